@@ -1,0 +1,1 @@
+"""base_driver node."""

@@ -1,0 +1,1 @@
+"""lidar_sim node."""

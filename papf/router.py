@@ -1,0 +1,33 @@
+"""The embedded Zenoh router (DESIGN.md §2): ``python -m papf.router``.
+
+Runs a Zenoh session in ``router`` mode listening on ``tcp/127.0.0.1:7447`` (by
+default) until SIGINT/SIGTERM, so no external ``zenohd`` is needed.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import zenoh
+
+from papf.transport import DEFAULT_ENDPOINT, StopRequested, setup_logging, zenoh_config
+
+
+def main(listen: list[str], config_file: str | None = None) -> None:
+    log = setup_logging("router")
+    stop = StopRequested()
+    conf = zenoh_config("router", listen=listen, config_file=config_file)
+    with zenoh.open(conf) as session:
+        log.info("Zenoh router %s listening on %s", session.zid(), ", ".join(listen))
+        while not stop.event.wait(0.2):
+            pass
+    log.info("router stopped")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
+                        help=f"endpoint to listen on (default {DEFAULT_ENDPOINT})")
+    parser.add_argument("--zenoh-config", metavar="FILE", help="Zenoh JSON5 config (TLS, ACL)")
+    a = parser.parse_args()
+    main(a.listen or [DEFAULT_ENDPOINT], a.zenoh_config)

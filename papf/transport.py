@@ -1,0 +1,217 @@
+"""Zenoh plumbing shared by every node process (DESIGN.md §2).
+
+- :func:`add_zenoh_args` / :func:`config_from_args`: ``--mode/--connect/--listen/
+  --namespace/--zenoh-config`` -> ``zenoh.Config`` (multicast scouting off unless asked).
+- :class:`Node`: one node's session — typed publishers, decoding subscribers that
+  count and drop bad payloads, an inbox the node's main thread drains (so a node's
+  core runs on one thread, in arrival order), and the liveliness token
+  ``<ns>/alive/<node>`` declared once the node is ready.
+- :func:`wait_alive`: block until named nodes' liveliness tokens exist.
+
+No maths here; algorithms never import this module.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import queue
+import signal
+import threading
+import time
+from collections import Counter
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+
+import zenoh
+
+from papf.errors import ConfigError, SchemaError
+from schemas import Keys
+from schemas.base import Message
+from schemas.keys import TOPICS
+
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+MODES = ("client", "peer", "router")
+
+
+def add_zenoh_args(parser: argparse.ArgumentParser) -> None:
+    """The Zenoh options every node and command shares."""
+    g = parser.add_argument_group("zenoh")
+    g.add_argument("--mode", choices=MODES, default="client",
+                   help="Zenoh session mode (default: client of a router)")
+    g.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                   help=f"endpoint to connect to, repeatable (default for client: {DEFAULT_ENDPOINT})")
+    g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
+                   help="endpoint to listen on, repeatable")
+    g.add_argument("--namespace", default="rosbot", help="robot key namespace (default: rosbot)")
+    g.add_argument("--zenoh-config", metavar="FILE",
+                   help="Zenoh JSON5 config file (TLS, auth, access control); CLI options override it")
+    g.add_argument("--multicast-scouting", action="store_true",
+                   help="enable multicast scouting (off by default)")
+
+
+def zenoh_config(mode: str = "client", connect: Iterable[str] = (), listen: Iterable[str] = (),
+                 multicast: bool = False, config_file: str | None = None) -> zenoh.Config:
+    """Build a ``zenoh.Config``; a client with no ``connect`` goes to the embedded router."""
+    if mode not in MODES:
+        raise ConfigError(f"Zenoh mode {mode!r} is not one of {MODES}")
+    try:
+        conf = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
+    except Exception as exc:  # zenoh raises ZError with the parser's message
+        raise ConfigError(f"cannot read Zenoh config {config_file!r}: {exc}") from None
+    connect, listen = list(connect), list(listen)
+    if mode == "client" and not connect and not config_file:
+        connect = [DEFAULT_ENDPOINT]
+    conf.insert_json5("mode", json.dumps(mode))
+    if connect:
+        conf.insert_json5("connect/endpoints", json.dumps(connect))
+    if listen:
+        conf.insert_json5("listen/endpoints", json.dumps(listen))
+    conf.insert_json5("scouting/multicast/enabled", json.dumps(bool(multicast)))
+    return conf
+
+
+def config_from_args(args: argparse.Namespace) -> zenoh.Config:
+    return zenoh_config(args.mode, args.connect, args.listen, args.multicast_scouting,
+                        args.zenoh_config)
+
+
+def setup_logging(name: str, level: str = "INFO") -> logging.Logger:
+    logging.basicConfig(level=level, format=f"%(asctime)s {name:>12} %(levelname)-7s %(message)s",
+                        datefmt="%H:%M:%S")
+    return logging.getLogger(name)
+
+
+class StopRequested:
+    """SIGINT/SIGTERM -> a flag the main loop polls (the session then closes cleanly)."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(sig, lambda *_: self.event.set())
+
+    def __bool__(self) -> bool:
+        return self.event.is_set()
+
+
+class Node:
+    """A node's Zenoh session with typed, fault-tolerant pub/sub.
+
+    Received messages are decoded in Zenoh's callback thread and queued as
+    ``(topic, message)``; :meth:`messages` hands them to the node's main thread.
+    A payload that fails to decode is logged (rate-limited), counted in
+    :attr:`bad_messages` and dropped: a bad peer never crashes a node.
+    """
+
+    def __init__(self, name: str, session: zenoh.Session, keys: Keys, log: logging.Logger):
+        self.name, self.session, self.keys, self.log = name, session, keys, log
+        self.inbox: queue.Queue = queue.Queue()
+        self.bad_messages: Counter[str] = Counter()
+        self.stop = StopRequested()
+        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._subscribers: list[zenoh.Subscriber] = []
+        self._token = None
+
+    # -- publishing -------------------------------------------------------
+    def publish(self, topic: str, msg: Message) -> None:
+        """Put ``msg`` on ``<ns>/<topic>``; the topic's type is checked (TOPICS)."""
+        expected = TOPICS.get(topic)
+        if expected is not None and not isinstance(msg, expected):
+            raise TypeError(f"{topic} carries {expected.__name__}, not {type(msg).__name__}")
+        pub = self._publishers.get(topic)
+        if pub is None:
+            pub = self.session.declare_publisher(self.keys.key(topic))
+            self._publishers[topic] = pub
+        pub.put(msg.to_bytes())
+
+    def declare_publishers(self, *topics: str) -> None:
+        """Declare publishers up front (before :meth:`ready`) so first puts are not late."""
+        for topic in topics:
+            if topic not in self._publishers:
+                self._publishers[topic] = self.session.declare_publisher(self.keys.key(topic))
+
+    # -- subscribing ------------------------------------------------------
+    def subscribe(self, topic: str, msg_type: type[Message] | None = None, *,
+                  handler=None) -> None:
+        """Decode ``<ns>/<topic>`` as ``msg_type`` (default: TOPICS) into the inbox or ``handler``."""
+        msg_type = msg_type or TOPICS[topic]
+        deliver = handler or (lambda m, t=topic: self.inbox.put((t, m)))
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                msg = msg_type.from_bytes(sample.payload.to_bytes())
+            except SchemaError as exc:
+                self._count_bad(topic, exc)
+                return
+            deliver(msg)
+
+        self._subscribers.append(self.session.declare_subscriber(self.keys.key(topic), on_sample))
+
+    def _count_bad(self, topic: str, exc: Exception) -> None:
+        self.bad_messages[topic] += 1
+        n = self.bad_messages[topic]
+        if n <= 5 or n % 100 == 0:
+            self.log.warning("dropped bad message #%d on %s: %s", n, self.keys.key(topic), exc)
+
+    def messages(self, tick_s: float = 0.1) -> Iterator[tuple[str | None, Message | None]]:
+        """Yield inbox items until stop; ``(None, None)`` every ``tick_s`` of silence."""
+        while not self.stop:
+            try:
+                yield self.inbox.get(timeout=tick_s)
+            except queue.Empty:
+                yield None, None
+
+    # -- health -----------------------------------------------------------
+    def ready(self) -> None:
+        """Declare the liveliness token: subscriptions and publishers now exist."""
+        self._token = self.session.liveliness().declare_token(self.keys.alive(self.name))
+        self.log.info("ready as %s", self.keys.alive(self.name))
+
+    def close(self) -> None:
+        if self._token is not None:
+            self._token.undeclare()
+        for sub in self._subscribers:
+            sub.undeclare()
+        for pub in self._publishers.values():
+            pub.undeclare()
+        self._subscribers.clear()
+        self._publishers.clear()
+
+
+@contextmanager
+def open_node(name: str, args: argparse.Namespace, log: logging.Logger | None = None):
+    """``with open_node("planner", args) as node:`` — session closed on exit, always."""
+    log = log or setup_logging(name, getattr(args, "log_level", "INFO"))
+    conf = config_from_args(args)
+    with zenoh.open(conf) as session:
+        node = Node(name, session, Keys(args.namespace), log)
+        try:
+            yield node
+        finally:
+            node.close()
+            if node.bad_messages:
+                log.info("bad messages dropped: %s", dict(node.bad_messages))
+
+
+def alive_nodes(session: zenoh.Session, keys: Keys) -> set[str]:
+    """Names of the nodes whose liveliness tokens exist now."""
+    prefix = keys.alive("")
+    names = set()
+    for reply in session.liveliness().get(keys.alive("*"), timeout=1.0):
+        if reply.ok is not None:
+            names.add(str(reply.ok.key_expr)[len(prefix):])
+    return names
+
+
+def wait_alive(session: zenoh.Session, keys: Keys, names: Iterable[str], timeout_s: float,
+               poll_s: float = 0.05, abort=lambda: False) -> set[str]:
+    """Wait until every named node is alive; return the missing ones on timeout/abort."""
+    wanted = set(names)
+    deadline = time.monotonic() + timeout_s
+    while True:
+        missing = wanted - alive_nodes(session, keys)
+        if not missing or time.monotonic() > deadline or abort():
+            return missing
+        time.sleep(poll_s)

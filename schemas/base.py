@@ -1,0 +1,307 @@
+"""Message base: frozen dataclasses <-> msgpack, validation and JSON Schema.
+
+A message class declares its fields with type annotations; the annotation
+decides the wire form and the checks (DESIGN.md §3):
+
+==============================  =====================================  ======================
+annotation                      wire form (msgpack)                    check
+==============================  =====================================  ======================
+``int``                         int                                    integer, no bool
+``float``                       float                                  finite unless ``nonfinite``
+``str``                         str                                    in ``choices`` if given
+``bool``                        bool                                   bool
+``Floats`` (tuple of float)     array of float                         finite, ``length`` if given
+``Points`` (tuple of (x, y))    array of [x, y]                        finite pairs
+``Paths`` (tuple of Points)     array of array of [x, y]               finite pairs
+``Strs`` (tuple of str)         array of str
+``np.ndarray``                  bytes, little-endian float32           length multiple of 4
+==============================  =====================================  ======================
+
+Field metadata (``meta(unit=..., doc=..., choices=..., nonfinite=..., length=...)``)
+carries units and constraints; they land in the derived JSON Schema too.
+Every encoded map carries ``"_type": "papf/<Name>/v<N>"``; decoding checks it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, ClassVar, get_type_hints
+
+import msgpack
+import numpy as np
+
+from papf.errors import SchemaError
+
+Floats = tuple[float, ...]
+Points = tuple[tuple[float, float], ...]
+Paths = tuple[Points, ...]
+Strs = tuple[str, ...]
+
+_F32 = np.dtype("<f4")
+
+
+def meta(unit: str = "", doc: str = "", *, choices: tuple[str, ...] | None = None,
+         nonfinite: bool = False, length: int | None = None) -> dict:
+    """Field metadata: unit, description and constraints (see module doc)."""
+    return {"unit": unit, "doc": doc, "choices": choices, "nonfinite": nonfinite,
+            "length": length}
+
+
+def field(default: Any = dataclasses.MISSING, **kwargs: Any) -> Any:
+    """A dataclass field with :func:`meta` metadata; tuples default to ``()``."""
+    md = meta(**kwargs)
+    if default is dataclasses.MISSING:
+        return dataclasses.field(metadata=md)
+    return dataclasses.field(default=default, metadata=md)
+
+
+def _kind(annotation: Any) -> str:
+    table = {int: "int", float: "float", str: "str", bool: "bool", Floats: "floats",
+             Points: "points", Paths: "paths", Strs: "strs", np.ndarray: "f32array"}
+    try:
+        return table[annotation]
+    except (KeyError, TypeError):
+        raise TypeError(f"unsupported message field annotation {annotation!r}") from None
+
+
+class Message:
+    """Base of all messages. Subclasses are ``@message("Name", version)`` dataclasses."""
+
+    TYPE: ClassVar[str] = ""
+    _FIELDS: ClassVar[tuple[tuple[str, str, dict], ...]] = ()
+
+    # -- encoding ---------------------------------------------------------
+    def to_dict(self) -> dict:
+        """Plain-Python form (arrays as lists) — for JSON logs and reports."""
+        out: dict[str, Any] = {}
+        for name, kind, _ in self._FIELDS:
+            value = getattr(self, name)
+            out[name] = value.astype(float).tolist() if kind == "f32array" else value
+        return out
+
+    def to_wire(self) -> dict:
+        """The msgpack map, ``_type`` first."""
+        out: dict[str, Any] = {"_type": self.TYPE}
+        for name, kind, _ in self._FIELDS:
+            value = getattr(self, name)
+            if kind == "f32array":
+                value = np.ascontiguousarray(value, dtype=_F32).tobytes()
+            elif kind == "points":
+                value = [list(p) for p in value]
+            elif kind == "paths":
+                value = [[list(p) for p in path] for path in value]
+            out[name] = value
+        return out
+
+    def to_bytes(self) -> bytes:
+        """msgpack bytes of this message."""
+        return msgpack.packb(self.to_wire(), use_bin_type=True)
+
+    # -- decoding ---------------------------------------------------------
+    @classmethod
+    def from_bytes(cls, data: bytes | bytearray | memoryview):
+        """Decode and validate; any problem raises :class:`SchemaError`."""
+        try:
+            wire = msgpack.unpackb(bytes(data), raw=False, strict_map_key=True)
+        except Exception as exc:  # msgpack raises several unrelated types
+            raise SchemaError(f"{cls.TYPE}: payload is not msgpack ({exc})") from None
+        return cls.from_wire(wire)
+
+    @classmethod
+    def from_wire(cls, wire: Any):
+        """Validate a decoded msgpack map and build the message."""
+        if not isinstance(wire, dict):
+            raise SchemaError(f"{cls.TYPE}: expected a map, got {type(wire).__name__}")
+        got = wire.get("_type")
+        if got != cls.TYPE:
+            raise SchemaError(f"{cls.TYPE}: wrong message type {got!r} (expected {cls.TYPE!r})")
+        values = {}
+        for name, kind, md in cls._FIELDS:
+            if name not in wire:
+                if cls._default_of(name) is not dataclasses.MISSING:
+                    continue
+                raise SchemaError(f"{cls.TYPE}: missing field {name!r}")
+            values[name] = _check(cls.TYPE, name, kind, md, wire[name])
+        return cls(**values)
+
+    @classmethod
+    def _default_of(cls, name: str) -> Any:
+        f = cls.__dataclass_fields__[name]  # type: ignore[attr-defined]
+        if f.default is not dataclasses.MISSING:
+            return f.default
+        if f.default_factory is not dataclasses.MISSING:
+            return f.default_factory()
+        return dataclasses.MISSING
+
+    # -- schema -----------------------------------------------------------
+    @classmethod
+    def json_schema(cls) -> dict:
+        """JSON Schema (draft 2020-12) of the decoded msgpack map.
+
+        ``f32array`` fields are described as byte strings (``contentEncoding:
+        binary``): validate decoded messages with bytes allowed as strings, or
+        use :meth:`to_json_compatible` first.
+        """
+        props: dict[str, Any] = {"_type": {"const": cls.TYPE}}
+        required = ["_type"]
+        for name, kind, md in cls._FIELDS:
+            props[name] = _json_type(kind, md)
+            if cls._default_of(name) is dataclasses.MISSING:
+                required.append(name)
+        return {
+            "$schema": "https://json-schema.org/draft/2020-12/schema",
+            "title": cls.TYPE,
+            "description": (cls.__doc__ or "").strip().split("\n\n")[0],
+            "type": "object",
+            "properties": props,
+            "required": required,
+        }
+
+    @classmethod
+    def to_json_compatible(cls, wire: dict) -> dict:
+        """A decoded wire map with byte fields as latin-1 strings (for JSON Schema validation)."""
+        return {k: (v.decode("latin-1") if isinstance(v, bytes) else v) for k, v in wire.items()}
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        for name, kind, _ in self._FIELDS:
+            a, b = getattr(self, name), getattr(other, name)
+            if kind == "f32array":
+                if not np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True):
+                    return False
+            elif a != b and not (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        _normalise(self)
+
+
+def message(name: str, version: int):
+    """Class decorator: make a frozen message dataclass typed ``papf/<name>/v<version>``."""
+
+    def wrap(cls):
+        cls = dataclasses.dataclass(frozen=True, eq=False)(cls)
+        hints = get_type_hints(cls)
+        cls._FIELDS = tuple(
+            (f.name, _kind(hints[f.name]), f.metadata or meta())
+            for f in dataclasses.fields(cls)
+        )
+        cls.TYPE = f"papf/{name}/v{version}"
+        return cls
+
+    return wrap
+
+
+def _normalise(self) -> None:
+    # Normalise containers so equal messages compare equal whatever was passed in.
+    for name, kind, _ in self._FIELDS:
+        value = getattr(self, name)
+        if kind == "f32array":
+            value = np.asarray(value, dtype=np.float32)
+        elif kind in ("floats", "strs"):
+            value = tuple(value)
+        elif kind == "points":
+            value = tuple((float(p[0]), float(p[1])) for p in value)
+        elif kind == "paths":
+            value = tuple(tuple((float(p[0]), float(p[1])) for p in path) for path in value)
+        else:
+            continue
+        object.__setattr__(self, name, value)
+
+
+# -- validation -------------------------------------------------------------
+def _check(type_name: str, name: str, kind: str, md: dict, value: Any) -> Any:
+    where = f"{type_name}.{name}"
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise SchemaError(f"{where}: expected an integer, got {value!r}")
+        return value
+    if kind == "float":
+        return _float(where, value, md)
+    if kind == "str":
+        if not isinstance(value, str):
+            raise SchemaError(f"{where}: expected a string, got {value!r}")
+        if md.get("choices") and value not in md["choices"]:
+            raise SchemaError(f"{where}: {value!r} is not one of {list(md['choices'])}")
+        return value
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise SchemaError(f"{where}: expected true/false, got {value!r}")
+        return value
+    if kind == "f32array":
+        if not isinstance(value, (bytes, bytearray)) or len(value) % 4:
+            raise SchemaError(f"{where}: expected little-endian float32 bytes, got "
+                              f"{type(value).__name__} of length {_len(value)}")
+        return np.frombuffer(bytes(value), dtype=_F32).copy()
+    if not isinstance(value, (list, tuple)):
+        raise SchemaError(f"{where}: expected an array, got {type(value).__name__}")
+    if kind == "floats":
+        if md.get("length") is not None and len(value) != md["length"]:
+            raise SchemaError(f"{where}: expected {md['length']} values, got {len(value)}")
+        return tuple(_float(where, v, md) for v in value)
+    if kind == "strs":
+        if not all(isinstance(v, str) for v in value):
+            raise SchemaError(f"{where}: expected an array of strings")
+        return tuple(value)
+    if kind == "points":
+        return _points(where, value, md)
+    if kind == "paths":
+        return tuple(_points(f"{where}[{i}]", p, md) for i, p in enumerate(value))
+    raise AssertionError(kind)
+
+
+def _points(where: str, value: Any, md: dict) -> Points:
+    if not isinstance(value, (list, tuple)):
+        raise SchemaError(f"{where}: expected an array of points, got {type(value).__name__}")
+    out = []
+    for i, p in enumerate(value):
+        if not isinstance(p, (list, tuple)) or len(p) != 2:
+            raise SchemaError(f"{where}[{i}]: expected an [x, y] pair, got {p!r}")
+        out.append((_float(where, p[0], md), _float(where, p[1], md)))
+    return tuple(out)
+
+
+def _float(where: str, value: Any, md: dict) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SchemaError(f"{where}: expected a number, got {value!r}")
+    value = float(value)
+    if not md.get("nonfinite") and not math.isfinite(value):
+        raise SchemaError(f"{where}: {value!r} is not allowed (must be finite)")
+    return value
+
+
+def _len(value: Any) -> str:
+    try:
+        return str(len(value))
+    except TypeError:
+        return "n/a"
+
+
+def _json_type(kind: str, md: dict) -> dict:
+    number = {"type": "number"}
+    pair = {"type": "array", "items": number, "minItems": 2, "maxItems": 2}
+    out: dict[str, Any] = {
+        "int": {"type": "integer"},
+        "float": dict(number),
+        "str": {"type": "string"},
+        "bool": {"type": "boolean"},
+        "floats": {"type": "array", "items": number},
+        "strs": {"type": "array", "items": {"type": "string"}},
+        "points": {"type": "array", "items": pair},
+        "paths": {"type": "array", "items": {"type": "array", "items": pair}},
+        "f32array": {"type": "string", "contentEncoding": "binary",
+                     "description": "little-endian float32 array"},
+    }[kind]
+    if md.get("choices"):
+        out["enum"] = list(md["choices"])
+    if md.get("length") is not None:
+        out["minItems"] = out["maxItems"] = md["length"]
+    text = " ".join(x for x in (md.get("doc", ""), f"[{md['unit']}]" if md.get("unit") else "") if x)
+    if text:
+        out["description"] = (out.get("description", "") + " " + text).strip()
+    return out

@@ -1,0 +1,60 @@
+"""Zenoh key expressions of one robot namespace, and the message type on each (DESIGN.md §2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from schemas.messages import (
+    BatteryState, Clock, Event, Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist,
+    WheelStates,
+)
+
+# suffix -> message type; the one table of the stack's topics.
+TOPICS = {
+    "scan": Scan,
+    "odom": Odometry,
+    "cmd_vel": Twist,
+    "wheels": WheelStates,
+    "battery": BatteryState,
+    "goal": Goal,
+    "planner/state": PlannerState,
+    "planner/status": PlannerStatus,
+    "clock": Clock,
+    "sim/pose": Odometry,
+    "events": Event,
+}
+
+
+@dataclass(frozen=True)
+class Keys:
+    """Keys under a namespace: ``Keys("rosbot").scan == "rosbot/scan"``."""
+
+    ns: str = "rosbot"
+
+    def __post_init__(self) -> None:
+        if not self.ns or self.ns.startswith("/") or self.ns.endswith("/") or "*" in self.ns:
+            raise ValueError(f"namespace {self.ns!r} must be a plain key like 'rosbot' or 'lab/r1'")
+
+    def key(self, suffix: str) -> str:
+        return f"{self.ns}/{suffix}"
+
+    def alive(self, node: str = "*") -> str:
+        """Liveliness token key of a node (``*`` matches all)."""
+        return f"{self.ns}/alive/{node}"
+
+    def type_of(self, key: str):
+        """Message type carried on a full key of this namespace, or None."""
+        prefix = self.ns + "/"
+        return TOPICS.get(key[len(prefix):]) if key.startswith(prefix) else None
+
+    scan = property(lambda self: self.key("scan"))
+    odom = property(lambda self: self.key("odom"))
+    cmd_vel = property(lambda self: self.key("cmd_vel"))
+    wheels = property(lambda self: self.key("wheels"))
+    battery = property(lambda self: self.key("battery"))
+    goal = property(lambda self: self.key("goal"))
+    planner_state = property(lambda self: self.key("planner/state"))
+    planner_status = property(lambda self: self.key("planner/status"))
+    clock = property(lambda self: self.key("clock"))
+    sim_pose = property(lambda self: self.key("sim/pose"))
+    events = property(lambda self: self.key("events"))

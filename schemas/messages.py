@@ -1,0 +1,161 @@
+"""Every message of the stack, defined once (DESIGN.md §3).
+
+Conventions: time is integer nanoseconds of *sim time* in sim runs (``stamp_ns``);
+lengths in metres, angles in radians, speeds in m/s and rad/s; the world frame is
+the ``odom`` frame of the run (x forward from the start pose, z up, yaw CCW).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from schemas.base import Floats, Message, Paths, Points, Strs, field, message
+
+WHEEL_NAMES = ("front_left", "front_right", "rear_left", "rear_right")
+
+
+@message("Scan", 1)
+class Scan(Message):
+    """A planar 360° laser scan in the sensor frame (like sensor_msgs/LaserScan).
+
+    ``ranges[i]`` is measured at angle ``angle_min + i * angle_increment`` (CCW from
+    the sensor's x axis). ``inf`` = no return within ``range_max``; ``nan`` = invalid
+    reading. The sensor sits at (sensor_x, sensor_y, sensor_yaw) in the robot frame.
+    """
+
+    stamp_ns: int = field(unit="ns", doc="sim time the scan describes")
+    angle_min: float = field(unit="rad")
+    angle_increment: float = field(unit="rad")
+    range_min: float = field(unit="m")
+    range_max: float = field(unit="m")
+    ranges: np.ndarray = field(unit="m", doc="float32 ranges; inf = no return, nan = invalid")
+    sensor_x: float = field(0.0, unit="m", doc="sensor offset in the robot frame")
+    sensor_y: float = field(0.0, unit="m")
+    sensor_yaw: float = field(0.0, unit="rad")
+
+
+@message("Odometry", 1)
+class Odometry(Message):
+    """Planar pose and body velocities (nav_msgs/Odometry reduced to 2-D)."""
+
+    stamp_ns: int = field(unit="ns")
+    x: float = field(unit="m")
+    y: float = field(unit="m")
+    yaw: float = field(unit="rad")
+    v: float = field(unit="m/s", doc="forward speed")
+    w: float = field(unit="rad/s", doc="yaw rate")
+
+
+@message("Twist", 1)
+class Twist(Message):
+    """A velocity command (geometry_msgs/Twist: linear.x, angular.z).
+
+    ``stamp_ns`` is the stamp of the scan the command answers (lockstep key).
+    """
+
+    stamp_ns: int = field(unit="ns")
+    v: float = field(unit="m/s")
+    w: float = field(unit="rad/s")
+
+
+@message("WheelStates", 1)
+class WheelStates(Message):
+    """Per-wheel speed and motor torque, ordered as ``names``."""
+
+    stamp_ns: int = field(unit="ns")
+    speed: Floats = field(unit="rad/s")
+    torque: Floats = field(unit="N*m", doc="torque the motor applies to the wheel")
+    names: Strs = field(WHEEL_NAMES)
+
+
+@message("BatteryState", 1)
+class BatteryState(Message):
+    """Battery pack state as metered (emulated or measured)."""
+
+    stamp_ns: int = field(unit="ns")
+    voltage: float = field(unit="V")
+    current: float = field(unit="A", doc="drawn from the pack (positive = discharge)")
+    power: float = field(unit="W")
+    charge_used_mAh: float = field(unit="mAh", doc="since the meter started")
+    energy_J: float = field(unit="J", doc="since the meter started")
+    soc: float = field(1.0, doc="state of charge 0..1")
+    model: str = field("motor", doc="energy model that produced the figures")
+
+
+@message("Goal", 1)
+class Goal(Message):
+    """The global goal position in the world frame."""
+
+    stamp_ns: int = field(unit="ns")
+    x: float = field(unit="m")
+    y: float = field(unit="m")
+    tolerance: float = field(0.1, unit="m")
+
+
+@message("PlannerState", 1)
+class PlannerState(Message):
+    """What the planner computed this cycle (what the papers drew in RViz)."""
+
+    stamp_ns: int = field(unit="ns")
+    algorithm: str = field(doc="planner name, e.g. apf, papf")
+    mode: str = field("drive", doc="planner-specific mode, e.g. drive, bypass, stop")
+    force: Floats = field((0.0, 0.0), unit="N (APF units)", doc="resultant force F_w, world frame",
+                          length=2)
+    heading_ref: float = field(0.0, unit="rad", doc="reference orientation theta*")
+    v_ref: float = field(0.0, unit="m/s")
+    w_ref: float = field(0.0, unit="rad/s")
+    temporary_goal: Floats = field((), unit="m", doc="[x, y] or empty")
+    predicted_path: Points = field((), unit="m")
+    abandoned_paths: Paths = field((), unit="m")
+    top_quarks: Points = field((), unit="m")
+    virtual_walls: Paths = field((), unit="m", doc="polylines of virtual wall points")
+    virtual_obstacles: Points = field((), unit="m")
+    obstacle_count: int = field(0, doc="obstacle points used this cycle")
+    compute_ns: int = field(0, unit="ns", doc="wall time the cycle took (not deterministic)")
+
+
+PLANNER_STATES = ("idle", "ready", "driving", "reached", "stagnated", "failed")
+
+
+@message("PlannerStatus", 1)
+class PlannerStatus(Message):
+    """The planner's progress towards the goal."""
+
+    stamp_ns: int = field(unit="ns")
+    state: str = field(choices=PLANNER_STATES)
+    reason: str = field("")
+    distance_to_goal: float = field(float("nan"), unit="m", nonfinite=True)
+
+
+@message("Clock", 1)
+class Clock(Message):
+    """Sim time, published by the simulated base driver."""
+
+    stamp_ns: int = field(unit="ns")
+
+
+EVENT_KINDS = ("run_started", "run_ended", "goal_reached", "collision", "timeout",
+               "stagnated", "node_fault", "watchdog_stop", "info")
+
+
+@message("Event", 1)
+class Event(Message):
+    """Something that happened during a run."""
+
+    stamp_ns: int = field(unit="ns")
+    kind: str = field(choices=EVENT_KINDS)
+    source: str = field(doc="node that reports it")
+    detail: str = field("")
+    x: float = field(float("nan"), unit="m", nonfinite=True, doc="where, if known")
+    y: float = field(float("nan"), unit="m", nonfinite=True)
+
+
+ALL_MESSAGES: tuple[type[Message], ...] = (
+    Scan, Odometry, Twist, WheelStates, BatteryState, Goal, PlannerState, PlannerStatus,
+    Clock, Event,
+)
+BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
+
+__all__ = [m.__name__ for m in ALL_MESSAGES] + [
+    "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "PLANNER_STATES", "WHEEL_NAMES", "Points",
+]

@@ -1,0 +1,204 @@
+"""World files (DESIGN.md §9, **fixed** TOML format): parse, validate, find by name.
+
+``load_world("energy")`` finds a packaged world by name; any path to a ``.toml``
+file works too. Every problem raises :class:`WorldError` naming the file, the
+entry and what would be valid.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from papf.errors import WorldError
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (DESIGN.md §9)
+KINDS = ("box", "cylinder", "wall", "sphere")
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """One obstacle, normalised: walls become boxes (from/to/thickness -> center/size/yaw).
+
+    ``kind`` keeps the file's kind; ``shape`` is the primitive: ``box``
+    (``size`` = (sx, sy) before ``yaw``), ``cylinder`` (``radius``) or ``sphere``
+    (``radius``, 3-D worlds: ``center`` has z).
+    """
+
+    kind: str
+    shape: str
+    center: tuple[float, ...]
+    size: tuple[float, float] = (0.0, 0.0)
+    radius: float = 0.0
+    yaw: float = 0.0
+    height: float = DEFAULT_HEIGHT
+
+    def corners(self) -> list[tuple[float, float]]:
+        """The 4 corners of a box footprint (counter-clockwise), world frame [m]."""
+        if self.shape != "box":
+            raise ValueError(f"{self.kind} has no corners")
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        hx, hy = self.size[0] / 2, self.size[1] / 2
+        cx, cy = self.center[0], self.center[1]
+        return [(cx + c * dx - s * dy, cy + s * dx + c * dy)
+                for dx, dy in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))]
+
+
+@dataclass(frozen=True)
+class World:
+    name: str
+    description: str
+    start: tuple[float, float, float]           # x [m], y [m], yaw [rad]
+    goal: tuple[float, ...]                      # (x, y) or (x, y, z) [m]
+    tolerance: float                             # [m]
+    obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
+    source: str = ""                             # file it came from
+
+    @property
+    def dims(self) -> int:
+        return len(self.goal)
+
+
+def packaged_worlds() -> list[str]:
+    """Names of the worlds shipped with the package."""
+    root = resources.files(__name__)
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def world_path(name_or_path: str | Path) -> Path:
+    """Resolve a packaged world name or a file path; WorldError says what exists."""
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.exists() or "/" in str(name_or_path):
+        if not p.is_file():
+            raise WorldError(f"world file {str(p)!r} does not exist; give a packaged world name "
+                             f"({', '.join(packaged_worlds())}) or a path to a .toml file")
+        return p
+    packaged = resources.files(__name__) / f"{name_or_path}.toml"
+    if not packaged.is_file():
+        raise WorldError(f"no packaged world named {str(name_or_path)!r}; packaged worlds: "
+                         f"{', '.join(packaged_worlds())} (or pass a path to a .toml file)")
+    return Path(str(packaged))
+
+
+def load_world(name_or_path: str | Path) -> World:
+    """Load and validate a world by packaged name or path."""
+    path = world_path(name_or_path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise WorldError(f"cannot read world file {str(path)!r}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise WorldError(f"world file {str(path)!r} is not valid TOML: {exc}") from None
+    return parse_world(data, source=str(path))
+
+
+def parse_world(data: dict, source: str = "<dict>") -> World:
+    """Validate a decoded TOML document as a world."""
+    ctx = _Ctx(source)
+    name = ctx.str(data, "name", default=Path(source).stem)
+    robot = ctx.table(data, "robot", default={})
+    start = ctx.vec(robot, "start", (2, 3), "robot.start", default=[0.0, 0.0, 0.0])
+    if len(start) == 2:
+        start = (*start, 0.0)
+    goal_t = ctx.table(data, "goal")
+    goal = ctx.vec(goal_t, "position", (2, 3), "goal.position")
+    tolerance = ctx.positive(goal_t, "tolerance", "goal.tolerance", default=0.1)
+    obstacles = []
+    raw = data.get("obstacles", [])
+    if not isinstance(raw, list):
+        ctx.fail("obstacles", "must be an array of tables ([[obstacles]])")
+    for i, ob in enumerate(raw):
+        obstacles.append(_obstacle(ctx, ob, f"obstacles[{i}]", len(goal)))
+    return World(name=name, description=ctx.str(data, "description", default=""),
+                 start=tuple(start), goal=tuple(goal), tolerance=tolerance,
+                 obstacles=tuple(obstacles), source=source)
+
+
+def _obstacle(ctx: _Ctx, ob: dict, where: str, dims: int) -> Obstacle:
+    if not isinstance(ob, dict):
+        ctx.fail(where, "must be a table")
+    kind = ctx.str(ob, "kind", where=f"{where}.kind")
+    if kind not in KINDS:
+        ctx.fail(f"{where}.kind", f"{kind!r} is not one of {', '.join(KINDS)}")
+    height = ctx.positive(ob, "height", f"{where}.height", default=DEFAULT_HEIGHT)
+    if kind == "wall":
+        a = ctx.vec(ob, "from", (2,), f"{where}.from")
+        b = ctx.vec(ob, "to", (2,), f"{where}.to")
+        thickness = ctx.positive(ob, "thickness", f"{where}.thickness", default=0.05)
+        length = math.dist(a, b)
+        if length <= 0:
+            ctx.fail(where, "wall 'from' and 'to' are the same point")
+        return Obstacle(kind, "box", ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2), (length, thickness),
+                        yaw=math.atan2(b[1] - a[1], b[0] - a[0]), height=height)
+    if kind == "sphere":
+        center = ctx.vec(ob, "center", (3,), f"{where}.center")
+        return Obstacle(kind, "sphere", tuple(center),
+                        radius=ctx.positive(ob, "radius", f"{where}.radius"), height=height)
+    center = ctx.vec(ob, "center", (2,), f"{where}.center")
+    if kind == "cylinder":
+        return Obstacle(kind, "cylinder", tuple(center),
+                        radius=ctx.positive(ob, "radius", f"{where}.radius"), height=height)
+    size = ctx.vec(ob, "size", (2,), f"{where}.size")
+    if min(size) <= 0:
+        ctx.fail(f"{where}.size", f"{size} must be positive")
+    return Obstacle(kind, "box", tuple(center), tuple(size),
+                    yaw=ctx.number(ob, "yaw", f"{where}.yaw", default=0.0), height=height)
+
+
+class _Ctx:
+    """Field readers that raise WorldError naming file, entry and expectation."""
+
+    _MISSING = object()
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, where: str, problem: str):
+        raise WorldError(f"world {self.source!r}: {where}: {problem}")
+
+    def _get(self, t: dict, key: str, where: str, default):
+        if key in t:
+            return t[key]
+        if default is self._MISSING:
+            self.fail(where, "is missing")
+        return default
+
+    def table(self, t: dict, key: str, default=_MISSING) -> dict:
+        v = self._get(t, key, f"[{key}]", default)
+        if not isinstance(v, dict):
+            self.fail(f"[{key}]", "must be a table")
+        return v
+
+    def str(self, t: dict, key: str, where: str | None = None, default=_MISSING) -> str:
+        v = self._get(t, key, where or key, default)
+        if not isinstance(v, str):
+            self.fail(where or key, f"must be a string, got {v!r}")
+        return v
+
+    def number(self, t: dict, key: str, where: str, default=_MISSING) -> float:
+        v = self._get(t, key, where, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            self.fail(where, f"must be a finite number, got {v!r}")
+        return float(v)
+
+    def positive(self, t: dict, key: str, where: str, default=_MISSING) -> float:
+        v = self.number(t, key, where, default)
+        if v <= 0:
+            self.fail(where, f"must be > 0, got {v}")
+        return v
+
+    def vec(self, t: dict, key: str, lengths: tuple[int, ...], where: str, default=_MISSING):
+        v = self._get(t, key, where, default)
+        ok = isinstance(v, list) and len(v) in lengths and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
+        if not ok:
+            want = " or ".join(f"{n} numbers" for n in lengths)
+            self.fail(where, f"must be an array of {want}, got {v!r}")
+        return [float(x) for x in v]
