@@ -203,7 +203,9 @@ def _normalise(self) -> None:
         value = getattr(self, name)
         if kind == "f32array":
             value = np.asarray(value, dtype=np.float32)
-        elif kind in ("floats", "strs"):
+        elif kind == "floats":
+            value = tuple(float(v) for v in value)
+        elif kind == "strs":
             value = tuple(value)
         elif kind == "points":
             value = tuple((float(p[0]), float(p[1])) for p in value)

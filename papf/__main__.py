@@ -1,0 +1,5 @@
+import sys
+
+from papf.cli import main
+
+sys.exit(main())

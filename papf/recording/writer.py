@@ -1,0 +1,236 @@
+"""Write a run to MCAP, crash-safe (DESIGN.md §8). Pure: no Zenoh here.
+
+Layout of a recording (see docs/recording.md):
+
+- one channel per Zenoh key (topic = the full key, e.g. ``rosbot/scan``), message
+  encoding ``msgpack``; keys of the stack (``schemas.keys.TOPICS``) get a schema
+  record named after the message type (``papf/Scan/v1``, encoding ``jsonschema``,
+  data = ``Message.json_schema()`` as JSON); any other key is recorded raw with no
+  schema (id 0) and encoding ``msgpack`` if its first payload is msgpack, else
+  ``application/octet-stream``;
+- ``log_time`` = the message's ``stamp_ns`` (sim time in sim runs; the receive wall
+  time when the payload has none), so log times may go backwards across channels;
+  ``publish_time`` = the wall-clock receive time [ns since the Unix epoch];
+- a metadata record named ``run`` (world, planner, seed, parameters, versions).
+
+Crash safety: messages go into chunks that are closed and flushed to the OS at
+least every ``flush_interval_s`` of wall time (and when ``chunk_size`` bytes are
+buffered), so a SIGKILL loses at most that much; ``papf recover`` salvages the rest.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import msgpack
+from mcap.writer import CompressionType, Writer
+
+import papf
+from papf.errors import RecordingError
+from schemas.base import Message
+from schemas.keys import TOPICS
+
+MESSAGE_ENCODING = "msgpack"
+RAW_ENCODING = "application/octet-stream"
+SCHEMA_ENCODING = "jsonschema"
+RUN_METADATA = "run"
+PROFILE = "papf"  # MCAP header profile: our own conventions (this module's docstring)
+
+# Defaults. A chunk is closed at whichever limit comes first.
+FLUSH_INTERVAL_S = 0.2      # [s] wall time; bounds what a SIGKILL can lose
+CHUNK_SIZE = 512 * 1024     # [bytes] uncompressed
+PEEK_FULL_UNPACK_MAX = 256  # [bytes] below this, unpacking the whole map is the cheapest peek
+COMPRESSIONS = {"none": CompressionType.NONE, "lz4": CompressionType.LZ4,
+                "zstd": CompressionType.ZSTD}
+
+
+def type_for_key(key: str) -> type[Message] | None:
+    """Message type of a full key whose suffix is a stack topic (any namespace), else None.
+
+    ``rosbot/scan`` -> Scan, ``lab/r1/planner/state`` -> PlannerState, ``x/y`` -> None.
+    """
+    parts = key.split("/")
+    for i in range(1, len(parts)):  # longest suffix first, namespace at least one chunk
+        msg_type = TOPICS.get("/".join(parts[i:]))
+        if msg_type is not None:
+            return msg_type
+    return None
+
+
+def peek_stamp(data: bytes) -> int | None:
+    """``stamp_ns`` of a msgpack map payload without decoding the whole map, or None.
+
+    Cheap for big payloads (scans, planner states): reads the map header and the first
+    few entries only (our encoder writes ``_type`` then ``stamp_ns``). None when the
+    payload is not a msgpack map, has no integer stamp, or the stamp does not fit
+    MCAP's unsigned 64-bit log time.
+    """
+    try:
+        if len(data) <= PEEK_FULL_UNPACK_MAX:
+            wire = msgpack.unpackb(data, raw=False)
+            stamp = wire.get("stamp_ns") if type(wire) is dict else None
+        else:
+            stamp = _peek_large(data)
+    except Exception:  # any malformed payload: no stamp
+        return None
+    if type(stamp) is int and 0 <= stamp < 2**64:
+        return stamp
+    return None
+
+
+def _peek_large(data: bytes, max_entries: int = 4) -> Any:
+    unpacker = msgpack.Unpacker(raw=False)
+    unpacker.feed(data)
+    for _ in range(min(unpacker.read_map_header(), max_entries)):
+        if unpacker.unpack() == "stamp_ns":
+            return unpacker.unpack()
+        unpacker.skip()
+    return None
+
+
+def is_msgpack(data: bytes) -> bool:
+    """True if ``data`` is exactly one msgpack object."""
+    try:
+        msgpack.unpackb(data, raw=False, strict_map_key=False)
+    except Exception:
+        return False
+    return True
+
+
+def default_metadata() -> dict[str, str]:
+    """What every recording states about the software that made it."""
+    return {"software": "papf-stack", "software_version": papf.__version__,
+            "python": platform.python_version(), "created_unix_ns": str(time.time_ns())}
+
+
+def metadata_strings(metadata: Mapping[str, Any]) -> dict[str, str]:
+    """MCAP metadata values are strings: keep str as is, JSON-encode the rest."""
+    return {str(k): v if isinstance(v, str) else json.dumps(v, sort_keys=True, default=str)
+            for k, v in metadata.items()}
+
+
+@dataclass
+class WriterStats:
+    messages: int = 0
+    bytes: int = 0           # payload bytes
+    unstamped: int = 0       # messages logged at their receive time (no stamp_ns)
+    channels: int = 0
+
+
+class RunWriter:
+    """An MCAP recording being written. Use as a context manager or call :meth:`close`.
+
+    ``RunWriter(path, {"world": "energy", "planner": "papf", "seed": 1})`` then
+    ``write(key, payload)`` for every received sample; ``maybe_flush()`` on idle ticks.
+    """
+
+    def __init__(self, path: str | Path, metadata: Mapping[str, Any] | None = None, *,
+                 compression: str = "zstd", chunk_size: int = CHUNK_SIZE,
+                 flush_interval_s: float = FLUSH_INTERVAL_S,
+                 clock: Callable[[], float] = time.monotonic):
+        if compression not in COMPRESSIONS:
+            raise RecordingError(f"compression {compression!r} is not one of {list(COMPRESSIONS)}")
+        if flush_interval_s <= 0:
+            raise RecordingError(f"flush interval {flush_interval_s} s must be > 0")
+        self.path = Path(path)
+        try:
+            self._file = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        except OSError as exc:
+            raise RecordingError(f"cannot create recording {str(path)!r}: {exc}") from None
+        self._mcap = Writer(self._file, chunk_size=chunk_size,
+                            compression=COMPRESSIONS[compression])
+        self._mcap.start(profile=PROFILE, library=f"papf-stack/{papf.__version__}")
+        self._mcap.add_metadata(RUN_METADATA, metadata_strings({**default_metadata(),
+                                                               **(metadata or {})}))
+        self._file.flush()
+        self._channels: dict[str, int] = {}
+        self._schemas: dict[str, int] = {}
+        self._clock, self._interval = clock, flush_interval_s
+        self._last_flush = clock()
+        self._dirty = False
+        self.stats = WriterStats()
+        self.closed = False
+
+    def __enter__(self) -> RunWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- writing ----------------------------------------------------------
+    def write(self, key: str, data: bytes, receive_ns: int | None = None,
+              log_time_ns: int | None = None) -> None:
+        """Record one payload received on ``key``.
+
+        ``receive_ns``: wall-clock receive time [ns since epoch] (default: now).
+        ``log_time_ns``: override; by default the payload's ``stamp_ns``, else ``receive_ns``.
+        """
+        if receive_ns is None:
+            receive_ns = time.time_ns()
+        channel = self._channels.get(key)
+        if channel is None:
+            channel = self._add_channel(key, data)
+        if log_time_ns is None:
+            log_time_ns = peek_stamp(data)
+            if log_time_ns is None:
+                log_time_ns = receive_ns
+                self.stats.unstamped += 1
+        self._mcap.add_message(channel, log_time_ns, data, receive_ns)
+        self.stats.messages += 1
+        self.stats.bytes += len(data)
+        self._dirty = True
+        if self._clock() - self._last_flush >= self._interval:
+            self.flush()
+
+    def write_message(self, key: str, msg: Message, receive_ns: int | None = None) -> None:
+        """Record a typed message (tests, tools): same as ``write(key, msg.to_bytes())``."""
+        self.write(key, msg.to_bytes(), receive_ns)
+
+    def _add_channel(self, key: str, first_payload: bytes) -> int:
+        msg_type = type_for_key(key)
+        if msg_type is None:
+            schema_id = 0
+            encoding = MESSAGE_ENCODING if is_msgpack(first_payload) else RAW_ENCODING
+        else:
+            schema_id = self._schema_id(msg_type)
+            encoding = MESSAGE_ENCODING
+        channel = self._mcap.register_channel(key, encoding, schema_id)
+        self._channels[key] = channel
+        self.stats.channels += 1
+        return channel
+
+    def _schema_id(self, msg_type: type[Message]) -> int:
+        schema_id = self._schemas.get(msg_type.TYPE)
+        if schema_id is None:
+            data = json.dumps(msg_type.json_schema(), sort_keys=True).encode()
+            schema_id = self._mcap.register_schema(msg_type.TYPE, SCHEMA_ENCODING, data)
+            self._schemas[msg_type.TYPE] = schema_id
+        return schema_id
+
+    # -- flushing and closing ---------------------------------------------
+    def maybe_flush(self) -> None:
+        """Flush if the flush interval has passed since the last flush (call on idle ticks)."""
+        if self._dirty and self._clock() - self._last_flush >= self._interval:
+            self.flush()
+
+    def flush(self) -> None:
+        """Close the current chunk and hand everything to the OS (survives a SIGKILL)."""
+        self._mcap.flush()
+        self._last_flush = self._clock()
+        self._dirty = False
+
+    def close(self) -> None:
+        """Write the summary (indexes, statistics) and the footer; the file is then complete."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self._mcap.finish()
+        finally:
+            self._file.close()

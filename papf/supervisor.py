@@ -1,0 +1,121 @@
+"""Start node processes, prefix their logs, and stop them all — no orphans.
+
+Each child runs in its own process group (so a stop reaches anything it spawned)
+and, on Linux, gets SIGTERM from the kernel if the supervisor itself dies
+(``PR_SET_PDEATHSIG``), so even a SIGKILLed launcher leaves no node behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import TextIO
+
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:  # runs in the child between fork and exec
+    with contextlib.suppress(Exception):
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+@dataclass
+class Child:
+    name: str
+    proc: subprocess.Popen
+    tail: deque = field(default_factory=lambda: deque(maxlen=40))
+
+    @property
+    def returncode(self) -> int | None:
+        return self.proc.poll()
+
+
+class Supervisor:
+    """Owns the node processes of one run. Use as a context manager."""
+
+    def __init__(self, log_stream: TextIO | None = None, show=lambda name, line: True):
+        self.children: list[Child] = []
+        self.log_stream = log_stream or sys.stderr
+        self.show = show
+        self._lock = threading.Lock()
+
+    def start(self, name: str, argv: list[str], env: dict | None = None) -> Child:
+        """Start ``argv`` (e.g. ``[python, -m, nodes.planner, ...]``) as node ``name``."""
+        proc = subprocess.Popen(
+            argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+            start_new_session=True, preexec_fn=_die_with_parent, text=True, bufsize=1,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
+        )
+        child = Child(name, proc)
+        self.children.append(child)
+        threading.Thread(target=self._pump, args=(child,), daemon=True,
+                         name=f"log-{name}").start()
+        return child
+
+    def _pump(self, child: Child) -> None:
+        for line in child.proc.stdout:  # type: ignore[union-attr]
+            line = line.rstrip("\n")
+            child.tail.append(line)
+            if self.show(child.name, line):
+                with self._lock:
+                    print(f"[{child.name}] {line}", file=self.log_stream, flush=True)
+
+    def dead(self) -> list[Child]:
+        """Children that have exited."""
+        return [c for c in self.children if c.returncode is not None]
+
+    def stop(self, grace_s: float = 3.0) -> None:
+        """SIGTERM every child's group (reverse start order), SIGKILL whatever is left."""
+        for child in reversed(self.children):
+            _signal_group(child.proc, signal.SIGTERM)
+        deadline = time.monotonic() + grace_s
+        for child in reversed(self.children):
+            try:
+                child.proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                _signal_group(child.proc, signal.SIGKILL)
+                child.proc.wait(timeout=5)
+        for child in self.children:  # a group may outlive its leader
+            _signal_group(child.proc, signal.SIGKILL)
+
+    def __enter__(self) -> Supervisor:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+
+def _signal_group(proc: subprocess.Popen, sig: int) -> None:
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(proc.pid, sig)
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that is free right now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def port_in_use(port: int, host: str = "127.0.0.1") -> bool:
+    with socket.socket() as s:
+        return s.connect_ex((host, port)) == 0
+
+
+def wait_port(port: int, timeout_s: float, host: str = "127.0.0.1", abort=lambda: False) -> bool:
+    """Wait until something accepts TCP connections on ``host:port``."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and not abort():
+        if port_in_use(port, host):
+            return True
+        time.sleep(0.02)
+    return False

@@ -1,0 +1,38 @@
+"""Shared fixtures: a real Zenoh router process on a free port, node processes that
+always die with the test, and a client session for the test itself."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+import zenoh
+
+from papf.supervisor import Supervisor, free_port, wait_port
+from papf.transport import zenoh_config
+
+
+@pytest.fixture
+def router():
+    """Start `python -m papf.router` on a free loopback port; yield its endpoint."""
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    with Supervisor(show=lambda *_: False) as sup:
+        sup.start("router", [sys.executable, "-m", "papf.router", "--listen", endpoint])
+        assert wait_port(port, 15.0), "router did not start: " + " | ".join(sup.children[0].tail)
+        yield endpoint
+
+
+@pytest.fixture
+def spawn():
+    """``spawn(name, [python -m ...])`` — processes are killed (group) at test end."""
+    sup = Supervisor(show=lambda name, line: True)
+    yield sup.start
+    sup.stop()
+
+
+@pytest.fixture
+def session(router):
+    """A Zenoh client session of the test, connected to the router fixture."""
+    with zenoh.open(zenoh_config("client", [router])) as s:
+        yield s

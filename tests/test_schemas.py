@@ -1,0 +1,107 @@
+"""Schemas: round trips, bad bytes -> SchemaError, JSON Schema validates real messages."""
+
+import math
+
+import jsonschema
+import msgpack
+import numpy as np
+import pytest
+
+import schemas as s
+from schemas.base import Message
+
+
+def samples() -> list[Message]:
+    return [
+        s.Scan(stamp_ns=100, angle_min=-math.pi, angle_increment=2 * math.pi / 4, range_min=0.2,
+               range_max=25.0, ranges=np.array([1.0, np.inf, np.nan, 0.5]), sensor_x=0.02),
+        s.Odometry(stamp_ns=1, x=1.0, y=-2.0, yaw=0.5, v=0.2, w=-0.1),
+        s.Twist(stamp_ns=2, v=0.3, w=0.1),
+        s.WheelStates(stamp_ns=3, speed=(1, 2, 3, 4), torque=(0.1, 0.2, 0.3, 0.4)),
+        s.BatteryState(stamp_ns=4, voltage=11.9, current=1.2, power=14.3, charge_used_mAh=1.5,
+                       energy_J=60.0, soc=0.99, model="paper"),
+        s.Goal(stamp_ns=5, x=10.0, y=0.0, tolerance=0.1),
+        s.PlannerState(stamp_ns=6, algorithm="papf", force=(1.0, 2.0), temporary_goal=(1.0, 1.0),
+                       predicted_path=((0, 0), (0.03, 0.0)), abandoned_paths=(((0, 0), (1, 1)),),
+                       top_quarks=((2.0, 2.0),), virtual_walls=(((1, 1), (1, 2)),)),
+        s.PlannerStatus(stamp_ns=7, state="driving", reason="", distance_to_goal=3.0),
+        s.Clock(stamp_ns=8),
+        s.Event(stamp_ns=9, kind="collision", source="base_driver", x=1.0, y=2.0),
+    ]
+
+
+@pytest.mark.parametrize("msg", samples(), ids=lambda m: m.TYPE)
+def test_round_trip(msg):
+    back = type(msg).from_bytes(msg.to_bytes())
+    assert back == msg
+    assert back.to_bytes() == msg.to_bytes()
+
+
+def test_every_message_type_is_sampled():
+    assert {type(m) for m in samples()} == set(s.ALL_MESSAGES)
+
+
+@pytest.mark.parametrize("msg", samples(), ids=lambda m: m.TYPE)
+def test_json_schema_validates_decoded_message(msg):
+    wire = msgpack.unpackb(msg.to_bytes(), raw=False)
+    jsonschema.validate(type(msg).to_json_compatible(wire), type(msg).json_schema())
+
+
+def test_json_schema_rejects_wrong_type_tag():
+    wire = s.Twist(stamp_ns=1, v=0, w=0).to_wire()
+    wire["_type"] = "papf/Scan/v1"
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(wire, s.Twist.json_schema())
+
+
+def test_scan_ranges_travel_as_float32_bytes():
+    scan = samples()[0]
+    wire = msgpack.unpackb(scan.to_bytes(), raw=False)
+    assert isinstance(wire["ranges"], bytes) and len(wire["ranges"]) == 16
+    assert np.frombuffer(wire["ranges"], "<f4")[0] == 1.0
+
+
+@pytest.mark.parametrize("payload, match", [
+    (b"", "not msgpack"),
+    (b"\xc1\xc1garbage", "not msgpack"),
+    (msgpack.packb([1, 2, 3]), "expected a map"),
+    (msgpack.packb({"_type": "papf/Twist/v2", "stamp_ns": 1, "v": 0.0, "w": 0.0}), "wrong message type"),
+    (msgpack.packb({"_type": "papf/Twist/v1", "stamp_ns": 1, "v": 0.0}), "missing field 'w'"),
+    (msgpack.packb({"_type": "papf/Twist/v1", "stamp_ns": "x", "v": 0.0, "w": 0.0}), "stamp_ns"),
+    (msgpack.packb({"_type": "papf/Twist/v1", "stamp_ns": 1, "v": float("nan"), "w": 0.0}), "finite"),
+    (msgpack.packb({"_type": "papf/Twist/v1", "stamp_ns": 1, "v": float("inf"), "w": 0.0}), "finite"),
+    (msgpack.packb({"_type": "papf/Twist/v1", "stamp_ns": 1, "v": True, "w": 0.0}), "number"),
+])
+def test_bad_twist_bytes_raise_schema_error(payload, match):
+    with pytest.raises(s.SchemaError, match=match) as info:
+        s.Twist.from_bytes(payload)
+    assert "papf/Twist/v1" in str(info.value)
+
+
+def test_bad_arrays_raise_schema_error():
+    wire = samples()[0].to_wire()
+    with pytest.raises(s.SchemaError, match="float32"):
+        s.Scan.from_wire({**wire, "ranges": b"abc"})
+    wheels = s.WheelStates(stamp_ns=1, speed=(1, 2, 3, 4), torque=(0, 0, 0, 0)).to_wire()
+    with pytest.raises(s.SchemaError, match="number"):
+        s.WheelStates.from_wire({**wheels, "speed": [1, "a"]})
+    state = samples()[6].to_wire()
+    with pytest.raises(s.SchemaError, match=r"\[x, y\] pair"):
+        s.PlannerState.from_wire({**state, "predicted_path": [[1, 2, 3]]})
+    with pytest.raises(s.SchemaError, match="2 values"):
+        s.PlannerState.from_wire({**state, "force": [1.0]})
+
+
+def test_enumerated_strings_are_checked():
+    with pytest.raises(s.SchemaError, match="not one of"):
+        s.PlannerStatus.from_wire({**samples()[7].to_wire(), "state": "flying"})
+
+
+def test_keys_and_namespace():
+    k = s.Keys("lab/r1")
+    assert k.cmd_vel == "lab/r1/cmd_vel" and k.alive("planner") == "lab/r1/alive/planner"
+    assert k.type_of("lab/r1/sim/pose") is s.Odometry
+    assert k.type_of("other/scan") is None
+    for bad in ("", "/x", "x/", "a/*"):
+        with pytest.raises(ValueError):
+            s.Keys(bad)

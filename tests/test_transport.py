@@ -1,0 +1,69 @@
+"""Transport helpers over a real router process: typed pub/sub, bad payloads dropped, liveliness."""
+
+import argparse
+import logging
+import time
+
+import pytest
+import zenoh
+
+from papf.errors import ConfigError
+from papf.transport import Node, add_zenoh_args, alive_nodes, wait_alive, zenoh_config
+from schemas import Keys, Odometry, Twist
+
+
+def test_config_defaults_to_embedded_router_client():
+    conf = zenoh_config()
+    assert '"client"' in conf.get_json("mode")
+    assert "7447" in conf.get_json("connect/endpoints")
+    assert conf.get_json("scouting/multicast/enabled") == "false"
+
+
+def test_config_from_cli_args():
+    p = argparse.ArgumentParser()
+    add_zenoh_args(p)
+    a = p.parse_args(["--mode", "peer", "--listen", "tcp/127.0.0.1:9000", "--namespace", "r2"])
+    assert a.mode == "peer" and a.namespace == "r2" and a.listen == ["tcp/127.0.0.1:9000"]
+
+
+def test_bad_config_file_is_a_config_error(tmp_path):
+    bad = tmp_path / "z.json5"
+    bad.write_text("{ this is : not json5 ")
+    with pytest.raises(ConfigError, match="cannot read Zenoh config"):
+        zenoh_config(config_file=str(bad))
+    with pytest.raises(ConfigError, match="mode"):
+        zenoh_config(mode="satellite")
+
+
+def wait_for(pred, timeout=5.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if pred():
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def test_node_decodes_drops_garbage_and_declares_liveliness(router, session):
+    keys = Keys("t1")
+    with zenoh.open(zenoh_config("client", [router])) as s2:
+        node = Node("probe", s2, keys, logging.getLogger("probe"))
+        node.subscribe("cmd_vel")
+        node.ready()
+        assert not wait_alive(session, keys, ["probe"], timeout_s=5)
+        assert "probe" in alive_nodes(session, keys)
+        session.put(keys.cmd_vel, b"\x00garbage")
+        session.put(keys.cmd_vel, Odometry(stamp_ns=1, x=0, y=0, yaw=0, v=0, w=0).to_bytes())
+        session.put(keys.cmd_vel, Twist(stamp_ns=7, v=0.1, w=0.2).to_bytes())
+        topic, msg = node.inbox.get(timeout=5)
+        assert topic == "cmd_vel" and msg == Twist(stamp_ns=7, v=0.1, w=0.2)
+        assert wait_for(lambda: node.bad_messages["cmd_vel"] == 2)
+        with pytest.raises(TypeError, match="carries Twist"):
+            node.publish("cmd_vel", Odometry(stamp_ns=1, x=0, y=0, yaw=0, v=0, w=0))
+        node.close()
+    assert wait_for(lambda: "probe" not in alive_nodes(session, keys))
+
+
+def test_wait_alive_reports_missing(session):
+    missing = wait_alive(session, Keys("nobody"), ["planner"], timeout_s=0.3)
+    assert missing == {"planner"}
