@@ -219,42 +219,52 @@ def _normalise(self) -> None:
 # -- validation -------------------------------------------------------------
 def _check(type_name: str, name: str, kind: str, md: dict, value: Any) -> Any:
     where = f"{type_name}.{name}"
-    if kind == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise SchemaError(f"{where}: expected an integer, got {value!r}")
-        return value
-    if kind == "float":
-        return _float(where, value, md)
-    if kind == "str":
-        if not isinstance(value, str):
-            raise SchemaError(f"{where}: expected a string, got {value!r}")
-        if md.get("choices") and value not in md["choices"]:
-            raise SchemaError(f"{where}: {value!r} is not one of {list(md['choices'])}")
-        return value
-    if kind == "bool":
-        if not isinstance(value, bool):
-            raise SchemaError(f"{where}: expected true/false, got {value!r}")
-        return value
-    if kind == "f32array":
-        if not isinstance(value, (bytes, bytearray)) or len(value) % 4:
-            raise SchemaError(f"{where}: expected little-endian float32 bytes, got "
-                              f"{type(value).__name__} of length {_len(value)}")
-        return np.frombuffer(bytes(value), dtype=_F32).copy()
-    if not isinstance(value, (list, tuple)):
+    if kind in _SEQUENCE_KINDS and not isinstance(value, (list, tuple)):
         raise SchemaError(f"{where}: expected an array, got {type(value).__name__}")
-    if kind == "floats":
-        if md.get("length") is not None and len(value) != md["length"]:
-            raise SchemaError(f"{where}: expected {md['length']} values, got {len(value)}")
-        return tuple(_float(where, v, md) for v in value)
-    if kind == "strs":
-        if not all(isinstance(v, str) for v in value):
-            raise SchemaError(f"{where}: expected an array of strings")
-        return tuple(value)
-    if kind == "points":
-        return _points(where, value, md)
-    if kind == "paths":
-        return tuple(_points(f"{where}[{i}]", p, md) for i, p in enumerate(value))
-    raise AssertionError(kind)
+    return _CHECKERS[kind](where, value, md)
+
+
+def _int(where: str, value: Any, md: dict) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise SchemaError(f"{where}: expected an integer, got {value!r}")
+    return value
+
+
+def _str(where: str, value: Any, md: dict) -> str:
+    if not isinstance(value, str):
+        raise SchemaError(f"{where}: expected a string, got {value!r}")
+    if md.get("choices") and value not in md["choices"]:
+        raise SchemaError(f"{where}: {value!r} is not one of {list(md['choices'])}")
+    return value
+
+
+def _bool(where: str, value: Any, md: dict) -> bool:
+    if not isinstance(value, bool):
+        raise SchemaError(f"{where}: expected true/false, got {value!r}")
+    return value
+
+
+def _f32array(where: str, value: Any, md: dict) -> np.ndarray:
+    if not isinstance(value, (bytes, bytearray)) or len(value) % 4:
+        raise SchemaError(f"{where}: expected little-endian float32 bytes, got "
+                          f"{type(value).__name__} of length {_len(value)}")
+    return np.frombuffer(bytes(value), dtype=_F32).copy()
+
+
+def _floats(where: str, value: Any, md: dict) -> tuple[float, ...]:
+    if md.get("length") is not None and len(value) != md["length"]:
+        raise SchemaError(f"{where}: expected {md['length']} values, got {len(value)}")
+    return tuple(_float(where, v, md) for v in value)
+
+
+def _strs(where: str, value: Any, md: dict) -> tuple[str, ...]:
+    if not all(isinstance(v, str) for v in value):
+        raise SchemaError(f"{where}: expected an array of strings")
+    return tuple(value)
+
+
+def _paths(where: str, value: Any, md: dict) -> Paths:
+    return tuple(_points(f"{where}[{i}]", p, md) for i, p in enumerate(value))
 
 
 def _points(where: str, value: Any, md: dict) -> Points:
@@ -275,6 +285,11 @@ def _float(where: str, value: Any, md: dict) -> float:
     if not md.get("nonfinite") and not math.isfinite(value):
         raise SchemaError(f"{where}: {value!r} is not allowed (must be finite)")
     return value
+
+
+_SEQUENCE_KINDS = ("floats", "strs", "points", "paths")
+_CHECKERS = {"int": _int, "float": _float, "str": _str, "bool": _bool, "f32array": _f32array,
+             "floats": _floats, "strs": _strs, "points": _points, "paths": _paths}
 
 
 def _len(value: Any) -> str:

@@ -5,7 +5,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from schemas.messages import (
-    BatteryState, Clock, Event, Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist,
+    BatteryState,
+    Clock,
+    Event,
+    Goal,
+    Odometry,
+    PlannerState,
+    PlannerStatus,
+    Scan,
+    Twist,
     WheelStates,
 )
 
