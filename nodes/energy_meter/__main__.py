@@ -1,0 +1,95 @@
+"""Energy meter node: ``python -m nodes.energy_meter [--model motor|paper] [--set name=value]``.
+
+Emulates the PAPF paper's charge measurement (IV-C) from the base driver's messages
+(DESIGN.md §7; the models and constants: docs/energy.md).
+
+Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
+
+=================  ==============  =====  ==================================================
+key                type            dir    what
+=================  ==============  =====  ==================================================
+``<ns>/odom``      Odometry        in     v, w (and stamps) at 50 Hz in sim
+``<ns>/wheels``    WheelStates     in     per-wheel speed [rad/s] and torque [N m]
+``<ns>/battery``   BatteryState    out    one per paired stamp: V, I, P, mAh, J, SoC, model
+``<ns>/alive/energy_meter``  liveliness  out  declared once subscribed
+=================  ==============  =====  ==================================================
+
+Settings: ``--model`` (``motor`` default, or ``paper`` = eq. (6)); ``--set name=value``,
+repeatable, overrides a constant of the pack (``initial_soc``, ``capacity_mAh``,
+``cell_resistance_ohm``, ``cells_series``) or of the model (``p_s_W``, ``f_v_Nm``,
+``regeneration=true``, ...; an unknown name lists the valid ones); the Zenoh options.
+Bad payloads and messages the meter cannot use are logged, counted and dropped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from papf.errors import ConfigError, PapfError
+from papf.transport import add_zenoh_args, open_node, setup_logging
+
+from .core import EnergyMeter
+from .models import MODELS
+
+NODE_NAME = "energy_meter"
+
+
+def parse_settings(items: list[str]) -> dict[str, str]:
+    """``["a=1", "b=x"]`` -> ``{"a": "1", "b": "x"}``."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ConfigError(f"--set {item!r}: expected name=value")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
+    """Subscribe, declare, get ready, then meter every message until stopped."""
+    errors = 0
+    with open_node(NODE_NAME, args, log) as node:
+        node.subscribe("odom")
+        node.subscribe("wheels")
+        node.declare_publishers("battery")
+        node.ready()
+        for _topic, msg in node.messages():
+            if msg is None:
+                continue
+            try:
+                state = meter.feed(msg)
+            except PapfError as exc:
+                errors += 1
+                if errors <= 5 or errors % 100 == 0:
+                    log.warning("dropped message #%d it cannot meter: %s", errors, exc)
+                continue
+            if state is not None:
+                node.publish("battery", state)
+        b = meter.battery
+        log.info("stopped: %.3f mAh, %.1f J, SoC %.4f (%s model; %d stale, %d unpaired, "
+                 "%d overloads)", b.charge_used_mAh, b.energy_J, b.soc, meter.model_name,
+                 meter.stale, meter.discarded, b.overloads)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m nodes.energy_meter",
+                                     description=__doc__.splitlines()[0])
+    parser.add_argument("--model", choices=sorted(MODELS), default="motor",
+                        help="power model: motor (DC motors, default) or paper (eq. 6)")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a pack or model constant (repeatable)")
+    parser.add_argument("--log-level", default="INFO")
+    add_zenoh_args(parser)
+    args = parser.parse_args(argv)
+    log = setup_logging(NODE_NAME, args.log_level)
+    try:
+        meter = EnergyMeter(args.model, parse_settings(args.set))
+        run(meter, args, log)
+    except ConfigError as exc:
+        parser.error(str(exc))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
