@@ -103,9 +103,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _optional_commands():
     """Subcommands that live with their feature's package."""
-    from papf.commands import REGISTRARS
+    from papf.commands import registrars
 
-    return REGISTRARS
+    return registrars()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,5 +1,17 @@
-"""Subcommands contributed by feature packages: each exposes ``register(subparsers)``."""
+"""Subcommands contributed by feature packages: each module exposes ``register(subparsers)``.
+
+Listed by module path and imported when the parser is built, so `papf --help` shows
+them all while `papf run` does not pay for importing matplotlib or rosbags.
+"""
 
 from __future__ import annotations
 
-REGISTRARS: list = []
+import importlib
+
+MODULES = (
+    "papf.recording.cli",   # record, replay, recover, info
+)
+
+
+def registrars() -> list:
+    return [importlib.import_module(m).register for m in MODULES]

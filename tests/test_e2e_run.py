@@ -10,7 +10,7 @@ import time
 import pytest
 import zenoh
 
-from papf.supervisor import free_port
+from papf.supervisor import free_port, wait_port
 from papf.transport import zenoh_config
 from schemas import Clock, Keys
 from tests.e2e import papf_run, pids_of, start_papf_run
@@ -73,6 +73,7 @@ def test_killing_the_planner_stops_the_robot_and_fails_the_run():
     port = free_port()
     proc = start_papf_run("--world", "open", "--planner", "apf", port=port)
     try:
+        assert wait_port(port, 60), "the run's router never came up"
         with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as s:
             moving = threading.Event()
             sub = s.declare_subscriber(Keys().clock, lambda smp: Clock.from_bytes(
@@ -110,7 +111,7 @@ def test_garbage_on_cmd_vel_and_scan_crashes_nothing():
                 time.sleep(0.005)
 
     t = threading.Thread(target=spam, daemon=True)
-    time.sleep(0.5)
+    assert wait_port(port, 60), "the run's router never came up"
     t.start()
     try:
         out, err = proc.communicate(timeout=200)
