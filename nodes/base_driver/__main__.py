@@ -1,0 +1,206 @@
+"""ROSbot base driver node: ``python -m nodes.base_driver --driver sim|rosbot ...``.
+
+``--driver sim`` (default) runs the simulated ROSbot (:mod:`nodes.base_driver.core`)
+on the lockstep protocol of docs/architecture.md; ``--driver rosbot`` hands over to
+the real-robot bridge driver (``nodes.base_driver.rosbot_node.main``).
+
+Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
+
+=================  ===========  =====  =================================================
+key                type         dir    what
+=================  ===========  =====  =================================================
+``<ns>/events``    Event        in     ``run_started``: a new run at t = 0; ``run_ended`` stops it
+``<ns>/cmd_vel``   Twist        in     velocity command; ``stamp_ns`` = the scan it answers
+``<ns>/sim/pose``  Odometry     out    ground-truth pose, every odometry instant
+``<ns>/odom``      Odometry     out    odometry (= ground truth in sim), same instants
+``<ns>/wheels``    WheelStates  out    wheel speeds and motor torques, same instants
+``<ns>/clock``     Clock        out    sim time, same instants
+``<ns>/events``    Event        out    ``collision`` (x, y), ``watchdog_stop``, ``node_fault``
+=================  ===========  =====  =================================================
+
+Settings: ``--world`` (packaged name or .toml path), ``--seed`` (noise), ``--odom-hz``
+(50), ``--scan-hz`` (10, lockstep instants), ``--watchdog`` (0.5 s of sim time),
+``--lockstep-timeout`` (2.0 wall s, then a ``node_fault`` event and free running in
+real time until a command answers the latest scan again), ``--realtime`` (pace sim
+time to the wall clock, never wait for commands), plus the Zenoh options.
+Liveliness token: ``<ns>/alive/base_driver``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import queue
+import sys
+import time
+from typing import TYPE_CHECKING
+
+from papf.errors import PapfError
+from papf.transport import Node, add_zenoh_args, open_node, setup_logging
+from schemas.messages import Event
+from worlds import load_world
+
+if TYPE_CHECKING:
+    from nodes.base_driver.core import DriverCore
+
+NAME = "base_driver"
+SOURCE = NAME                      # Event.source (same as nodes.base_driver.core.SOURCE)
+PUBLISHES = ("sim/pose", "odom", "wheels", "clock", "events")
+
+
+class SimDriver:
+    """The lockstep / realtime loop around a :class:`DriverCore` (transport only)."""
+
+    def __init__(self, node: Node, core: DriverCore, realtime: bool, lockstep_timeout_s: float):
+        self.node, self.core, self.log = node, core, node.log
+        self.realtime = realtime
+        self.timeout_s = lockstep_timeout_s
+        self.free_running = realtime       # True: pace to the wall clock, do not wait
+        self.wall0 = time.monotonic()      # wall time of sim t = 0 while free running
+        self.ended = False
+        self.matched = False               # a command answering the scan of this instant came
+        self.last_scan_ns = -1             # latest scan instant published [ns]
+
+    def handle(self, topic: str, msg) -> None:
+        if topic == "cmd_vel":
+            self.matched |= self.core.command(msg)
+            if self.free_running and not self.realtime and msg.stamp_ns == self.last_scan_ns:
+                self.log.info("cmd_vel answers scan %d ns again: back to lockstep", msg.stamp_ns)
+                self.free_running = False
+        elif topic == "events" and msg.kind == "run_ended":
+            self.ended = True
+
+    def pump(self, deadline: float, until_matched: bool) -> bool:
+        """Handle inbox messages until ``deadline`` (monotonic s; a past deadline drains what
+        is queued) or, with ``until_matched``, until a command answers this instant's scan."""
+        inbox = self.node.inbox
+        while not (self.node.stop or self.ended):
+            if until_matched and self.matched:
+                return True
+            remaining = deadline - time.monotonic()
+            try:
+                item = inbox.get(timeout=min(remaining, 0.1)) if remaining > 0 else inbox.get_nowait()
+            except queue.Empty:
+                if remaining > 0:
+                    continue
+                break
+            self.handle(*item)
+        return until_matched and self.matched
+
+    def run(self) -> None:
+        core, node = self.core, self.node
+        while not (node.stop or self.ended):
+            t = core.t_ns
+            if self.free_running:
+                self.pump(self.wall0 + t / 1e9, until_matched=False)
+            self.matched = False
+            for topic, msg in core.outputs():
+                node.publish(topic, msg)
+            if core.is_scan_instant():
+                self.last_scan_ns = t
+            if core.is_scan_instant() and not self.free_running:
+                if not self.pump(time.monotonic() + self.timeout_s, until_matched=True):
+                    if node.stop or self.ended:
+                        break
+                    self._fault(t)
+            else:
+                self.pump(0.0, until_matched=False)
+            core.advance()
+
+    def _fault(self, t: int) -> None:
+        detail = (f"no cmd_vel with stamp_ns={t} within {self.timeout_s:g} s (wall); "
+                  "free running in real time until a command answers the latest scan")
+        self.log.warning("lockstep: %s", detail)
+        self.node.publish("events", Event(stamp_ns=t, kind="node_fault", source=SOURCE, detail=detail))
+        self.free_running = True
+        self.wall0 = time.monotonic() - t / 1e9
+
+
+def wait_for_start(node: Node) -> bool:
+    """Block until an ``events`` ``run_started`` arrives (True) or stop is requested (False)."""
+    while not node.stop:
+        try:
+            topic, msg = node.inbox.get(timeout=0.1)
+        except queue.Empty:
+            continue
+        if topic == "events" and msg.kind == "run_started":
+            return True
+    return False
+
+
+def main_sim(args: argparse.Namespace) -> int:
+    from nodes.base_driver.core import DriverConfig, DriverCore  # pybullet: only when simulating
+
+    log = setup_logging(NAME, args.log_level)
+    world = load_world(args.world)
+    config = DriverConfig.from_rates(args.odom_hz, args.scan_hz, args.watchdog)
+    with open_node(NAME, args, log) as node:
+        node.subscribe("events")
+        node.subscribe("cmd_vel")
+        node.declare_publishers(*PUBLISHES)
+        node.ready()
+        while wait_for_start(node):  # one run per run_started; run_ended waits for the next
+            with DriverCore(world, args.seed, config) as core:
+                log.info("run started: world %s, seed %d, %s", world.name, args.seed,
+                         "realtime" if args.realtime else "lockstep")
+                SimDriver(node, core, args.realtime, args.lockstep_timeout).run()
+                log.info("run stopped at sim t = %.3f s; collisions: %d", core.t_ns / 1e9,
+                         core.collision_count)
+    return 0
+
+
+def main_rosbot(args: argparse.Namespace) -> int:
+    try:
+        rosbot_node = importlib.import_module("nodes.base_driver.rosbot_node")
+    except ModuleNotFoundError as exc:
+        if exc.name != "nodes.base_driver.rosbot_node":
+            raise
+        print("base_driver: --driver rosbot needs nodes/base_driver/rosbot_node.py, which is not "
+              "installed in this tree; use --driver sim", file=sys.stderr)
+        return 2
+    return rosbot_node.main(args) or 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m nodes.base_driver",
+                                     description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog=__doc__.split("\n\n", 1)[1])
+    parser.add_argument("--driver", choices=("sim", "rosbot"), default="sim",
+                        help="simulated ROSbot (default) or the real robot over the ROS 2 bridge")
+    parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")
+    parser.add_argument("--seed", type=int, default=0, help="noise seed (sim; default 0)")
+    parser.add_argument("--realtime", action="store_true",
+                        help="pace sim time to the wall clock and never wait for commands")
+    parser.add_argument("--lockstep-timeout", type=float, default=2.0, metavar="S",
+                        help="wall seconds to wait for the cmd_vel of a scan (default 2.0)")
+    parser.add_argument("--scan-hz", type=float, default=10.0, help="scan / lockstep rate (10)")
+    parser.add_argument("--odom-hz", type=float, default=50.0, help="odometry rate (50)")
+    parser.add_argument("--watchdog", type=float, default=0.5, metavar="S",
+                        help="stop when no fresh command for S seconds (default 0.5)")
+    parser.add_argument("--log-level", default="INFO")
+    add_zenoh_args(parser)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--driver", default="sim")
+    known, _ = pre.parse_known_args(argv)
+    parser = build_parser()
+    if known.driver == "rosbot":
+        try:  # the rosbot driver may add its own options (bridge namespace, ...)
+            add = importlib.import_module("nodes.base_driver.rosbot_node").add_arguments
+            add(parser)
+        except (ModuleNotFoundError, AttributeError):
+            pass
+    args = parser.parse_args(argv)
+    try:
+        return main_rosbot(args) if args.driver == "rosbot" else main_sim(args)
+    except PapfError as exc:
+        print(f"base_driver: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

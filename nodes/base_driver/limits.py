@@ -1,0 +1,105 @@
+"""ROSbot velocity-command safety, shared by the simulated and the real-robot driver.
+
+Pure Python (no pybullet, no zenoh). :class:`CommandGate` does what the ROS 2
+``diff_drive_controller`` of the ROSbot does with ``/cmd_vel`` (DESIGN.md §5,
+docs/architecture.md "Safety"):
+
+1. non-finite ``v`` or ``w`` -> the whole command is treated as a stop (0, 0);
+2. velocity clamp ``|v| <= v_max``, ``|w| <= w_max``;
+3. watchdog: no fresh command for ``watchdog_ns`` (in the caller's time base, sim
+   time in sim) -> the target becomes (0, 0) and ``stopped_by_watchdog`` is set;
+4. acceleration rate limit towards the target (like the controller's
+   ``SpeedLimiter``): ``|dv/dt| <= a_max``, ``|dw/dt| <= alpha_max``, so a watchdog
+   stop decelerates at the limit too, as on the robot.
+
+Usage: ``gate.command(v, w, t_ns)`` whenever a command arrives, then
+``v, w, stopped = gate.output(t_ns, dt_s)`` every control step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from papf.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class RosbotLimits:
+    """Command limits of the ROSbot 2.0 PRO (DESIGN.md §5).
+
+    Source: husarion/rosbot_ros ``rosbot_controller/config/.../diff_drive_controller.yaml``
+    as summarised in DESIGN.md §5: linear max 0.9 m/s (the yaml has 1.0; the design
+    keeps a margin under the 1.25 m/s top speed), 1.0 m/s^2; angular 3.0 rad/s,
+    4.0 rad/s^2; ``cmd_vel_timeout`` 0.5 s.
+    """
+
+    v_max: float = 0.9                   # [m/s] |linear.x| limit
+    w_max: float = 3.0                   # [rad/s] |angular.z| limit
+    a_max: float = 1.0                   # [m/s^2] linear acceleration limit
+    alpha_max: float = 4.0               # [rad/s^2] angular acceleration limit
+    watchdog_ns: int = 500_000_000       # [ns] cmd_vel_timeout
+
+    def __post_init__(self) -> None:
+        for name in ("v_max", "w_max", "a_max", "alpha_max"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"RosbotLimits.{name} = {value!r} must be a finite number > 0")
+        if not isinstance(self.watchdog_ns, int) or self.watchdog_ns <= 0:
+            raise ConfigError(f"RosbotLimits.watchdog_ns = {self.watchdog_ns!r} must be an "
+                              "integer number of nanoseconds > 0")
+
+
+class GateOutput(NamedTuple):
+    v: float                   # [m/s] command to apply now
+    w: float                   # [rad/s]
+    stopped_by_watchdog: bool  # the target is zero because no fresh command came in time
+
+
+def _clamp(x: float, limit: float) -> float:
+    return max(-limit, min(limit, x))
+
+
+class CommandGate:
+    """Clamp, rate-limit and watchdog a stream of (v, w) commands (see module doc)."""
+
+    def __init__(self, limits: RosbotLimits | None = None):
+        self.limits = limits or RosbotLimits()
+        self._target = (0.0, 0.0)
+        self._last_cmd_ns: int | None = None
+        self._out = (0.0, 0.0)
+        self.rejected_nonfinite = 0     # commands turned into a stop because of nan/inf
+
+    @property
+    def last_command_ns(self) -> int | None:
+        """Time of the freshest accepted command, or None before the first one."""
+        return self._last_cmd_ns
+
+    def command(self, v: float, w: float, t_ns: int) -> bool:
+        """Take a new command valid from ``t_ns``; False (ignored) if older than the last one."""
+        if self._last_cmd_ns is not None and t_ns < self._last_cmd_ns:
+            return False
+        if not (math.isfinite(v) and math.isfinite(w)):
+            self.rejected_nonfinite += 1
+            v, w = 0.0, 0.0
+        lim = self.limits
+        self._target = (_clamp(float(v), lim.v_max), _clamp(float(w), lim.w_max))
+        self._last_cmd_ns = t_ns
+        return True
+
+    def stopped_by_watchdog(self, t_ns: int) -> bool:
+        """True when a command was once received but none is fresh at ``t_ns``."""
+        return (self._last_cmd_ns is not None
+                and t_ns - self._last_cmd_ns > self.limits.watchdog_ns)
+
+    def output(self, t_ns: int, dt_s: float) -> GateOutput:
+        """The rate-limited command for the control step of ``dt_s`` seconds starting at ``t_ns``."""
+        stopped = self.stopped_by_watchdog(t_ns)
+        v_t, w_t = (0.0, 0.0) if stopped else self._target
+        v0, w0 = self._out
+        lim = self.limits
+        v = v0 + _clamp(v_t - v0, lim.a_max * dt_s)
+        w = w0 + _clamp(w_t - w0, lim.alpha_max * dt_s)
+        self._out = (v, w)
+        return GateOutput(v, w, stopped)

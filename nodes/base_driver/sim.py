@@ -1,0 +1,277 @@
+"""Simulated ROSbot 2.0 PRO base: pybullet rigid-body physics, no transport (pure core).
+
+The robot (DESIGN.md §5; geometry and masses from husarion/rosbot_ros
+``rosbot_description``): a chassis box of 0.200 x 0.235 x 0.100 m (the footprint,
+so it covers the wheels; obstacle contacts are found on it) and four wheels of
+r = 0.0425 m, 0.036 m wide, 0.074 kg each, at x = +-wheelbase/2 = +-0.053 m,
+y = +-track/2 = +-0.096 m; 2.84 kg in total. Each wheel is a revolute joint
+under pybullet ``VELOCITY_CONTROL`` with a motor torque limit
+(:data:`MOTOR_TORQUE_LIMIT`), so speed changes are physically bounded (by that torque
+and by tyre friction, mu g ~ 10 m/s^2; the command gate's 1 m/s^2 is tighter). Poses
+are in the world file's frame: the robot starts at ``world.start`` plus jitter.
+
+Wheel-ground friction. Bullet's multibody solver takes its two friction directions
+from fixed world axes, which makes a skid-steer robot turn differently at yaw 0 and
+yaw 45 deg (measured: in-place rotation stalls near yaw 0 and pi/2). So the
+wheels have zero Bullet friction with the floor and each wheel gets a Coulomb tyre
+force, direction-invariant, computed here every step and applied at its contact
+point: ``F = -mu N s / sqrt(|s|^2 + eps^2)`` with ``s`` the contact slip velocity
+(floor-relative velocity of the contact point minus the rim speed ``omega r``) and
+``N = m g / 4`` (flat floor, no load transfer: an assumption). ``eps`` smooths the
+Coulomb law's jump at zero slip so a robot at rest does not chatter (0.05 m/s, an
+assumption; trajectories barely change for 0.005-0.1 m/s).
+
+Skid steering. For in-place rotation the Coulomb forces balance when the wheels'
+contact speed is ``w (a^2 + b^2) / b`` (a = wheelbase/2, b = track/2), i.e. the
+wheel targets use an effective track ``track * (1 + (wheelbase/track)^2)`` =
+0.192 * 1.305 = 0.251 m. The real ROSbot's controller uses 0.186 * 1.36 = 0.253 m
+(``wheel_separation`` x ``wheel_separation_multiplier``, "checked on our office
+floor"), which this model reproduces.
+
+Noise (one ``numpy.random.Generator(seed)``, drawn once at construction): start-pose
+jitter (hand placement), per-wheel friction coefficient and per-wheel rolling radius
+(calibration error that makes straight driving curve slightly). Same seed -> the
+same trajectory bit for bit; another seed -> another one.
+
+Odometry is ground truth from pybullet; the real ROSbot publishes EKF-filtered
+wheel+IMU odometry (``/odometry/filtered``), which is smoother but drifts.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pybullet as p
+
+from papf.errors import ConfigError
+from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
+from worlds import World
+from worlds.bullet import add_ground, build_world
+
+GRAVITY = 9.81                 # [m/s^2]
+STEP_NS = 4_000_000            # [ns] physics step, 250 Hz (docs/architecture.md "Time")
+SETTLE_STEPS = 25              # steps (0.1 s) at rest before t = 0 so the robot sits on the floor
+MOTOR_TORQUE_LIMIT = 1.5       # [N*m] per wheel: rosbot_description wheel joint effort limit and the
+                               # Gazebo plugin's max_wheel_torque (assumption: the real gear motor
+                               # delivers about this much)
+TOP_SPEED = 1.25               # [m/s] ROSbot 2.0 PRO top speed (Husarion manual, DESIGN.md §5)
+
+
+@dataclass(frozen=True)
+class SimParams:
+    """Physical and noise parameters of the simulated ROSbot (units in comments)."""
+
+    mass: float = 2.84                    # [kg] total, with LiDAR and camera (DESIGN.md §5)
+    wheel_mass: float = 0.074             # [kg] per wheel (rosbot_description wheel.urdf.xacro)
+    chassis_size: tuple[float, float, float] = (0.200, 0.235, 0.100)  # [m] x, y, z (footprint)
+    chassis_clearance: float = 0.025      # [m] floor to chassis bottom (body collision box ~0.023)
+    com_above_axle: float = 0.02          # [m] centre of mass above the wheel axles (rosbot_description)
+    wheel_radius: float = 0.0425          # [m]
+    wheel_width: float = 0.036            # [m]
+    track: float = 0.192                  # [m] left-right wheel distance
+    wheelbase: float = 0.106              # [m] front-rear wheel distance
+    friction: float = 1.0                 # [-] tyre-floor Coulomb coefficient (Gazebo model: mu = 1)
+    slip_eps: float = 0.05                # [m/s] Coulomb regularisation (see module doc)
+    motor_torque_limit: float = MOTOR_TORQUE_LIMIT  # [N*m] per wheel
+    wheel_speed_limit: float = TOP_SPEED / 0.0425   # [rad/s] 29.4, top speed / r
+    icr_factor: float | None = None       # [-] effective-track factor; None = 1 + (wheelbase/track)^2
+    start_xy_sd: float = 0.01             # [m] start position jitter (hand placement)
+    start_yaw_sd: float = math.radians(1.0)  # [rad] start heading jitter
+    friction_sd: float = 0.05             # [-] relative per-wheel friction variation
+    radius_sd: float = 0.003              # [-] relative per-wheel rolling-radius error
+    step_ns: int = field(default=STEP_NS)  # [ns]
+
+    def __post_init__(self) -> None:
+        positive = ("mass", "wheel_mass", "wheel_radius", "wheel_width", "track", "wheelbase",
+                    "friction", "slip_eps", "motor_torque_limit", "wheel_speed_limit")
+        for name in positive:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"SimParams.{name} = {value!r} must be a finite number > 0")
+        if self.mass <= 4 * self.wheel_mass:
+            raise ConfigError(f"SimParams.mass = {self.mass} kg must exceed the four wheels' "
+                              f"{4 * self.wheel_mass} kg")
+        if not isinstance(self.step_ns, int) or self.step_ns <= 0:
+            raise ConfigError(f"SimParams.step_ns = {self.step_ns!r} must be an integer > 0")
+
+    @property
+    def effective_track(self) -> float:
+        """[m] track used to turn (v, w) into wheel speeds (skid-steer ICR model)."""
+        chi = self.icr_factor if self.icr_factor is not None else 1 + (self.wheelbase / self.track) ** 2
+        return self.track * chi
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The robot touching an obstacle: index in ``world.obstacles`` and a contact point [m]."""
+
+    obstacle: int
+    x: float
+    y: float
+
+
+class SimBase:
+    """One simulated ROSbot in a pybullet DIRECT client holding ``world``'s obstacles."""
+
+    def __init__(self, world: World, seed: int = 0, params: SimParams | None = None):
+        if world.dims != 2:
+            raise ConfigError(f"world {world.name!r} is {world.dims}-D; the ROSbot sim needs a 2-D world")
+        self.params = prm = params or SimParams()
+        self.world = world
+        rng = np.random.default_rng(seed)
+        jitter = rng.normal(0.0, 1.0, 3) * (prm.start_xy_sd, prm.start_xy_sd, prm.start_yaw_sd)
+        mu = prm.friction * np.clip(1 + prm.friction_sd * rng.normal(0.0, 1.0, 4), 0.5, 1.5)
+        r_eff = prm.wheel_radius * (1 + prm.radius_sd * rng.normal(0.0, 1.0, 4))
+        self._mu = [float(m) for m in mu]                             # [-] per wheel
+        self._r_eff = [float(r) for r in r_eff]                       # [m] rolling radius per wheel
+        self._load = prm.mass * GRAVITY / 4                          # [N] per wheel
+        a, b = prm.wheelbase / 2, prm.track / 2
+        self._wx = (a, a, -a, -a)                                     # [m] WHEEL_NAMES order
+        self._wy = (b, -b, b, -b)
+        self._joints = [0, 1, 2, 3]
+        self.t_ns = 0
+        self.cid = p.connect(p.DIRECT)
+        try:
+            self._setup(world, tuple(float(c) for c in np.add(world.start, jitter)))
+        except Exception:
+            p.disconnect(self.cid)
+            raise
+
+    # -- construction -------------------------------------------------------
+    def _setup(self, world: World, start: tuple[float, float, float]) -> None:
+        cid, prm = self.cid, self.params
+        p.setGravity(0, 0, -GRAVITY, physicsClientId=cid)
+        p.setTimeStep(prm.step_ns * 1e-9, physicsClientId=cid)
+        p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=cid)
+        self.ground = add_ground(cid)
+        self.obstacles = build_world(cid, world)
+        self._obstacle_index = {body: i for i, body in enumerate(self.obstacles)}
+        self.robot = self._build_robot(start)
+        for _ in range(SETTLE_STEPS):
+            self._physics_step()
+
+    def _build_robot(self, start: tuple[float, float, float]) -> int:
+        cid, prm = self.cid, self.params
+        r, zc = prm.wheel_radius, prm.com_above_axle
+        sx, sy, sz = prm.chassis_size
+        chassis = p.createCollisionShape(
+            p.GEOM_BOX, halfExtents=[sx / 2, sy / 2, sz / 2],
+            collisionFramePosition=[0, 0, prm.chassis_clearance + sz / 2 - r - zc], physicsClientId=cid)
+        wheel = p.createCollisionShape(
+            p.GEOM_CYLINDER, radius=r, height=prm.wheel_width,
+            collisionFrameOrientation=p.getQuaternionFromEuler([math.pi / 2, 0, 0]), physicsClientId=cid)
+        robot = p.createMultiBody(
+            baseMass=prm.mass - 4 * prm.wheel_mass, baseCollisionShapeIndex=chassis,
+            basePosition=[start[0], start[1], r + zc],
+            baseOrientation=p.getQuaternionFromEuler([0, 0, start[2]]),
+            linkMasses=[prm.wheel_mass] * 4, linkCollisionShapeIndices=[wheel] * 4,
+            linkVisualShapeIndices=[-1] * 4,
+            linkPositions=[[x, y, -zc] for x, y in zip(self._wx, self._wy, strict=True)],
+            linkOrientations=[[0, 0, 0, 1]] * 4, linkInertialFramePositions=[[0, 0, 0]] * 4,
+            linkInertialFrameOrientations=[[0, 0, 0, 1]] * 4, linkParentIndices=[0] * 4,
+            linkJointTypes=[p.JOINT_REVOLUTE] * 4, linkJointAxis=[[0, 1, 0]] * 4,
+            physicsClientId=cid)
+        for j in self._joints:  # the tyre model below replaces Bullet's floor friction
+            p.changeDynamics(robot, j, lateralFriction=0.0, physicsClientId=cid)
+        p.setJointMotorControlArray(robot, self._joints, p.VELOCITY_CONTROL,
+                                    targetVelocities=[0.0] * 4,
+                                    forces=[prm.motor_torque_limit] * 4, physicsClientId=cid)
+        self._targets = (0.0, 0.0)                                    # [rad/s] left, right
+        return robot
+
+    # -- control and stepping -------------------------------------------------
+    def set_twist(self, v: float, w: float) -> tuple[float, float]:
+        """Command body velocities [m/s, rad/s]; returns the (left, right) wheel targets [rad/s]."""
+        prm = self.params
+        half = w * prm.effective_track / 2
+        lim = prm.wheel_speed_limit
+        left = max(-lim, min(lim, (v - half) / prm.wheel_radius))
+        right = max(-lim, min(lim, (v + half) / prm.wheel_radius))
+        if (left, right) != self._targets:  # motor settings persist across steps
+            p.setJointMotorControlArray(self.robot, self._joints, p.VELOCITY_CONTROL,
+                                        targetVelocities=[left, right, left, right],
+                                        forces=[prm.motor_torque_limit] * 4, physicsClientId=self.cid)
+            self._targets = (left, right)
+        return left, right
+
+    def step(self) -> None:
+        """Advance the physics by one step (4 ms) with the current wheel targets."""
+        self._physics_step()
+        self.t_ns += self.params.step_ns
+
+    def _physics_step(self) -> None:
+        self._apply_tyre_forces()
+        p.stepSimulation(physicsClientId=self.cid)
+
+    def _apply_tyre_forces(self) -> None:
+        # Plain floats, not numpy: 4-element arrays cost more in overhead than they save.
+        cid, robot = self.cid, self.robot
+        (px, py, _), quat = p.getBasePositionAndOrientation(robot, physicsClientId=cid)
+        (vx, vy, _), (_, _, w) = p.getBaseVelocity(robot, physicsClientId=cid)
+        yaw = _yaw(quat)
+        c, s = math.cos(yaw), math.sin(yaw)
+        vbx, vby = c * vx + s * vy, -s * vx + c * vy                  # body-frame velocity
+        states = p.getJointStates(robot, self._joints, physicsClientId=cid)
+        eps2 = self.params.slip_eps ** 2
+        for i in range(4):
+            wx, wy = self._wx[i], self._wy[i]
+            slip_x = vbx - w * wy - states[i][1] * self._r_eff[i]
+            slip_y = vby + w * wx
+            k = -self._mu[i] * self._load / math.sqrt(slip_x * slip_x + slip_y * slip_y + eps2)
+            fx, fy = k * slip_x, k * slip_y
+            p.applyExternalForce(robot, i, [c * fx - s * fy, s * fx + c * fy, 0.0],
+                                 [px + c * wx - s * wy, py + s * wx + c * wy, 0.0], p.WORLD_FRAME,
+                                 physicsClientId=cid)
+
+    # -- state ------------------------------------------------------------------
+    def pose(self) -> tuple[float, float, float]:
+        """Ground-truth (x [m], y [m], yaw [rad]) of the robot centre in the world frame."""
+        (x, y, _), quat = p.getBasePositionAndOrientation(self.robot, physicsClientId=self.cid)
+        return x, y, _yaw(quat)
+
+    def odometry(self, stamp_ns: int) -> Odometry:
+        """Ground-truth pose and body-frame forward speed and yaw rate."""
+        x, y, yaw = self.pose()
+        (vx, vy, _), (_, _, w) = p.getBaseVelocity(self.robot, physicsClientId=self.cid)
+        v = math.cos(yaw) * vx + math.sin(yaw) * vy
+        return Odometry(stamp_ns=stamp_ns, x=x, y=y, yaw=yaw, v=v, w=w)
+
+    def wheel_states(self, stamp_ns: int) -> WheelStates:
+        """Wheel speeds [rad/s] and the motor torques applied in the last step [N*m]."""
+        states = p.getJointStates(self.robot, self._joints, physicsClientId=self.cid)
+        return WheelStates(stamp_ns=stamp_ns, speed=tuple(float(s[1]) for s in states),
+                           torque=tuple(float(s[3]) for s in states), names=WHEEL_NAMES)
+
+    def contacts(self) -> list[Contact]:
+        """Obstacles the robot touches after the last step, one entry per obstacle.
+
+        Only the chassis is checked: its box covers the wheels' footprint, so an obstacle
+        reaches it first (unless lower than the 2.5 cm ground clearance).
+        """
+        seen: dict[int, Contact] = {}
+        for cp in p.getContactPoints(bodyA=self.robot, linkIndexA=-1, physicsClientId=self.cid):
+            index = self._obstacle_index.get(cp[2])
+            if index is not None and index not in seen:
+                seen[index] = Contact(index, float(cp[6][0]), float(cp[6][1]))
+        return list(seen.values())
+
+    def close(self) -> None:
+        if self.cid is not None and p.isConnected(self.cid):
+            p.disconnect(self.cid)
+        self.cid = None
+
+    def __enter__(self) -> SimBase:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _yaw(quat) -> float:
+    x, y, z, w = quat
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+__all__ = ["Contact", "MOTOR_TORQUE_LIMIT", "STEP_NS", "SimBase", "SimParams", "WHEEL_NAMES"]

@@ -1,0 +1,136 @@
+"""Simulated LiDAR node: ``python -m nodes.lidar_sim --world W --seed N ...``.
+
+Casts an RPLIDAR A3 scan (:mod:`nodes.lidar_sim.core`) at the robot pose of each
+scan instant: when a pose arrives whose stamp is due (``stamp >= next_due``, the
+next multiple of the scan period; on the lockstep grid exactly ``stamp % period == 0``),
+it publishes ``scan`` with that stamp. A pose stamp going backwards (a new run)
+restarts the schedule. ``--source ros2`` hands over to the real sensor's bridge
+(``nodes.lidar_sim.ros2_source.main``).
+
+Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
+
+=================  ========  ===  =====================================================
+key                type      dir  what
+=================  ========  ===  =====================================================
+``<ns>/sim/pose``  Odometry  in   ground-truth pose (``--pose-source sim``, default)
+``<ns>/odom``      Odometry  in   odometry pose (``--pose-source odom``)
+``<ns>/scan``      Scan      out  one scan per scan instant, stamped with the pose's stamp
+=================  ========  ===  =====================================================
+
+Settings: ``--world``, ``--seed`` (noise), ``--beams`` (300), ``--scan-hz`` (10),
+``--noise-sd`` (0.01 m), ``--noise-rel`` (0), ``--pose-source sim|odom``, plus the
+Zenoh options. Liveliness token: ``<ns>/alive/lidar_sim``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from papf.errors import PapfError
+from papf.transport import add_zenoh_args, open_node, setup_logging
+from worlds import load_world
+
+NAME = "lidar_sim"
+
+
+class ScanSchedule:
+    """Which pose stamps get a scan: the first one at or after each multiple of the period."""
+
+    def __init__(self, period: int):
+        self.period = period
+        self.next_due = 0
+        self.last = -1
+
+    def due(self, stamp_ns: int) -> bool:
+        if stamp_ns < self.last:          # the clock restarted: a new run
+            self.next_due = 0
+        self.last = stamp_ns
+        if stamp_ns < self.next_due:
+            return False
+        self.next_due = (stamp_ns // self.period + 1) * self.period
+        return True
+
+
+def main_sim(args: argparse.Namespace) -> int:
+    from nodes.base_driver.core import period_ns  # the driver owns the time grid
+    from nodes.lidar_sim.core import LidarParams, LidarSim  # pybullet: only when simulating
+
+    log = setup_logging(NAME, args.log_level)
+    world = load_world(args.world)
+    params = LidarParams(beams=args.beams, noise_sd=args.noise_sd, noise_rel=args.noise_rel)
+    schedule = ScanSchedule(period_ns(args.scan_hz, "scan rate"))
+    pose_topic = "sim/pose" if args.pose_source == "sim" else "odom"
+    with LidarSim(world, params, args.seed) as lidar, open_node(NAME, args, log) as node:
+        def keep_due(pose) -> None:  # Zenoh's callback thread: only due poses wake the main one
+            if schedule.due(pose.stamp_ns):
+                node.inbox.put((pose_topic, pose))
+
+        node.subscribe(pose_topic, handler=keep_due)
+        node.declare_publishers("scan")
+        node.ready()
+        count = 0
+        for topic, pose in node.messages():
+            if topic is None:
+                continue
+            node.publish("scan", lidar.scan(pose.x, pose.y, pose.yaw, pose.stamp_ns))
+            count += 1
+        log.info("published %d scans", count)
+    return 0
+
+
+def main_ros2(args: argparse.Namespace) -> int:
+    try:
+        source = importlib.import_module("nodes.lidar_sim.ros2_source")
+    except ModuleNotFoundError as exc:
+        if exc.name != "nodes.lidar_sim.ros2_source":
+            raise
+        print("lidar_sim: --source ros2 needs nodes/lidar_sim/ros2_source.py, which is not "
+              "installed in this tree; use --source sim", file=sys.stderr)
+        return 2
+    return source.main(args) or 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
+                                     description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog=__doc__.split("\n\n", 1)[1])
+    parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
+                        help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")
+    parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")
+    parser.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    parser.add_argument("--beams", type=int, default=300, help="rays per revolution (300)")
+    parser.add_argument("--scan-hz", type=float, default=10.0, help="scan rate in sim time (10)")
+    parser.add_argument("--noise-sd", type=float, default=0.01, metavar="M",
+                        help="range noise sigma, constant part [m] (default 0.01)")
+    parser.add_argument("--noise-rel", type=float, default=0.0, metavar="F",
+                        help="range noise sigma, part proportional to the range (default 0)")
+    parser.add_argument("--pose-source", choices=("sim", "odom"), default="sim",
+                        help="pose to scan from: ground truth sim/pose (default) or odom")
+    parser.add_argument("--log-level", default="INFO")
+    add_zenoh_args(parser)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--source", default="sim")
+    known, _ = pre.parse_known_args(argv)
+    parser = build_parser()
+    if known.source == "ros2":
+        try:  # the ROS 2 source may add its own options (bridge namespace, topic, ...)
+            importlib.import_module("nodes.lidar_sim.ros2_source").add_arguments(parser)
+        except (ModuleNotFoundError, AttributeError):
+            pass
+    args = parser.parse_args(argv)
+    try:
+        return main_ros2(args) if args.source == "ros2" else main_sim(args)
+    except PapfError as exc:
+        print(f"lidar_sim: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,139 @@
+"""Simulated RPLIDAR A3 on the ROSbot: pybullet ray casting, no transport (pure core).
+
+A 360 deg planar scan (DESIGN.md §5): ``beams`` rays (300 by default, the L of the
+PAPF paper's Table 1) at ``angle_min + i * angle_increment`` with ``angle_min = -pi``,
+``angle_increment = 2 pi / beams``, counter-clockwise in the sensor frame, like the
+``sensor_msgs/LaserScan`` that ``rplidar_ros`` publishes. Ranges 0.2-25 m
+(RPLIDAR A3 datasheet). Rays are cast with ``rayTestBatch`` in the sensor's own
+pybullet DIRECT client that holds only the world's obstacles (no robot, so no
+self-hits), at :data:`SENSOR_HEIGHT` above the floor (below the default 0.5 m
+obstacle height).
+
+Invalid readings: no return within ``range_max`` -> ``inf``; a return closer than
+``range_min`` -> ``inf`` too, because the A3 reports distance 0 ("no valid
+measurement") there and ``rplidar_ros`` publishes a 0 reading as ``inf``.
+
+Noise: Gaussian, sigma = ``noise_sd + noise_rel * range`` [m]. The A3 datasheet gives
+"accuracy 1 % of range (<= 3 m)"; the default is a constant 1 cm (1 % at 1 m, the
+distance the planners react at), ``noise_rel`` follows the datasheet's form when set.
+The noise of a scan is drawn from ``numpy.random.default_rng([seed, stamp_ns])``, so
+the scan of a given instant is identical whatever the process timing.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+
+from papf.errors import ConfigError
+from schemas.messages import Scan
+from worlds import World
+from worlds.bullet import build_world
+
+RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
+RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
+SENSOR_HEIGHT = 0.2      # [m] scan plane above the floor: the A3 sits on the 0.22 m tall robot's
+                         # top and scans ~2 cm below its own top (assumption from the outline)
+SENSOR_X = 0.02          # [m] sensor ahead of the robot centre (assumption: mounted slightly
+                         # forward on the top plate)
+
+
+@dataclass(frozen=True)
+class LidarParams:
+    """Scan geometry and noise (units in comments)."""
+
+    beams: int = 300                   # [-] rays per 360 deg revolution
+    range_min: float = RANGE_MIN       # [m]
+    range_max: float = RANGE_MAX       # [m]
+    noise_sd: float = 0.01             # [m] constant part of the range noise sigma
+    noise_rel: float = 0.0             # [-] part of sigma proportional to the range
+    sensor_x: float = SENSOR_X         # [m] sensor position in the robot frame
+    sensor_y: float = 0.0              # [m]
+    sensor_yaw: float = 0.0            # [rad] sensor x axis relative to the robot's
+    height: float = SENSOR_HEIGHT      # [m] scan plane above the floor
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.beams, int) or not 1 <= self.beams <= p.MAX_RAY_INTERSECTION_BATCH_SIZE:
+            raise ConfigError(f"lidar beams = {self.beams!r} must be an integer in "
+                              f"1..{p.MAX_RAY_INTERSECTION_BATCH_SIZE}")
+        if not 0 < self.range_min < self.range_max or not math.isfinite(self.range_max):
+            raise ConfigError(f"lidar ranges {self.range_min!r}..{self.range_max!r} m must satisfy "
+                              "0 < range_min < range_max < inf")
+        if not (self.noise_sd >= 0 and self.noise_rel >= 0):
+            raise ConfigError(f"lidar noise_sd = {self.noise_sd!r} m and noise_rel = "
+                              f"{self.noise_rel!r} must be >= 0")
+        if not self.height > 0:
+            raise ConfigError(f"lidar height = {self.height!r} m must be > 0")
+
+    @property
+    def angle_min(self) -> float:
+        return -math.pi
+
+    @property
+    def angle_increment(self) -> float:
+        return 2 * math.pi / self.beams
+
+
+class LidarSim:
+    """Cast a scan at a robot pose in ``world`` (see module doc)."""
+
+    def __init__(self, world: World, params: LidarParams | None = None, seed: int = 0):
+        self.params = prm = params or LidarParams()
+        if seed < 0:
+            raise ConfigError(f"lidar seed = {seed} must be >= 0")
+        self.seed = seed
+        angles = prm.angle_min + prm.angle_increment * np.arange(prm.beams) + prm.sensor_yaw
+        self._angles = angles               # beam directions in the robot frame [rad]
+        self.cid = p.connect(p.DIRECT)
+        try:
+            self.bodies = build_world(self.cid, world)
+        except Exception:
+            p.disconnect(self.cid)
+            raise
+
+    def true_ranges(self, pose_x: float, pose_y: float, pose_yaw: float) -> np.ndarray:
+        """Noise-free distance to the first obstacle per beam [m]; ``inf`` if none within range_max."""
+        prm = self.params
+        c, s = math.cos(pose_yaw), math.sin(pose_yaw)
+        ox = pose_x + c * prm.sensor_x - s * prm.sensor_y
+        oy = pose_y + s * prm.sensor_x + c * prm.sensor_y
+        directions = self._angles + pose_yaw
+        n = prm.beams
+        origin = np.empty((n, 3))
+        origin[:] = (ox, oy, prm.height)
+        end = origin.copy()
+        end[:, 0] += prm.range_max * np.cos(directions)
+        end[:, 1] += prm.range_max * np.sin(directions)
+        hits = p.rayTestBatch(origin.tolist(), end.tolist(), numThreads=1, physicsClientId=self.cid)
+        # hit = (body id or -1, link, fraction of the ray, position, normal)
+        fraction = np.fromiter((h[2] if h[0] >= 0 else np.inf for h in hits), float, n)
+        return fraction * prm.range_max
+
+    def scan(self, pose_x: float, pose_y: float, pose_yaw: float, stamp_ns: int) -> Scan:
+        """The noisy scan taken at robot pose (x [m], y [m], yaw [rad]) at sim time ``stamp_ns``."""
+        prm = self.params
+        ranges = self.true_ranges(pose_x, pose_y, pose_yaw)
+        hit = np.isfinite(ranges)
+        if prm.noise_sd > 0 or prm.noise_rel > 0:
+            rng = np.random.default_rng([self.seed, stamp_ns % 2**64])
+            noise = rng.normal(0.0, 1.0, prm.beams)
+            ranges[hit] += (prm.noise_sd + prm.noise_rel * ranges[hit]) * noise[hit]
+        ranges[(ranges < prm.range_min) | (ranges > prm.range_max)] = np.inf
+        return Scan(stamp_ns=stamp_ns, angle_min=prm.angle_min, angle_increment=prm.angle_increment,
+                    range_min=prm.range_min, range_max=prm.range_max,
+                    ranges=ranges.astype(np.float32), sensor_x=prm.sensor_x, sensor_y=prm.sensor_y,
+                    sensor_yaw=prm.sensor_yaw)
+
+    def close(self) -> None:
+        if self.cid is not None and p.isConnected(self.cid):
+            p.disconnect(self.cid)
+        self.cid = None
+
+    def __enter__(self) -> LidarSim:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
