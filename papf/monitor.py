@@ -36,6 +36,7 @@ class RunResult:
     wall_time_s: float         # wall time of the whole run, start-up included [s]
     reason: str = ""
     stop_latency_s: float | None = None  # last command -> watchdog stop, after a planner fault
+    faults: tuple[str, ...] = ()         # node_fault events (e.g. a lockstep timeout)
 
     @property
     def exit_code(self) -> int:
@@ -48,6 +49,10 @@ class RunResult:
             d[k] = round(d[k], 6)
         if d["stop_latency_s"] is None:
             del d["stop_latency_s"]
+        if d["faults"]:  # a fault (e.g. lockstep timeout) makes the run not bit-reproducible
+            d["faults"] = list(d["faults"])
+        else:
+            del d["faults"]
         return d
 
 
@@ -67,6 +72,7 @@ class RunMonitor:
         self._poses: list[Odometry] = []
         self.last_cmd_ns: int | None = None
         self.watchdog_stop_ns: int | None = None
+        self.faults: list[str] = []
 
     # -- inputs ---------------------------------------------------------------
     def on_clock(self, msg: Clock) -> None:
@@ -87,6 +93,8 @@ class RunMonitor:
                              f"collision at ({msg.x:.2f}, {msg.y:.2f}) {msg.detail}".strip())
         elif msg.kind == "watchdog_stop" and self.watchdog_stop_ns is None:
             self.watchdog_stop_ns = msg.stamp_ns
+        elif msg.kind == "node_fault":
+            self.faults.append(f"{msg.source} at {msg.stamp_ns / NS:.2f} s: {msg.detail}")
 
     def on_battery(self, msg: BatteryState) -> None:
         self.batteries.append(msg)
@@ -162,5 +170,5 @@ class RunMonitor:
             energy_J=battery.energy_J if battery else math.nan,
             collisions=sum(1 for c in self.collisions if c <= t_end),
             sim_time_s=t_end / NS, wall_time_s=wall_time_s, reason=self.reason,
-            stop_latency_s=latency,
+            stop_latency_s=latency, faults=tuple(self.faults),
         )

@@ -122,15 +122,22 @@ class Node:
             raise TypeError(f"{topic} carries {expected.__name__}, not {type(msg).__name__}")
         pub = self._publishers.get(topic)
         if pub is None:
-            pub = self.session.declare_publisher(self.keys.key(topic))
-            self._publishers[topic] = pub
+            pub = self._declare(topic)
         pub.put(msg.to_bytes())
 
     def declare_publishers(self, *topics: str) -> None:
         """Declare publishers up front (before :meth:`ready`) so first puts are not late."""
         for topic in topics:
             if topic not in self._publishers:
-                self._publishers[topic] = self.session.declare_publisher(self.keys.key(topic))
+                self._declare(topic)
+
+    def _declare(self, topic: str) -> zenoh.Publisher:
+        # express: send at once, no batching (the lockstep chain is latency-bound);
+        # BLOCK: a full queue waits rather than drops (lockstep and recordings need every message).
+        pub = self.session.declare_publisher(self.keys.key(topic), express=True,
+                                             congestion_control=zenoh.CongestionControl.BLOCK)
+        self._publishers[topic] = pub
+        return pub
 
     # -- subscribing ------------------------------------------------------
     def subscribe(self, topic: str, msg_type: type[Message] | None = None, *,

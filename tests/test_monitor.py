@@ -80,3 +80,12 @@ def test_stop_latency_after_fault():
     r = m.result("p", "w", 0, 0)
     assert r.outcome == "failed" and r.exit_code == 6 and r.stop_latency_s == 0.5
     assert "stop_latency_s" in r.to_json()
+
+
+def test_node_faults_are_reported():
+    m = RunMonitor(timeout_s=10)
+    assert "faults" not in m.result("p", "w", 0, 0).to_json()
+    m.on_event(Event(stamp_ns=NS, kind="node_fault", source="base_driver",
+                     detail="no cmd_vel for 2 s; free-running"))
+    assert m.result("p", "w", 0, 0).to_json()["faults"] == [
+        "base_driver at 1.00 s: no cmd_vel for 2 s; free-running"]
