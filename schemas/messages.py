@@ -1,8 +1,9 @@
 """Every message of the stack, defined once (DESIGN.md §3).
 
 Conventions: time is integer nanoseconds of *sim time* in sim runs (``stamp_ns``);
-lengths in metres, angles in radians, speeds in m/s and rad/s; the world frame is
-the ``odom`` frame of the run (x forward from the start pose, z up, yaw CCW).
+lengths in metres, angles in radians, speeds in m/s and rad/s. Poses are in the
+world file's frame (z up, yaw counter-clockwise from +x); the sim starts the robot at
+the world's ``[robot].start`` (plus seeded jitter), not at an odometry origin.
 """
 
 from __future__ import annotations
