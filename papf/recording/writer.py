@@ -140,7 +140,7 @@ class RunWriter:
             raise RecordingError(f"flush interval {flush_interval_s} s must be > 0")
         self.path = Path(path)
         try:
-            self._file = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+            self._file = open(self.path, "wb")
         except OSError as exc:
             raise RecordingError(f"cannot create recording {str(path)!r}: {exc}") from None
         self._mcap = Writer(self._file, chunk_size=chunk_size,
@@ -154,6 +154,7 @@ class RunWriter:
         self._clock, self._interval = clock, flush_interval_s
         self._last_flush = clock()
         self._dirty = False
+        self._last_stamp_ns: int | None = None  # [ns] log time of unstamped payloads
         self.stats = WriterStats()
         self.closed = False
 
@@ -169,7 +170,9 @@ class RunWriter:
         """Record one payload received on ``key``.
 
         ``receive_ns``: wall-clock receive time [ns since epoch] (default: now).
-        ``log_time_ns``: override; by default the payload's ``stamp_ns``, else ``receive_ns``.
+        ``log_time_ns``: override; by default the payload's ``stamp_ns``, else the last
+        stamp seen (so garbage and unstamped payloads sit where they arrived on the sim-time
+        line), else ``receive_ns`` when nothing stamped came yet.
         """
         if receive_ns is None:
             receive_ns = time.time_ns()
@@ -179,8 +182,10 @@ class RunWriter:
         if log_time_ns is None:
             log_time_ns = peek_stamp(data)
             if log_time_ns is None:
-                log_time_ns = receive_ns
+                log_time_ns = receive_ns if self._last_stamp_ns is None else self._last_stamp_ns
                 self.stats.unstamped += 1
+            else:
+                self._last_stamp_ns = log_time_ns
         self._mcap.add_message(channel, log_time_ns, data, receive_ns)
         self.stats.messages += 1
         self.stats.bytes += len(data)
@@ -212,6 +217,11 @@ class RunWriter:
             schema_id = self._mcap.register_schema(msg_type.TYPE, SCHEMA_ENCODING, data)
             self._schemas[msg_type.TYPE] = schema_id
         return schema_id
+
+    def add_metadata(self, name: str, values: Mapping[str, Any]) -> None:
+        """Another metadata record (e.g. ``"result"`` with the run's outcome at the end)."""
+        self._mcap.add_metadata(name, metadata_strings(values))
+        self._file.flush()
 
     # -- flushing and closing ---------------------------------------------
     def maybe_flush(self) -> None:
