@@ -6,6 +6,7 @@ run_started -> watch messages until an outcome -> figures at ``t_end`` -> stop.
 
 from __future__ import annotations
 
+import json
 import logging
 import queue
 import sys
@@ -139,9 +140,13 @@ def run(cfg: RunConfig) -> RunResult:
                 _drive(cfg, world, world_file, endpoint, sup, session, keys, watch, monitor)
             finally:
                 watch.close()
-                session.put(keys.events, Event(stamp_ns=max(monitor.clock_ns, 0), kind="run_ended",
-                                               source="launcher", detail=monitor.outcome or "").to_bytes())
-    return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+                # The result rides on run_ended, so a recording carries its own outcome.
+                result = monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+                session.put(keys.events, Event(
+                    stamp_ns=monitor.t_end_ns or max(monitor.clock_ns, 0), kind="run_ended",
+                    source="launcher", detail=json.dumps(result.to_json())).to_bytes())
+    result.wall_time_s = time.monotonic() - wall0
+    return result
 
 
 def _drive(cfg: RunConfig, world: World, world_file: str, endpoint: str, sup: Supervisor,
