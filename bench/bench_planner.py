@@ -1,0 +1,92 @@
+"""Planner cycle time on synthetic 300-point scans: ``python bench/bench_planner.py [--cycles N]``.
+
+Prints one JSON object per (planner, scene) with the time of ``Planner.step`` (scan
+conversion + algorithm + messages) in microseconds: wall time p50, p99, max, and the
+thread's CPU time p50, p99 (less disturbed when other processes share the cores). Scenes:
+
+- ``open``: no returns (inf everywhere);
+- ``energy``: the energy world's three obstacles seen from along the approach;
+- ``trap``: the robot inside a ring of returns with one narrow gap, goal outside; every
+  PAPF prediction stagnates, so with ``persist_quarks=false`` each cycle places all
+  M = 10 top quarks and runs M + 1 predictions — the PAPF worst case.
+
+PAPF is also timed with the numpy fallback (``use_numba=false``). Speed is reported,
+never asserted (tests/ do not time anything).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import time
+
+import numpy as np
+
+from nodes.planner.registry import make_planner
+from nodes.planner.toysim import ToyWorld, box_segments, cast_scan
+from schemas.messages import Goal, Odometry
+
+RING = ToyWorld(segments=tuple(
+    (0.8 * math.cos(a0), 0.8 * math.sin(a0), 0.8 * math.cos(a1), 0.8 * math.sin(a1))
+    for a0, a1 in zip(np.linspace(0.05, 2 * math.pi - 0.05, 41)[:-1],
+                      np.linspace(0.05, 2 * math.pi - 0.05, 41)[1:], strict=True)))
+ENERGY = ToyWorld(circles=((5.0, -0.2, 0.2),),
+                  segments=box_segments(2.5, 0.1, 0.4, 0.4) + box_segments(7.5, 0.15, 0.05, 0.7))
+SCENES = {  # world, start x range [m], goal
+    "open": (ToyWorld(), (0.0, 2.0), (10.0, 0.0)),
+    "energy": (ENERGY, (0.0, 2.0), (10.0, 0.0)),
+    "trap": (RING, (-0.05, 0.05), (3.0, 0.0)),
+}
+CASES = [  # (label, planner, --set overrides)
+    ("apf", "apf", []), ("papf", "papf", []),
+    ("papf_worst_numba", "papf", ["persist_quarks=false"]),
+    ("papf_worst_numpy", "papf", ["persist_quarks=false", "use_numba=false"]),
+    ("arapf", "arapf", []), ("wang", "wang", []),
+]
+
+
+def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
+    world, (x0, x1), goal = SCENES[scene]
+    planner = make_planner(planner_name, sets=sets)
+    xs = np.linspace(x0, x1, cycles)
+    scans = [cast_scan(world, x, 0.0, 0.0, stamp_ns=k) for k, x in enumerate(xs)]
+    odoms = [Odometry(stamp_ns=k, x=x, y=0.0, yaw=0.0, v=0.0, w=0.0) for k, x in enumerate(xs)]
+    planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1]))
+    planner.step(scans[0], odoms[0])                     # warm-up (JIT compile)
+    times, cpu, quarks = [], [], 0
+    for scan, odom in zip(scans, odoms, strict=True):
+        planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1]))
+        planner.state = "driving"                          # keep timing the algorithm
+        t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
+        _, state, _ = planner.step(scan, odom)
+        times.append(time.perf_counter_ns() - t0)
+        cpu.append(time.thread_time_ns() - c0)
+        quarks = max(quarks, len(state.top_quarks))
+    us, cpu_us = np.array(times) / 1e3, np.array(cpu) / 1e3
+    return {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
+            "beams": int(scans[0].ranges.size), "max_top_quarks": quarks,
+            "p50_us": _r(np.percentile(us, 50)), "p99_us": _r(np.percentile(us, 99)),
+            "max_us": _r(us.max()), "cpu_p50_us": _r(np.percentile(cpu_us, 50)),
+            "cpu_p99_us": _r(np.percentile(cpu_us, 99))}
+
+
+def _r(x) -> float:
+    return round(float(x), 1)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--cycles", type=int, default=300)
+    args = ap.parse_args()
+    print(json.dumps({"machine": platform.processor() or platform.machine(),
+                      "python": platform.python_version()}))
+    for label, name, sets in CASES:
+        for scene in SCENES:
+            cycles = args.cycles if "numpy" not in label else max(20, args.cycles // 10)
+            print(json.dumps({"case": label, **bench(name, sets, scene, cycles)}), flush=True)
+
+
+if __name__ == "__main__":
+    main()

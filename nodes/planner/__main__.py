@@ -1,0 +1,97 @@
+"""Planner node: ``python -m nodes.planner --planner apf|papf|arapf|wang [options]``.
+
+Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
+
+=========================  ==============  =====  ==========================================
+key                        type            dir    when
+=========================  ==============  =====  ==========================================
+``<ns>/scan``              Scan            in     each scan -> one cycle
+``<ns>/odom``              Odometry        in     paired with the scan (see below)
+``<ns>/goal``              Goal            in     sets the goal; answered with status ``ready``
+``<ns>/cmd_vel``           Twist           out    one per scan, ``stamp_ns`` = scan stamp
+``<ns>/planner/state``     PlannerState    out    after each cmd_vel (debug geometry)
+``<ns>/planner/status``    PlannerStatus   out    after each state; ``ready`` on a goal
+``<ns>/alive/planner``     liveliness      out    once subscribed and warmed up
+=========================  ==============  =====  ==========================================
+
+Settings: ``--planner`` (algorithm), ``--params FILE.toml`` and ``--set name=value``
+(see docs/planners.md for every parameter), ``--realtime`` (pair scans with the latest
+odometry instead of the same stamp), ``--stale-timeout S`` (zero command when odometry
+or scans are older than that), ``--pair-timeout S`` (lockstep: wall time a scan waits for
+its odometry), plus the Zenoh options of :func:`papf.transport.add_zenoh_args`.
+Exit code 2 on a bad setting.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from nodes.planner.loop import PlannerLoop
+from nodes.planner.registry import PLANNERS, make_planner
+from papf.errors import ConfigError
+from papf.transport import add_zenoh_args, open_node, setup_logging
+
+NODE_NAME = "planner"
+
+
+def parse_args(argv=None) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--planner", default="apf", choices=sorted(PLANNERS), help="algorithm")
+    ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                    help="override one setting, repeatable (e.g. --set d_o=0.8)")
+    ap.add_argument("--realtime", action="store_true",
+                    help="pair each scan with the latest odometry (robot / HIL)")
+    ap.add_argument("--stale-timeout", type=float, default=0.5, metavar="S",
+                    help="inputs older than this -> zero command [s] (default 0.5)")
+    ap.add_argument("--pair-timeout", type=float, default=0.25, metavar="S",
+                    help="lockstep: wall time a scan waits for its odometry [s] (default 0.25)")
+    ap.add_argument("--log-level", default="INFO")
+    add_zenoh_args(ap)
+    return ap.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    log = setup_logging(NODE_NAME, args.log_level)
+    try:
+        planner = make_planner(args.planner, args.params, args.set)
+    except ConfigError as exc:
+        log.error("%s", exc)
+        return 2
+    warm_up(planner)
+    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log)
+    with open_node(NODE_NAME, args, log) as node:
+        for topic in ("scan", "odom", "goal"):
+            node.subscribe(topic)
+        node.declare_publishers("cmd_vel", "planner/state", "planner/status")
+        node.ready()
+        log.info("planner %s (%s)", args.planner, "realtime" if args.realtime else "lockstep")
+        last_status = None
+        for topic, msg in node.messages(tick_s=0.05):
+            now = time.monotonic()
+            out = loop.on_message(topic, msg, now) if topic else []
+            for out_topic, out_msg in out + loop.poll(now):
+                node.publish(out_topic, out_msg)
+                if out_topic == "planner/status" and out_msg.state != last_status:
+                    last_status = out_msg.state
+                    log.info("status %s at %d ns %s", out_msg.state, out_msg.stamp_ns, out_msg.reason)
+        log.info("stopping after %d cycles (%d stale)", loop.cycles, loop.stale_cycles)
+    return 0
+
+
+def warm_up(planner) -> None:
+    """Run one throw-away cycle on a copy so JIT kernels compile before ``ready``."""
+    warm = getattr(planner.strategy, "warm_up", None)
+    if warm is not None:
+        warm(planner.apf)
+
+
+def main(argv=None) -> int:
+    return run(parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,189 @@
+"""The planner core: scan + odometry -> velocity command (pure; no zenoh).
+
+:class:`Planner` owns what every algorithm shares — obstacle points from the scan (world
+frame), the goal, the motion law (eqs. 3 and 5 of the PAPF paper + our heading
+controller), goal reached, the stagnation watch, and the messages. The algorithm itself
+is a small *strategy* (:class:`Strategy`) that turns the situation into a force and the
+debug geometry the papers drew in RViz; strategies are looked up by name in
+:mod:`nodes.planner.registry`.
+
+Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
+from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+
+NS_PER_S = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class ScanView:
+    """One scan in the world frame. ``ranges`` keeps every beam (invalid ones = inf) in scan order."""
+
+    origin: np.ndarray      # (2,) sensor position, world frame [m]
+    angles: np.ndarray      # (B,) world-frame direction of each beam [rad]
+    ranges: np.ndarray      # (B,) [m], inf where nan/inf/outside [range_min, range_max]
+    points: np.ndarray      # (K, 2) world-frame points of the valid beams, scan order [m]
+    valid: np.ndarray       # (B,) bool
+
+
+def scan_view(scan: Scan, odom: Odometry) -> ScanView:
+    """Beams -> world frame using the robot pose and the sensor offset; drop invalid returns.
+
+    A return is valid when finite and within [range_min, range_max].
+    """
+    c, s = math.cos(odom.yaw), math.sin(odom.yaw)
+    origin = np.array([odom.x + c * scan.sensor_x - s * scan.sensor_y,
+                       odom.y + s * scan.sensor_x + c * scan.sensor_y])
+    ranges = np.asarray(scan.ranges, dtype=float)
+    angles = odom.yaw + scan.sensor_yaw + scan.angle_min + scan.angle_increment * np.arange(ranges.size)
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
+    ranges = np.where(valid, ranges, np.inf)
+    r, a = ranges[valid], angles[valid]
+    points = origin + np.column_stack([r * np.cos(a), r * np.sin(a)])
+    return ScanView(origin, angles, ranges, points.reshape(-1, 2), valid)
+
+
+@dataclass
+class Plan:
+    """A strategy's answer: the force to steer by and what to show (world frame, 2-D)."""
+
+    force: np.ndarray
+    mode: str = "drive"
+    temporary_goal: tuple = ()
+    predicted_path: np.ndarray | tuple = ()
+    abandoned_paths: list = field(default_factory=list)
+    top_quarks: np.ndarray | tuple = ()
+    virtual_walls: list = field(default_factory=list)
+    virtual_obstacles: np.ndarray | tuple = ()
+    stagnated: str = ""     # non-empty: the strategy declares stagnation, with this reason
+
+
+class Strategy(Protocol):
+    """An algorithm on the shared APF core."""
+
+    name: str
+
+    def reset(self) -> None:
+        """Forget per-goal memory (called on a new goal)."""
+
+    def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
+             apf: APFParams) -> Plan:
+        """The force at ``pos`` (world frame) and the debug geometry."""
+
+
+def _points(a) -> list:
+    """(K, >=2) array-like -> list of (x, y) (the first two coordinates)."""
+    arr = np.asarray(a, dtype=float)
+    if arr.size == 0:
+        return []
+    return list(map(tuple, arr.reshape(arr.shape[0] if arr.ndim > 1 else 1, -1)[:, :2].tolist()))
+
+
+class Planner:
+    """Goal, motion law, status and messages around one :class:`Strategy`."""
+
+    def __init__(self, strategy: Strategy, apf: APFParams | None = None):
+        self.strategy = strategy
+        self.apf = apf or APFParams()
+        self.goal: Goal | None = None
+        self.state = "idle"
+        self.reason = ""
+        self._best = math.inf           # best distance to goal at the last progress [m]
+        self._best_ns = 0               # scan time of the last progress [ns]
+        self._apf_for_l: dict[int, APFParams] = {}
+
+    # -- goal ---------------------------------------------------------------
+    def set_goal(self, goal: Goal) -> PlannerStatus:
+        """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
+        same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
+            goal.x, goal.y, goal.tolerance)
+        if not same:
+            self.goal = goal
+            self.state, self.reason = "ready", ""
+            self._best, self._best_ns = math.inf, 0
+            self.strategy.reset()
+        return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
+
+    # -- one cycle ----------------------------------------------------------
+    def step(self, scan: Scan, odom: Odometry) -> tuple[Twist, PlannerState, PlannerStatus]:
+        """One control cycle for ``scan`` (the command carries the scan's stamp)."""
+        t0 = time.perf_counter_ns()
+        t = scan.stamp_ns
+        if self.goal is None:
+            return self._stop(t, "idle", "no goal", math.nan, t0)
+        pos = np.array([odom.x, odom.y])
+        goal = np.array([self.goal.x, self.goal.y])
+        dist = float(np.hypot(*(goal - pos)))
+        if self.state in ("reached", "stagnated", "failed"):
+            return self._stop(t, self.state, self.reason, dist, t0)
+        if dist <= self.goal.tolerance:
+            return self._stop(t, "reached", f"within {self.goal.tolerance} m of the goal", dist, t0)
+        apf = self._params_for(len(scan.ranges))
+        view = scan_view(scan, odom)
+        plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
+        why = plan.stagnated or self._watch(t, dist, apf)
+        if why:
+            return self._stop(t, "stagnated", why, dist, t0, plan, view)
+        theta_ref = heading_ref(plan.force)
+        err = wrap_angle(theta_ref - odom.yaw)
+        v = speed_ref(float(np.linalg.norm(plan.force)), err, apf)
+        w = turn_rate(theta_ref, odom.yaw, apf)
+        self.state, self.reason = "driving", ""
+        state = self._state(t, plan, view, theta_ref, v, w, t0)
+        return (Twist(stamp_ns=t, v=v, w=w), state,
+                PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
+
+    # -- helpers ------------------------------------------------------------
+    def _params_for(self, beams: int) -> APFParams:
+        if not self.apf.scale_to_scan or beams == 0 or beams == self.apf.lidar_points:
+            return self.apf
+        if beams not in self._apf_for_l:
+            self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
+        return self._apf_for_l[beams]
+
+    def _watch(self, t: int, dist: float, apf: APFParams) -> str:
+        """Stagnation watch: no progress > stagnation_progress_m within stagnation_window_s."""
+        if dist < self._best - apf.stagnation_progress_m or not math.isfinite(self._best):
+            self._best, self._best_ns = dist, t
+            return ""
+        if t - self._best_ns > apf.stagnation_window_s * NS_PER_S:
+            return (f"no progress > {apf.stagnation_progress_m} m towards the goal in "
+                    f"{apf.stagnation_window_s} s (best {self._best:.3f} m)")
+        return ""
+
+    def _stop(self, t, state, reason, dist, t0, plan: Plan | None = None,
+              view: ScanView | None = None):
+        if state != "idle":
+            self.state, self.reason = state, reason
+        plan = plan or Plan(force=np.zeros(2), mode="stop")
+        plan.mode = "stop" if state != "idle" else "idle"
+        ps = self._state(t, plan, view, 0.0, 0.0, 0.0, t0)
+        return (Twist(stamp_ns=t, v=0.0, w=0.0), ps,
+                PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
+
+    def _state(self, t, plan: Plan, view, theta_ref, v, w, t0) -> PlannerState:
+        force = np.asarray(plan.force, dtype=float)
+        return PlannerState(
+            stamp_ns=t, algorithm=self.strategy.name, mode=plan.mode,
+            force=(float(force[0]), float(force[1])), heading_ref=float(theta_ref),
+            v_ref=float(v), w_ref=float(w),
+            temporary_goal=tuple(float(x) for x in plan.temporary_goal),
+            predicted_path=_points(plan.predicted_path),
+            abandoned_paths=tuple(_points(p) for p in plan.abandoned_paths),
+            top_quarks=_points(plan.top_quarks),
+            virtual_walls=tuple(_points(p) for p in plan.virtual_walls),
+            virtual_obstacles=_points(plan.virtual_obstacles),
+            obstacle_count=0 if view is None else int(view.points.shape[0]),
+            compute_ns=time.perf_counter_ns() - t0)

@@ -1,0 +1,130 @@
+"""Planner algorithms by name, and their settings (TOML file + ``--set name=value``).
+
+Each algorithm is a strategy class with a frozen ``Params`` dataclass and
+``__init__(self, params)``; :data:`PLANNERS` maps the ``--planner`` name to it.
+Settings: :class:`~nodes.planner.apf.APFParams` (shared field and motion law) plus the
+algorithm's own ``Params``. A TOML file may give them at top level or in ``[apf]`` /
+``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from nodes.planner.apf import APFParams, apf_force
+from nodes.planner.arapf import ARAPFStrategy
+from nodes.planner.core import Plan, Planner, ScanView
+from nodes.planner.papf import PAPFStrategy
+from nodes.planner.wang import WangStrategy
+from papf.errors import ConfigError
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+
+class APFStrategy:
+    """Classic APF (PAPF paper eq. 2): steer by the resultant force towards the global goal."""
+
+    name = "apf"
+
+    @dataclass(frozen=True)
+    class Params:
+        """Classic APF has no settings beyond :class:`APFParams`."""
+
+    def __init__(self, params: Params | None = None):
+        self.params = params or self.Params()
+
+    def reset(self) -> None:
+        pass
+
+    def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
+             apf: APFParams) -> Plan:
+        return Plan(force=apf_force(pos, goal, view.points, apf))
+
+
+PLANNERS: dict[str, type] = {
+    "apf": APFStrategy,
+    "papf": PAPFStrategy,
+    "arapf": ARAPFStrategy,
+    "wang": WangStrategy,
+}
+
+
+def _convert(cls, name: str, text):
+    """Parse ``text`` to the type of ``cls.name``; ConfigError names the field and type."""
+    f = {f.name: f for f in dataclasses.fields(cls)}[name]
+    kind = type(f.default)
+    if not isinstance(text, str):
+        value = text
+    elif kind is bool:
+        low = text.strip().lower()
+        if low not in ("true", "false", "1", "0", "yes", "no"):
+            raise ConfigError(f"setting {name}={text!r}: expected true or false")
+        value = low in ("true", "1", "yes")
+    else:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise ConfigError(f"setting {name}={text!r}: expected a {kind.__name__}") from None
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, kind):
+        raise ConfigError(f"setting {name}={value!r}: expected a {kind.__name__}")
+    return value
+
+
+def _apply(apf: APFParams, algo, items: list[tuple[str, str, object]], planner: str):
+    """Apply (table, name, value) items; table '' = whichever dataclass has the name."""
+    apf_vals, algo_vals = {}, {}
+    apf_names = {f.name for f in dataclasses.fields(apf)}
+    algo_names = {f.name for f in dataclasses.fields(algo)}
+    for table, name, value in items:
+        if table not in ("", "apf", planner):
+            raise ConfigError(f"setting table {table!r} is not 'apf' or {planner!r}")
+        if name in algo_names and table in ("", planner):
+            algo_vals[name] = _convert(type(algo), name, value)
+        elif name in apf_names and table in ("", "apf"):
+            apf_vals[name] = _convert(APFParams, name, value)
+        else:
+            valid = sorted(apf_names | algo_names)
+            raise ConfigError(f"unknown planner setting {name!r} for {planner!r}; valid: {valid}")
+    return dataclasses.replace(apf, **apf_vals), dataclasses.replace(algo, **algo_vals)
+
+
+def load_params(planner: str, file: str | Path | None = None, sets: list[str] = ()):
+    """(APFParams, algorithm Params) from defaults, then ``file``, then ``sets``."""
+    if planner not in PLANNERS:
+        raise ConfigError(f"unknown planner {planner!r}; valid: {sorted(PLANNERS)}")
+    apf, algo = APFParams(), PLANNERS[planner].Params()
+    items: list[tuple[str, str, object]] = []
+    if file:
+        try:
+            data = tomllib.loads(Path(file).read_text())
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise ConfigError(f"cannot read planner params {str(file)!r}: {exc}") from None
+        for key, value in data.items():
+            if isinstance(value, dict):
+                if key not in ("apf", planner):  # tables of other planners are ignored
+                    continue
+                items += [(key, k, v) for k, v in value.items()]
+            else:
+                items.append(("", key, value))
+    for text in sets:
+        if "=" not in text:
+            raise ConfigError(f"--set {text!r}: expected name=value")
+        key, value = text.split("=", 1)
+        table, _, name = key.strip().rpartition(".")
+        items.append((table, name, value.strip()))
+    return _apply(apf, algo, items, planner)
+
+
+def make_planner(planner: str, file: str | Path | None = None, sets: list[str] = ()) -> Planner:
+    """A ready :class:`Planner` running the named algorithm."""
+    apf, algo = load_params(planner, file, sets)
+    return Planner(PLANNERS[planner](algo), apf)

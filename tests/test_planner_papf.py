@@ -1,0 +1,156 @@
+"""PAPF (Szczepanski 2022, Sec. III): prediction, top quarks, temporary goal, motion, kernels."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nodes.planner.apf import APFParams, Repulsors, apf_force
+from nodes.planner.core import scan_view
+from nodes.planner.kernels import HAVE_NUMBA, rollout, tail_stagnation
+from nodes.planner.papf import PAPFParams, PAPFStrategy, predict, temporary_goal
+from nodes.planner.registry import make_planner
+from nodes.planner.toysim import ToyWorld, box_segments, cast_scan, simulate
+from schemas.messages import Goal, Odometry
+
+APF = APFParams()
+PP = PAPFParams()
+WALL = np.column_stack([np.full(101, 1.0), np.linspace(-1.0, 1.0, 101)])  # across the path at x = 1
+NO_POINTS = np.zeros((0, 2))
+
+
+def test_table1_derived_values():
+    assert (PP.horizon_m, PP.step_m, PP.max_quarks) == (1.0, 0.03, 10)
+    assert PP.i_max == 33 and PP.n_stag == 8                  # lambda/Delta, 0.25 lambda/Delta
+    assert PP.stag_radius == pytest.approx(0.0625)            # R = 0.25 * 0.25 * lambda
+    assert PP.k_vq_factor * APF.k_vo == pytest.approx(5 * 10 / 300)
+
+
+def test_free_space_prediction_is_a_straight_line_of_delta_steps():
+    p = predict(np.zeros(2), np.array([3.0, 4.0]), NO_POINTS, APF, PP)
+    assert p.resolved and not p.reached_goal and len(p.quarks) == 0 and p.abandoned == []
+    assert p.path.shape == (34, 2)
+    steps = np.diff(p.path, axis=0)
+    np.testing.assert_allclose(np.hypot(*steps.T), 0.03, rtol=1e-12)
+    np.testing.assert_allclose(p.path[-1], 33 * 0.03 * np.array([0.6, 0.8]), rtol=1e-12)
+
+
+def test_prediction_stops_at_the_goal():
+    p = predict(np.zeros(2), np.array([0.5, 0.0]), NO_POINTS, APF, PP)
+    assert p.reached_goal and p.path.shape == (17, 2)          # 16 steps: 0.48 is within Delta
+    assert p.path[-1, 0] == pytest.approx(0.48)
+
+
+def test_tail_stagnation_check():
+    still = np.array([[0, 0], [0.01, 0], [0.0, 0.01], [0.01, 0.01]], dtype=float)
+    stuck, mean = tail_stagnation(still, 0, 0.0625)
+    assert stuck and np.allclose(mean, [0.005, 0.005])
+    moving = np.array([[0.03 * k, 0.0] for k in range(8)])
+    assert not tail_stagnation(moving, 0, 0.0625)[0]          # spans 0.21 m: > R from the mean
+    assert tail_stagnation(moving, 8, 0.0625)[0] is False      # no tail points
+
+
+def test_head_on_wall_places_a_top_quark_at_the_stagnation_point():
+    p = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
+    q0 = p.quarks[0]
+    # the prediction stalls where the first wall point enters d_o (0.5 m before the wall)
+    assert 1.0 - APF.d_o - 0.03 <= q0[0] <= 1.0 - APF.d_o + 0.03 and abs(q0[1]) < 1e-9
+    assert len(p.abandoned) == len(p.quarks) >= 1 and p.resolved
+    assert all(a.shape == (34, 2) for a in p.abandoned)
+    assert abs(p.path[-1, 1]) > 0.3                            # the kept path leaves sideways
+
+
+def test_after_m_quarks_the_last_path_is_kept_unresolved():
+    angles = np.linspace(0.05, 2 * math.pi - 0.05, 300)       # closed ring, 8 cm gap ahead
+    ring = 0.6 * np.column_stack([np.cos(angles), np.sin(angles)])
+    p = predict(np.zeros(2), np.array([3.0, 0.0]), ring, APF, PP)
+    assert not p.resolved and len(p.quarks) == PP.max_quarks and len(p.abandoned) == PP.max_quarks
+
+
+def test_temporary_goal_eq8_hand_computed():
+    path = np.array([[0, 0], [0.5, 0.2], [1.0, 0.4], [1.2, 0.1]], dtype=float)
+    np.testing.assert_array_equal(temporary_goal(np.zeros(2), [1.0, 0.0], path, 1e-3), [1.0, 0.4])
+    # slanted line y = x through the robot: A = 1, B = -1, C = 0 -> d = |x - y| / sqrt(2)
+    path = np.array([[0, 0], [1, 0], [0.5, 0.5], [2, 1.5]], dtype=float)
+    d = np.abs(path[:, 0] - path[:, 1]) / math.sqrt(2)
+    expected = path[1:][np.argmax(d[1:])]
+    np.testing.assert_array_equal(temporary_goal(np.zeros(2), [2.0, 2.0], path, 1e-3), expected)
+
+
+def test_temporary_goal_ties_go_to_the_farthest_point_along_the_path():
+    path = np.array([[0.03 * k, 0.0] for k in range(34)])
+    np.testing.assert_array_equal(temporary_goal(np.zeros(2), [1.0, 0.0], path, 1e-3), path[-1])
+
+
+def test_motion_force_is_eq7_with_the_temporary_goal():
+    s = cast_scan(ToyWorld(segments=box_segments(1.5, 0.1, 0.4, 0.4)), 0.0, 0.0, 0.0)
+    view = scan_view(s, Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    strat = PAPFStrategy()
+    plan = strat.plan(np.zeros(2), 0.0, np.array([6.0, 0.0]), view, APF)
+    quarks = Repulsors(np.asarray(plan.top_quarks).reshape(-1, 2), 5 * APF.k_vo, PP.d_q)
+    expected = apf_force(np.zeros(2), plan.temporary_goal, view.points, APF, extra=(quarks,))
+    np.testing.assert_allclose(plan.force, expected, rtol=1e-12)
+    assert len(plan.predicted_path) == 34 and len(plan.temporary_goal) == 2
+
+
+def test_quarks_persist_while_in_reach_and_reset_on_new_goal():
+    strat = PAPFStrategy()
+    view = scan_view(cast_scan(ToyWorld(segments=((1.0, -1.0, 1.0, 1.0),)), 0.0, 0.0, 0.0),
+                     Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    first = strat.plan(np.zeros(2), 0.0, np.array([8.0, 0.0]), view, APF)
+    assert len(first.top_quarks) >= 1 and strat.quarks is not None
+    again = strat.plan(np.zeros(2), 0.0, np.array([8.0, 0.0]), view, APF)
+    np.testing.assert_array_equal(np.asarray(again.top_quarks)[: len(first.top_quarks)],
+                                  first.top_quarks)
+    strat.reset()
+    assert strat.quarks is None
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_numba_and_numpy_kernels_are_bit_identical():
+    rng = np.random.default_rng(7)
+    for dims in (2, 3):
+        for _ in range(10):
+            obs = rng.uniform(-2.0, 3.0, (300, dims))
+            quarks = rng.uniform(-1.0, 2.0, (int(rng.integers(0, 5)), dims))
+            goal = rng.uniform(2.0, 6.0, dims)
+            args = (np.zeros(dims), goal, -5.0, obs, 10 / 300, 0.5, quarks, 50 / 300, 1.0, 0.03, 41, 0.03)
+            a, b = rollout(*args, use_numba=True), rollout(*args, use_numba=False)
+            assert a[1] == b[1] and np.array_equal(a[0], b[0])
+    fast = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
+    slow = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PAPFParams(use_numba=False))
+    assert np.array_equal(fast.path, slow.path) and np.array_equal(fast.quarks, slow.quarks)
+
+
+def test_planner_state_carries_the_prediction_every_cycle():
+    world = ToyWorld(segments=box_segments(2.0, 0.0, 0.4, 0.4))
+    r = simulate(make_planner("papf"), world, goal=(5.0, 0.0), max_time_s=120, keep_states=True)
+    driving = [s for s in r.states[:-1]]
+    assert all(len(s.predicted_path) >= 2 and len(s.temporary_goal) == 2 for s in driving)
+    assert any(s.top_quarks for s in driving) and any(s.abandoned_paths for s in driving)
+    assert {s.algorithm for s in r.states} == {"papf"}
+
+
+def test_head_on_box_papf_reaches_where_apf_stagnates():
+    world = ToyWorld(segments=box_segments(2.0, 0.0, 0.4, 0.4))
+    papf = simulate(make_planner("papf"), world, goal=(5.0, 0.0), max_time_s=150)
+    apf = simulate(make_planner("apf"), world, goal=(5.0, 0.0), max_time_s=150)
+    assert papf.status == "reached" and papf.min_clearance > 0.15
+    assert apf.status == "stagnated"
+
+
+def test_papf_is_deterministic():
+    world = ToyWorld(segments=box_segments(2.0, 0.1, 0.4, 0.4))
+    a = simulate(make_planner("papf"), world, goal=(4.0, 0.0), max_time_s=80)
+    b = simulate(make_planner("papf"), world, goal=(4.0, 0.0), max_time_s=80)
+    assert np.array_equal(a.path, b.path)
+
+
+def test_same_goal_twice_keeps_quarks_new_goal_resets():
+    pl = make_planner("papf")
+    pl.set_goal(Goal(stamp_ns=0, x=8.0, y=0.0))
+    pl.strategy.quarks = np.array([[1.0, 0.0]])
+    pl.set_goal(Goal(stamp_ns=1, x=8.0, y=0.0))
+    assert pl.strategy.quarks is not None
+    pl.set_goal(Goal(stamp_ns=2, x=7.0, y=0.0))
+    assert pl.strategy.quarks is None
