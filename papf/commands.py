@@ -10,6 +10,7 @@ import importlib
 
 MODULES = (
     "papf.recording.cli",   # record, replay, recover, info
+    "papf.bench_cli",       # bench
 )
 
 

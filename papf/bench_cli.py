@@ -1,0 +1,41 @@
+"""``papf bench NAME [ARGS...]``: run one of the benchmarks in ``bench/`` (they print JSON).
+
+Benchmarks measure speed and memory; tests never do. Each ``bench/bench_<name>.py``
+is a script with its own ``--help``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import runpy
+import sys
+from pathlib import Path
+
+import bench
+
+BENCHES = {
+    "planner": "planner cycle time p50/p99 per planner, incl. the PAPF worst case (M = 10)",
+    "sim": "sim-time / wall-time ratio of the lockstep driver + LiDAR loop",
+    "recorder": "recorder node's sustained throughput without loss (messages/s)",
+    "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
+}
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("bench", help="run a benchmark (prints JSON)",
+                              description=__doc__.splitlines()[0] + "\n\n" + "\n".join(
+                                  f"  {k:9} {v}" for k, v in BENCHES.items()),
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("name", choices=sorted(BENCHES))
+    p.add_argument("args", nargs=argparse.REMAINDER, help="options of that benchmark (--help)")
+    p.set_defaults(func=cmd_bench)
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    script = Path(bench.__file__).parent / f"bench_{args.name}.py"
+    sys.argv = [str(script), *args.args]
+    try:
+        runpy.run_path(str(script), run_name="__main__")
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    return 0
