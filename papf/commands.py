@@ -11,6 +11,8 @@ import importlib
 MODULES = (
     "papf.recording.cli",   # record, replay, recover, info
     "papf.bench_cli",       # bench
+    "papf.plan_cli",        # plan, experiment paper-tests, experiment random
+    "papf.report_cli",      # report, experiment energy
 )
 
 

@@ -60,7 +60,8 @@ def node_commands(cfg: RunConfig, world_file: str, endpoint: str) -> dict[str, l
                             "--meta", f"world={cfg.world}", "--meta", f"planner={cfg.planner}",
                             "--meta", f"seed={cfg.seed}",
                             "--meta", f"planner_args={' '.join(cfg.planner_args)}",
-                            "--meta", f"energy_model={cfg.energy_model}"]
+                            "--meta", f"energy_model={cfg.energy_model}",
+                            "--meta", f"timeout_s={cfg.timeout_s:g}"]
     cmds["energy_meter"] = [*py, "nodes.energy_meter", *z, "--model", cfg.energy_model]
     cmds["planner"] = [*py, "nodes.planner", *z, "--planner", cfg.planner, *rt, *cfg.planner_args]
     cmds["lidar_sim"] = [*py, "nodes.lidar_sim", *z, "--world", world_file, "--seed", str(cfg.seed)]
@@ -128,7 +129,7 @@ def run(cfg: RunConfig) -> RunResult:
     wall0 = time.monotonic()
     monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision)
     keys = Keys(cfg.namespace)
-    with Supervisor(show=_show_line(cfg.verbose)) as sup:
+    with Supervisor(show=_show_line(cfg.verbose), last=("recorder", "router")) as sup:
         sup.start("router", [sys.executable, "-m", "papf.router", "--listen", endpoint])
         if not wait_port(port, 15.0, abort=lambda: bool(sup.dead())):
             monitor.fail(f"the embedded router did not come up on {endpoint}: "

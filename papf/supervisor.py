@@ -42,8 +42,10 @@ class Child:
 class Supervisor:
     """Owns the node processes of one run. Use as a context manager."""
 
-    def __init__(self, log_stream: TextIO | None = None, show=lambda name, line: True):
+    def __init__(self, log_stream: TextIO | None = None, show=lambda name, line: True,
+                 last: tuple[str, ...] = ()):
         self.children: list[Child] = []
+        self.last = last  # names stopped after all others, in this order (see stop())
         self.log_stream = log_stream or sys.stderr
         self.show = show
         self._lock = threading.Lock()
@@ -73,17 +75,19 @@ class Supervisor:
         """Children that have exited."""
         return [c for c in self.children if c.returncode is not None]
 
-    def stop(self, grace_s: float = 3.0) -> None:
-        """SIGTERM every child's group (reverse start order), SIGKILL whatever is left."""
-        for child in reversed(self.children):
-            _signal_group(child.proc, signal.SIGTERM)
-        deadline = time.monotonic() + grace_s
-        for child in reversed(self.children):
-            try:
-                child.proc.wait(timeout=max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                _signal_group(child.proc, signal.SIGKILL)
-                child.proc.wait(timeout=5)
+    def stop(self, grace_s: float = 3.0, last: tuple[str, ...] = (), settle_s: float = 0.3) -> None:
+        """Stop every child: SIGTERM, then SIGKILL after ``grace_s``.
+
+        Children named in ``last`` are stopped afterwards, one stage each in that order,
+        ``settle_s`` after the previous stage exited — e.g. ``("recorder", "router")`` so a
+        recorder gets every message already published before the router goes.
+        """
+        stages = [[c for c in self.children if c.name not in last]]
+        stages += [[c for c in self.children if c.name == name] for name in last]
+        for i, stage in enumerate(stages):
+            if i and stage:
+                time.sleep(settle_s)
+            _stop_stage(stage, grace_s)
         for child in self.children:  # a group may outlive its leader
             _signal_group(child.proc, signal.SIGKILL)
 
@@ -91,7 +95,19 @@ class Supervisor:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.stop()
+        self.stop(last=self.last)
+
+
+def _stop_stage(children: list[Child], grace_s: float) -> None:
+    for child in reversed(children):
+        _signal_group(child.proc, signal.SIGTERM)
+    deadline = time.monotonic() + grace_s
+    for child in reversed(children):
+        try:
+            child.proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            _signal_group(child.proc, signal.SIGKILL)
+            child.proc.wait(timeout=5)
 
 
 def _signal_group(proc: subprocess.Popen, sig: int) -> None:

@@ -1,0 +1,259 @@
+"""Per-run figures of a recorded run, from its MCAP file alone (DESIGN.md §8, docs/experiments-energy.md).
+
+Outcome, ``t_end``, duration, path length and the live battery at ``t_end`` are decided
+by feeding the recording to :class:`papf.monitor.RunMonitor` — the very object
+``papf run`` uses live — so a report and the run's own summary agree by construction.
+Charge and energy are re-metered from the recorded ``odom`` + ``wheels``
+(:mod:`papf.report.remeter`). Smoothness and heading oscillations are computed here
+from the recorded odometry (definitions in :func:`smoothness` and
+:func:`heading_oscillations`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from papf.errors import RecordingError
+from papf.monitor import NS, RunMonitor
+from papf.recording.reader import Recording
+from papf.report.remeter import Remeter, battery_at
+from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist, WheelStates
+
+OSCILLATION_W_RAD_S = 0.1   # [rad/s] |w| a swing must exceed to count (ASSUMPTION: well above
+                            # the sim's straight-line yaw corrections, ~0.02 rad/s; 5.7 deg/s)
+REPRODUCE_TOL = 1e-9        # [-] relative: a file's figure vs the live run's summary
+NO_TIMEOUT_S = 1e9          # [s] stands for "no timeout known" (the monitor needs a number)
+NO_OUTCOME = "no_outcome"   # the recording ends before any outcome message (timeout unknown)
+INCOMPLETE = "incomplete"   # ... and before the run's timeout: the recording lost the end
+
+
+@dataclass(frozen=True)
+class Series:
+    """Time series of one run up to ``t_end`` (for figures). Arrays of equal length."""
+
+    t_s: np.ndarray          # [s] sim time
+    x: np.ndarray            # [m] ground truth (sim/pose; odom on a real robot)
+    y: np.ndarray            # [m]
+    heading: np.ndarray      # [rad] unwrapped yaw
+    v: np.ndarray            # [m/s] odometry forward speed
+    w: np.ndarray            # [rad/s] odometry yaw rate
+
+
+@dataclass
+class RunMetrics:
+    """Everything the report states about one run (units in the names)."""
+
+    file: str
+    planner: str
+    world: str
+    seed: int
+    outcome: str
+    reason: str
+    t_end_s: float              # [s] sim time of the outcome
+    duration_s: float           # [s] first motion -> outcome (papf.monitor definition)
+    path_length_m: float        # [m] ground-truth path up to t_end
+    charge_mAh: float           # [mAh] re-metered with ``energy_model`` at t_end
+    energy_J: float             # [J] re-metered
+    mean_power_W: float         # [W] energy_J / t_end_s (the meter integrates from t = 0)
+    live_charge_mAh: float      # [mAh] last recorded live battery with stamp <= t_end (nan: none)
+    live_energy_J: float        # [J]
+    live_stamp_s: float         # [s] its stamp (< t_end when the recorder stopped before the
+                                #     meter's last messages reached it)
+    live_model: str             # model the live meter ran ("" if no battery recorded)
+    remeter_diff_mAh: float     # [mAh] re-metered minus live charge at live_stamp_s (0: exact)
+    energy_model: str           # model used for charge_mAh / energy_J
+    ang_accel_sq: float         # [rad^2/s^3] integral of (dw/dt)^2 over the motion
+    jerk_sq: float              # [m^2/s^5] integral of (d^2v/dt^2)^2 over the motion
+    heading_oscillations: int   # sign changes of w beyond +-OSCILLATION_W_RAD_S
+    collisions: int
+    series: Series | None = field(default=None, repr=False, compare=False)
+
+    def row(self) -> dict:
+        """Flat dict of the scalar figures (CSV row)."""
+        d = asdict(self)
+        d.pop("series")
+        return d
+
+
+def smoothness(t_s: np.ndarray, v: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """(∫ β² dt [rad²/s³], ∫ j² dt [m²/s⁵]) by finite differences of sampled v, w.
+
+    β = dω/dt is the angular acceleration of eq. (6)'s I ω β term; j = d²v/dt² the
+    linear jerk. Both integrals are 0 for a motion at constant speeds and grow with every
+    swing of the commands (the paper's "unsmooth and oscillating motion"). Differences
+    of samples: β_k = Δω_k / Δt_k over each interval (weight Δt_k); a_k = Δv_k / Δt_k at
+    interval midpoints, j_k = Δa_k / (midpoint spacing) (weight: that spacing). Values
+    depend on the sample rate (odometry at 50 Hz): compare runs recorded at one rate only.
+    """
+    t = np.asarray(t_s, dtype=float)
+    if t.size < 3:
+        return 0.0, 0.0
+    dt = np.diff(t)
+    beta = np.diff(w) / dt
+    ang = float(np.sum(beta**2 * dt))
+    a = np.diff(v) / dt
+    t_mid = 0.5 * (t[1:] + t[:-1])
+    dtm = np.diff(t_mid)
+    jerk = np.diff(a) / dtm
+    return ang, float(np.sum(jerk**2 * dtm))
+
+
+def heading_oscillations(w: np.ndarray, threshold: float = OSCILLATION_W_RAD_S) -> int:
+    """Times the yaw rate swings from beyond +threshold to beyond -threshold or back.
+
+    Samples with |w| <= threshold are ignored (hysteresis), so sensor-level wiggles
+    around zero and one-sided turns count nothing; a left-right-left weave counts 2.
+    """
+    arr = np.asarray(w, dtype=float)
+    signs = np.sign(arr[np.abs(arr) > threshold])
+    return int(np.count_nonzero(signs[1:] != signs[:-1])) if signs.size else 0
+
+
+def _unwrap_heading(yaw: list[float]) -> np.ndarray:
+    return np.unwrap(np.asarray(yaw, dtype=float)) if yaw else np.zeros(0)
+
+
+class _Collector:
+    """One pass over a recording: feeds the monitor, the re-meter and the series."""
+
+    def __init__(self, ns: str, timeout_s: float, remeter: Remeter):
+        self.timeout_known = timeout_s < NO_TIMEOUT_S
+        self.monitor = RunMonitor(timeout_s)
+        self.remeter = remeter
+        self.odom: list[Odometry] = []
+        self.poses: list[Odometry] = []
+        m = self.monitor
+        self.handlers = {f"{ns}/clock": (Clock, m.on_clock),
+                         f"{ns}/planner/status": (PlannerStatus, m.on_status),
+                         f"{ns}/events": (Event, m.on_event),
+                         f"{ns}/battery": (BatteryState, m.on_battery),
+                         f"{ns}/sim/pose": (Odometry, self._on_pose),
+                         f"{ns}/cmd_vel": (Twist, m.on_cmd),
+                         f"{ns}/odom": (Odometry, self._on_odom),
+                         f"{ns}/wheels": (WheelStates, self.remeter.feed)}
+
+    def _on_pose(self, msg: Odometry) -> None:
+        self.poses.append(msg)
+        self.monitor.on_pose(msg)
+
+    def _on_odom(self, msg: Odometry) -> None:
+        self.odom.append(msg)
+        self.remeter.feed(msg)
+
+    def feed(self, key: str, msg: object) -> None:
+        msg_type, handler = self.handlers[key]
+        if isinstance(msg, msg_type):  # undecodable payloads arrive as bytes: skip them
+            handler(msg)
+
+    def finish(self) -> None:
+        """No outcome message: the run ended at its last clock (or odometry) stamp."""
+        m = self.monitor
+        if not self.poses:  # a real robot has no ground truth: odometry is the path
+            for o in self.odom:
+                self._on_pose(o)
+        if m.outcome is None:
+            last = max([m.clock_ns] + [o.stamp_ns for o in self.odom[-1:]])
+            m.outcome, m.t_end_ns = NO_OUTCOME, max(last, 0)
+            m.reason = "the recording ends before any outcome (timeout, or a stopped run)"
+            if self.timeout_known:  # the run went on to an outcome the file does not hold
+                m.outcome = INCOMPLETE
+                m.reason = (f"the recording ends at {last / NS:.2f} s, before any outcome and "
+                            f"before the timeout ({m.timeout_ns / NS:g} s): its end was lost")
+
+
+def run_metrics(path: str | Path, energy_model: str | None = None,
+                energy_params: dict | None = None, with_series: bool = True) -> RunMetrics:
+    """Figures of the run recorded in ``path`` (see the module doc).
+
+    ``energy_model``: ``paper`` | ``motor`` | None (the model the live meter ran, from the
+    run metadata). Raises RecordingError for a truncated or foreign file.
+    """
+    with Recording(path) as rec:
+        meta = rec.run_metadata
+        ns = meta.get("namespace") or _guess_namespace(rec)
+        model = energy_model or meta.get("energy_model") or "motor"
+        timeout_s = float(meta.get("timeout_s") or NO_TIMEOUT_S)
+        col = _Collector(ns, timeout_s, Remeter(model, energy_params))
+        for key, msg, _t in rec.messages(list(col.handlers)):
+            col.feed(key, msg)
+    col.finish()
+    return _assemble(Path(path), meta, col, model, with_series)
+
+
+def _guess_namespace(rec: Recording) -> str:
+    odom = [k for k in rec.keys() if k.endswith("/odom")]
+    if not odom:
+        raise RecordingError(f"{rec.path}: no '<namespace>/odom' channel; is this a papf run "
+                             f"recording? keys: {', '.join(rec.keys()[:8]) or 'none'}")
+    return odom[0][: -len("/odom")]
+
+
+def _assemble(path: Path, meta: dict, col: _Collector, model: str,
+              with_series: bool) -> RunMetrics:
+    m = col.monitor
+    t_end = m.t_end_ns or 0
+    res = m.result(meta.get("planner", "?"), meta.get("world", "?"), int(meta.get("seed", -1)), 0.0)
+    remetered = battery_at(col.remeter.states, t_end)
+    live = m.battery_at_end()
+    start_ns = m.motion_start_ns()
+    moving = [o for o in col.odom if start_ns is not None and start_ns <= o.stamp_ns <= t_end]
+    t = np.array([o.stamp_ns / NS for o in moving])
+    v = np.array([o.v for o in moving])
+    w = np.array([o.w for o in moving])
+    ang, jerk = smoothness(t, v, w)
+    energy = remetered.energy_J if remetered else math.nan
+    return RunMetrics(
+        file=path.name, planner=res.planner, world=res.world, seed=res.seed,
+        outcome=res.outcome, reason=res.reason, t_end_s=t_end / NS,
+        duration_s=res.duration_s, path_length_m=res.path_length_m,
+        charge_mAh=remetered.charge_used_mAh if remetered else math.nan, energy_J=energy,
+        mean_power_W=energy / (t_end / NS) if t_end > 0 else math.nan,
+        live_charge_mAh=live.charge_used_mAh if live else math.nan,
+        live_energy_J=live.energy_J if live else math.nan,
+        live_stamp_s=live.stamp_ns / NS if live else math.nan,
+        live_model=live.model if live else "", energy_model=model,
+        remeter_diff_mAh=_remeter_diff(col.remeter.states, live),
+        ang_accel_sq=ang, jerk_sq=jerk, heading_oscillations=heading_oscillations(w),
+        collisions=res.collisions,
+        series=_series(col.poses, col.odom, t_end) if with_series else None,
+    )
+
+
+def _remeter_diff(states: list[BatteryState], live: BatteryState | None) -> float:
+    if live is None:
+        return math.nan
+    same = battery_at(states, live.stamp_ns)
+    if same is None or same.stamp_ns != live.stamp_ns:
+        return math.nan
+    return same.charge_used_mAh - live.charge_used_mAh
+
+
+def _series(poses: list[Odometry], odom: list[Odometry], t_end: int) -> Series:
+    poses = [p for p in poses if p.stamp_ns <= t_end]
+    by_stamp = {o.stamp_ns: o for o in odom if o.stamp_ns <= t_end}
+    both = [(p, by_stamp[p.stamp_ns]) for p in poses if p.stamp_ns in by_stamp]
+    return Series(t_s=np.array([p.stamp_ns / NS for p, _ in both]),
+                  x=np.array([p.x for p, _ in both]), y=np.array([p.y for p, _ in both]),
+                  heading=_unwrap_heading([p.yaw for p, _ in both]),
+                  v=np.array([o.v for _, o in both]), w=np.array([o.w for _, o in both]))
+
+
+def differences_from_live(name: str, live, m: RunMetrics,
+                          rel_tol: float = REPRODUCE_TOL) -> list[str]:
+    """Figures of a run's file that differ from its live summary (:class:`papf.monitor.RunResult`).
+
+    Empty when the recording holds the whole run: the monitor and the meter then see the
+    same messages as they did live (charge/energy compared for the same energy model).
+    """
+    bad = []
+    for attr in ("outcome", "duration_s", "path_length_m", "charge_mAh", "energy_J"):
+        a, b = getattr(live, attr), getattr(m, attr)
+        same = a == b if isinstance(a, str) else (
+            math.isclose(a, b, rel_tol=rel_tol, abs_tol=1e-12) or (math.isnan(a) and math.isnan(b)))
+        if not same:
+            bad.append(f"{name}: {attr} live {a} vs file {b}")
+    return bad

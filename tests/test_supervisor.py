@@ -1,0 +1,68 @@
+"""Supervisor: staged stop order, and no orphans even when the supervisor is SIGKILLed."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+from papf.supervisor import Supervisor
+
+SLEEPER = [sys.executable, "-c",
+           "import signal, sys, time\n"
+           "signal.signal(signal.SIGTERM, lambda *_: (print('term', time.monotonic(), flush=True), sys.exit(0)))\n"
+           "print('up', flush=True)\n"
+           "time.sleep(60)"]
+
+
+def wait_lines(child, n, timeout=10):
+    deadline = time.monotonic() + timeout
+    while len(child.tail) < n and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+def alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    with open(f"/proc/{pid}/stat") as f:  # a zombie is not alive
+        return f.read().split(")")[-1].split()[0] != "Z"
+
+
+def test_staged_stop_stops_named_children_last():
+    sup = Supervisor(show=lambda *_: False)
+    kids = {name: sup.start(name, SLEEPER) for name in ("a", "recorder", "router")}
+    for c in kids.values():
+        wait_lines(c, 1)
+    sup.stop(last=("recorder", "router"), settle_s=0.2)
+    for c in kids.values():
+        wait_lines(c, 2)
+    t = {n: float(c.tail[-1].split()[1]) for n, c in kids.items()}
+    assert t["a"] < t["recorder"] < t["router"]
+    assert all(c.returncode == 0 for c in kids.values())
+
+
+def test_children_die_with_a_killed_supervisor(tmp_path):
+    pid_file = tmp_path / "pid"
+    script = textwrap.dedent(f"""
+        import sys, time
+        from papf.supervisor import Supervisor
+        sup = Supervisor(show=lambda *_: False)
+        c = sup.start("sleeper", {SLEEPER!r})
+        open({str(pid_file)!r}, "w").write(str(c.proc.pid))
+        time.sleep(60)
+    """)
+    parent = subprocess.Popen([sys.executable, "-c", script], start_new_session=True)
+    deadline = time.monotonic() + 20
+    while not (pid_file.exists() and pid_file.read_text()) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    child_pid = int(pid_file.read_text())
+    assert alive(child_pid)
+    os.kill(parent.pid, signal.SIGKILL)
+    parent.wait()
+    deadline = time.monotonic() + 10
+    while alive(child_pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not alive(child_pid), "the child outlived its SIGKILLed supervisor"
