@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import signal
 import sys
 
 from papf.errors import PapfError
@@ -108,8 +109,13 @@ def _optional_commands():
     return registrars()
 
 
+def _sigterm_as_interrupt(*_) -> None:
+    raise KeyboardInterrupt  # same clean stop as Ctrl-C: every child process is stopped
+
+
 def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

@@ -122,3 +122,23 @@ def test_garbage_on_cmd_vel_and_scan_crashes_nothing():
     res = json.loads(out.strip().splitlines()[-1])
     assert proc.returncode == 0 and res["outcome"] == "reached", err[-3000:]
     assert_no_orphans(port)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_interrupting_the_launcher_stops_everything(sig):
+    port = free_port()
+    proc = start_papf_run("--world", "energy", "--planner", "apf", port=port)
+    try:
+        assert wait_port(port, 60), "the run's router never came up"
+        deadline = time.monotonic() + 60
+        while not pids_of("nodes.base_driver", port) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(1.0)
+        os.kill(proc.pid, sig)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err[-2000:]
+    assert "interrupted" in err
+    assert_no_orphans(port)
