@@ -13,6 +13,7 @@ MODULES = (
     "papf.bench_cli",       # bench
     "papf.plan_cli",        # plan, experiment paper-tests, experiment random
     "papf.report_cli",      # report, experiment energy
+    "papf.robot_cli",       # launch, rosbot-emulator, make-certs
 )
 
 

@@ -162,6 +162,8 @@ class RunMonitor:
         latency = None
         if self.watchdog_stop_ns is not None and self.last_cmd_ns is not None:
             latency = (self.watchdog_stop_ns - self.last_cmd_ns) / NS
+            if latency < 0:  # the stop belonged to an earlier outage the run recovered from
+                latency = None
         return RunResult(
             outcome=self.outcome or "failed", planner=planner, world=world, seed=seed,
             duration_s=max(0, t_end - start) / NS if start is not None else 0.0,

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from schemas.messages import (
     BatteryState,
+    BatteryVoltage,
     Clock,
     Event,
     Goal,
@@ -24,6 +25,7 @@ TOPICS = {
     "cmd_vel": Twist,
     "wheels": WheelStates,
     "battery": BatteryState,
+    "battery/measured": BatteryVoltage,   # the real robot's pack voltage (rosbot driver)
     "goal": Goal,
     "planner/state": PlannerState,
     "planner/status": PlannerStatus,
@@ -60,6 +62,7 @@ class Keys:
     cmd_vel = property(lambda self: self.key("cmd_vel"))
     wheels = property(lambda self: self.key("wheels"))
     battery = property(lambda self: self.key("battery"))
+    battery_measured = property(lambda self: self.key("battery/measured"))
     goal = property(lambda self: self.key("goal"))
     planner_state = property(lambda self: self.key("planner/state"))
     planner_status = property(lambda self: self.key("planner/status"))

@@ -83,6 +83,15 @@ class BatteryState(Message):
     model: str = field("motor", doc="energy model that produced the figures")
 
 
+@message("BatteryVoltage", 1)
+class BatteryVoltage(Message):
+    """Pack voltage measured by the robot (sensor_msgs/BatteryState.voltage via the bridge)."""
+
+    stamp_ns: int = field(unit="ns", doc="run time it was received")
+    voltage: float = field(unit="V")
+    source: str = field("robot", doc="who measured it")
+
+
 @message("Goal", 1)
 class Goal(Message):
     """The global goal position in the world frame."""
@@ -152,8 +161,8 @@ class Event(Message):
 
 
 ALL_MESSAGES: tuple[type[Message], ...] = (
-    Scan, Odometry, Twist, WheelStates, BatteryState, Goal, PlannerState, PlannerStatus,
-    Clock, Event,
+    Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
+    PlannerStatus, Clock, Event,
 )
 BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
 

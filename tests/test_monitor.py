@@ -89,3 +89,11 @@ def test_node_faults_are_reported():
                      detail="no cmd_vel for 2 s; free-running"))
     assert m.result("p", "w", 0, 0).to_json()["faults"] == [
         "base_driver at 1.00 s: no cmd_vel for 2 s; free-running"]
+
+
+def test_stop_latency_ignores_an_outage_the_run_recovered_from():
+    m = RunMonitor(timeout_s=100)
+    m.on_event(Event(stamp_ns=2 * NS, kind="watchdog_stop", source="base_driver"))
+    m.on_cmd(Twist(stamp_ns=9 * NS, v=0.2, w=0))  # commands resumed after the outage
+    m.on_status(PlannerStatus(stamp_ns=20 * NS, state="reached"))
+    assert m.result("p", "w", 0, 0).stop_latency_s is None

@@ -20,6 +20,7 @@ def samples() -> list[Message]:
         s.WheelStates(stamp_ns=3, speed=(1, 2, 3, 4), torque=(0.1, 0.2, 0.3, 0.4)),
         s.BatteryState(stamp_ns=4, voltage=11.9, current=1.2, power=14.3, charge_used_mAh=1.5,
                        energy_J=60.0, soc=0.99, model="paper"),
+        s.BatteryVoltage(stamp_ns=4, voltage=11.7),
         s.Goal(stamp_ns=5, x=10.0, y=0.0, tolerance=0.1),
         s.PlannerState(stamp_ns=6, algorithm="papf", force=(1.0, 2.0), temporary_goal=(1.0, 1.0),
                        predicted_path=((0, 0), (0.03, 0.0)), abandoned_paths=(((0, 0), (1, 1)),),
@@ -85,7 +86,7 @@ def test_bad_arrays_raise_schema_error():
     wheels = s.WheelStates(stamp_ns=1, speed=(1, 2, 3, 4), torque=(0, 0, 0, 0)).to_wire()
     with pytest.raises(s.SchemaError, match="number"):
         s.WheelStates.from_wire({**wheels, "speed": [1, "a"]})
-    state = samples()[6].to_wire()
+    state = samples()[7].to_wire()
     with pytest.raises(s.SchemaError, match=r"\[x, y\] pair"):
         s.PlannerState.from_wire({**state, "predicted_path": [[1, 2, 3]]})
     with pytest.raises(s.SchemaError, match="2 values"):
@@ -94,7 +95,7 @@ def test_bad_arrays_raise_schema_error():
 
 def test_enumerated_strings_are_checked():
     with pytest.raises(s.SchemaError, match="not one of"):
-        s.PlannerStatus.from_wire({**samples()[7].to_wire(), "state": "flying"})
+        s.PlannerStatus.from_wire({**samples()[8].to_wire(), "state": "flying"})
 
 
 def test_keys_and_namespace():

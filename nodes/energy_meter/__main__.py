@@ -10,6 +10,7 @@ key                type            dir    what
 =================  ==============  =====  ==================================================
 ``<ns>/odom``      Odometry        in     v, w (and stamps) at 50 Hz in sim
 ``<ns>/wheels``    WheelStates     in     per-wheel speed [rad/s] and torque [N m]
+``<ns>/battery/measured``  BatteryVoltage  in  the robot's pack voltage (replaces the model's)
 ``<ns>/battery``   BatteryState    out    one per paired stamp: V, I, P, mAh, J, SoC, model
 ``<ns>/alive/energy_meter``  liveliness  out  declared once subscribed
 =================  ==============  =====  ==================================================
@@ -52,10 +53,14 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
     with open_node(NODE_NAME, args, log) as node:
         node.subscribe("odom")
         node.subscribe("wheels")
+        node.subscribe("battery/measured")  # the real robot's voltage replaces the model's
         node.declare_publishers("battery")
         node.ready()
-        for _topic, msg in node.messages():
+        for topic, msg in node.messages():
             if msg is None:
+                continue
+            if topic == "battery/measured":
+                meter.set_measured_voltage(msg.voltage, msg.stamp_ns)
                 continue
             try:
                 state = meter.feed(msg)

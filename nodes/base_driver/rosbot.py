@@ -1,0 +1,178 @@
+"""The real ROSbot as seen through ``zenoh-bridge-ros2dds``: our messages <-> its CDR (pure).
+
+No transport here (the process is :mod:`nodes.base_driver.rosbot_node`). DESIGN.md §5:
+the robot takes ``geometry_msgs/Twist`` on ``cmd_vel`` (linear.x, angular.z), publishes
+``nav_msgs/Odometry`` on ``odometry/filtered`` (EKF of wheels + IMU) and
+``sensor_msgs/BatteryState`` on ``battery`` (voltage only). The bridge maps topic ``/t``
+to key ``t`` (``<bridge-ns>/t`` with a bridge namespace); payloads are CDR with the
+4-byte encapsulation header, coded with ``rosbags`` (:mod:`papf.ros2`).
+
+Wheels: the ROSbot reports no wheel torque, so :func:`wheel_states` derives them from
+two odometry samples — speeds from skid-steer kinematics, torques from a rigid-body
+estimate (mass x acceleration, yaw inertia x angular acceleration, shared equally by
+the two wheels of a side; rolling and skid friction are NOT included). The ``paper``
+energy model (eq. 6, odometry only) is therefore the one to use on real data.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from papf import ros2
+from papf.errors import ConfigError
+from schemas import Odometry, WheelStates
+from schemas.messages import WHEEL_NAMES
+
+WHEEL_RADIUS = 0.0425          # [m] 85 mm wheels (Husarion manual, DESIGN.md §5)
+MASS = 2.84                    # [kg] with LiDAR and camera (Husarion manual)
+YAW_INERTIA = MASS * (0.200**2 + 0.235**2) / 12.0   # [kg m^2] ASSUMPTION: uniform box footprint
+# [m] effective skid-steer track: rosbot_ros diff_drive_controller wheel_separation 0.186 x
+# wheel_separation_multiplier 1.36 (the sim driver reproduces the same, nodes/base_driver/sim.py)
+EFFECTIVE_TRACK = 0.186 * 1.36
+
+
+@dataclass(frozen=True)
+class BridgeTopics:
+    """Bridge keys of the robot's ROS 2 topics: ``[<namespace>/]<topic>``.
+
+    The bridge namespace is a setting of its own, distinct from our key namespace:
+    :meth:`check_separate` refuses any overlap with our msgpack keys (DESIGN.md §5).
+    """
+
+    namespace: str = ""
+    cmd_vel: str = "cmd_vel"
+    odometry: str = "odometry/filtered"
+    battery: str = "battery"
+    scan: str = "scan"
+
+    def key(self, topic: str) -> str:
+        topic = topic.strip("/")
+        return f"{self.namespace.strip('/')}/{topic}" if self.namespace.strip("/") else topic
+
+    @property
+    def keys(self) -> dict[str, str]:
+        return {t: self.key(getattr(self, t)) for t in ("cmd_vel", "odometry", "battery", "scan")}
+
+    def check_separate(self, our_namespace: str) -> None:
+        """ConfigError if a bridge key falls under ``<our_namespace>/`` (or contains wildcards)."""
+        for name, key in self.keys.items():
+            if not key or "*" in key or "$" in key:
+                raise ConfigError(f"bridge {name} key {key!r} must be a plain key without wildcards")
+            if key == our_namespace or key.startswith(our_namespace + "/"):
+                raise ConfigError(
+                    f"bridge {name} key {key!r} overlaps our namespace {our_namespace!r}: the "
+                    "bridge carries CDR and our keys msgpack; give the bridge another namespace "
+                    "(--bridge-namespace) or none")
+
+
+# -- commands -----------------------------------------------------------------------------------
+def twist_to_cdr(v: float, w: float) -> bytes:
+    """Our command (v [m/s], w [rad/s]) as the CDR ``geometry_msgs/Twist`` the robot takes."""
+    return ros2.encode(ros2.twist(v, w), ros2.TWIST)
+
+
+def cdr_to_twist(data: bytes) -> tuple[float, float]:
+    """(linear.x, angular.z) of a CDR ``geometry_msgs/Twist``."""
+    msg = ros2.decode(data, ros2.TWIST)
+    return float(msg.linear.x), float(msg.angular.z)
+
+
+# -- odometry -----------------------------------------------------------------------------------
+class Pose2D(NamedTuple):
+    x: float     # [m]
+    y: float     # [m]
+    yaw: float   # [rad]
+
+
+ORIGIN = Pose2D(0.0, 0.0, 0.0)
+
+
+class RobotOdom(NamedTuple):
+    """The robot's odometry reduced to 2-D, in the robot's own ``odom`` frame."""
+
+    stamp_ns: int   # ROS header stamp (the robot's clock)
+    pose: Pose2D
+    v: float        # [m/s] forward speed (twist.linear.x, base_link frame)
+    w: float        # [rad/s] yaw rate
+
+
+def cdr_to_robot_odom(data: bytes) -> RobotOdom:
+    msg = ros2.decode(data, ros2.ODOMETRY)
+    p, q = msg.pose.pose.position, msg.pose.pose.orientation
+    values = (p.x, p.y, q.x, q.y, q.z, q.w, msg.twist.twist.linear.x, msg.twist.twist.angular.z)
+    if not all(math.isfinite(x) for x in values):
+        raise ros2.CdrError(f"{ros2.ODOMETRY}: non-finite pose or twist {values}")
+    return RobotOdom(ros2.stamp_ns(msg.header), Pose2D(float(p.x), float(p.y), ros2.yaw_of(q)),
+                     float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z))
+
+
+def compose(a: Pose2D, b: Pose2D) -> Pose2D:
+    """a ⊕ b: pose b given in frame a, expressed in a's parent frame."""
+    c, s = math.cos(a.yaw), math.sin(a.yaw)
+    return Pose2D(a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, _wrap(a.yaw + b.yaw))
+
+
+def inverse(a: Pose2D) -> Pose2D:
+    c, s = math.cos(a.yaw), math.sin(a.yaw)
+    return Pose2D(-c * a.x - s * a.y, s * a.x - c * a.y, _wrap(-a.yaw))
+
+
+def _wrap(angle: float) -> float:
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+class OdomFrame:
+    """Re-express the robot's odometry in the run's world frame.
+
+    The robot's ``odom`` frame starts wherever its EKF started; a run's world frame has
+    the robot at ``world_start`` when the run starts. :meth:`anchor` takes the robot's
+    pose at that moment; :meth:`to_world` maps every later pose: world_start ⊕ (anchor⁻¹ ⊕ p).
+    """
+
+    def __init__(self, world_start: Pose2D = ORIGIN):
+        self.world_start = world_start
+        self._anchor_inv: Pose2D | None = None
+
+    def anchor(self, robot_pose: Pose2D) -> None:
+        self._anchor_inv = inverse(robot_pose)
+
+    @property
+    def anchored(self) -> bool:
+        return self._anchor_inv is not None
+
+    def to_world(self, odom: RobotOdom, stamp_ns: int) -> Odometry:
+        rel = compose(self._anchor_inv, odom.pose) if self._anchor_inv else odom.pose
+        p = compose(self.world_start, rel)
+        return Odometry(stamp_ns=stamp_ns, x=p.x, y=p.y, yaw=p.yaw, v=odom.v, w=odom.w)
+
+
+# -- battery ------------------------------------------------------------------------------------
+def cdr_to_voltage(data: bytes) -> float:
+    """Pack voltage [V] of a CDR ``sensor_msgs/BatteryState`` (the ROSbot fills only that)."""
+    v = float(ros2.decode(data, ros2.BATTERY_STATE).voltage)
+    if not (math.isfinite(v) and v > 0.0):
+        raise ros2.CdrError(f"{ros2.BATTERY_STATE}: voltage {v!r} V is not a finite number > 0")
+    return v
+
+
+# -- wheels -------------------------------------------------------------------------------------
+def wheel_states(prev: Odometry | None, odom: Odometry) -> WheelStates:
+    """Wheel speeds [rad/s] and estimated torques [N m] at ``odom.stamp_ns`` (see module doc).
+
+    Speeds: side speed v ∓ w B/2 over r (B = :data:`EFFECTIVE_TRACK`). Torques: per wheel
+    r (m a / 4 ∓ I β / (2 B)), so that the four wheel forces give m a and the yaw moment I β;
+    a and β by differencing ``prev`` and ``odom`` (zero for the first sample).
+    """
+    half = 0.5 * EFFECTIVE_TRACK
+    left, right = (odom.v - odom.w * half) / WHEEL_RADIUS, (odom.v + odom.w * half) / WHEEL_RADIUS
+    a = beta = 0.0
+    if prev is not None and odom.stamp_ns > prev.stamp_ns:
+        dt = (odom.stamp_ns - prev.stamp_ns) * 1e-9
+        a, beta = (odom.v - prev.v) / dt, (odom.w - prev.w) / dt
+    f_common, f_yaw = MASS * a / 4.0, YAW_INERTIA * beta / (2.0 * EFFECTIVE_TRACK)
+    tl, tr = WHEEL_RADIUS * (f_common - f_yaw), WHEEL_RADIUS * (f_common + f_yaw)
+    # WHEEL_NAMES = front_left, front_right, rear_left, rear_right
+    return WheelStates(stamp_ns=odom.stamp_ns, speed=(left, right, left, right),
+                       torque=(tl, tr, tl, tr), names=WHEEL_NAMES)

@@ -1,0 +1,292 @@
+"""Real-ROSbot base driver: ``python -m nodes.base_driver --driver rosbot [--bridge-namespace NS]``.
+
+The same node contract as the simulated driver (liveliness ``<ns>/alive/base_driver``),
+talking to the robot through ``zenoh-bridge-ros2dds`` (DESIGN.md §5). Always real time.
+
+Ports (``<ns>`` = ``--namespace``; ``<b>/`` = ``--bridge-namespace`` + ``/``, empty by default):
+
+==========================  ====================  ===  ========================================
+key                         type                  dir  what
+==========================  ====================  ===  ========================================
+``<ns>/cmd_vel``            Twist                 in   our command; clamped, rate-limited, watchdog
+``<ns>/events``             Event                 in   ``run_started`` starts the clock at 0,
+                                                       ``run_ended`` stops it (and the robot)
+``<b>/cmd_vel``             CDR geometry_msgs/    out  the gated command, on every command and
+                            Twist                      every tick; zeros for 1 s after a stop
+``<b>/odometry/filtered``   CDR nav_msgs/         in   the robot's EKF odometry
+                            Odometry
+``<b>/battery``             CDR sensor_msgs/      in   pack voltage
+                            BatteryState
+``<ns>/odom``               Odometry              out  robot odometry in the run's world frame,
+                                                       every tick while a run is on
+``<ns>/wheels``             WheelStates           out  derived from odometry (rosbot.wheel_states)
+``<ns>/clock``              Clock                 out  run time: wall time since ``run_started``
+``<ns>/battery/measured``   BatteryVoltage        out  the robot's voltage (``info`` Event with
+                                                       ``battery_voltage_V=`` if the schema lacks it)
+``<ns>/events``             Event                 out  ``watchdog_stop``, ``node_fault`` (odometry lost)
+==========================  ====================  ===  ========================================
+
+Time: the driver owns the clock here too. A run's time is wall time since the driver saw
+``run_started``, on a tick grid of ``--odom-hz`` (default 50 Hz: 20 ms), and every
+odom/wheels/clock of a tick carries the same stamp. Before a run nothing is published on
+our keys, but commands are forwarded (with limits and watchdog) at any time. During a run,
+a command whose stamp (the scan it answers) is older than the watchdog is dropped as late:
+after a network outage TCP delivers queued commands in a burst, and they are stale.
+Odometry: at ``run_started`` the robot's current pose becomes the world's start pose
+(``--world``'s ``robot.start``), see :class:`nodes.base_driver.rosbot.OdomFrame`; robot
+odometry older than 0.5 s is not republished (the planner then stops on stale odometry).
+"""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import time
+from collections import Counter
+
+import schemas.messages as messages
+from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.rosbot import (
+    BridgeTopics,
+    OdomFrame,
+    Pose2D,
+    cdr_to_robot_odom,
+    cdr_to_voltage,
+    twist_to_cdr,
+    wheel_states,
+)
+from papf.errors import SchemaError
+from papf.transport import Node, open_node, setup_logging
+from schemas import Clock, Event, Odometry, Twist
+from worlds import load_world
+
+NAME = "base_driver"
+ZERO_HOLD_NS = 1_000_000_000     # [ns] zeros keep going out this long after a stop, then silence
+ODOM_TIMEOUT_NS = 500_000_000    # [ns] robot odometry older than this is not republished
+EXIT_ZEROS = 3                   # zero commands sent when the node stops
+BatteryVoltage = getattr(messages, "BatteryVoltage", None)   # schemas change requested (issue 5)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``--driver rosbot`` (called by ``nodes.base_driver.__main__``)."""
+    g = parser.add_argument_group("rosbot driver (--driver rosbot)")
+    d = BridgeTopics()
+    g.add_argument("--bridge-namespace", default=d.namespace, metavar="NS",
+                   help="zenoh-bridge-ros2dds namespace of the robot's topics (default: none); "
+                        "must differ from --namespace")
+    g.add_argument("--bridge-cmd-vel", default=d.cmd_vel, metavar="TOPIC", help="(cmd_vel)")
+    g.add_argument("--bridge-odom", default=d.odometry, metavar="TOPIC",
+                   help="odometry topic (odometry/filtered)")
+    g.add_argument("--bridge-battery", default=d.battery, metavar="TOPIC", help="(battery)")
+
+
+def bridge_topics(args: argparse.Namespace) -> BridgeTopics:
+    d = BridgeTopics()
+    topics = BridgeTopics(getattr(args, "bridge_namespace", d.namespace),
+                          getattr(args, "bridge_cmd_vel", d.cmd_vel),
+                          getattr(args, "bridge_odom", d.odometry),
+                          getattr(args, "bridge_battery", d.battery))
+    topics.check_separate(args.namespace)
+    return topics
+
+
+class RosbotDriver:
+    """Gate our commands to the robot and republish its odometry on the run's clock."""
+
+    def __init__(self, node: Node, topics: BridgeTopics, limits: RosbotLimits, period_ns: int,
+                 frame: OdomFrame):
+        self.node, self.log, self.topics = node, node.log, topics
+        self.gate = CommandGate(limits)
+        self.period_ns, self.frame = period_ns, frame
+        self.cmd_pub = node.session.declare_publisher(topics.key(topics.cmd_vel))
+        self.t0: int | None = None          # monotonic ns of run time 0 (None: no run)
+        self.tick = 0                       # next tick index of the run
+        self.robot = None                   # latest RobotOdom
+        self.robot_rx_ns = 0                # monotonic ns it arrived
+        self.prev_odom: Odometry | None = None
+        self.last_out_ns: int | None = None
+        self.zero_since: int | None = None  # monotonic ns the output first was (0, 0)
+        self.watchdog_fired = False
+        self.odom_lost = False
+        self.sent = 0
+        self.bad: Counter[str] = Counter()   # undecodable robot messages, per bridge topic
+        self.late = 0                        # commands dropped as older than the watchdog
+        self.last_run_ns = 0
+
+    # -- inputs ---------------------------------------------------------------------------
+    def on_command(self, msg: Twist, now: int) -> None:
+        if self.t0 is not None and msg.stamp_ns + self.gate.limits.watchdog_ns < self.run_time(now):
+            self.late += 1   # answers a scan older than the watchdog: delayed in the network
+            if self.late <= 5 or self.late % 100 == 0:
+                self.log.warning("dropped late command #%d: stamp %.3f s, run time %.3f s",
+                                 self.late, msg.stamp_ns * 1e-9, self.run_time(now) * 1e-9)
+            return
+        self.gate.command(msg.v, msg.w, now)
+        self.watchdog_fired = False
+        self.send(now)
+
+    def on_event(self, msg: Event, now: int) -> None:
+        if msg.kind == "run_started":
+            self.t0, self.tick, self.prev_odom, self.last_run_ns = now, 0, None, 0
+            if self.robot is not None:
+                self.frame.anchor(self.robot.pose)
+            self.log.info("run started: clock at 0%s", "" if self.robot else
+                          " (no robot odometry yet: waiting for it)")
+        elif msg.kind == "run_ended" and self.t0 is not None:
+            self.t0 = None
+            self.gate.command(0.0, 0.0, now)
+            self.log.info("run ended: clock stopped, robot commanded to stop")
+
+    def on_bridge(self, what: str, data: bytes, now: int) -> None:
+        try:
+            if what == "odometry":
+                self.robot, self.robot_rx_ns = cdr_to_robot_odom(data), now
+                if self.t0 is not None and not self.frame.anchored:
+                    self.frame.anchor(self.robot.pose)
+            else:
+                self.publish_voltage(cdr_to_voltage(data))
+        except SchemaError as exc:
+            self.bad[what] += 1
+            if self.bad[what] <= 5 or self.bad[what] % 100 == 0:
+                self.log.warning("dropped bad robot message #%d on %s: %s", self.bad[what],
+                                 self.topics.key(getattr(self.topics, what)), exc)
+
+    # -- outputs --------------------------------------------------------------------------
+    def run_time(self, now: int) -> int:
+        """Run time [ns] at monotonic ``now`` (the last run's end time between runs)."""
+        if self.t0 is not None:
+            self.last_run_ns = now - self.t0
+        return self.last_run_ns
+
+    def send(self, now: int) -> None:
+        """Put the gated command on the bridge (silence once stopped for ZERO_HOLD)."""
+        if self.gate.last_command_ns is None:
+            return                               # never commanded: leave the robot alone
+        dt = 0.0 if self.last_out_ns is None else (now - self.last_out_ns) * 1e-9
+        self.last_out_ns = now
+        v, w, stopped = self.gate.output(now, dt)
+        if stopped and not self.watchdog_fired:
+            self.watchdog_fired = True
+            age = (now - self.gate.last_command_ns) * 1e-9
+            self.log.warning("watchdog: no command for %.3f s: stopping the robot", age)
+            self.event("watchdog_stop", f"no cmd_vel for {age:.3f} s (limit "
+                       f"{self.gate.limits.watchdog_ns * 1e-9:g} s); commanding zero velocity")
+        if v == 0.0 and w == 0.0:
+            self.zero_since = self.zero_since or now
+            if now - self.zero_since > ZERO_HOLD_NS:
+                return
+        else:
+            self.zero_since = None
+        self.cmd_pub.put(twist_to_cdr(v, w))
+        self.sent += 1
+
+    def on_tick(self, now: int) -> None:
+        self.send(now)
+        if self.t0 is None:
+            return
+        stamp = self.tick * self.period_ns
+        fresh = self.robot is not None and now - self.robot_rx_ns <= ODOM_TIMEOUT_NS
+        if fresh:
+            odom = self.frame.to_world(self.robot, stamp)
+            self.node.publish("odom", odom)
+            self.node.publish("wheels", wheel_states(self.prev_odom, odom))
+            self.prev_odom = odom
+            if self.odom_lost:
+                self.odom_lost = False
+                self.log.info("robot odometry back")
+        elif not self.odom_lost and (self.robot is not None or stamp > ODOM_TIMEOUT_NS):
+            self.odom_lost = True
+            self.event("node_fault", f"no robot odometry on {self.topics.key(self.topics.odometry)} "
+                       f"for > {ODOM_TIMEOUT_NS * 1e-9:g} s: odom not published")
+        self.node.publish("clock", Clock(stamp_ns=stamp))
+
+    def next_tick_at(self, now: int) -> int:
+        """Monotonic ns of the next tick (run ticks on the run's grid; skipped ones dropped)."""
+        if self.t0 is None:
+            return now + self.period_ns
+        behind = (now - self.t0) // self.period_ns
+        self.tick = max(self.tick, behind)
+        return self.t0 + self.tick * self.period_ns
+
+    def event(self, kind: str, detail: str) -> None:
+        self.node.publish("events", Event(stamp_ns=self.run_time(time.monotonic_ns()), kind=kind,
+                                          source=NAME, detail=detail))
+
+    def publish_voltage(self, voltage: float) -> None:
+        stamp = self.run_time(time.monotonic_ns())
+        if BatteryVoltage is not None:
+            self.node.publish("battery/measured", BatteryVoltage(stamp_ns=stamp, voltage=voltage))
+        else:
+            self.node.publish("events", Event(stamp_ns=stamp, kind="info", source=NAME,
+                                              detail=f"battery_voltage_V={voltage:.3f}"))
+
+    def stop_robot(self) -> None:
+        for _ in range(EXIT_ZEROS):
+            self.cmd_pub.put(twist_to_cdr(0.0, 0.0))
+
+    # -- loop -----------------------------------------------------------------------------
+    def watchdog_due(self) -> int | None:
+        """Monotonic ns at which the watchdog fires (so a stop goes out on time, not a tick late)."""
+        last = self.gate.last_command_ns
+        if last is None or self.watchdog_fired:
+            return None
+        return last + self.gate.limits.watchdog_ns + 1
+
+    def run(self) -> None:
+        node, inbox = self.node, self.node.inbox
+        due = self.next_tick_at(time.monotonic_ns())
+        while not node.stop:
+            now = time.monotonic_ns()
+            if now >= due:
+                self.on_tick(now)
+                if self.t0 is not None:
+                    self.tick += 1
+                due = self.next_tick_at(now) if self.t0 is not None else now + self.period_ns
+                continue
+            wd = self.watchdog_due()
+            if wd is not None and now >= wd:
+                self.send(now)
+                continue
+            wake = due if wd is None else min(due, wd)
+            try:
+                topic, msg = inbox.get(timeout=(wake - now) * 1e-9)
+            except queue.Empty:
+                continue
+            now = time.monotonic_ns()
+            if topic == "cmd_vel":
+                self.on_command(msg, now)
+            elif topic == "events":
+                self.on_event(msg, now)
+                due = min(due, self.next_tick_at(now))
+            else:
+                self.on_bridge(topic, msg, now)
+
+
+def main(args: argparse.Namespace) -> int:
+    log = setup_logging(NAME, getattr(args, "log_level", "INFO"))
+    topics = bridge_topics(args)
+    limits = RosbotLimits(watchdog_ns=int(round(getattr(args, "watchdog", 0.5) * 1e9)))
+    period_ns = int(round(1e9 / getattr(args, "odom_hz", 50.0)))
+    world = getattr(args, "world", None)
+    start = Pose2D(*load_world(world).start) if world else Pose2D(0.0, 0.0, 0.0)
+    with open_node(NAME, args, log) as node:
+        node.subscribe("cmd_vel")
+        node.subscribe("events")
+        subs = [node.session.declare_subscriber(
+            topics.key(getattr(topics, what)),
+            lambda s, w=what: node.inbox.put((w, s.payload.to_bytes())))
+            for what in ("odometry", "battery")]
+        node.declare_publishers("odom", "wheels", "clock", "events")
+        driver = RosbotDriver(node, topics, limits, period_ns, OdomFrame(start))
+        log.info("rosbot driver: bridge keys %s; limits %s", topics.keys, limits)
+        node.ready()
+        try:
+            driver.run()
+        finally:
+            driver.stop_robot()
+            for sub in subs:
+                sub.undeclare()
+            driver.cmd_pub.undeclare()
+            log.info("stopped: %d commands sent to the robot, %d late ones dropped", driver.sent,
+                     driver.late)
+    return 0

@@ -1,0 +1,169 @@
+"""`papf rosbot-emulator`: the ROSbot as seen through ``zenoh-bridge-ros2dds``, without a robot.
+
+What a driver sees of the real robot (DESIGN.md §5), on the bridge keys
+``[<bridge-ns>/]<topic>``, all CDR with the encapsulation header:
+
+=======================  ===========================  ===  ==================================
+key                      type                         dir  what
+=======================  ===========================  ===  ==================================
+``cmd_vel``              geometry_msgs/Twist          in   linear.x, angular.z
+``odometry/filtered``    nav_msgs/Odometry            out  ``--rate`` Hz (50), odom frame
+``battery``              sensor_msgs/BatteryState     out  1 Hz, voltage only
+``scan``                 sensor_msgs/LaserScan        out  10 Hz, only with ``--world``
+=======================  ===========================  ===  ==================================
+
+The body (:class:`EmulatedRosbot`, pure) is a unicycle whose commands pass the robot's own
+``diff_drive_controller`` behaviour: the ROSbot limits of
+:class:`nodes.base_driver.limits.RosbotLimits` (clamp, 1.0 m/s², 4.0 rad/s²) and its
+``cmd_vel_timeout`` (``--cmd-timeout``, 0.5 s; 0 disables it, to show that the base driver
+alone stops the robot). Odometry is exact (no slip, no noise) and starts at (0, 0, 0) like
+a freshly started EKF; with ``--world`` the robot really stands at the world's start pose
+and the scan is cast there with :mod:`nodes.lidar_sim.core` (``--scan-beams`` rays).
+Header stamps are wall-clock time, as ROS time is. ``--trace FILE`` appends one JSON line
+per command received (``{"t_ns": monotonic ns, "v": .., "w": ..}``) for latency benches.
+Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import queue
+import time
+
+from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
+from papf import ros2
+from papf.errors import SchemaError
+
+NAME = "rosbot_emulator"
+BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
+SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (DESIGN.md §5)
+NO_TIMEOUT_NS = 10**18              # "never": --cmd-timeout 0
+
+
+class EmulatedRosbot:
+    """Unicycle + the controller's command gate, stepped with wall-clock nanoseconds."""
+
+    def __init__(self, cmd_timeout_s: float = 0.5, start: Pose2D = ORIGIN):
+        watchdog = int(round(cmd_timeout_s * 1e9)) if cmd_timeout_s > 0 else NO_TIMEOUT_NS
+        self.gate = CommandGate(RosbotLimits(watchdog_ns=watchdog))
+        self.start = start                          # where the odom frame's origin really is
+        self.pose = ORIGIN                          # in the robot's odom frame
+        self.v = self.w = 0.0
+        self.commands = 0
+
+    def command(self, v: float, w: float, t_ns: int) -> None:
+        self.commands += 1
+        self.gate.command(v, w, t_ns)
+
+    def step(self, t_ns: int, dt_s: float) -> None:
+        """Apply the gated command over ``dt_s`` (exact arc of constant v, w)."""
+        self.v, self.w, _ = self.gate.output(t_ns, dt_s)
+        x, y, yaw = self.pose
+        if abs(self.w) < 1e-9:
+            x, y = x + self.v * dt_s * math.cos(yaw), y + self.v * dt_s * math.sin(yaw)
+        else:
+            r, yaw1 = self.v / self.w, yaw + self.w * dt_s
+            x, y = x + r * (math.sin(yaw1) - math.sin(yaw)), y - r * (math.cos(yaw1) - math.cos(yaw))
+            yaw = yaw1
+        self.pose = Pose2D(x, y, math.atan2(math.sin(yaw), math.cos(yaw)))
+
+    @property
+    def world_pose(self) -> Pose2D:
+        return compose(self.start, self.pose)
+
+    def odometry_cdr(self, stamp_ns: int) -> bytes:
+        x, y, yaw = self.pose
+        return ros2.encode(ros2.odometry(stamp_ns, x, y, yaw, self.v, self.w), ros2.ODOMETRY)
+
+
+def _lidar(args):
+    if not args.world or args.no_scan:
+        return None
+    from nodes.lidar_sim.core import LidarParams, LidarSim  # pybullet: only when scanning
+    from worlds import load_world
+
+    return LidarSim(load_world(args.world), LidarParams(beams=args.scan_beams), args.seed)
+
+
+def run(args: argparse.Namespace) -> int:
+    from papf.transport import open_node, setup_logging
+    from worlds import load_world
+
+    log = setup_logging("emulator", args.log_level)
+    topics = BridgeTopics(args.bridge_namespace)
+    topics.check_separate(args.namespace)
+    start = Pose2D(*load_world(args.world).start) if args.world else ORIGIN
+    robot = EmulatedRosbot(args.cmd_timeout, start)
+    period = int(round(1e9 / args.rate))
+    lidar = _lidar(args)
+    trace = open(args.trace, "a", encoding="utf-8") if args.trace else None  # noqa: SIM115
+    with open_node(NAME, args, log) as node:
+        s = node.session
+        sub = s.declare_subscriber(topics.key(topics.cmd_vel), lambda smp: node.inbox.put(
+            (time.monotonic_ns(), smp.payload.to_bytes())))
+        pubs = {t: s.declare_publisher(topics.key(getattr(topics, t)))
+                for t in ("odometry", "battery", "scan")}
+        node.ready()
+        log.info("emulating the ROSbot on %s (scan: %s)", topics.keys, "yes" if lidar else "no")
+        now = last = time.monotonic_ns()
+        next_battery = next_scan = now
+        try:
+            while not node.stop:
+                try:
+                    t_rx, data = node.inbox.get(timeout=max(0.0, (last + period - now) * 1e-9))
+                    try:
+                        v, w = cdr_to_twist(data)
+                    except SchemaError as exc:
+                        log.warning("dropped bad cmd_vel: %s", exc)
+                    else:
+                        robot.command(v, w, t_rx)
+                        if trace:
+                            trace.write(json.dumps({"t_ns": t_rx, "v": v, "w": w}) + "\n")
+                except queue.Empty:
+                    pass
+                now = time.monotonic_ns()
+                if now - last < period:
+                    continue
+                robot.step(now, (now - last) * 1e-9)
+                last, wall = now, time.time_ns()
+                pubs["odometry"].put(robot.odometry_cdr(wall))
+                if now >= next_battery:
+                    next_battery = now + BATTERY_PERIOD_NS
+                    pubs["battery"].put(ros2.encode(ros2.battery_state(wall, args.battery_voltage),
+                                                    ros2.BATTERY_STATE))
+                if lidar is not None and now >= next_scan:
+                    next_scan = now + SCAN_PERIOD_NS
+                    pubs["scan"].put(_scan_cdr(lidar, robot.world_pose, wall))
+        finally:
+            sub.undeclare()
+            for p in pubs.values():
+                p.undeclare()
+            if trace:
+                trace.close()
+            if lidar is not None:
+                lidar.close()
+            log.info("stopped after %d commands; odom pose %s", robot.commands, robot.pose)
+    return 0
+
+
+def _scan_cdr(lidar, pose: Pose2D, wall_ns: int) -> bytes:
+    scan = lidar.scan(pose.x, pose.y, pose.yaw, wall_ns)
+    return ros2.encode(ros2.laser_scan(wall_ns, scan.angle_min, scan.angle_increment,
+                                       scan.range_min, scan.range_max, scan.ranges),
+                       ros2.LASER_SCAN)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from papf.robot_cli import add_emulator_arguments
+
+    parser = argparse.ArgumentParser(prog="papf rosbot-emulator",
+                                     description=__doc__.splitlines()[0])
+    add_emulator_arguments(parser)
+    return run(parser.parse_args(argv))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,174 @@
+"""The secure split: Zenoh TLS, user/password and access control (DESIGN.md §2, docs/robot.md).
+
+``papf make-certs DIR --robot-host 192.168.1.10`` writes a test bundle:
+
+- ``ca.pem``/``ca.key`` and certificates ``robot.pem`` (server; its SANs are the
+  ``--robot-host`` names/IPs plus localhost/127.0.0.1) and ``laptop.pem`` (client), made
+  with the ``openssl`` CLI (the ``cryptography`` package is not a dependency);
+- ``credentials.txt``: the router's user/password dictionary, random passwords for the
+  three identities of :data:`ROLES`;
+- ``router.json5`` (the robot's router: TLS listener with mutual TLS, local TCP listener,
+  password dictionary, access control), ``robot.json5`` (nodes on the robot, TCP loopback),
+  ``laptop.json5`` (planner host: TLS + client certificate) and ``observer.json5`` (valid
+  credentials, read-only: for viewers, and to test that valid credentials alone cannot
+  drive the robot).
+
+Access control (:func:`access_control`): default deny. Every authenticated identity may
+subscribe, query and hold liveliness tokens, and receive every publication; each role may
+*put* only on the keys of :data:`ROLES`. Only ``planner`` may put on ``<ns>/cmd_vel`` and
+only ``robot`` (the base driver) on the bridge's ``cmd_vel``; ``observer`` puts nothing.
+Zenoh 1.x decides explicit deny > explicit allow > default, and a rule's key expression
+must include the message key, so "everything but cmd_vel" is written as the list of
+allowed keys, generated from this table.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+from nodes.base_driver.rosbot import BridgeTopics
+from papf.errors import ConfigError
+
+LOCAL_PORT = 7447   # [-] TCP on the robot's loopback (robot nodes, the bridge)
+TLS_PORT = 7448     # [-] TLS on the robot's network interfaces (the laptop)
+CERT_DAYS = 30      # [days] a test bundle, not a PKI
+CURVE = "prime256v1"
+
+# role -> (our topic suffixes it may put on, bridge topics (BridgeTopics fields) it may put on)
+ROLES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "robot": (("odom", "wheels", "clock", "scan", "events", "battery/measured", "sim/pose"),
+              ("cmd_vel", "odometry", "battery", "scan")),
+    "planner": (("cmd_vel", "goal", "planner/state", "planner/status", "battery", "events",
+                 "scan"), ()),
+    "observer": ((), ()),
+}
+# every message type that is not a data write: declarations, queries, liveliness
+NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "liveliness_token",
+           "liveliness_query", "declare_liveliness_subscriber")
+
+
+def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None) -> dict:
+    """The ``access_control`` section for the robot's router (see module doc)."""
+    bridge = bridge or BridgeTopics()
+    rules = [
+        {"id": "talk", "permission": "allow", "flows": ["ingress", "egress"],
+         "messages": list(NON_PUT), "key_exprs": ["**"]},
+        {"id": "receive", "permission": "allow", "flows": ["egress"],
+         "messages": ["put", "delete"], "key_exprs": ["**"]},
+    ]
+    subjects, policies = [], []
+    for role, (ours, bridged) in ROLES.items():
+        subjects.append({"id": role, "usernames": [role]})
+        keys = [f"{namespace}/{t}" for t in ours] + [bridge.key(getattr(bridge, t)) for t in bridged]
+        names = ["talk", "receive"]
+        if keys:
+            rules.append({"id": f"{role}-puts", "permission": "allow", "flows": ["ingress"],
+                          "messages": ["put"], "key_exprs": keys})
+            names.append(f"{role}-puts")
+        policies.append({"id": role, "rules": names, "subjects": [role]})
+    return {"enabled": True, "default_permission": "deny", "rules": rules,
+            "subjects": subjects, "policies": policies}
+
+
+@dataclass(frozen=True)
+class Bundle:
+    """Paths of a generated bundle."""
+
+    dir: Path
+
+    def __getattr__(self, name: str) -> Path:  # bundle.router -> DIR/router.json5, ...
+        files = {"ca": "ca.pem", "credentials": "credentials.txt", "router": "router.json5",
+                 "robot": "robot.json5", "laptop": "laptop.json5", "observer": "observer.json5"}
+        if name not in files:
+            raise AttributeError(name)
+        return self.dir / files[name]
+
+
+def _openssl(*args: str) -> None:
+    exe = shutil.which("openssl")
+    if exe is None:
+        raise ConfigError("make-certs needs the openssl command (not found on PATH)")
+    proc = subprocess.run([exe, *args], capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        raise ConfigError(f"openssl {args[0]} failed: {proc.stderr.strip()[-400:]}")
+
+
+def make_certs(out: Path, robot_hosts: list[str], days: int = CERT_DAYS) -> None:
+    """A test CA, ``robot`` (server + client) and ``laptop`` (client) EC certificates in ``out``."""
+    key = ["-newkey", "ec", "-pkeyopt", f"ec_paramgen_curve:{CURVE}", "-nodes"]
+    _openssl("req", "-x509", *key, "-keyout", str(out / "ca.key"), "-out", str(out / "ca.pem"),
+             "-days", str(days), "-subj", "/CN=papf-test-ca")
+    sans = ["DNS:localhost", "IP:127.0.0.1"]
+    for host in robot_hosts:
+        san = f"IP:{host}" if host.replace(".", "").isdigit() or ":" in host else f"DNS:{host}"
+        if san not in sans:
+            sans.append(san)
+    for who, alt in (("robot", sans), ("laptop", ["DNS:laptop"])):
+        ext = out / f"{who}.ext"
+        ext.write_text(f"subjectAltName={','.join(alt)}\nbasicConstraints=CA:FALSE\n"
+                       "keyUsage=digitalSignature\nextendedKeyUsage=serverAuth,clientAuth\n")
+        _openssl("req", *key, "-keyout", str(out / f"{who}.key"), "-out", str(out / f"{who}.csr"),
+                 "-subj", f"/CN={who}")
+        _openssl("x509", "-req", "-in", str(out / f"{who}.csr"), "-CA", str(out / "ca.pem"),
+                 "-CAkey", str(out / "ca.key"), "-CAcreateserial", "-out", str(out / f"{who}.pem"),
+                 "-days", str(days), "-extfile", str(ext))
+        (out / f"{who}.csr").unlink()
+        ext.unlink()
+    (out / "ca.srl").unlink(missing_ok=True)
+    for k in out.glob("*.key"):
+        k.chmod(0o600)
+
+
+def _tls(out: Path, who: str) -> dict:
+    return {"root_ca_certificate": str(out / "ca.pem"), "enable_mtls": True,
+            "connect_private_key": str(out / f"{who}.key"),
+            "connect_certificate": str(out / f"{who}.pem")}
+
+
+def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosbot",
+                 bridge: BridgeTopics | None = None, local_port: int = LOCAL_PORT,
+                 tls_port: int = TLS_PORT) -> Bundle:
+    """Certificates, credentials and the four Zenoh configs (module doc) in directory ``out``."""
+    out = Path(out).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    if not robot_hosts:
+        raise ConfigError("give at least one --robot-host (the robot's IP or DNS name the "
+                          "laptop connects to)")
+    make_certs(out, robot_hosts)
+    passwords = {role: secrets.token_urlsafe(18) for role in ROLES}
+    cred = out / "credentials.txt"
+    cred.write_text("".join(f"{u}:{p}\n" for u, p in passwords.items()))
+    cred.chmod(0o600)
+    local, remote = f"tcp/127.0.0.1:{local_port}", f"tls/{robot_hosts[0]}:{tls_port}"
+    router_tls = {**_tls(out, "robot"), "listen_private_key": str(out / "robot.key"),
+                  "listen_certificate": str(out / "robot.pem")}
+    configs = {
+        "router": {"mode": "router",
+                   "listen": {"endpoints": [local, f"tls/0.0.0.0:{tls_port}"]},
+                   "transport": {"link": {"tls": router_tls},
+                                 "auth": {"usrpwd": {"user": "robot", "password": passwords["robot"],
+                                                     "dictionary_file": str(cred)}}},
+                   "access_control": access_control(namespace, bridge)},
+        "robot": _client(local, "robot", passwords, None),
+        "laptop": _client(remote, "planner", passwords, _tls(out, "laptop")),
+        "observer": _client(remote, "observer", passwords, _tls(out, "laptop")),
+    }
+    for name, conf in configs.items():
+        path = out / f"{name}.json5"
+        path.write_text(json.dumps(conf, indent=2) + "\n")
+        os.chmod(path, 0o600)
+    return Bundle(out)
+
+
+def _client(endpoint: str, user: str, passwords: dict, tls: dict | None) -> dict:
+    transport: dict = {"auth": {"usrpwd": {"user": user, "password": passwords[user]}}}
+    if tls:
+        transport["link"] = {"tls": tls}
+    return {"mode": "client", "connect": {"endpoints": [endpoint]},
+            "scouting": {"multicast": {"enabled": False}}, "transport": transport}
