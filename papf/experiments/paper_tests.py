@@ -1,0 +1,157 @@
+"""``papf experiment paper-tests``: every paper world with every planner, a table like PAPF Table 2.
+
+For each world of :data:`PAPER_WORLDS` and each planner: one run through the full process
+stack (default; :func:`papf.experiments.trials.run_stack`, recorded to
+``OUT/recordings/<world>-<planner>.mcap``) or offline (``mode="offline"``). Writes
+
+- ``OUT/paper-tests.md`` — per world and planner: outcome, duration, path length, their
+  change against APF (negative = shorter, as the paper's "reduced by"), and the paper's
+  own figures (:data:`PAPER`);
+- ``OUT/paper-tests.csv`` — one row per run;
+- ``OUT/<world>.png`` — all planners' paths over the obstacles (like PAPF Figs. 8-13).
+
+The paper values: PAPF Table 2 (its text is partly illegible in our copy: the APF durations
+of Tests I, II, III and VI are reconstructed from the PAPF durations and the stated
+reductions, e.g. Test I 41.71 s "reduced by 40.23 %" -> 69.79 s); AR-APF Sec. 4.2 and Wang
+Sec. 4 give outcomes only.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+PAPF_WORLDS = tuple(f"papf-test-{i}" for i in range(1, 7))
+ARAPF_WORLDS = tuple(f"arapf-test-{i}" for i in range(1, 4))
+WANG_WORLDS = ("wang-local-minimum", "wang-unreachable-goal")
+PAPER_WORLDS = PAPF_WORLDS + ARAPF_WORLDS + WANG_WORLDS
+DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
+
+
+@dataclass(frozen=True)
+class PaperResult:
+    """What a paper reports for one planner in one test (None: not given)."""
+
+    outcome: str                  # reached | fails | stagnated
+    duration_s: float | None = None
+    path_length_m: float | None = None
+
+
+PAPER: dict[str, dict[str, PaperResult]] = {
+    "papf-test-1": {"apf": PaperResult("reached", 69.79, 4.50), "papf": PaperResult("reached", 41.71, 4.13)},
+    "papf-test-2": {"apf": PaperResult("reached", 52.12, 4.20), "papf": PaperResult("reached", 41.366, 4.16)},
+    "papf-test-3": {"apf": PaperResult("reached", 42.31, 3.99), "papf": PaperResult("reached", 37.89, 3.80)},
+    "papf-test-4": {"apf": PaperResult("fails"), "papf": PaperResult("reached", 38.424, 3.77)},
+    "papf-test-5": {"apf": PaperResult("fails"), "papf": PaperResult("reached", 39.426, 3.87)},
+    "papf-test-6": {"apf": PaperResult("reached", 49.15, 4.05), "papf": PaperResult("reached", 41.93, 3.76)},
+    **{w: {"apf": PaperResult("stagnated"), "arapf": PaperResult("reached")} for w in ARAPF_WORLDS},
+    **{w: {"apf": PaperResult("fails"), "wang": PaperResult("reached")} for w in WANG_WORLDS},
+}
+
+
+def _pct(x: float, ref: float) -> str:
+    if not (math.isfinite(x) and math.isfinite(ref)) or ref <= 0:
+        return ""
+    return f"{100.0 * (x - ref) / ref:+.1f} %"
+
+
+def _num(x, nd=2) -> str:
+    return "" if x is None or not math.isfinite(x) else f"{x:.{nd}f}"
+
+
+def table_rows(trials) -> list[list[str]]:
+    """Markdown rows: world, planner, ours (outcome, duration, change, length, change), paper."""
+    by = {(t.world, t.planner): t for t in trials}
+    rows = []
+    for t in trials:
+        apf = by.get((t.world, "apf"))
+        both = apf is not None and apf.outcome == t.outcome == "reached" and t.planner != "apf"
+        ref = PAPER.get(t.world, {}).get(t.planner)
+        rows.append([t.world, t.planner, t.outcome, _num(t.duration_s, 1),
+                     _pct(t.duration_s, apf.duration_s) if both else "",
+                     _num(t.path_length_m), _pct(t.path_length_m, apf.path_length_m) if both else "",
+                     ref.outcome if ref else "", _num(ref.duration_s) if ref and ref.duration_s else "",
+                     _num(ref.path_length_m) if ref and ref.path_length_m else ""])
+    return rows
+
+
+HEADER = ["world", "planner", "outcome", "duration [s]", "vs APF", "path [m]", "vs APF",
+          "paper outcome", "paper duration [s]", "paper path [m]"]
+
+
+def acceptance(trials) -> list[str]:
+    """Issue 3's checks on the PAPF-paper worlds, as sentences."""
+    by = {(t.world, t.planner): t for t in trials}
+    lines = []
+    papf = [by[(w, "papf")] for w in PAPF_WORLDS if (w, "papf") in by]
+    if papf:
+        reached = sum(t.outcome == "reached" for t in papf)
+        coll = sum(t.collisions for t in papf)
+        lines.append(f"PAPF reached the goal in {reached}/{len(papf)} PAPF-paper worlds, "
+                     f"{coll} collision(s).")
+        pairs = [(by[(w, "apf")], by[(w, "papf")]) for w in PAPF_WORLDS
+                 if (w, "apf") in by and (w, "papf") in by
+                 and by[(w, "apf")].outcome == by[(w, "papf")].outcome == "reached"]
+        if pairs:
+            ok = sum(p.duration_s <= a.duration_s for a, p in pairs)
+            lines.append(f"PAPF duration <= APF's in {ok}/{len(pairs)} worlds where both reached.")
+    apf_dead = [by[(w, "apf")] for w in ("papf-test-4", "papf-test-5", *ARAPF_WORLDS) if (w, "apf") in by]
+    if apf_dead:
+        st = sum(t.outcome == "stagnated" for t in apf_dead)
+        lines.append(f"APF reported `stagnated` in {st}/{len(apf_dead)} dead-end worlds "
+                     "(PAPF Tests IV-V, AR-APF Tests I-III).")
+    ar = [by[(w, "arapf")] for w in ARAPF_WORLDS if (w, "arapf") in by]
+    if ar:
+        lines.append(f"AR-APF reached the goal in {sum(t.outcome == 'reached' for t in ar)}/{len(ar)} "
+                     "AR-APF-paper worlds.")
+    wang = [by[(w, "wang")] for w in WANG_WORLDS if (w, "wang") in by]
+    if wang:
+        lines.append(f"Wang reached the goal in {sum(t.outcome == 'reached' for t in wang)}/{len(wang)} "
+                     "Wang worlds.")
+    return lines
+
+
+def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS, seed: int = 0,
+                    mode: str = "stack", worlds: Sequence[str] = PAPER_WORLDS,
+                    timeout_s: float = 300.0, progress: bool | None = None) -> list:
+    """Run every (world, planner); write the table, CSV and plots into ``out``; return the trials."""
+    from papf.errors import ConfigError
+    from papf.experiments.trials import (
+        markdown_table,
+        progress_bar,
+        quiet_runner_logs,
+        run_offline,
+        run_stack,
+        write_csv,
+    )
+    from papf.plots import plot_paths
+    from worlds import load_world, world_path
+
+    if mode not in ("stack", "offline"):
+        raise ConfigError(f"mode {mode!r} is not stack or offline")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    quiet_runner_logs()
+    trials = []
+    with progress_bar(progress) as bar:
+        task = bar.add_task("paper tests", total=len(worlds) * len(planners))
+        for name in worlds:
+            world = load_world(name)
+            for planner in planners:
+                bar.update(task, description=f"{name} {planner}")
+                if mode == "offline":
+                    trial = run_offline(world, planner, seed, timeout_s)
+                else:
+                    trial = run_stack(world_path(name), planner, seed, timeout_s,
+                                      record=out / "recordings" / f"{name}-{planner}.mcap")
+                trials.append(trial)
+                bar.advance(task)
+            paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}
+            plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
+    write_csv([t.row() for t in trials], out / "paper-tests.csv")
+    text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, table_rows(trials))
+            + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")
+    (out / "paper-tests.md").write_text(text)
+    return trials

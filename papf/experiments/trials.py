@@ -1,0 +1,140 @@
+"""One run of a planner on a world as a :class:`Trial` — offline or through the stack.
+
+One :class:`Trial` per (world, planner, seed), run either offline (:func:`run_offline`,
+:mod:`papf.plan`) or through the full process stack (:func:`run_stack`,
+:func:`papf.runner.run` on a free port, recorded to MCAP so the ground-truth path can be
+drawn); plus the CSV / Markdown writers and the progress bar the experiments share.
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from worlds import World, load_world
+
+MODES = ("offline", "stack")
+
+
+@dataclass
+class Trial:
+    """One run of one planner on one world."""
+
+    world: str
+    planner: str
+    seed: int
+    mode: str                       # offline | stack
+    outcome: str                    # reached | stagnated | collision | timeout | failed
+    duration_s: float               # first motion -> outcome [s sim time]
+    path_length_m: float
+    collisions: int
+    reason: str = ""
+    min_clearance_m: float = math.nan   # offline only [m]
+    charge_mAh: float = math.nan        # stack only [mAh]
+    wall_time_s: float = 0.0
+    path: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (N, 2|3) [m]
+
+    def row(self) -> dict:
+        """The CSV row (no path)."""
+        return {"world": self.world, "planner": self.planner, "seed": self.seed, "mode": self.mode,
+                "outcome": self.outcome, "duration_s": round(self.duration_s, 3),
+                "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
+                "min_clearance_m": _r(self.min_clearance_m), "charge_mAh": _r(self.charge_mAh),
+                "wall_time_s": round(self.wall_time_s, 2), "reason": self.reason}
+
+
+def _r(x: float, nd: int = 3):
+    return "" if x is None or not math.isfinite(x) else round(x, nd)
+
+
+def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
+                params=None) -> Trial:
+    """One offline run (:func:`papf.plan.plan`)."""
+    from papf.plan import plan
+
+    t0 = time.monotonic()
+    r = plan(world, planner, params=params, seed=seed, max_time_s=timeout_s)
+    return Trial(r.world, planner, seed, "offline", r.outcome, r.duration_s, r.length_m,
+                 r.collisions, r.reason, min_clearance_m=r.min_clearance_m,
+                 wall_time_s=time.monotonic() - t0, path=r.path)
+
+
+def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
+              record: str | Path | None = None, planner_args: Sequence[str] = ()) -> Trial:
+    """One run of the whole process stack on a free port; the path from the recording if any."""
+    from papf.runner import RunConfig, run
+    from papf.supervisor import free_port
+
+    if record is not None:
+        Path(record).parent.mkdir(parents=True, exist_ok=True)
+        Path(record).unlink(missing_ok=True)
+    cfg = RunConfig(world=str(world_file), planner=planner, seed=seed, timeout_s=timeout_s,
+                    record=str(record) if record else None, port=free_port(), progress=False,
+                    planner_args=list(planner_args))
+    res = run(cfg)
+    path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
+    return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,
+                 res.collisions, res.reason, charge_mAh=res.charge_mAh,
+                 wall_time_s=res.wall_time_s, path=path)
+
+
+def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
+    """(N, 2) ground-truth positions [m] from a recording's ``<ns>/sim/pose`` channel."""
+    from papf.errors import RecordingError
+    from papf.recording.reader import iter_messages
+
+    pts = []
+    try:
+        for _key, msg, _t in iter_messages(mcap, keys=f"{namespace}/sim/pose"):
+            if hasattr(msg, "x"):
+                pts.append((msg.x, msg.y))
+    except RecordingError as exc:
+        logging.getLogger("papf.experiment").warning("no path from %s: %s", mcap, exc)
+    return np.array(pts, dtype=float).reshape(-1, 2)
+
+
+def load_all(names: Sequence[str]) -> list[World]:
+    return [load_world(n) for n in names]
+
+
+def write_csv(rows: list[dict], path: str | Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as fh:
+        if rows:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    return path
+
+
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A GitHub-flavoured Markdown table."""
+    def cell(x):
+        return str(x).replace("|", "\\|")
+
+    out = ["| " + " | ".join(map(cell, header)) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(map(cell, r)) + " |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def progress_bar(enabled: bool | None = None) -> Progress:
+    """A rich progress bar on stderr (``enabled=None``: when stderr is a terminal)."""
+    console = Console(stderr=True)
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TimeElapsedColumn(), console=console,
+                    disable=not (console.is_terminal if enabled is None else enabled))
+
+
+def quiet_runner_logs() -> None:
+    """The launcher logs a line per 10 s of sim time when it has no progress bar: mute those."""
+    logging.getLogger("papf.run").setLevel(logging.WARNING)
