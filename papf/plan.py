@@ -63,7 +63,7 @@ class PlanResult:
     sim_time_s: float              # sim time of the outcome [s]
     min_clearance_m: float         # closest approach of the footprint / point to an obstacle [m]
     collisions: int
-    states: list = field(default_factory=list)   # PlannerState per cycle when keep_states
+    states: list = field(default_factory=list)   # keep_states: PlannerState (2-D) or Plan (3-D) per cycle
 
     @property
     def length_m(self) -> float:

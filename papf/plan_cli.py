@@ -71,6 +71,8 @@ def register(subparsers) -> None:
     e.add_argument("--worlds", help="comma-separated subset of the paper worlds")
     e.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
     e.add_argument("--offline", action="store_true", help="offline planner runs (no processes)")
+    e.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="planner setting for every planner, repeatable (e.g. a shared APF one)")
     e.set_defaults(func=cmd_paper_tests)
 
     r = sub.add_parser("random", help="success and collision rates on seeded random worlds",
@@ -83,6 +85,8 @@ def register(subparsers) -> None:
     r.add_argument("--out", default="random-worlds", metavar="DIR", help="output directory")
     r.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
     r.add_argument("--plots", action="store_true", help="one PNG per world with every path")
+    r.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="planner setting for every planner, repeatable (e.g. a shared APF one)")
     mode = r.add_mutually_exclusive_group()
     mode.add_argument("--offline", dest="mode", action="store_const", const="offline",
                       help="offline planner runs (default; fast)")
@@ -127,7 +131,7 @@ def cmd_paper_tests(args: argparse.Namespace) -> int:
         if bad:
             raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
     run_paper_tests(args.out, _planner_list(args.planners), args.seed,
-                    "offline" if args.offline else "stack", worlds, args.timeout)
+                    "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set)
     print((Path(args.out) / "paper-tests.md").read_text())
     print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
     return 0
@@ -137,7 +141,7 @@ def cmd_random(args: argparse.Namespace) -> int:
     from papf.experiments.random_worlds import run_random
 
     run_random(args.out, args.n, args.seed, _planner_list(args.planners), args.mode, args.timeout,
-               args.plots)
+               args.plots, sets=args.set)
     print((Path(args.out) / "random.md").read_text())
     print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
     return 0

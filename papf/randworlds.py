@@ -14,6 +14,8 @@ and one of three layouts (:data:`KINDS`, in turn by index):
 Solvable (:func:`is_solvable`) = a 4-connected path of free cells joins start and goal on an
 occupancy grid (:data:`GRID_M`) whose obstacles are inflated by the robot's circumscribed
 radius (:data:`ROBOT_RADIUS_M`): a robot of that disc fits through in any heading.
+:func:`bottleneck_width` is the widest disc that still gets through, doubled: the narrowest
+passage of the best route.
 """
 
 from __future__ import annotations
@@ -98,6 +100,21 @@ def is_solvable(world: World, grid_m: float = GRID_M, inflate_m: float = ROBOT_R
                 seen[jy, jx] = True
                 todo.append((jy, jx))
     return False
+
+
+def bottleneck_width(world: World, hi_m: float = 2.0, tol_m: float = 0.02,
+                     grid_m: float = GRID_M) -> float:
+    """Width of the narrowest passage on the best start-goal route [m] (bisection on the
+    inflation radius of :func:`is_solvable`; ``2 * hi_m`` if wider than that, 0 if none)."""
+    lo, hi = 0.0, hi_m
+    if not is_solvable(world, grid_m, lo):
+        return 0.0
+    if is_solvable(world, grid_m, hi):
+        return 2.0 * hi
+    while hi - lo > tol_m / 2:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if is_solvable(world, grid_m, mid) else (lo, mid)
+    return 2.0 * lo
 
 
 # -- generation ---------------------------------------------------------------------

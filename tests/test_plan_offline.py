@@ -15,6 +15,8 @@ from papf.plots import plot_paths
 from papf.randworlds import (
     GAP_RANGE_M,
     KINDS,
+    ROBOT_RADIUS_M,
+    bottleneck_width,
     generate,
     generate_solvable,
     is_solvable,
@@ -161,6 +163,8 @@ def test_solvability_rejects_a_blocked_world_and_accepts_a_narrow_gap():
     assert is_solvable(corridor([]))
     assert is_solvable(barrier(0.45))
     assert not is_solvable(barrier(0.2))       # narrower than the robot's disc
+    assert bottleneck_width(barrier(0.6)) == pytest.approx(0.6, abs=2 * 0.05)
+    assert bottleneck_width(barrier(0.2)) < 2 * ROBOT_RADIUS_M
     blocked = corridor([{"kind": "wall", "from": [1.5, -0.8], "to": [1.5, 0.8], "thickness": 0.1}])
     assert not is_solvable(blocked)
     worlds, _rejected = generate_solvable(3, seed=4)

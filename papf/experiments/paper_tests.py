@@ -115,8 +115,12 @@ def acceptance(trials) -> list[str]:
 
 def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS, seed: int = 0,
                     mode: str = "stack", worlds: Sequence[str] = PAPER_WORLDS,
-                    timeout_s: float = 300.0, progress: bool | None = None) -> list:
-    """Run every (world, planner); write the table, CSV and plots into ``out``; return the trials."""
+                    timeout_s: float = 300.0, progress: bool | None = None,
+                    sets: Sequence[str] = ()) -> list:
+    """Run every (world, planner); write the table, CSV and plots into ``out``; return the trials.
+
+    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
+    """
     from papf.errors import ConfigError
     from papf.experiments.trials import (
         markdown_table,
@@ -142,10 +146,11 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
             for planner in planners:
                 bar.update(task, description=f"{name} {planner}")
                 if mode == "offline":
-                    trial = run_offline(world, planner, seed, timeout_s)
+                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets))
                 else:
                     trial = run_stack(world_path(name), planner, seed, timeout_s,
-                                      record=out / "recordings" / f"{name}-{planner}.mcap")
+                                      record=out / "recordings" / f"{name}-{planner}.mcap",
+                                      planner_args=[a for kv in sets for a in ("--set", kv)])
                 trials.append(trial)
                 bar.advance(task)
             paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}

@@ -5,7 +5,8 @@ obstacle fields, dead ends, narrow gaps, in turn) are run with every planner —
 default (:mod:`papf.plan`, fast), or through the whole stack (``mode="stack"``). Writes
 
 - ``OUT/random.md`` — per planner: reached / collision / stagnated / timeout / failed rates
-  over the solvable worlds, and the success rate per world kind;
+  over the solvable worlds, the success rate per world kind, and split by the world's
+  bottleneck (:func:`papf.randworlds.bottleneck_width`) at :data:`WIDE_M`;
 - ``OUT/random.csv`` — one row per run;
 - ``OUT/worlds/<name>.toml`` — every world (so a run can be repeated with ``papf plan`` or
   ``papf run``), and with ``plots=True`` ``OUT/plots/<name>.png`` (all planners' paths).
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
+WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
 DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
 
 
@@ -27,10 +29,16 @@ def kind_of(world_name: str) -> str:
     return world_name.split("-", 3)[-1]
 
 
-def summarize(trials) -> list[dict]:
-    """Per planner: number of worlds, rate of each outcome [%], success rate per kind [%]."""
+def _rate(trials) -> float:
+    return 100.0 * sum(t.outcome == "reached" for t in trials) / len(trials) if trials else float("nan")
+
+
+def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
+    """Per planner: worlds, rate of each outcome [%], success rate per kind and, given the
+    worlds' bottleneck widths, on the worlds whose bottleneck is >= / < WIDE_M [%]."""
     from papf.randworlds import KINDS
 
+    bottleneck = bottleneck or {}
     rows = []
     for planner in dict.fromkeys(t.planner for t in trials):
         mine = [t for t in trials if t.planner == planner]
@@ -39,9 +47,11 @@ def summarize(trials) -> list[dict]:
             row[o] = 100.0 * sum(t.outcome == o for t in mine) / len(mine)
         row["collisions"] = sum(t.collisions for t in mine)
         for k in KINDS:
-            of_kind = [t for t in mine if kind_of(t.world) == k]
-            row[f"reached_{k}"] = (100.0 * sum(t.outcome == "reached" for t in of_kind) / len(of_kind)
-                                   if of_kind else float("nan"))
+            row[f"reached_{k}"] = _rate([t for t in mine if kind_of(t.world) == k])
+        wide = [t for t in mine if bottleneck.get(t.world, 0.0) >= WIDE_M]
+        narrow = [t for t in mine if t.world in bottleneck and bottleneck[t.world] < WIDE_M]
+        row["wide_worlds"], row["reached_wide"] = len(wide), _rate(wide)
+        row["narrow_worlds"], row["reached_narrow"] = len(narrow), _rate(narrow)
         rows.append(row)
     return rows
 
@@ -51,17 +61,24 @@ def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected
     from papf.randworlds import KINDS
 
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
-              *[f"reached: {k} [%]" for k in KINDS]]
+              *[f"reached: {k} [%]" for k in KINDS],
+              f"reached: bottleneck >= {WIDE_M} m [%]", f"reached: bottleneck < {WIDE_M} m [%]"]
     rows = [[r["planner"], r["worlds"], *[f"{r[o]:.1f}" for o in OUTCOMES], r["collisions"],
-             *[f"{r[f'reached_{k}']:.1f}" for k in KINDS]] for r in summary]
+             *[f"{r[f'reached_{k}']:.1f}" for k in KINDS],
+             f"{r['reached_wide']:.1f} (of {r['wide_worlds']})",
+             f"{r['reached_narrow']:.1f} (of {r['narrow_worlds']})"] for r in summary]
     return (f"# Random worlds ({mode}, set {seed}: {n} solvable worlds, {rejected} unsolvable "
             "ones skipped)\n\n" + markdown_table(header, rows))
 
 
 def run_random(out: str | Path, n: int = 50, seed: int = 0,
                planners: Sequence[str] = DEFAULT_PLANNERS, mode: str = "offline",
-               timeout_s: float = 300.0, plots: bool = False, progress: bool | None = None):
-    """Run the experiment; write its files into ``out``; return (trials, summary rows)."""
+               timeout_s: float = 300.0, plots: bool = False, progress: bool | None = None,
+               sets: Sequence[str] = ()):
+    """Run the experiment; write its files into ``out``; return (trials, summary rows).
+
+    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
+    """
     from papf.errors import ConfigError
     from papf.experiments.trials import (
         progress_bar,
@@ -71,7 +88,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
         write_csv,
     )
     from papf.plots import plot_paths
-    from papf.randworlds import generate_solvable, world_to_toml
+    from papf.randworlds import bottleneck_width, generate_solvable, world_to_toml
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
@@ -81,6 +98,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     (out / "worlds").mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()
     worlds, rejected = generate_solvable(n, seed)
+    bottleneck = {w.name: bottleneck_width(w) for w in worlds}
     trials = []
     with progress_bar(progress) as bar:
         task = bar.add_task("random worlds", total=len(worlds) * len(planners))
@@ -91,17 +109,19 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
             for planner in planners:
                 bar.update(task, description=f"{world.name} {planner}")
                 if mode == "offline":
-                    trial = run_offline(world, planner, seed, timeout_s)
+                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets))
                 else:
                     rec = out / "recordings" / f"{world.name}-{planner}.mcap" if plots else None
-                    trial = run_stack(file, planner, seed, timeout_s, record=rec)
+                    trial = run_stack(file, planner, seed, timeout_s, record=rec,
+                                      planner_args=[a for kv in sets for a in ("--set", kv)])
                 mine.append(trial)
                 bar.advance(task)
             trials += mine
             if plots:
                 plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},
                            out / "plots" / f"{world.name}.png", world.name)
-    summary = summarize(trials)
-    write_csv([t.row() for t in trials], out / "random.csv")
+    summary = summarize(trials, bottleneck)
+    write_csv([{**t.row(), "bottleneck_m": round(bottleneck[t.world], 3)} for t in trials],
+              out / "random.csv")
     (out / "random.md").write_text(summary_markdown(summary, len(worlds), seed, mode, rejected))
     return trials, summary
