@@ -55,7 +55,7 @@ class Obstacle:
 class World:
     name: str
     description: str
-    start: tuple[float, float, float]           # x [m], y [m], yaw [rad]
+    start: tuple[float, float, float]           # (x, y, yaw) [m, m, rad]; (x, y, z) [m] in 3-D worlds
     goal: tuple[float, ...]                      # (x, y) or (x, y, z) [m]
     tolerance: float                             # [m]
     obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
