@@ -47,12 +47,15 @@ class RunConfig:
     startup_timeout_s: float = 60.0    # [s wall] for every node to become alive
     lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
+    zenoh_mode: str = "client"         # nodes' Zenoh mode: client (via the router) or peer
 
 
 def node_commands(cfg: RunConfig, world_file: str, endpoint: str) -> dict[str, list[str]]:
     """argv of every node process of a sim run, in start order."""
     py = [sys.executable, "-m"]
     z = ["--connect", endpoint, "--namespace", cfg.namespace]
+    if cfg.zenoh_mode == "peer":  # peers also talk directly: one loopback hop, not two
+        z += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
     rt = ["--realtime"] if cfg.realtime else []
     cmds: dict[str, list[str]] = {}
     if cfg.record:

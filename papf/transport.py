@@ -132,9 +132,10 @@ class Node:
                 self._declare(topic)
 
     def _declare(self, topic: str) -> zenoh.Publisher:
-        # express: send at once, no batching (the lockstep chain is latency-bound);
-        # BLOCK: a full queue waits rather than drops (lockstep and recordings need every message).
-        pub = self.session.declare_publisher(self.keys.key(topic), express=True,
+        # BLOCK: a full queue waits rather than drops (lockstep and recordings need every
+        # message). Not express: batching costs no latency on an idle link, and express
+        # puts cost ~10 us each against ~1.3 us (measured on loopback through the router).
+        pub = self.session.declare_publisher(self.keys.key(topic),
                                              congestion_control=zenoh.CongestionControl.BLOCK)
         self._publishers[topic] = pub
         return pub

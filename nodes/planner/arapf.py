@@ -1,21 +1,27 @@
 """AR-APF: APF supported by augmented reality (Szczepanski, Energies 2021, 14, 6642).
 
 Per cycle (:meth:`ARAPFStrategy.plan`), on the shared APF core with the paper's own
-constants (Table 1: k_RT = 5, k_RO = 5/L, no repulsion range):
+constants (Table 1: k_RT = 5, k_RO = 5/L, k_RW = k_RD = 10 k_RO, charges -1 / +1):
 
 1. **Detection** (Sec. 3.1, :func:`detect_minimum`): the beams within +-alpha of the goal
-   direction that return closer than d_min block; if no free run between blocking
-   returns is at least s_min wide, a local minimum lies ahead.
+   direction that return closer than d_min block; if no free run between them opens at
+   least s_min (:func:`opening`), a local minimum lies ahead. Runs every cycle without AR,
+   on the scan alone (no prediction).
 2. **Virtual wall** (Sec. 3.2, :func:`object_ends`): from the outermost blocking beams walk
-   outwards (up to +-beta) while successive returns are closer than d_max to each other;
-   the last points are the object's ends; N_wall points are spread between them (k_RW).
-3. **Side** (Sec. 3.3): one virtual obstacle (k_RD) at the end on the side *not* taken.
-4. **Force** (eq. 4) = goal + obstacles + virtual wall + virtual obstacle; both virtual
-   objects stay fixed in the world frame until
-5. **Abandonment** (Sec. 3.4): the angle between F_w and F_goal is within delta_gamma.
+   outwards (within +-beta) while successive returns are closer than d_max; the last
+   points are the object's ends; N_wall points evenly between them (:func:`wall_points`).
+   The wall stays fixed in the world frame until abandonment.
+3. **Side and virtual obstacle** (Sec. 3.3): go round the end giving the shorter path
+   (:func:`choose_left`); the obstacle (k_RD) sits on the robot's other side, s_min/2
+   from it, across the goal direction (:func:`obstacle_beside`). While the robot's
+   perception augmented with the wall (:func:`with_wall`) still shows the minimum closed
+   by the wall, the obstacle is placed beside the robot again; then it stays put.
+4. **Force** (eq. 4) = goal + obstacles + virtual wall + virtual obstacle.
+5. **Abandonment** (Sec. 3.4, :func:`abandon`): F_w and F_goal within delta_gamma.
 
-Choices where the paper is silent or ambiguous are listed in docs/planners.md (sector
-centred on the goal direction, the side rule, the virtual obstacle at the other end).
+Without a local minimum the force is eq. 2 with k_RO: AR-APF is then exactly the APF
+planner with ``k_vo_l = 5`` (paper, Test III). Every choice where the paper is silent is
+argued in docs/planners.md (AR-APF section).
 """
 
 from __future__ import annotations
@@ -30,80 +36,89 @@ from nodes.planner.apf import APFParams, Repulsors, apf_force, coulomb_sum, wrap
 from nodes.planner.core import Plan, ScanView
 from papf.errors import ConfigError
 
-OBSTACLE_PLACES = ("beside", "end", "midpoint")
+PASSAGE_WIDTHS = ("opening", "gap")
 
 
 @dataclass(frozen=True)
 class ARAPFParams:
-    """AR-APF Table 1 parameters (charges as PAPF Table 1: q_R = q_O = q_W = q_D = -1, q_T = 1)."""
+    """AR-APF Table 1 parameters (q_R = q_O = q_W = q_D = -1, q_T = 1) and our choices."""
 
     k_ro_l: float = 5.0             # k_RO * L: Table 1 gives k_RO = 5 / L
-    range_limited: bool = True      # repulsion only within APFParams.d_o (ours; eq. 2 has no range)
     k_virtual_factor: float = 10.0  # k_RW = k_RD = 10 k_RO (Table 1)
     alpha_deg: float = 30.0         # detection half-angle (Table 1)
     d_min: float = 1.2              # [m] detection distance (Table 1)
     s_min: float = 0.5              # [m] narrowest passage (Table 1)
-    d_max: float = 0.2              # [m] gap between successive returns that ends an object
+    d_max: float = 0.2              # [m] gap between successive returns that ends an object (Table 1)
     n_wall: int = 10                # virtual wall points (Table 1)
     beta_deg: float = 75.0          # wall construction half-angle (Table 1)
     delta_gamma_deg: float = 5.0    # abandonment tolerance between F_w and F_goal (Table 1)
-    wall_range_limited: bool = True  # virtual wall acts only within d_o like obstacles (ours)
-    obstacle_at: str = "beside"     # virtual obstacle: beside | end | midpoint (ours, see docs)
+    range_limited: bool = True      # obstacles repel only within APFParams.d_o (ours; eq. 2 has no range)
+    wall_range_limited: bool = True  # wall points too, like perceived points (ours)
+    obstacle_offset_m: float = 0.25  # [m] virtual obstacle beside the robot (ours: s_min / 2)
+    follow: bool = True             # re-place the obstacle while the wall still closes the way (ours)
+    passage_width: str = "opening"  # opening (chord at the nearer bound) | gap (bound to bound) (ours)
 
 
-def _sector_order(view: ScanView, centre: float, half_angle: float) -> tuple[np.ndarray, np.ndarray]:
-    """Beam indices within +-half_angle of ``centre``, sorted right (CW) to left (CCW), and rel angles."""
-    rel = np.array([wrap_angle(a - centre) for a in view.angles])
-    idx = np.flatnonzero(np.abs(rel) <= half_angle)
-    order = idx[np.argsort(rel[idx], kind="stable")]
-    return order, rel
+# -- Sec. 3.1: detection -----------------------------------------------------------------
+def opening(r_a: float, r_b: float, dtheta: float) -> float:
+    """Width [m] of a free run between bounds at ranges r_a, r_b, dtheta [rad] apart.
+
+    The chord at the nearer bound, 2 min(r) sin(dtheta / 2): the opening the robot would
+    have to pass through next to the nearer obstacle.
+    """
+    return 2.0 * min(r_a, r_b) * math.sin(abs(dtheta) / 2.0)
 
 
-def _beam_point(view: ScanView, i: int, r: float | None = None) -> np.ndarray:
-    r = view.ranges[i] if r is None else r
-    return view.origin + r * np.array([math.cos(view.angles[i]), math.sin(view.angles[i])])
+def _gap(r_a: float, a: float, r_b: float, b: float) -> float:
+    """Straight distance between the two bounding points (the ``gap`` reading)."""
+    return math.hypot(r_b * math.cos(b) - r_a * math.cos(a), r_b * math.sin(b) - r_a * math.sin(a))
 
 
 def detect_minimum(view: ScanView, goal: np.ndarray, ap: ARAPFParams):
-    """Sec. 3.1: the sector's beam order (right to left) and its blocking mask, or None if free.
+    """Sec. 3.1: (sector beam indices right to left, blocked mask) if a minimum lies ahead, else None.
 
-    A free run's width is the distance between the returns that bound it; a run reaching the
-    sector's edge is bounded there by the point at d_min on the edge beam.
+    The sector is +-alpha about the direction from the sensor to the goal. A free run
+    reaching the sector's edge is bounded there by the edge ray at d_min. A goal nearer
+    than the nearest blocking return is not behind a minimum.
     """
     to_goal = goal - view.origin
-    order, _ = _sector_order(view, math.atan2(to_goal[1], to_goal[0]), math.radians(ap.alpha_deg))
-    if order.size == 0:
+    centre, half = math.atan2(to_goal[1], to_goal[0]), math.radians(ap.alpha_deg)
+    rel = (view.angles - centre + math.pi) % (2.0 * math.pi) - math.pi
+    idx = np.flatnonzero(np.abs(rel) <= half)
+    if idx.size == 0:
         return None
-    ranges = view.ranges[order]
+    order = idx[np.argsort(rel[idx], kind="stable")]
+    ranges, angles = view.ranges[order], rel[order]
     blocked = ranges < ap.d_min
     if not blocked.any() or np.hypot(*to_goal) <= ranges[blocked].min():
         return None
-    bounds = [_beam_point(view, order[0], ap.d_min) if not blocked[0] else None]
-    run_start = None
-    for k in range(order.size + 1):
-        free = k < order.size and not blocked[k]
-        if free and run_start is None:
-            run_start = k
-        elif not free and run_start is not None:
-            right = _beam_point(view, order[run_start - 1]) if run_start > 0 else bounds[0]
-            left = _beam_point(view, order[k]) if k < order.size else _beam_point(view, order[-1], ap.d_min)
-            if np.hypot(*(left - right)) >= ap.s_min:
-                return None
-            run_start = None
+    edges = np.flatnonzero(np.diff(np.concatenate(([True], blocked, [True])).astype(int)))
+    for start, stop in zip(edges[::2], edges[1::2], strict=True):   # free runs [start, stop)
+        r_a, a = (ranges[start - 1], angles[start - 1]) if start > 0 else (ap.d_min, -half)
+        r_b, b = (ranges[stop], angles[stop]) if stop < order.size else (ap.d_min, half)
+        width = opening(r_a, r_b, b - a) if ap.passage_width == "opening" else _gap(r_a, a, r_b, b)
+        if width >= ap.s_min:
+            return None
     return order, blocked
+
+
+# -- Sec. 3.2: virtual wall --------------------------------------------------------------
+def _beam_point(view: ScanView, i: int) -> np.ndarray:
+    return view.origin + view.ranges[i] * np.array([math.cos(view.angles[i]), math.sin(view.angles[i])])
 
 
 def object_ends(view: ScanView, order: np.ndarray, blocked: np.ndarray, goal: np.ndarray,
                 ap: ARAPFParams) -> tuple[np.ndarray, np.ndarray]:
-    """Sec. 3.2: (right end, left end) of the object, walking out from the outer blocking beams."""
+    """Sec. 3.2: (right end, left end), walking out beam by beam from the outer blocking beams.
+
+    The walk goes on while the next return is valid, within +-beta of the goal direction
+    and no more than d_max from the previous one; the last point reached is the end.
+    """
     to_goal = goal - view.origin
-    centre = math.atan2(to_goal[1], to_goal[0])
-    beta = math.radians(ap.beta_deg)
-    n = view.ranges.size
-    hits = order[blocked]
-    ends = []
+    centre, beta = math.atan2(to_goal[1], to_goal[0]), math.radians(ap.beta_deg)
+    n, hits, ends = view.ranges.size, order[blocked], []
     for start, step in ((hits[0], -1), (hits[-1], +1)):
-        i, p = start, _beam_point(view, start)
+        i, p = int(start), _beam_point(view, int(start))
         for _ in range(n):
             j = (i + step) % n
             if not view.valid[j] or abs(wrap_angle(view.angles[j] - centre)) > beta:
@@ -116,25 +131,60 @@ def object_ends(view: ScanView, order: np.ndarray, blocked: np.ndarray, goal: np
     return ends[0], ends[1]
 
 
-def virtual_obstacle(pos, goal, right, left, how: str = "beside") -> np.ndarray:
-    """Sec. 3.3: side choice and the virtual obstacle's position (world frame).
+def wall_points(right: np.ndarray, left: np.ndarray, n_wall: int) -> np.ndarray:
+    """N_wall points equally spaced from the right end to the left end, both included."""
+    return np.linspace(right, left, n_wall)
 
-    Side: around the end giving the shorter path robot -> end -> goal (ties: left; the
-    paper draws at random). The obstacle goes on the other side: ``beside`` the robot,
-    half the wall's length away perpendicular to the goal direction (default); at the
-    other ``end``; or at the ``midpoint`` between the robot and the other end.
+
+def with_wall(view: ScanView, a: np.ndarray, b: np.ndarray) -> tuple[ScanView, np.ndarray]:
+    """The robot's augmented perception: the scan with segment a-b as an obstacle.
+
+    Returns the view whose beams that cross the segment before their own return report
+    the segment, and the mask of those beams.
+    """
+    d = np.column_stack([np.cos(view.angles), np.sin(view.angles)])
+    e, w = b - a, a - view.origin
+    den = d[:, 1] * e[0] - d[:, 0] * e[1]                       # ray o + t d = a + s e
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[1] * e[0] - w[0] * e[1]) / den
+        s = (d[:, 0] * w[1] - d[:, 1] * w[0]) / den
+    virtual = (np.abs(den) > 1e-12) & (t > 0.0) & (s >= 0.0) & (s <= 1.0) & (t < view.ranges)
+    ranges = np.where(virtual, t, view.ranges)
+    valid = view.valid | virtual
+    points = view.origin + ranges[valid, None] * d[valid]
+    return ScanView(view.origin, view.angles, ranges, points, valid), virtual
+
+
+# -- Sec. 3.3: side and virtual obstacle -------------------------------------------------
+def choose_left(pos, goal, right, left) -> bool:
+    """Go round the left end? The shorter path robot -> end -> goal wins; ties go left.
+
+    (The paper draws ties at random; we stay deterministic.)
     """
     cost_r = np.hypot(*(right - pos)) + np.hypot(*(goal - right))
     cost_l = np.hypot(*(left - pos)) + np.hypot(*(goal - left))
-    go_left = cost_l <= cost_r + 1e-3
-    other = right if go_left else left
-    if how == "end":
-        return np.array(other, dtype=float)
-    if how == "midpoint":
-        return (pos + other) / 2.0
+    return bool(cost_l <= cost_r + 1e-9)
+
+
+def obstacle_beside(pos, goal, go_left: bool, offset: float) -> np.ndarray:
+    """The virtual obstacle on the robot's side not taken, ``offset`` across the goal direction."""
     u = (goal - pos) / np.hypot(*(goal - pos))
-    n = np.array([u[1], -u[0]]) if go_left else np.array([-u[1], u[0]])   # right or left normal
-    return pos + n * np.hypot(*(left - right)) / 2.0
+    right_normal = np.array([u[1], -u[0]])
+    return pos + (right_normal if go_left else -right_normal) * offset
+
+
+# -- Sec. 3.4: abandonment ---------------------------------------------------------------
+def angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle between two vectors [deg] (180 if either is zero)."""
+    na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+    if na == 0.0 or nb == 0.0:
+        return 180.0
+    return math.degrees(math.acos(max(-1.0, min(1.0, float(a @ b) / (na * nb)))))
+
+
+def abandon(force: np.ndarray, f_goal: np.ndarray, delta_gamma_deg: float) -> bool:
+    """Sec. 3.4: F_w and F_goal point the same way within delta_gamma."""
+    return angle_deg(force, f_goal) <= delta_gamma_deg
 
 
 class ARAPFStrategy:
@@ -145,40 +195,56 @@ class ARAPFStrategy:
 
     def __init__(self, params: ARAPFParams | None = None):
         self.params = params or ARAPFParams()
-        if self.params.obstacle_at not in OBSTACLE_PLACES:
-            raise ConfigError(f"arapf obstacle_at={self.params.obstacle_at!r}: valid are "
-                              f"{list(OBSTACLE_PLACES)}")
+        if self.params.passage_width not in PASSAGE_WIDTHS:
+            raise ConfigError(f"arapf passage_width={self.params.passage_width!r}: valid are "
+                              f"{list(PASSAGE_WIDTHS)}")
+        if not 2 <= self.params.n_wall:
+            raise ConfigError(f"arapf n_wall={self.params.n_wall!r}: must be an integer >= 2")
         self.reset()
 
     def reset(self) -> None:
+        """Drop the augmented reality (new goal, or abandonment)."""
         self.wall: np.ndarray | None = None       # (N_wall, 2) world frame
         self.obstacle: np.ndarray | None = None   # (1, 2) world frame
+        self.go_left = True
 
     def _field(self, apf: APFParams) -> APFParams:
         d_o = apf.d_o if self.params.range_limited else math.inf
         return dataclasses.replace(apf, k_vo_l=self.params.k_ro_l, d_o=d_o)
 
-    def _augment(self, pos, goal, view: ScanView) -> None:
+    def _augment(self, pos, goal, view: ScanView) -> bool:
+        """Without AR: detect, build wall, side and obstacle. True if AR was created."""
         ap = self.params
         found = detect_minimum(view, goal, ap)
         if found is None:
-            return
+            return False
         right, left = object_ends(view, *found, goal, ap)
-        self.wall = np.linspace(right, left, ap.n_wall)
-        self.obstacle = virtual_obstacle(pos, goal, right, left, ap.obstacle_at)[None, :]
+        self.wall = wall_points(right, left, ap.n_wall)
+        self.go_left = choose_left(pos, goal, right, left)
+        self.obstacle = obstacle_beside(pos, goal, self.go_left, ap.obstacle_offset_m)[None, :]
+        return True
+
+    def _follow(self, pos, goal, view: ScanView) -> None:
+        """With AR: while the perceived wall still closes the way ahead, keep the obstacle beside."""
+        seen, virtual = with_wall(view, self.wall[0], self.wall[-1])
+        found = detect_minimum(seen, goal, self.params)
+        if found is not None and virtual[found[0][found[1]]].any():
+            self.obstacle = obstacle_beside(pos, goal, self.go_left, self.params.obstacle_offset_m)[None, :]
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
         ap, field = self.params, self._field(apf)
-        fresh = self.wall is None
-        if fresh:
-            self._augment(pos, goal, view)
+        if self.wall is None:
+            fresh = self._augment(pos, goal, view)
+        else:
+            fresh = False
+            if ap.follow:
+                self._follow(pos, goal, view)
         force = apf_force(pos, goal, view.points, field, self._virtual(field))
         if self.wall is not None and not fresh:
             f_goal = -(field.k_vg * field.q_v * field.q_g) * coulomb_sum(pos, goal[None, :])
-            cos = float(force @ f_goal) / max(np.linalg.norm(force) * np.linalg.norm(f_goal), 1e-300)
-            if math.degrees(math.acos(max(-1.0, min(1.0, cos)))) <= ap.delta_gamma_deg:
-                self.reset()                                   # Sec. 3.4: abandon AR
+            if abandon(force, f_goal, ap.delta_gamma_deg):
+                self.reset()
                 force = apf_force(pos, goal, view.points, field)
         if self.wall is None:
             return Plan(force=force)
@@ -186,6 +252,7 @@ class ARAPFStrategy:
                     virtual_obstacles=self.obstacle)
 
     def _virtual(self, field: APFParams) -> tuple[Repulsors, ...]:
+        """Eq. 3-4 terms: wall points (k_RW, within d_o by default) and the obstacle (k_RD, no range)."""
         if self.wall is None:
             return ()
         k = self.params.k_virtual_factor * field.k_vo
