@@ -10,7 +10,6 @@ orphans); readiness is the nodes' liveliness tokens; SIGINT/SIGTERM stop everyth
 
 from __future__ import annotations
 
-import queue
 import re
 import shlex
 import sys
@@ -22,10 +21,11 @@ from pathlib import Path
 import zenoh
 
 from papf.errors import ConfigError
-from papf.monitor import NS, RunMonitor, RunResult
+from papf.monitor import RunMonitor, RunResult
+from papf.run_sequence import STALL_S, RunSequence
 from papf.supervisor import Supervisor, wait_port
 from papf.transport import StopRequested, wait_alive, zenoh_config
-from schemas import Event, Goal, Keys, PlannerStatus
+from schemas import Keys
 from schemas.keys import TOPICS
 from worlds import load_world, world_path
 
@@ -34,8 +34,6 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-STALL_S = 20.0           # [s wall] no run-clock progress for this long: the run failed
-GOAL_HANDSHAKE_S = 15.0  # [s wall] for the planner to acknowledge the goal
 VARIABLES = ("world", "world_file", "seed", "planner", "record", "energy_model", "bridge_namespace")
 
 
@@ -201,7 +199,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
             missing = wait_alive(session, keys, wanted, opt.startup_timeout_s,
                                  abort=lambda: bool(sup.dead()) or bool(stop))
             if missing or sup.dead():
-                reason = _death(sup) or f"not alive after {opt.startup_timeout_s:g} s: " \
+                reason = sup.death_reason() or f"not alive after {opt.startup_timeout_s:g} s: " \
                                         f"{', '.join(sorted(missing))}"
                 return _failed(reason, opt, prof)
             print(f"papf launch {prof.name}: ready ({', '.join(wanted)} alive)", file=sys.stderr,
@@ -210,7 +208,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
                 return _drive_run(session, keys, sup, prof, opt, stop)
             while not stop and not sup.dead():   # a serving host: until Ctrl-C or a death
                 stop.event.wait(0.2)
-            return _failed(_death(sup), opt, prof) if sup.dead() else None
+            return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
 
 
 def _failed(reason: str, opt: LaunchOptions, prof: Profile) -> RunResult:
@@ -225,14 +223,6 @@ def _router_argv(listen: list[str], router_config: str | None) -> list[str]:
     return argv + (["--zenoh-config", router_config] if router_config else [])
 
 
-def _death(sup: Supervisor) -> str:
-    dead = sup.dead()
-    if not dead:
-        return ""
-    c = dead[0]
-    return f"{c.name} exited with code {c.returncode}: " + " | ".join(list(c.tail)[-6:])
-
-
 def _result(monitor: RunMonitor, opt: LaunchOptions, prof: Profile, wall_s: float = 0.0):
     world = opt.values.get("world") or prof.defaults.get("world", "")
     return monitor.result(str(opt.values.get("planner") or prof.defaults.get("planner", "apf")),
@@ -241,89 +231,20 @@ def _result(monitor: RunMonitor, opt: LaunchOptions, prof: Profile, wall_s: floa
 
 
 # -- the run sequence (docs/architecture.md "Start and end of a run", real time) ---------------
-class _Watch:
-    """The launcher's subscriptions, queued and fed to a RunMonitor on the main thread."""
-
-    def __init__(self, session: zenoh.Session, keys: Keys, monitor: RunMonitor, pose_topic: str):
-        self.q: queue.Queue = queue.Queue()
-        self.handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
-                         "events": monitor.on_event, "battery": monitor.on_battery,
-                         "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose}
-        self.subs = [session.declare_subscriber(keys.key(t), self._cb(t)) for t in self.handlers]
-
-    def _cb(self, topic: str):
-        def on_sample(sample: zenoh.Sample) -> None:
-            try:
-                self.q.put((topic, TOPICS[topic].from_bytes(sample.payload.to_bytes())))
-            except Exception:  # a bad payload is the nodes' business, not the launcher's
-                pass
-        return on_sample
-
-    def drain(self, timeout_s: float) -> list:
-        got = []
-        try:
-            item = self.q.get(timeout=timeout_s)
-            while True:
-                self.handlers[item[0]](item[1])
-                got.append(item)
-                item = self.q.get_nowait()
-        except queue.Empty:
-            return got
-
-    def close(self) -> None:
-        for s in self.subs:
-            s.undeclare()
-
-
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
                stop: StopRequested) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
     monitor = RunMonitor(opt.timeout_s)
-    watch = _Watch(session, keys, monitor, prof.pose_topic)
+    seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
+                      stall_s=opt.stall_s)
     try:
-        if _handshake(session, keys, world, watch, monitor, sup, stop):
-            session.put(keys.events, Event(stamp_ns=0, kind="run_started", source="launcher",
-                                           detail=f"profile={prof.name} world={world.name}")
-                        .to_bytes())
-            _until_outcome(watch, monitor, sup, stop, opt.stall_s)
-            deadline = time.monotonic() + 10.0
-            while not monitor.figures_complete() and time.monotonic() < deadline and not stop:
-                watch.drain(0.05)
+        if seq.handshake(world):
+            seq.start(f"profile={prof.name} world={world.name}")
+            seq.until_outcome()
     finally:
-        watch.close()
-        session.put(keys.events, Event(stamp_ns=max(monitor.clock_ns, 0), kind="run_ended",
-                                       source="launcher", detail=monitor.outcome or "").to_bytes())
-    return _result(monitor, opt, prof, time.monotonic() - wall0)
+        result = _result(monitor, opt, prof, time.monotonic() - wall0)
+        seq.end(result)
+    return result
 
 
-def _handshake(session, keys, world, watch, monitor, sup, stop) -> bool:
-    """Publish the goal every 0.5 s until the planner answers ``ready``."""
-    goal = Goal(stamp_ns=0, x=world.goal[0], y=world.goal[1], tolerance=world.tolerance)
-    deadline = time.monotonic() + GOAL_HANDSHAKE_S
-    while time.monotonic() < deadline and not stop and not sup.dead():
-        session.put(keys.goal, goal.to_bytes())
-        t_next = time.monotonic() + 0.5
-        while time.monotonic() < t_next:
-            if any(t == "planner/status" and isinstance(m, PlannerStatus) and m.state == "ready"
-                   for t, m in watch.drain(0.05)):
-                return True
-    monitor.fail("interrupted" if stop else _death(sup) or
-                 f"the planner never acknowledged the goal within {GOAL_HANDSHAKE_S:g} s")
-    return False
-
-
-def _until_outcome(watch: _Watch, monitor: RunMonitor, sup, stop, stall_s: float) -> None:
-    last_clock, last_change = monitor.clock_ns, time.monotonic()
-    while not monitor.done:
-        watch.drain(0.05)
-        now = time.monotonic()
-        if monitor.clock_ns != last_clock:
-            last_clock, last_change = monitor.clock_ns, now
-        if stop:
-            monitor.fail("interrupted")
-        elif sup.dead():
-            monitor.fail(_death(sup))
-        elif now - last_change > stall_s:
-            monitor.fail(f"no run clock for {stall_s:g} s at t = {monitor.clock_ns / NS:.2f} s: "
-                         "the base driver is down or unreachable (link lost?)")

@@ -75,6 +75,14 @@ class Supervisor:
         """Children that have exited."""
         return [c for c in self.children if c.returncode is not None]
 
+    def death_reason(self) -> str:
+        """'<name> exited with code N: <last log lines>' for the first dead child, or ''."""
+        dead = self.dead()
+        if not dead:
+            return ""
+        c = dead[0]
+        return f"{c.name} exited with code {c.returncode}: " + " | ".join(list(c.tail)[-6:])
+
     def stop(self, grace_s: float = 3.0, last: tuple[str, ...] = (), settle_s: float = 0.3) -> None:
         """Stop every child: SIGTERM, then SIGKILL after ``grace_s``.
 

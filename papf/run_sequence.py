@@ -1,0 +1,139 @@
+"""The launcher's side of a run over its Zenoh session (docs/architecture.md, "Start and
+end of a run"), shared by `papf run` and `papf launch`:
+
+goal handshake -> ``run_started`` -> watch messages until an outcome -> figures at
+``t_end`` -> ``run_ended`` (carrying the result as JSON, so recordings hold it).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import queue
+import time
+from collections.abc import Callable
+
+import zenoh
+
+from papf.monitor import NS, RunMonitor, RunResult
+from papf.supervisor import Supervisor
+from schemas import Event, Goal, Keys, PlannerStatus
+from schemas.keys import TOPICS
+from worlds import World
+
+log = logging.getLogger("papf.run")
+
+GOAL_HANDSHAKE_S = 15.0  # [s wall] for the planner to acknowledge the goal
+STALL_S = 20.0           # [s wall] no sim-clock progress for this long = the stack is stuck
+FIGURES_S = 10.0         # [s wall] for battery/pose samples to reach t_end
+
+
+class RunSequence:
+    """One run driven over ``session``: subscriptions feed ``monitor`` on the caller's thread."""
+
+    def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
+                 pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
+                 stall_s: float = STALL_S):
+        self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
+        self.stop, self.stall_s = stop, stall_s
+        self._q: queue.Queue = queue.Queue()
+        self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
+                          "events": monitor.on_event, "battery": monitor.on_battery,
+                          "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose}
+        self._subs = [session.declare_subscriber(keys.key(t), self._callback(t))
+                      for t in self._handlers]
+
+    def _callback(self, topic: str):
+        msg_type = TOPICS[topic]
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                self._q.put((topic, msg_type.from_bytes(sample.payload.to_bytes())))
+            except Exception:  # a bad payload is the nodes' business, not the launcher's
+                pass
+        return on_sample
+
+    def drain(self, timeout_s: float) -> list[tuple[str, object]]:
+        """Feed queued messages to the monitor (waiting up to ``timeout_s`` for the first)."""
+        got = []
+        try:
+            item = self._q.get(timeout=timeout_s)
+            while True:
+                self._handlers[item[0]](item[1])
+                got.append(item)
+                item = self._q.get_nowait()
+        except queue.Empty:
+            return got
+
+    # -- the sequence ---------------------------------------------------------
+    def handshake(self, world: World) -> bool:
+        """Publish the goal every 0.5 s until the planner answers ``ready``."""
+        goal = Goal(stamp_ns=0, x=world.goal[0], y=world.goal[1], tolerance=world.tolerance)
+        deadline = time.monotonic() + GOAL_HANDSHAKE_S
+        while time.monotonic() < deadline and not self.stop() and not self.sup.dead():
+            self.session.put(self.keys.goal, goal.to_bytes())
+            t_next = time.monotonic() + 0.5
+            while time.monotonic() < t_next:
+                if any(t == "planner/status" and isinstance(m, PlannerStatus) and m.state == "ready"
+                       for t, m in self.drain(0.05)):
+                    return True
+        self.monitor.fail("interrupted" if self.stop() else self.sup.death_reason() or
+                          f"the planner never acknowledged the goal within {GOAL_HANDSHAKE_S:g} s")
+        return False
+
+    def start(self, detail: str) -> None:
+        self.session.put(self.keys.events, Event(stamp_ns=0, kind="run_started",
+                                                 source="launcher", detail=detail).to_bytes())
+
+    def until_outcome(self, progress=None, goal_xy: tuple[float, float] | None = None) -> None:
+        """Watch until the monitor has an outcome; a dead node, a stall or a stop is one too."""
+        m = self.monitor
+        last_clock, last_change = m.clock_ns, time.monotonic()
+        while not m.done:
+            self.drain(0.05)
+            now = time.monotonic()
+            if m.clock_ns != last_clock:
+                last_clock, last_change = m.clock_ns, now
+            if progress is not None and goal_xy is not None:
+                progress.update(m.clock_ns / NS, m.distance_to(*goal_xy),
+                                m.batteries[-1].charge_used_mAh if m.batteries else 0.0,
+                                m.status.state if m.status else "")
+            if self.stop():
+                m.fail("interrupted")
+            elif self.sup.dead():
+                self._on_node_death()
+            elif now - last_change > self.stall_s:
+                m.fail(f"sim time stuck at {m.clock_ns / NS:.2f} s for {self.stall_s:g} s "
+                       "(a node is hung, or the link to the base driver is lost)")
+        self._wait_for_figures()
+
+    def _on_node_death(self) -> None:
+        """A node died: record why, and (unless it was the driver) let the robot stop first."""
+        m = self.monitor
+        m.fail(self.sup.death_reason())
+        if any(c.name in ("base_driver", "router") for c in self.sup.dead()):
+            return
+        deadline = time.monotonic() + 10.0  # the driver's lockstep timeout + its watchdog
+        while time.monotonic() < deadline and not (m.watchdog_stop_ns and m.robot_stopped()):
+            self.drain(0.05)
+        m.t_end_ns = max(m.clock_ns, 0)
+
+    def _wait_for_figures(self) -> None:
+        deadline = time.monotonic() + FIGURES_S
+        while not self.monitor.figures_complete() and time.monotonic() < deadline:
+            if self.stop() or any(c.name in ("energy_meter", "base_driver")
+                                  for c in self.sup.dead()):
+                break
+            self.drain(0.05)
+        if not self.monitor.figures_complete():
+            log.warning("figures at t_end=%.2f s incomplete (battery/pose samples missing)",
+                        (self.monitor.t_end_ns or 0) / NS)
+
+    def end(self, result: RunResult) -> None:
+        """``run_ended`` with the result as JSON; then stop listening."""
+        for sub in self._subs:
+            sub.undeclare()
+        self._subs.clear()
+        self.session.put(self.keys.events, Event(
+            stamp_ns=self.monitor.t_end_ns or max(self.monitor.clock_ns, 0), kind="run_ended",
+            source="launcher", detail=json.dumps(result.to_json())).to_bytes())
