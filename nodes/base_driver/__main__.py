@@ -29,7 +29,6 @@ Liveliness token: ``<ns>/alive/base_driver``.
 from __future__ import annotations
 
 import argparse
-import importlib
 import queue
 import sys
 import time
@@ -150,14 +149,8 @@ def main_sim(args: argparse.Namespace) -> int:
 
 
 def main_rosbot(args: argparse.Namespace) -> int:
-    try:
-        rosbot_node = importlib.import_module("nodes.base_driver.rosbot_node")
-    except ModuleNotFoundError as exc:
-        if exc.name != "nodes.base_driver.rosbot_node":
-            raise
-        print("base_driver: --driver rosbot needs nodes/base_driver/rosbot_node.py, which is not "
-              "installed in this tree; use --driver sim", file=sys.stderr)
-        return 2
+    from nodes.base_driver import rosbot_node  # imported only when asked: it pulls in rosbags
+
     return rosbot_node.main(args) or 0
 
 
@@ -188,12 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     pre.add_argument("--driver", default="sim")
     known, _ = pre.parse_known_args(argv)
     parser = build_parser()
-    if known.driver == "rosbot":
-        try:  # the rosbot driver may add its own options (bridge namespace, ...)
-            add = importlib.import_module("nodes.base_driver.rosbot_node").add_arguments
-            add(parser)
-        except (ModuleNotFoundError, AttributeError):
-            pass
+    if known.driver == "rosbot":  # the rosbot driver's own options (bridge keys, ...)
+        from nodes.base_driver import rosbot_node
+
+        rosbot_node.add_arguments(parser)
     args = parser.parse_args(argv)
     try:
         return main_rosbot(args) if args.driver == "rosbot" else main_sim(args)

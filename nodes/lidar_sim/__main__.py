@@ -25,7 +25,6 @@ Zenoh options. Liveliness token: ``<ns>/alive/lidar_sim``.
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
 from papf.errors import PapfError
@@ -81,15 +80,9 @@ def main_sim(args: argparse.Namespace) -> int:
 
 
 def main_ros2(args: argparse.Namespace) -> int:
-    try:
-        source = importlib.import_module("nodes.lidar_sim.ros2_source")
-    except ModuleNotFoundError as exc:
-        if exc.name != "nodes.lidar_sim.ros2_source":
-            raise
-        print("lidar_sim: --source ros2 needs nodes/lidar_sim/ros2_source.py, which is not "
-              "installed in this tree; use --source sim", file=sys.stderr)
-        return 2
-    return source.main(args) or 0
+    from nodes.lidar_sim import ros2_source  # imported only when asked: it pulls in rosbags
+
+    return ros2_source.main(args) or 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -119,11 +112,10 @@ def main(argv: list[str] | None = None) -> int:
     pre.add_argument("--source", default="sim")
     known, _ = pre.parse_known_args(argv)
     parser = build_parser()
-    if known.source == "ros2":
-        try:  # the ROS 2 source may add its own options (bridge namespace, topic, ...)
-            importlib.import_module("nodes.lidar_sim.ros2_source").add_arguments(parser)
-        except (ModuleNotFoundError, AttributeError):
-            pass
+    if known.source == "ros2":  # the ROS 2 source's own options (bridge keys, sensor pose)
+        from nodes.lidar_sim import ros2_source
+
+        ros2_source.add_arguments(parser)
     args = parser.parse_args(argv)
     try:
         return main_ros2(args) if args.source == "ros2" else main_sim(args)
