@@ -6,7 +6,7 @@ PY      = $(VENV)/bin/python
 WORLD  ?= energy
 PLANNER ?= apf
 
-.PHONY: demo test lint bench setup clean
+.PHONY: demo test lint coverage setup clean
 setup: $(VENV)/.installed
 
 $(VENV)/.installed: pyproject.toml
@@ -23,6 +23,10 @@ test: setup
 
 lint: setup
 	$(VENV)/bin/ruff check .
+
+coverage: setup   # in-process coverage of the unit and pub/sub tiers (node processes not traced)
+	$(VENV)/bin/coverage run -m pytest -q -m "not e2e"
+	$(VENV)/bin/coverage report
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info
