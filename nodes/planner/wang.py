@@ -1,29 +1,33 @@
 """Improved APF of G. Wang, "Real-time path planning based on improved artificial potential
 field method" (papers/improved-apf-wang.txt), on N-dimensional points (2-D and 3-D).
 
-The paper's eqs. 6-8 mix up their distances (the text and the formulas disagree); this is
-our reconstruction, kept to what the text says each term must do (docs/planners.md):
+The paper's eqs. 6-8 mix up their distances (text and formulas disagree); this is our
+reading, kept to what the text says each coefficient must do (docs/planners.md, Wang):
 
-- **Attraction** (eqs. 6-7): ``F_att = k_att * eta * (X_g - X_u)`` (quadratic potential,
-  linear force). ``eta`` (dynamic attraction coefficient) =
-  ``(sin((rho_min - R_0) / rho_0 * pi - pi/2) + 1) / 2`` while the nearest obstacle point
-  (our X_0, the potential local-minimum point) is within ``R_0 .. R_0 + rho_0``
-  (rho_min = distance to it; R_0 = 0 for LiDAR points), else 1: the pull fades smoothly
-  near obstacles instead of balancing them. Within rho_1 of the goal eta = 1 (the goal
-  is the minimum we want).
-- **Repulsion** (eq. 8): each point at distance ``rho < rho_1 = 2 rho_0`` pushes with
+- **Attraction** (eqs. 6-7): ``F_att = k_att * eta_eff * (X_g - X_u)`` (quadratic potential,
+  linear force). :func:`eta` is the paper's sine, ``(sin((rho_min - R_0) / rho_0 * pi - pi/2)
+  + 1) / 2`` on ``R_0 .. R_0 + rho_0`` of the nearest obstacle point (our X_0; rho_min its
+  distance, R_0 = 0 for LiDAR points), 0 inside R_0, 1 beyond: the linear pull, which grows
+  without bound with the goal distance, fades out against an obstacle, so the repulsion
+  always wins there. Near the target the attraction takes over again (:func:`attraction_coef`,
+  ``eta_eff = 1 - lambda_goal (1 - eta)``, = 1 at the target).
+- **Repulsion** (eq. 8): each point at ``rho < rho_1 = 2 rho_0`` pushes with
   ``lambda_obs(rho) * lambda_goal(d_g) * k_rep * (1/rho - 1/rho_1) / rho^2`` along the
-  point->robot direction. ``lambda_obs`` is the paper's cosine,
-  ``(cos((rho - rho_0) / rho_0 * pi) + 1) / 2`` on ``rho_0 .. rho_1`` (1 inside rho_0,
-  0 beyond rho_1: the repulsion fades out smoothly); ``lambda_goal`` =
-  ``(1 - cos(pi * min(d_g / rho_0, 1))) / 2`` makes the repulsion vanish at the target
-  (the paper's fix for a goal next to an obstacle).
+  point->robot direction. :func:`lambda_obs` is the paper's cosine (1 inside rho_0, 0 from
+  rho_1 on); :func:`lambda_goal` = ``(1 - cos(pi * min(d_g / rho_1, 1))) / 2`` makes the
+  repulsion vanish at the target (the paper's fix for a goal next to an obstacle).
+- **Control point** (ours): Wang moves a point along the force; a ROSbot cannot move its
+  axle centre sideways, so in 2-D the force is evaluated ``control_offset_m`` ahead of the
+  robot (:func:`control_point`). At the saddle in front of an obstacle on the way to the
+  goal, turning then moves the point sideways, into the field's unstable direction, and the
+  robot commits to one side instead of turning in place.
 
-The planner core then applies the PAPF paper's eqs. 3 and 5 to the force.
+The planner core then applies the PAPF paper's eqs. 3 and 5 (shared motion law) to the force.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -31,30 +35,46 @@ import numpy as np
 
 from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
+from papf.errors import ConfigError
 
 
 @dataclass(frozen=True)
 class WangParams:
     """Wang's gains scaled to a LiDAR robot (Table 1 values were for a 10 m MATLAB map)."""
 
-    k_att: float = 10.0             # attraction gain (Wang Table 1)
+    k_att: float = 10.0             # attraction gain k_att (Wang Table 1)
     k_rep_l: float = 5.0            # k_rep * L: per-point repulsion gain times beams (ours)
     lidar_points: int = 300         # L used to scale k_rep (PAPF Table 1)
     rho_0: float = 0.5              # [m] influence radius (ours: = APF d_o); rho_1 = 2 rho_0
     r_0: float = 0.0                # [m] obstacle radius R_0 in eta (0: LiDAR points)
+    control_offset_m: float = 0.05  # [m] force evaluated this far ahead of the robot, 2-D (ours)
+
+    def __post_init__(self):
+        for name in ("k_att", "k_rep_l", "r_0", "control_offset_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ConfigError(f"wang setting {name} = {value!r}: expected a finite number >= 0")
+        if not (math.isfinite(self.rho_0) and self.rho_0 > 0):
+            raise ConfigError(f"wang setting rho_0 = {self.rho_0!r} m: expected a finite number > 0")
+        if self.lidar_points < 1:
+            raise ConfigError(f"wang setting lidar_points = {self.lidar_points!r}: expected >= 1")
 
     @property
     def k_rep(self) -> float:
+        """Per-point repulsion gain k_rep = k_rep_l / L."""
         return self.k_rep_l / self.lidar_points
 
     @property
     def rho_1(self) -> float:
-        """Double influence radius rho_1 = 2 rho_0 [m]."""
+        """Double influence radius rho_1 = 2 rho_0 [m] (eq. 8)."""
         return 2.0 * self.rho_0
 
 
 def eta(rho_min: float, wp: WangParams) -> float:
-    """Dynamic attraction coefficient (eq. 6), 0 at R_0 rising to 1 at R_0 + rho_0."""
+    """Eq. 6 dynamic attraction coefficient: 0 within R_0, sine up to 1 at R_0 + rho_0, then 1.
+
+    ``rho_min`` [m]: distance to the nearest obstacle point (our X_0).
+    """
     if rho_min >= wp.r_0 + wp.rho_0:
         return 1.0
     x = max(rho_min - wp.r_0, 0.0) / wp.rho_0
@@ -62,14 +82,19 @@ def eta(rho_min: float, wp: WangParams) -> float:
 
 
 def lambda_goal(d_goal: float, wp: WangParams) -> float:
-    """Goal factor of the repulsion: 0 at the target, 1 from rho_0 on."""
+    """Target part of eq. 8's lambda: 0 at the target, cosine up to 1 at rho_1, then 1."""
     return 0.5 * (1.0 - math.cos(math.pi * min(d_goal / wp.rho_1, 1.0)))
 
 
 def lambda_obs(rho: np.ndarray, wp: WangParams) -> np.ndarray:
-    """Eq. 8 taper: 1 inside rho_0, cosine to 0 at rho_1, 0 beyond."""
+    """Obstacle part of eq. 8's lambda: 1 inside rho_0, cosine down to 0 at rho_1, 0 beyond."""
     taper = 0.5 * (np.cos((rho - wp.rho_0) / wp.rho_0 * math.pi) + 1.0)
     return np.where(rho < wp.rho_0, 1.0, np.where(rho < wp.rho_1, taper, 0.0))
+
+
+def attraction_coef(rho_min: float, d_goal: float, wp: WangParams) -> float:
+    """eta_eff = 1 - lambda_goal (1 - eta): eta away from the target, 1 at the target."""
+    return 1.0 - lambda_goal(d_goal, wp) * (1.0 - eta(rho_min, wp))
 
 
 def wang_force(pos, goal, obstacles, wp: WangParams) -> np.ndarray:
@@ -84,7 +109,7 @@ def wang_force(pos, goal, obstacles, wp: WangParams) -> np.ndarray:
     rho_min = float(rho.min()) if rho.size else math.inf
     to_goal = goal - pos
     d_goal = float(np.sqrt(np.sum(to_goal * to_goal)))
-    f_att = wp.k_att * (eta(rho_min, wp) if d_goal >= wp.rho_1 else 1.0) * to_goal
+    f_att = wp.k_att * attraction_coef(rho_min, d_goal, wp) * to_goal
     near = rho < wp.rho_1
     if not near.any():
         return f_att
@@ -92,6 +117,17 @@ def wang_force(pos, goal, obstacles, wp: WangParams) -> np.ndarray:
     mag = lambda_obs(r, wp) * wp.k_rep * (1.0 / r - 1.0 / wp.rho_1) / r**2
     f_rep = lambda_goal(d_goal, wp) * np.sum(a * (mag / r)[:, None], axis=0)
     return f_att + f_rep
+
+
+def control_point(pos, yaw: float, goal, wp: WangParams) -> np.ndarray:
+    """The point the force acts on: in 2-D ``min(control_offset_m, d_g / 2)`` ahead along the
+    heading (half the goal distance at most, so the point cannot settle on the target while
+    the robot stays away); in other dimensions (a point robot) ``pos`` itself."""
+    pos = np.asarray(pos, dtype=float)
+    if pos.shape[0] != 2 or wp.control_offset_m == 0:
+        return pos
+    offset = min(wp.control_offset_m, 0.5 * float(np.linalg.norm(np.asarray(goal) - pos)))
+    return pos + offset * np.array([math.cos(yaw), math.sin(yaw)])
 
 
 class WangStrategy:
@@ -110,5 +146,6 @@ class WangStrategy:
              apf: APFParams) -> Plan:
         wp = self.params
         if apf.scale_to_scan and apf.lidar_points != wp.lidar_points:
-            wp = WangParams(wp.k_att, wp.k_rep_l, apf.lidar_points, wp.rho_0, wp.r_0)
-        return Plan(force=wang_force(pos, goal, view.points, wp))
+            wp = dataclasses.replace(wp, lidar_points=apf.lidar_points)
+        at = control_point(pos, yaw, goal, wp)
+        return Plan(force=wang_force(at, goal, view.points, wp))
