@@ -8,7 +8,7 @@ import pytest
 from nodes.planner.apf import APFParams, Repulsors, apf_force
 from nodes.planner.core import scan_view
 from nodes.planner.kernels import HAVE_NUMBA, rollout, tail_stagnation
-from nodes.planner.papf import PAPFParams, PAPFStrategy, predict, temporary_goal
+from nodes.planner.papf import PAPFParams, PAPFStrategy, predict, quark_force, temporary_goal
 from nodes.planner.registry import make_planner
 from nodes.planner.toysim import ToyWorld, box_segments, cast_scan, simulate
 from schemas.messages import Goal, Odometry
@@ -17,6 +17,8 @@ APF = APFParams()
 PP = PAPFParams()
 WALL = np.column_stack([np.full(101, 1.0), np.linspace(-1.0, 1.0, 101)])  # across the path at x = 1
 NO_POINTS = np.zeros((0, 2))
+RING_ANGLES = np.linspace(0.05, 2 * math.pi - 0.05, 300)
+RING = 0.6 * np.column_stack([np.cos(RING_ANGLES), np.sin(RING_ANGLES)])  # closed, 8 cm gap ahead
 
 
 def test_table1_derived_values():
@@ -57,14 +59,46 @@ def test_head_on_wall_places_a_top_quark_at_the_stagnation_point():
     assert 1.0 - APF.d_o - 0.03 <= q0[0] <= 1.0 - APF.d_o + 0.03 and abs(q0[1]) < 1e-9
     assert len(p.abandoned) == len(p.quarks) >= 1 and p.resolved
     assert all(a.shape == (34, 2) for a in p.abandoned)
-    assert abs(p.path[-1, 1]) > 0.3                            # the kept path leaves sideways
+    # the kept path no longer stagnates and keeps off the quark (here, by symmetry, straight back)
+    assert np.min(np.hypot(*(p.path - q0).T)) > 0.4
 
 
-def test_after_m_quarks_the_last_path_is_kept_unresolved():
-    angles = np.linspace(0.05, 2 * math.pi - 0.05, 300)       # closed ring, 8 cm gap ahead
-    ring = 0.6 * np.column_stack([np.cos(angles), np.sin(angles)])
-    p = predict(np.zeros(2), np.array([3.0, 0.0]), ring, APF, PP)
+def test_quark_range_d_q_decides_whether_quarks_chain_back_to_the_robot():
+    # Goal 8 m away: pull 5 / 7.5^2 = 0.089 at the stall. With d_q = 1 m the quark's force
+    # steps by k_VQ / d_q^2 = 0.167 at its range boundary: the next prediction stalls there,
+    # d_q before the first quark, and so on (a chain towards the robot). With d_q = 2 m the
+    # step is 0.042 < 0.089 and one quark suffices.
+    chain = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PAPFParams(d_q=1.0))
+    assert len(chain.quarks) >= 2
+    np.testing.assert_allclose(chain.quarks[1], chain.quarks[0] - [1.0 - 0.01, 0.0], atol=0.03)
+    single = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
+    assert len(single.quarks) == 1 and single.resolved
+
+
+def test_after_m_repetitions_the_prediction_is_unresolved():
+    p = predict(np.zeros(2), np.array([3.0, 0.0]), RING, APF, PP)
     assert not p.resolved and len(p.quarks) == PP.max_quarks and len(p.abandoned) == PP.max_quarks
+
+
+def test_at_most_m_quarks_in_use_a_new_one_replaces_the_oldest():
+    old = np.column_stack([np.arange(10.0), np.full(10, 50.0)])  # far beyond d_q: no effect
+    p = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP, quarks=old)
+    assert len(p.quarks) == PP.max_quarks and p.resolved and len(p.abandoned) == 1
+    np.testing.assert_array_equal(p.quarks[:-1], old[1:])       # oldest dropped, order kept
+    assert 1.0 - APF.d_o - 0.03 <= p.quarks[-1][0] <= 1.0 - APF.d_o + 0.03
+
+
+def test_quark_force_is_eq7_outside_the_ball_and_linear_inside():
+    k = PP.k_vq_factor * APF.k_vo                              # |F| = k / r^2 outside
+    q = np.array([[1.0, 0.0]])
+    expected = apf_force(np.zeros(2), None, NO_POINTS, APF,
+                         extra=(Repulsors(q, PP.k_vq_factor * APF.k_vo, PP.d_q, PP.q_q),))
+    np.testing.assert_allclose(quark_force(np.zeros(2), q, APF, PP), expected, rtol=1e-12)
+    np.testing.assert_allclose(quark_force(np.zeros(2), q, APF, PP), [-k, 0.0], rtol=1e-12)
+    inside = quark_force(np.zeros(2), np.array([[0.1, 0.0]]), APF, PP)
+    np.testing.assert_allclose(inside, [-k * 0.1 / PP.quark_ball_m ** 3, 0.0], rtol=1e-12)
+    assert not quark_force(np.zeros(2), np.array([[0.0, 0.0]]), APF, PP).any()   # centre: 0
+    assert not quark_force(np.zeros(2), np.array([[PP.d_q + 0.01, 0.0]]), APF, PP).any()
 
 
 def test_temporary_goal_eq8_hand_computed():
@@ -93,7 +127,19 @@ def test_motion_force_is_eq7_with_the_temporary_goal():
     assert len(plan.predicted_path) == 34 and len(plan.temporary_goal) == 2
 
 
-def test_quarks_persist_while_in_reach_and_reset_on_new_goal():
+def test_unresolved_cycle_drives_by_eq7_with_the_global_goal():
+    view = scan_view(cast_scan(ToyWorld(circles=()), 0.0, 0.0, 0.0),
+                     Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    view = type(view)(view.origin, view.angles, view.ranges, RING, view.valid)
+    strat, goal = PAPFStrategy(), np.array([3.0, 0.0])
+    plan = strat.plan(np.zeros(2), 0.0, goal, view, APF)
+    assert plan.mode == "unresolved" and plan.temporary_goal == (3.0, 0.0)
+    expected = apf_force(np.zeros(2), goal, RING, APF) + quark_force(np.zeros(2), plan.top_quarks,
+                                                                      APF, PP)
+    np.testing.assert_allclose(plan.force, expected, rtol=1e-12)
+
+
+def test_quarks_persist_and_reset_on_new_goal():
     strat = PAPFStrategy()
     view = scan_view(cast_scan(ToyWorld(segments=((1.0, -1.0, 1.0, 1.0),)), 0.0, 0.0, 0.0),
                      Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))

@@ -51,6 +51,8 @@ class APFParams:
     scale_to_scan: bool = True      # use L = beams in the actual scan (ours; 300 in the paper)
     stagnation_window_s: float = 20.0   # [s] of scan time without progress -> stagnated (ours)
     stagnation_progress_m: float = 0.1  # [m] progress that resets the window (ours)
+    stagnation_roam_m: float = 0.5      # [m] moving this far from where the window began restarts it (ours)
+    stagnation_max_s: float = 120.0     # [s] no progress towards the goal for this long -> stagnated (ours)
 
     @property
     def k_vo(self) -> float:

@@ -102,6 +102,8 @@ class Planner:
         self.reason = ""
         self._best = math.inf           # best distance to goal at the last progress [m]
         self._best_ns = 0               # scan time of the last progress [ns]
+        self._win_ns = 0                # scan time the current window began [ns]
+        self._anchor = None             # robot position where the current window began [m]
         self._apf_for_l: dict[int, APFParams] = {}
 
     # -- goal ---------------------------------------------------------------
@@ -113,6 +115,7 @@ class Planner:
             self.goal = goal
             self.state, self.reason = "ready", ""
             self._best, self._best_ns = math.inf, 0
+            self._win_ns, self._anchor = 0, None
             self.strategy.reset()
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
@@ -133,7 +136,7 @@ class Planner:
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
-        why = plan.stagnated or self._watch(t, dist, apf)
+        why = plan.stagnated or self._watch(t, dist, apf, pos)
         if why:
             return self._stop(t, "stagnated", why, dist, t0, plan, view)
         theta_ref = heading_ref(plan.force)
@@ -153,14 +156,23 @@ class Planner:
             self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
         return self._apf_for_l[beams]
 
-    def _watch(self, t: int, dist: float, apf: APFParams) -> str:
-        """Stagnation watch: no progress > stagnation_progress_m within stagnation_window_s."""
+    def _watch(self, t: int, dist: float, apf: APFParams, pos=None) -> str:
+        """Stagnation watch: no progress > stagnation_progress_m towards the goal and no move
+        of stagnation_roam_m away from where the window began, within stagnation_window_s; or no
+        progress towards the goal within stagnation_max_s."""
         if dist < self._best - apf.stagnation_progress_m or not math.isfinite(self._best):
             self._best, self._best_ns = dist, t
+            self._win_ns, self._anchor = t, pos
             return ""
-        if t - self._best_ns > apf.stagnation_window_s * NS_PER_S:
+        if pos is not None and self._anchor is not None and float(
+                np.hypot(*(pos - self._anchor))) > apf.stagnation_roam_m:
+            self._win_ns, self._anchor = t, pos
+        if t - self._win_ns > apf.stagnation_window_s * NS_PER_S:
             return (f"no progress > {apf.stagnation_progress_m} m towards the goal in "
                     f"{apf.stagnation_window_s} s (best {self._best:.3f} m)")
+        if t - self._best_ns > apf.stagnation_max_s * NS_PER_S:
+            return (f"no progress > {apf.stagnation_progress_m} m towards the goal in "
+                    f"{apf.stagnation_max_s} s (best {self._best:.3f} m)")
         return ""
 
     def _stop(self, t, state, reason, dist, t0, plan: Plan | None = None,

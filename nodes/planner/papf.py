@@ -7,17 +7,19 @@ One cycle (:meth:`PAPFStrategy.plan`):
    Delta`` more for the stagnation check (:func:`predict`).
 2. **Top quarks** (Sec. III-B): if all the extra ``lambda_stag`` points lie within ``R`` of
    their mean, the prediction stagnated: put a top quark (k_VQ = 5 k_VO, q_Q = -1, range
-   d_q) at that mean, keep the path as *abandoned* and predict again; at most ``M`` quarks.
+   d_q) at that mean, keep the path as *abandoned* and predict again; at most ``M``
+   repetitions per cycle and at most ``M`` quarks in use (0 <= M_curr <= M, eq. 7).
 3. **Temporary goal** (Sec. III-C, eq. 8): the predicted point farthest from the line
    through the robot along the classic APF force (eq. 2 at the robot).
 4. **Motion** (Sec. III-D): the eq. 7 force with the temporary goal in place of the global
-   one (obstacles + this cycle's quarks); the planner core turns it into (v, w) by eqs. 3, 5.
+   one (obstacles + quarks); the planner core turns it into (v, w) by eqs. 3, 5.
 
-Choices where the paper is silent (docs/planners.md): quarks persist in the world frame
-while they can reach the prediction; d_q = 1.0 m; the prediction stops at the goal (no
-stagnation check then); ties in eq. 8 go to the farthest point along the path; after M
-quarks the last (stagnating) path is used as is (mode ``unresolved``) and the planner's
-progress watch decides stagnation.
+Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda; quarks
+persist in the world frame, the oldest giving way when a new one needs a place beyond M;
+after M repetitions without a stagnation-free path the motion uses eq. 7 with the global
+goal (mode ``unresolved``); in the motion law a quark acts as a charged ball of radius
+lambda_stag (no singular push when the robot stands on it); the prediction stops at the
+goal; ties in eq. 8 go to the farthest point along the path.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.planner.apf import APFParams, Repulsors, apf_force
+from nodes.planner.apf import EPS_M, APFParams, apf_force
 from nodes.planner.core import Plan, ScanView
 from nodes.planner.kernels import rollout, tail_stagnation
 
@@ -43,10 +45,11 @@ class PAPFParams:
     k_vq_factor: float = 5.0        # k_VQ = 5 k_VO (Table 1)
     q_q: float = -1.0               # top quark charge (Table 1)
     max_quarks: int = 10            # M (Table 1)
-    d_q: float = 1.0                # [m] top-quark range (ours: = lambda; d_q = d_o fails, see docs)
+    d_q: float = 2.0                # [m] top-quark range (ours: 2 lambda, see docs)
+    quark_ball_m: float = 0.25      # [m] motion law: quark as a charged ball of this radius (ours: lambda_stag)
     tie_tol_m: float = 1e-3         # [m] eq. 8 ties: prefer the farther point along the path (ours)
     use_numba: bool = True          # numba kernel if installed (identical results to numpy)
-    persist_quarks: bool = True     # keep quarks (world frame) across cycles while in reach (ours)
+    persist_quarks: bool = True     # keep quarks (world frame) across cycles (ours)
 
     @property
     def i_max(self) -> int:
@@ -67,19 +70,24 @@ class PAPFParams:
 @dataclass
 class Prediction:
     path: np.ndarray                 # (n, D) predicted points from the robot, lambda part only
-    quarks: np.ndarray               # (Q, D) top quarks placed this cycle
+    quarks: np.ndarray               # (Q, D) top quarks in use after this cycle, oldest first
     abandoned: list                  # paths that stagnated
-    resolved: bool                   # False: still stagnating after M quarks
+    resolved: bool                   # False: still stagnating after M repetitions
     reached_goal: bool               # the prediction reached the goal
 
 
 def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -> Prediction:
-    """Algorithm 1 with the top-quark loop of Sec. III-B (``quarks``: already placed ones)."""
+    """Algorithm 1 with the top-quark loop of Sec. III-B (``quarks``: already placed ones).
+
+    At most ``M`` repetitions (new quarks) per call and at most ``M`` quarks in use: a new
+    quark beyond ``M`` replaces the oldest one.
+    """
     g_goal = apf.k_vg * apf.q_v * apf.q_g
     g_obs = apf.k_vo * apf.q_v * apf.q_o
     g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
-    d_q = pp.d_q
-    quarks = np.zeros((0, len(pos))) if quarks is None else np.asarray(quarks, float).reshape(-1, len(pos))
+    dims = len(pos)
+    quarks = np.zeros((0, dims)) if quarks is None else np.asarray(quarks, float).reshape(-1, dims)
+    quarks = quarks[max(0, quarks.shape[0] - pp.max_quarks):]
     # Points beyond (steps * Delta + d_o) can never be within d_o of a predicted point:
     # dropping them changes no result (their terms are skipped anyway), only the time.
     reach = (pp.i_max + pp.n_stag) * pp.step_m + apf.d_o + 1e-6
@@ -87,7 +95,7 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
     obstacles = obstacles[np.sum(rel * rel, axis=1) <= reach * reach]
     abandoned = []
     while True:
-        path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, d_q,
+        path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
                                 pp.step_m, pp.i_max + pp.n_stag, pp.step_m, pp.use_numba)
         if reached:
             return Prediction(path, quarks, abandoned, True, True)
@@ -95,10 +103,10 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
         stuck, mean = tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
         if not stuck:
             return Prediction(main, quarks, abandoned, True, False)
-        if quarks.shape[0] >= pp.max_quarks:
+        if len(abandoned) >= pp.max_quarks or pp.max_quarks <= 0:
             return Prediction(main, quarks, abandoned, False, False)
         abandoned.append(main)
-        quarks = np.vstack([quarks, mean])
+        quarks = np.vstack([quarks[max(0, quarks.shape[0] - pp.max_quarks + 1):], mean])
 
 
 def temporary_goal(pos, direction, path: np.ndarray, tie_tol: float) -> np.ndarray:
@@ -116,6 +124,25 @@ def temporary_goal(pos, direction, path: np.ndarray, tie_tol: float) -> np.ndarr
     dist = np.sqrt(np.sum(normal * normal, axis=1))
     best = np.flatnonzero(dist >= dist.max() - tie_tol)[-1]
     return pts[best]
+
+
+def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.ndarray:
+    """Eq. 7's top-quark term at ``pos`` with each quark a uniformly charged ball (motion law).
+
+    Outside ``quark_ball_m`` (and within d_q) this is eq. 7 exactly, ``-k_VQ q_V q_Q / |r|^2
+    r_hat``; inside, the push falls linearly to 0 at the centre (Gauss's law for a ball), so
+    a quark placed where the robot itself stagnated cannot produce an unbounded push.
+    """
+    pos = np.asarray(pos, dtype=float)
+    force = np.zeros_like(pos)
+    if len(quarks) == 0:
+        return force
+    r = np.asarray(quarks, dtype=float) - pos
+    dist = np.sqrt(np.sum(r * r, axis=1))
+    keep = (dist > EPS_M) & (dist <= pp.d_q)
+    soft = np.maximum(dist[keep], pp.quark_ball_m)
+    gain = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
+    return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
 
 
 class PAPFStrategy:
@@ -139,20 +166,17 @@ class PAPFStrategy:
              apf: APFParams) -> Plan:
         pp = self.params
         obstacles = view.points
-        kept = None
-        if pp.persist_quarks and self.quarks is not None and len(self.quarks):
-            reach = (1 + pp.stag_fraction) * pp.horizon_m + pp.d_q
-            kept = self.quarks[np.hypot(*(self.quarks - pos).T) <= reach]
+        kept = self.quarks if pp.persist_quarks else None
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
-        f_apf = apf_force(pos, goal, obstacles, apf)          # eq. 2: the direction line
-        direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
-        temp = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
-        quarks = Repulsors(pred.quarks, pp.k_vq_factor * apf.k_vo, pp.d_q, pp.q_q)
-        force = apf_force(pos, temp, obstacles, apf, extra=(quarks,))   # eq. 7, temporary goal
-        mode = "drive" if pred.resolved else "unresolved"
-        if pred.quarks.shape[0] and pred.resolved:
-            mode = "bypass"
-        return Plan(force=force, mode=mode, temporary_goal=tuple(temp[:2]),
+        if pred.resolved:
+            f_apf = apf_force(pos, goal, obstacles, apf)          # eq. 2: the direction line
+            direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
+            target = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
+            mode = "bypass" if pred.quarks.shape[0] else "drive"
+        else:   # no stagnation-free path after M repetitions: eq. 7 with the global goal
+            target, mode = goal, "unresolved"
+        force = apf_force(pos, target, obstacles, apf) + quark_force(pos, pred.quarks, apf, pp)
+        return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
                     top_quarks=pred.quarks)
