@@ -39,7 +39,7 @@ def test_open_world_reaches_goal_in_a_straight_line():
     assert res["world"] == "open" and res["planner"] == "apf" and res["seed"] == 1
     assert 4.85 <= res["path_length_m"] <= 5.3  # straight line 5 m, goal tolerance 0.1 m
     assert res["charge_mAh"] > 0 and res["energy_J"] > 0 and res["collisions"] == 0
-    assert 0 < res["duration_s"] <= res["sim_time_s"]
+    assert res["sim_time_s"] >= res["duration_s"] > 0  # sim-time figures, not wall time
     assert set(res) >= {"outcome", "planner", "world", "seed", "duration_s", "path_length_m",
                         "charge_mAh", "energy_J", "collisions", "sim_time_s", "wall_time_s"}
     assert_no_orphans(port)
