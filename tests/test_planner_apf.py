@@ -1,5 +1,6 @@
 """Classic APF core (PAPF paper eqs. 2-5) and the planner core around it."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -137,6 +138,19 @@ def test_stagnation_after_window_without_progress():
     assert states[20].state == "driving" and states[21].state == "stagnated"
     cmd, _, st = pl.step(scan([np.inf] * 8, t=26 * 10**8), odom(0.0, t=26 * 10**8))
     assert st.state == "stagnated" and cmd.v == cmd.w == 0.0 and "no progress" in st.reason
+
+
+def test_a_strategy_that_is_still_searching_restarts_the_window_up_to_the_hard_cap():
+    class Searching(APFStrategy):                # e.g. PAPF placing a new top quark every cycle
+        def plan(self, *args):
+            return dataclasses.replace(super().plan(*args), searching=True)
+
+    pl = Planner(Searching(), APFParams(stagnation_window_s=2.0, stagnation_max_s=4.0))
+    pl.set_goal(Goal(stamp_ns=0, x=5.0, y=0.0))
+    states = [pl.step(scan([np.inf] * 8, t=k * 10**8), odom(0.0, t=k * 10**8))[2].state
+              for k in range(45)]
+    assert states[30] == "driving"               # past the 2 s window: the search goes on
+    assert states[40] == "driving" and states[41] == "stagnated"   # 4 s cap without progress
 
 
 def test_params_file_and_set_overrides(tmp_path):

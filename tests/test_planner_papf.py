@@ -15,6 +15,7 @@ from schemas.messages import Goal, Odometry
 
 APF = APFParams()
 PP = PAPFParams()
+LITERAL = PAPFParams(pull_range_fraction=0.0)   # Algorithm 1 with the far goal's own 5 / r^2 pull
 WALL = np.column_stack([np.full(101, 1.0), np.linspace(-1.0, 1.0, 101)])  # across the path at x = 1
 NO_POINTS = np.zeros((0, 2))
 RING_ANGLES = np.linspace(0.05, 2 * math.pi - 0.05, 300)
@@ -53,9 +54,10 @@ def test_tail_stagnation_check():
 
 
 def test_head_on_wall_places_a_top_quark_at_the_stagnation_point():
-    p = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
+    p = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, LITERAL)
     q0 = p.quarks[0]
-    # the prediction stalls where the first wall point enters d_o (0.5 m before the wall)
+    # literal pull (0.089): the prediction stalls where the first wall point enters d_o
+    # (0.5 m before the wall)
     assert 1.0 - APF.d_o - 0.03 <= q0[0] <= 1.0 - APF.d_o + 0.03 and abs(q0[1]) < 1e-9
     assert len(p.abandoned) == len(p.quarks) >= 1 and p.resolved
     assert all(a.shape == (34, 2) for a in p.abandoned)
@@ -68,10 +70,11 @@ def test_quark_range_d_q_decides_whether_quarks_chain_back_to_the_robot():
     # steps by k_VQ / d_q^2 = 0.167 at its range boundary: the next prediction stalls there,
     # d_q before the first quark, and so on (a chain towards the robot). With d_q = 2 m the
     # step is 0.042 < 0.089 and one quark suffices.
-    chain = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PAPFParams(d_q=1.0))
+    chain = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF,
+                    PAPFParams(d_q=1.0, pull_range_fraction=0.0))
     assert len(chain.quarks) >= 2
     np.testing.assert_allclose(chain.quarks[1], chain.quarks[0] - [1.0 - 0.01, 0.0], atol=0.03)
-    single = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
+    single = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, LITERAL)
     assert len(single.quarks) == 1 and single.resolved
 
 
@@ -82,23 +85,55 @@ def test_after_m_repetitions_the_prediction_is_unresolved():
 
 def test_at_most_m_quarks_in_use_a_new_one_replaces_the_oldest():
     old = np.column_stack([np.arange(10.0), np.full(10, 50.0)])  # far beyond d_q: no effect
-    p = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP, quarks=old)
+    p = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, LITERAL, quarks=old)
     assert len(p.quarks) == PP.max_quarks and p.resolved and len(p.abandoned) == 1
     np.testing.assert_array_equal(p.quarks[:-1], old[1:])       # oldest dropped, order kept
     assert 1.0 - APF.d_o - 0.03 <= p.quarks[-1][0] <= 1.0 - APF.d_o + 0.03
 
 
+def test_pull_range_evaluates_a_far_goal_as_one_lambda_away():
+    # goal 8 m: literal pull 5 / 8^2; with the pull range the prediction is pulled as by a
+    # goal 1 m away in the same direction (5 / 1^2): the stall moves to where the wall's push
+    # reaches 5, i.e. closer to the wall, and only the balance changes (free space: same path)
+    lit = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, LITERAL)
+    near = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
+    assert lit.quarks[0][0] < near.quarks[0][0] < 1.0 - 0.2
+    f_wall = -APF.k_vo * APF.q_v * APF.q_o * np.sum(
+        (WALL - near.quarks[0]) / np.hypot(*(WALL - near.quarks[0]).T)[:, None] ** 3
+        * (np.hypot(*(WALL - near.quarks[0]).T) <= APF.d_o)[:, None], axis=0)
+    assert abs(f_wall[0]) == pytest.approx(APF.k_vg / PP.pull_range ** 2, rel=0.35)
+    for goal in ([3.0, 4.0], [0.6, 0.0]):                       # free space, far and near
+        a = predict(np.zeros(2), np.array(goal), NO_POINTS, APF, PP)
+        b = predict(np.zeros(2), np.array(goal), NO_POINTS, APF, LITERAL)
+        np.testing.assert_allclose(a.path, b.path, rtol=0, atol=1e-12)
+
+
+def test_pull_range_lets_the_prediction_through_a_narrow_gap():
+    # a barrier at x = 2 with a 0.5 m gap on the line to a goal 6 m away: the literal far-goal
+    # pull (0.14 at the gap) loses to the gap edges' push and the prediction stagnates there;
+    # pulled as by a goal lambda away (5) it passes
+    ys = np.linspace(-2.0, 2.0, 401)
+    barrier = np.column_stack([np.full(ys.size, 2.0), ys])[np.abs(ys) >= 0.25]
+    start, goal = np.array([1.2, 0.0]), np.array([6.0, 0.0])
+    lit = predict(start, goal, barrier, APF, LITERAL)
+    near = predict(start, goal, barrier, APF, PP)
+    assert lit.abandoned and np.max(lit.abandoned[0][:, 0]) < 2.0
+    assert near.abandoned == [] and near.path[-1, 0] > 2.1 and np.max(np.abs(near.path[:, 1])) < 0.05
+
+
 def test_quark_force_is_eq7_outside_the_ball_and_linear_inside():
     k = PP.k_vq_factor * APF.k_vo                              # |F| = k / r^2 outside
-    q = np.array([[1.0, 0.0]])
+    q = np.array([[0.45, 0.0]])
     expected = apf_force(np.zeros(2), None, NO_POINTS, APF,
-                         extra=(Repulsors(q, PP.k_vq_factor * APF.k_vo, PP.d_q, PP.q_q),))
+                         extra=(Repulsors(q, PP.k_vq_factor * APF.k_vo, APF.d_o, PP.q_q),))
     np.testing.assert_allclose(quark_force(np.zeros(2), q, APF, PP), expected, rtol=1e-12)
-    np.testing.assert_allclose(quark_force(np.zeros(2), q, APF, PP), [-k, 0.0], rtol=1e-12)
+    np.testing.assert_allclose(quark_force(np.zeros(2), q, APF, PP), [-k / 0.45 ** 2, 0.0],
+                               rtol=1e-12)
     inside = quark_force(np.zeros(2), np.array([[0.1, 0.0]]), APF, PP)
     np.testing.assert_allclose(inside, [-k * 0.1 / PP.quark_ball_m ** 3, 0.0], rtol=1e-12)
     assert not quark_force(np.zeros(2), np.array([[0.0, 0.0]]), APF, PP).any()   # centre: 0
-    assert not quark_force(np.zeros(2), np.array([[PP.d_q + 0.01, 0.0]]), APF, PP).any()
+    # the motion law feels a quark within d_o only (eq. 7's where-clause; the prediction: d_q)
+    assert not quark_force(np.zeros(2), np.array([[APF.d_o + 0.01, 0.0]]), APF, PP).any()
 
 
 def test_temporary_goal_eq8_hand_computed():
@@ -121,7 +156,7 @@ def test_motion_force_is_eq7_with_the_temporary_goal():
     view = scan_view(s, Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     strat = PAPFStrategy()
     plan = strat.plan(np.zeros(2), 0.0, np.array([6.0, 0.0]), view, APF)
-    quarks = Repulsors(np.asarray(plan.top_quarks).reshape(-1, 2), 5 * APF.k_vo, PP.d_q)
+    quarks = Repulsors(np.asarray(plan.top_quarks).reshape(-1, 2), 5 * APF.k_vo, APF.d_o)
     expected = apf_force(np.zeros(2), plan.temporary_goal, view.points, APF, extra=(quarks,))
     np.testing.assert_allclose(plan.force, expected, rtol=1e-12)
     assert len(plan.predicted_path) == 34 and len(plan.temporary_goal) == 2
@@ -161,8 +196,10 @@ def test_numba_and_numpy_kernels_are_bit_identical():
             quarks = rng.uniform(-1.0, 2.0, (int(rng.integers(0, 5)), dims))
             goal = rng.uniform(2.0, 6.0, dims)
             args = (np.zeros(dims), goal, -5.0, obs, 10 / 300, 0.5, quarks, 50 / 300, 1.0, 0.03, 41, 0.03)
-            a, b = rollout(*args, use_numba=True), rollout(*args, use_numba=False)
-            assert a[1] == b[1] and np.array_equal(a[0], b[0])
+            for goal_range in (math.inf, 1.0):
+                a = rollout(*args, use_numba=True, goal_range=goal_range)
+                b = rollout(*args, use_numba=False, goal_range=goal_range)
+                assert a[1] == b[1] and np.array_equal(a[0], b[0])
     fast = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
     slow = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PAPFParams(use_numba=False))
     assert np.array_equal(fast.path, slow.path) and np.array_equal(fast.quarks, slow.quarks)

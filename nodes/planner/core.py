@@ -68,6 +68,7 @@ class Plan:
     virtual_walls: list = field(default_factory=list)
     virtual_obstacles: np.ndarray | tuple = ()
     stagnated: str = ""     # non-empty: the strategy declares stagnation, with this reason
+    searching: bool = False  # the strategy found something new this cycle (e.g. placed a top quark)
 
 
 class Strategy(Protocol):
@@ -136,7 +137,7 @@ class Planner:
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
-        why = plan.stagnated or self._watch(t, dist, apf, pos)
+        why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
         if why:
             return self._stop(t, "stagnated", why, dist, t0, plan, view)
         theta_ref = heading_ref(plan.force)
@@ -156,7 +157,7 @@ class Planner:
             self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
         return self._apf_for_l[beams]
 
-    def _watch(self, t: int, dist: float, apf: APFParams, pos=None) -> str:
+    def _watch(self, t: int, dist: float, apf: APFParams, pos=None, searching: bool = False) -> str:
         """Stagnation watch: no progress > stagnation_progress_m towards the goal and no move
         of stagnation_roam_m away from where the window began, within stagnation_window_s; or no
         progress towards the goal within stagnation_max_s."""
@@ -164,8 +165,8 @@ class Planner:
             self._best, self._best_ns = dist, t
             self._win_ns, self._anchor = t, pos
             return ""
-        if pos is not None and self._anchor is not None and float(
-                np.hypot(*(pos - self._anchor))) > apf.stagnation_roam_m:
+        if searching or (pos is not None and self._anchor is not None and float(
+                np.hypot(*(pos - self._anchor))) > apf.stagnation_roam_m):
             self._win_ns, self._anchor = t, pos
         if t - self._win_ns > apf.stagnation_window_s * NS_PER_S:
             return (f"no progress > {apf.stagnation_progress_m} m towards the goal in "

@@ -26,9 +26,23 @@ except ImportError:  # numba is optional (pyproject extra "fast")
 HAVE_NUMBA = numba is not None
 
 
-def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q):
+def _carrot(pos, goal, goal_range):
+    """``goal``, or the point ``goal_range`` from ``pos`` towards it when the goal is farther."""
+    d2 = 0.0
+    for j in range(pos.shape[0]):
+        d2 += (goal[j] - pos[j]) * (goal[j] - pos[j])
+    dist = math.sqrt(d2)
+    if dist <= goal_range:
+        return goal
+    c = np.empty_like(pos)
+    for j in range(pos.shape[0]):
+        c[j] = pos[j] + (goal[j] - pos[j]) * (goal_range / dist)
+    return c
+
+
+def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range):
     f = np.zeros_like(pos)
-    f = f - g_goal * coulomb_sum(pos, goal[None, :])
+    f = f - g_goal * coulomb_sum(pos, _carrot(pos, goal, goal_range)[None, :])
     f = f - g_obs * coulomb_sum(pos, obstacles, d_o)
     if quarks.shape[0]:
         f = f - g_q * coulomb_sum(pos, quarks, d_q)
@@ -36,14 +50,14 @@ def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q):
 
 
 def rollout_numpy(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, n_steps,
-                  stop_radius):
+                  stop_radius, goal_range):
     """Numpy reference of :func:`rollout` (same arguments and result)."""
     dims = start.shape[0]
     path = np.empty((n_steps + 1, dims))
     path[0] = start
     for i in range(1, n_steps + 1):
         prev = path[i - 1]
-        f = _force_numpy(prev, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q)
+        f = _force_numpy(prev, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range)
         n2 = 0.0
         for j in range(dims):
             n2 += f[j] * f[j]
@@ -82,15 +96,24 @@ if HAVE_NUMBA:
 
     @numba.njit(cache=True)
     def _rollout_numba(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step,
-                       n_steps, stop_radius):  # pragma: no cover - compiled
+                       n_steps, stop_radius, goal_range):  # pragma: no cover - compiled
         dims = start.shape[0]
         path = np.empty((n_steps + 1, dims))
         path[0] = start
-        goal2 = goal.reshape(1, dims)
+        goal2 = np.empty((1, dims))
         f = np.empty(dims)
         for i in range(1, n_steps + 1):
             prev = path[i - 1]
             f[:] = 0.0
+            gd2 = 0.0
+            for j in range(dims):
+                gd2 += (goal[j] - prev[j]) * (goal[j] - prev[j])
+            gdist = math.sqrt(gd2)
+            for j in range(dims):
+                if gdist <= goal_range:
+                    goal2[0, j] = goal[j]
+                else:
+                    goal2[0, j] = prev[j] + (goal[j] - prev[j]) * (goal_range / gdist)
             _coulomb_acc(prev, goal2, np.inf, g_goal, f)
             _coulomb_acc(prev, obstacles, d_o, g_obs, f)
             if quarks.shape[0]:
@@ -145,11 +168,12 @@ def tail_stagnation(path: np.ndarray, first: int, radius: float,
 
 def rollout(start, goal, g_goal: float, obstacles, g_obs: float, d_o: float, quarks,
             g_q: float, d_q: float, step: float, n_steps: int, stop_radius: float,
-            use_numba: bool = True) -> tuple[np.ndarray, bool]:
+            use_numba: bool = True, goal_range: float = math.inf) -> tuple[np.ndarray, bool]:
     """Algorithm 1: ``path[0] = start``, ``path[i] = path[i-1] + step * F/|F|`` for ``n_steps``.
 
     ``F = -g_goal S(goal) - g_obs S(obstacles within d_o) - g_q S(quarks within d_q)`` with
-    ``S`` = :func:`coulomb_sum` (gains are ``k q_V q_X``). Stops early, returning
+    ``S`` = :func:`coulomb_sum` (gains are ``k q_V q_X``). A goal farther than ``goal_range``
+    pulls as one ``goal_range`` away in its direction (the PAPF prediction's pull range). Stops early, returning
     ``(path[:i+1], True)``, once a point is within ``stop_radius`` of the goal. Zero force:
     the point stays (a stagnation the caller detects).
     """
@@ -157,7 +181,7 @@ def rollout(start, goal, g_goal: float, obstacles, g_obs: float, d_o: float, qua
             float(g_goal), np.ascontiguousarray(obstacles, dtype=float).reshape(-1, len(start)),
             float(g_obs), float(d_o),
             np.ascontiguousarray(quarks, dtype=float).reshape(-1, len(start)), float(g_q),
-            float(d_q), float(step), int(n_steps), float(stop_radius))
+            float(d_q), float(step), int(n_steps), float(stop_radius), float(goal_range))
     if use_numba and HAVE_NUMBA:
         return _rollout_numba(*args)
     return rollout_numpy(*args)

@@ -4,7 +4,11 @@ One cycle (:meth:`PAPFStrategy.plan`):
 
 1. **Prediction** (Algorithm 1): from the robot, step ``Delta`` along the eq. 7 force
    towards the *global* goal for ``i_max = lambda / Delta`` steps, plus ``lambda_stag /
-   Delta`` more for the stagnation check (:func:`predict`).
+   Delta`` more for the stagnation check (:func:`predict`). The goal's pull is evaluated
+   as if the goal were at most lambda away (``pull_range_fraction``): the robot itself is
+   driven by a temporary goal <= lambda away (step 4), and the prediction is to foresee
+   that motion — a far goal's literal 5/r^2 pull (0.05-0.3) makes it stall in front of
+   every gap the robot could pass (docs/planners.md).
 2. **Top quarks** (Sec. III-B): if all the extra ``lambda_stag`` points lie within ``R`` of
    their mean, the prediction stagnated: put a top quark (k_VQ = 5 k_VO, q_Q = -1, range
    d_q) at that mean, keep the path as *abandoned* and predict again; at most ``M``
@@ -18,8 +22,9 @@ Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda; qu
 persist in the world frame, the oldest giving way when a new one needs a place beyond M;
 after M repetitions without a stagnation-free path the motion uses eq. 7 with the global
 goal (mode ``unresolved``); in the motion law a quark acts as a charged ball of radius
-lambda_stag (no singular push when the robot stands on it); the prediction stops at the
-goal; ties in eq. 8 go to the farthest point along the path.
+lambda_stag (no singular push when the robot stands on it) acting within d_o (eq. 7's
+where-clause); the prediction stops at the goal; ties in eq. 8 go to the farthest point
+along the path; a cycle that places a quark tells the stagnation watch the search goes on.
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ class PAPFParams:
     tie_tol_m: float = 1e-3         # [m] eq. 8 ties: prefer the farther point along the path (ours)
     use_numba: bool = True          # numba kernel if installed (identical results to numpy)
     persist_quarks: bool = True     # keep quarks (world frame) across cycles (ours)
+    pull_range_fraction: float = 1.0  # prediction: goal pull as if the goal were <= this * lambda away (ours; 0: literal)
 
     @property
     def i_max(self) -> int:
@@ -60,6 +66,11 @@ class PAPFParams:
     def n_stag(self) -> int:
         """Extra steps for lambda_stag (8 for 0.25 / 0.03)."""
         return int(math.floor(self.stag_fraction * self.horizon_m / self.step_m + 1e-9))
+
+    @property
+    def pull_range(self) -> float:
+        """[m] Range the prediction's goal pull is evaluated at most at (inf: Algorithm 1 literally)."""
+        return self.pull_range_fraction * self.horizon_m if self.pull_range_fraction > 0 else math.inf
 
     @property
     def stag_radius(self) -> float:
@@ -96,7 +107,8 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
     abandoned = []
     while True:
         path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
-                                pp.step_m, pp.i_max + pp.n_stag, pp.step_m, pp.use_numba)
+                                pp.step_m, pp.i_max + pp.n_stag, pp.step_m, pp.use_numba,
+                                pp.pull_range)
         if reached:
             return Prediction(path, quarks, abandoned, True, True)
         main = path[: pp.i_max + 1]
@@ -129,7 +141,9 @@ def temporary_goal(pos, direction, path: np.ndarray, tie_tol: float) -> np.ndarr
 def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.ndarray:
     """Eq. 7's top-quark term at ``pos`` with each quark a uniformly charged ball (motion law).
 
-    Outside ``quark_ball_m`` (and within d_q) this is eq. 7 exactly, ``-k_VQ q_V q_Q / |r|^2
+    Quarks act within d_o here (the range eq. 7's where-clause names; the prediction uses
+    d_q): a quark a metre behind the robot must not shove it into the obstacles beside it.
+    Outside ``quark_ball_m`` (and within d_o) this is eq. 7 exactly, ``-k_VQ q_V q_Q / |r|^2
     r_hat``; inside, the push falls linearly to 0 at the centre (Gauss's law for a ball), so
     a quark placed where the robot itself stagnated cannot produce an unbounded push.
     """
@@ -139,7 +153,7 @@ def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.n
         return force
     r = np.asarray(quarks, dtype=float) - pos
     dist = np.sqrt(np.sum(r * r, axis=1))
-    keep = (dist > EPS_M) & (dist <= pp.d_q)
+    keep = (dist > EPS_M) & (dist <= apf.d_o)
     soft = np.maximum(dist[keep], pp.quark_ball_m)
     gain = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
     return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
@@ -179,4 +193,4 @@ class PAPFStrategy:
         force = apf_force(pos, target, obstacles, apf) + quark_force(pos, pred.quarks, apf, pp)
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
-                    top_quarks=pred.quarks)
+                    top_quarks=pred.quarks, searching=bool(pred.abandoned))
