@@ -26,23 +26,23 @@ except ImportError:  # numba is optional (pyproject extra "fast")
 HAVE_NUMBA = numba is not None
 
 
-def _carrot(pos, goal, goal_range):
-    """``goal``, or the point ``goal_range`` from ``pos`` towards it when the goal is farther."""
+def _carrot(pos, goal, goal_range, out):
+    """``out`` = ``goal``, or the point ``goal_range`` from ``pos`` towards it when farther."""
     d2 = 0.0
     for j in range(pos.shape[0]):
         d2 += (goal[j] - pos[j]) * (goal[j] - pos[j])
     dist = math.sqrt(d2)
-    if dist <= goal_range:
-        return goal
-    c = np.empty_like(pos)
     for j in range(pos.shape[0]):
-        c[j] = pos[j] + (goal[j] - pos[j]) * (goal_range / dist)
-    return c
+        out[j] = goal[j] if dist <= goal_range else pos[j] + (goal[j] - pos[j]) * (goal_range / dist)
+    return out
+
+
+_carrot_jit = numba.njit(cache=True)(_carrot) if HAVE_NUMBA else None
 
 
 def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range):
     f = np.zeros_like(pos)
-    f = f - g_goal * coulomb_sum(pos, _carrot(pos, goal, goal_range)[None, :])
+    f = f - g_goal * coulomb_sum(pos, _carrot(pos, goal, goal_range, np.empty_like(pos))[None, :])
     f = f - g_obs * coulomb_sum(pos, obstacles, d_o)
     if quarks.shape[0]:
         f = f - g_q * coulomb_sum(pos, quarks, d_q)
@@ -105,15 +105,7 @@ if HAVE_NUMBA:
         for i in range(1, n_steps + 1):
             prev = path[i - 1]
             f[:] = 0.0
-            gd2 = 0.0
-            for j in range(dims):
-                gd2 += (goal[j] - prev[j]) * (goal[j] - prev[j])
-            gdist = math.sqrt(gd2)
-            for j in range(dims):
-                if gdist <= goal_range:
-                    goal2[0, j] = goal[j]
-                else:
-                    goal2[0, j] = prev[j] + (goal[j] - prev[j]) * (goal_range / gdist)
+            _carrot_jit(prev, goal, goal_range, goal2[0])
             _coulomb_acc(prev, goal2, np.inf, g_goal, f)
             _coulomb_acc(prev, obstacles, d_o, g_obs, f)
             if quarks.shape[0]:
