@@ -66,7 +66,7 @@ def probe(endpoint: str, probes: int, out: str) -> int:
     """Laptop side: step commands, log each step's put time (monotonic ns)."""
     import zenoh
 
-    from papf.transport import wait_alive, zenoh_config
+    from common.transport import wait_alive, zenoh_config
     from schemas import Keys, Twist
 
     keys = Keys(NS)

@@ -29,9 +29,9 @@ from pathlib import Path
 
 import zenoh
 
+from common.transport import wait_alive, zenoh_config
 from papf.recording import open_recording
 from papf.supervisor import free_port, wait_port
-from papf.transport import wait_alive, zenoh_config
 from schemas import Keys, Twist
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,7 +40,7 @@ SETTLE_S = 1.0  # [s] after the last put before stopping the recorder
 # The no-op subscriber of --baseline: argv = endpoint, namespace, file to write the count to.
 BASELINE = """
 import signal, sys, threading, zenoh
-from papf.transport import zenoh_config
+from common.transport import zenoh_config
 stop = threading.Event()
 signal.signal(signal.SIGTERM, lambda *_: stop.set())
 endpoint, ns, out = sys.argv[1:4]

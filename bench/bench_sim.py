@@ -22,8 +22,8 @@ sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
+from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.supervisor import Supervisor, free_port, wait_port  # noqa: E402
-from papf.transport import wait_alive, zenoh_config  # noqa: E402
 from schemas import Keys  # noqa: E402
 from schemas.messages import Clock, Event, Scan, Twist  # noqa: E402
 

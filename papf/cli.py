@@ -8,7 +8,7 @@ import logging
 import signal
 import sys
 
-from papf.errors import PapfError
+from common.errors import PapfError
 
 log = logging.getLogger("papf")
 

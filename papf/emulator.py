@@ -32,10 +32,10 @@ import math
 import queue
 import time
 
+from common import ros2
+from common.errors import SchemaError
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
-from papf import ros2
-from papf.errors import SchemaError
 
 NAME = "rosbot_emulator"
 BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
@@ -89,7 +89,7 @@ def _lidar(args):
 
 
 def run(args: argparse.Namespace) -> int:
-    from papf.transport import open_node, setup_logging
+    from common.transport import open_node, setup_logging
     from worlds import load_world
 
     log = setup_logging("emulator", args.log_level)

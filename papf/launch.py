@@ -20,11 +20,11 @@ from pathlib import Path
 
 import zenoh
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
+from common.transport import StopRequested, wait_alive, zenoh_config
 from papf.monitor import RunMonitor, RunResult
 from papf.run_sequence import STALL_S, RunSequence
 from papf.supervisor import Supervisor, wait_port
-from papf.transport import StopRequested, wait_alive, zenoh_config
 from schemas import Keys
 from schemas.keys import TOPICS
 from worlds import load_world, world_path

@@ -10,9 +10,9 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+from common.units import NS_PER_S as NS
 from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist
 
-NS = 1_000_000_000
 MOVING_SPEED = 0.01  # [m/s] |v| above which the robot counts as moving (duration_s starts)
 
 OUTCOMES = ("reached", "stagnated", "collision", "timeout", "failed")

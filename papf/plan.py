@@ -30,17 +30,17 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from common.errors import ConfigError
+from common.units import NS_PER_S as NS
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.registry import make_planner
-from papf.errors import ConfigError
 from papf.monitor import MOVING_SPEED
 from schemas.messages import Goal, Odometry
 from worlds import World, load_world
 from worlds.bullet import build_world
 
-NS = 1_000_000_000
 SUBSTEP_S = 0.02          # [s] integration and collision-check step (driver odometry period)
 CLEARANCE_CAP_M = 1.0     # [m] clearances above this are not resolved (reported as the cap)
 DEFAULT_MAX_TIME_S = 300.0  # [s] sim-time limit, as `papf run --timeout`

@@ -25,9 +25,9 @@ import math
 
 import numpy as np
 
+from common.errors import ConfigError
 from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
-from papf.errors import ConfigError
 from worlds import World
 
 RAYS = 4000               # [-] rays of the 3-D range sensor (~3.2 deg apart; ours)

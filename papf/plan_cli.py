@@ -29,8 +29,8 @@ def experiment_parser(subparsers):
 
 
 def _planner_list(text: str) -> list[str]:
+    from common.errors import ConfigError
     from nodes.planner.registry import PLANNERS
-    from papf.errors import ConfigError
 
     names = [p.strip() for p in text.split(",") if p.strip()]
     bad = [p for p in names if p not in PLANNERS]
@@ -121,7 +121,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 
 def cmd_paper_tests(args: argparse.Namespace) -> int:
-    from papf.errors import ConfigError
+    from common.errors import ConfigError
     from papf.experiments.paper_tests import PAPER_WORLDS, run_paper_tests
 
     worlds = PAPER_WORLDS

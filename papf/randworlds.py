@@ -26,7 +26,7 @@ from collections import deque
 
 import numpy as np
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
 from worlds import World, parse_world
 
 KINDS = ("field", "dead_end", "gap")

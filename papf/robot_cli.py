@@ -33,7 +33,7 @@ def register(sub) -> None:
 
 def add_emulator_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of `papf rosbot-emulator` (here, so that building the CLI imports no rosbags)."""
-    from papf.transport import add_zenoh_args
+    from common.transport import add_zenoh_args
 
     parser.add_argument("--bridge-namespace", default="", metavar="NS",
                         help="bridge namespace of the emulated topics (default: none)")
@@ -127,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="papf")
     register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
-    from papf.errors import PapfError
+    from common.errors import PapfError
 
     try:
         return args.func(args)

@@ -10,7 +10,7 @@ import argparse
 
 import zenoh
 
-from papf.transport import DEFAULT_ENDPOINT, StopRequested, setup_logging, zenoh_config
+from common.transport import DEFAULT_ENDPOINT, StopRequested, setup_logging, zenoh_config
 
 
 def main(listen: list[str], config_file: str | None = None) -> None:

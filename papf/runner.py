@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 
 import zenoh
 
+from common.transport import wait_alive, zenoh_config
 from papf.monitor import RunMonitor, RunResult
 from papf.progress import RunProgress
 from papf.run_sequence import RunSequence
 from papf.supervisor import Supervisor, free_port, port_in_use, wait_port
-from papf.transport import wait_alive, zenoh_config
 from schemas import Keys
 from worlds import World, load_world, world_path
 

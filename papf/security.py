@@ -32,8 +32,8 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
+from common.errors import ConfigError
 from nodes.base_driver.rosbot import BridgeTopics
-from papf.errors import ConfigError
 
 LOCAL_PORT = 7447   # [-] TCP on the robot's loopback (robot nodes, the bridge)
 TLS_PORT = 7448     # [-] TLS on the robot's network interfaces (the laptop)

@@ -1,6 +1,6 @@
 """Message definitions shared by every node (DESIGN.md §3). Import from here."""
 
-from papf.errors import SchemaError
+from common.errors import SchemaError
 from schemas.base import Message
 from schemas.keys import Keys
 from schemas.messages import *  # noqa: F403

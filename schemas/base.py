@@ -31,7 +31,7 @@ from typing import Any, ClassVar, get_type_hints
 import msgpack
 import numpy as np
 
-from papf.errors import SchemaError
+from common.errors import SchemaError
 
 Floats = tuple[float, ...]
 Points = tuple[tuple[float, float], ...]

@@ -8,8 +8,8 @@ import sys
 import pytest
 import zenoh
 
+from common.transport import zenoh_config
 from papf.supervisor import Supervisor, free_port, wait_port
-from papf.transport import zenoh_config
 
 
 @pytest.fixture

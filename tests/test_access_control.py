@@ -10,10 +10,10 @@ import time
 import pytest
 import zenoh
 
+from common.transport import wait_alive, zenoh_config
 from nodes.base_driver.rosbot import BridgeTopics, cdr_to_robot_odom, twist_to_cdr
 from papf.security import ROLES, access_control, write_bundle
 from papf.supervisor import free_port, wait_port
-from papf.transport import wait_alive, zenoh_config
 from schemas import Keys, Twist
 
 NS, BRIDGE = "t5sec", "bot"

@@ -6,10 +6,10 @@ import math
 
 import pytest
 
+from common.errors import ConfigError
 from nodes.base_driver.core import CollisionMonitor, DriverConfig, DriverCore, period_ns
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimBase, SimParams
-from papf.errors import ConfigError
 from schemas.messages import WHEEL_NAMES, Clock, Event, Odometry, Twist, WheelStates
 from worlds import load_world, parse_world
 

@@ -11,9 +11,9 @@ import pytest
 import zenoh
 from mcap.reader import make_reader
 
+from common.transport import wait_alive, zenoh_config
 from papf.recording.replay import replay
 from papf.supervisor import free_port, wait_port
-from papf.transport import wait_alive, zenoh_config
 from schemas import BatteryState, Keys
 from tests.e2e import papf_run
 

@@ -10,8 +10,8 @@ import time
 import pytest
 import zenoh
 
+from common.transport import zenoh_config
 from papf.supervisor import free_port, wait_port
-from papf.transport import zenoh_config
 from schemas import Clock, Keys
 from tests.e2e import papf_run, pids_of, start_papf_run
 

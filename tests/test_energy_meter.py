@@ -10,6 +10,8 @@ import sys
 import numpy as np
 import pytest
 
+from common.errors import ConfigError
+from common.transport import wait_alive
 from nodes.energy_meter import models as M
 from nodes.energy_meter.battery import (
     CELL_OCV_SOC,
@@ -21,8 +23,6 @@ from nodes.energy_meter.battery import (
     solve_current,
 )
 from nodes.energy_meter.core import EnergyMeter
-from papf.errors import ConfigError
-from papf.transport import wait_alive
 from schemas import BatteryState, Keys, Odometry, Twist, WheelStates
 
 DT_NS = 20_000_000   # 50 Hz, as the sim driver publishes

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
 from papf.experiments.energy import EnergyExperiment, plan, run_experiment
 from papf.monitor import RunResult
 from papf.report import run_metrics

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
 from papf.launch import LaunchOptions, load_profile, local_endpoint, packaged_profiles, plan
 from papf.supervisor import free_port, wait_port
 

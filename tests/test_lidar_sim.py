@@ -8,9 +8,9 @@ import numpy as np
 import pybullet as p
 import pytest
 
+from common.errors import ConfigError
 from nodes.lidar_sim.__main__ import ScanSchedule
 from nodes.lidar_sim.core import LidarParams, LidarSim
-from papf.errors import ConfigError
 from schemas.messages import Scan
 from worlds import parse_world
 from worlds.bullet import add_ground, build_world

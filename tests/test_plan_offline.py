@@ -7,8 +7,8 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
+from common.errors import ConfigError
 from nodes.planner.registry import PLANNERS
-from papf.errors import ConfigError
 from papf.plan import FootprintChecker, plan, write_path
 from papf.plan3d import cast_points, fibonacci_directions
 from papf.plots import plot_paths

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from common.errors import ConfigError
 from nodes.planner.apf import (
     APFParams,
     Repulsors,
@@ -18,7 +19,6 @@ from nodes.planner.apf import (
 from nodes.planner.core import Planner, scan_view
 from nodes.planner.registry import APFStrategy, load_params, make_planner
 from nodes.planner.toysim import ToyWorld, simulate
-from papf.errors import ConfigError
 from schemas.messages import Goal, Odometry, Scan
 
 P = APFParams()

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from common.errors import ConfigError
 from nodes.planner.apf import APFParams, Repulsors, apf_force
 from nodes.planner.arapf import (
     ARAPFParams,
@@ -22,7 +23,6 @@ from nodes.planner.arapf import (
 from nodes.planner.core import scan_view
 from nodes.planner.registry import make_planner
 from nodes.planner.toysim import ToyWorld, box_segments, cast_scan, simulate
-from papf.errors import ConfigError
 from papf.plan import plan
 from schemas.messages import Odometry
 

@@ -7,9 +7,9 @@ import sys
 import numpy as np
 import pytest
 
+from common.transport import wait_alive
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner
-from papf.transport import wait_alive
 from schemas import Keys
 from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
 

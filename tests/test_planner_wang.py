@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from common.errors import ConfigError
 from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
 from nodes.planner.registry import load_params, make_planner
@@ -20,7 +21,6 @@ from nodes.planner.wang import (
     lambda_obs,
     wang_force,
 )
-from papf.errors import ConfigError
 
 WP = WangParams()          # k_att 10, k_rep 5/300, rho_0 0.5 m, rho_1 1 m, R_0 0, offset 0.05 m
 S45 = math.sin(math.pi / 4)

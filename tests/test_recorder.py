@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from papf.errors import ConfigError, RecordingError
+from common.errors import ConfigError, RecordingError
 from papf.recording import (
     RunWriter,
     iter_messages,

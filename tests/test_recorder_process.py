@@ -10,8 +10,8 @@ import time
 import msgpack
 import pytest
 
+from common.transport import wait_alive
 from papf.recording import Recording, recover
-from papf.transport import wait_alive
 from schemas import Keys, Twist
 from schemas.messages import ALL_MESSAGES
 from tests.test_recorder import key_of, sample

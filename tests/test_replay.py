@@ -9,9 +9,9 @@ import threading
 import pytest
 import zenoh
 
-from papf.errors import RecordingError
+from common.errors import RecordingError
+from common.transport import zenoh_config
 from papf.recording import Recording, RunWriter, remap_key, replay
-from papf.transport import zenoh_config
 from schemas import Clock, Odometry, Twist
 from tests.test_recorder_process import recovered_count, start_recorder, wait_until
 

@@ -10,16 +10,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from common.errors import ConfigError, PapfError, RecordingError
+from common.units import NS_PER_S as NS
 from nodes.energy_meter.core import EnergyMeter
 from nodes.energy_meter.models import B_W, F_V_NM, MASS_KG, P_S_W, WHEEL_RADIUS_M
-from papf.errors import ConfigError, PapfError, RecordingError
+from nodes.recorder.writer import RunWriter
 from papf.recording.reader import Recording
-from papf.recording.writer import RunWriter
 from papf.report import build_report, remeter_file, run_metrics
 from papf.report.metrics import NO_OUTCOME, heading_oscillations, smoothness
 from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, WheelStates
 
-NS = 1_000_000_000
 STEP_NS = 20_000_000           # 50 Hz, as the sim driver
 SPEED = 0.5                    # [m/s] of the synthetic run
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

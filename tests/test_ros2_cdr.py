@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_typestore
 
+from common import ros2
+from common.errors import SchemaError
 from nodes.base_driver.rosbot import (
     cdr_to_robot_odom,
     cdr_to_twist,
@@ -15,8 +17,6 @@ from nodes.base_driver.rosbot import (
     twist_to_cdr,
 )
 from nodes.lidar_sim.ros2_source import classify, laserscan_to_scan, resample
-from papf import ros2
-from papf.errors import SchemaError
 
 TS = get_typestore(Stores.ROS2_HUMBLE)   # an independent store: rosbags, not our helpers
 INF, NAN = math.inf, math.nan

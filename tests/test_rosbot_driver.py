@@ -11,6 +11,9 @@ import time
 
 import pytest
 
+from common import ros2
+from common.errors import ConfigError
+from common.transport import wait_alive
 from nodes.base_driver.limits import RosbotLimits
 from nodes.base_driver.rosbot import (
     EFFECTIVE_TRACK,
@@ -28,10 +31,7 @@ from nodes.base_driver.rosbot import (
     wheel_states,
 )
 from nodes.base_driver.rosbot_node import ZERO_HOLD_NS, RosbotDriver
-from papf import ros2
 from papf.emulator import EmulatedRosbot
-from papf.errors import ConfigError
-from papf.transport import wait_alive
 from schemas import Clock, Event, Keys, Odometry, Twist
 from schemas.keys import TOPICS
 

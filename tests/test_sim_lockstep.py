@@ -16,9 +16,9 @@ from contextlib import contextmanager
 import pytest
 import zenoh
 
-from papf.errors import SchemaError
+from common.errors import SchemaError
+from common.transport import wait_alive, zenoh_config
 from papf.supervisor import Supervisor, free_port, wait_port
-from papf.transport import wait_alive, zenoh_config
 from schemas import Keys
 from schemas.messages import Clock, Event, Odometry, Scan, Twist
 

@@ -7,8 +7,8 @@ import time
 import pytest
 import zenoh
 
-from papf.errors import ConfigError
-from papf.transport import Node, add_zenoh_args, alive_nodes, wait_alive, zenoh_config
+from common.errors import ConfigError
+from common.transport import Node, add_zenoh_args, alive_nodes, wait_alive, zenoh_config
 from schemas import Keys, Odometry, Twist
 
 

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from papf.errors import WorldError
+from common.errors import WorldError
 from worlds import load_world, packaged_worlds, parse_world
 
 EXAMPLE = """

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
-from papf.errors import WorldError
+from common.errors import WorldError
 
 try:
     import tomllib

@@ -34,8 +34,8 @@ import sys
 import time
 from typing import TYPE_CHECKING
 
-from papf.errors import PapfError
-from papf.transport import Node, add_zenoh_args, open_node, setup_logging
+from common.errors import PapfError
+from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from schemas.messages import Event
 from worlds import load_world
 

@@ -20,15 +20,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from common.errors import ConfigError
+from common.units import NS_PER_S
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimBase, SimParams
-from papf.errors import ConfigError
 from schemas.messages import Clock, Event, Twist
 from worlds import World
 
 SOURCE = "base_driver"            # Event.source of this node's events
 COLLISION_GAP_NS = 200_000_000    # [ns] contact-free time that ends a contact episode (assumption)
-NS_PER_S = 1_000_000_000
 
 
 def period_ns(hz: float, what: str) -> int:

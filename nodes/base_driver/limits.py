@@ -22,7 +22,8 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from papf.errors import ConfigError
+from common import robot
+from common.errors import ConfigError
 
 
 @dataclass(frozen=True)
@@ -35,11 +36,11 @@ class RosbotLimits:
     4.0 rad/s^2; ``cmd_vel_timeout`` 0.5 s.
     """
 
-    v_max: float = 0.9                   # [m/s] |linear.x| limit
-    w_max: float = 3.0                   # [rad/s] |angular.z| limit
-    a_max: float = 1.0                   # [m/s^2] linear acceleration limit
-    alpha_max: float = 4.0               # [rad/s^2] angular acceleration limit
-    watchdog_ns: int = 500_000_000       # [ns] cmd_vel_timeout
+    v_max: float = robot.V_MAX_M_S                # [m/s] |linear.x| limit
+    w_max: float = robot.W_MAX_RAD_S              # [rad/s] |angular.z| limit
+    a_max: float = robot.A_MAX_M_S2               # [m/s^2] linear acceleration limit
+    alpha_max: float = robot.ALPHA_MAX_RAD_S2     # [rad/s^2] angular acceleration limit
+    watchdog_ns: int = robot.CMD_VEL_TIMEOUT_NS   # [ns] cmd_vel_timeout
 
     def __post_init__(self) -> None:
         for name in ("v_max", "w_max", "a_max", "alpha_max"):

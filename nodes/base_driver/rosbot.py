@@ -5,7 +5,7 @@ the robot takes ``geometry_msgs/Twist`` on ``cmd_vel`` (linear.x, angular.z), pu
 ``nav_msgs/Odometry`` on ``odometry/filtered`` (EKF of wheels + IMU) and
 ``sensor_msgs/BatteryState`` on ``battery`` (voltage only). The bridge maps topic ``/t``
 to key ``t`` (``<bridge-ns>/t`` with a bridge namespace); payloads are CDR with the
-4-byte encapsulation header, coded with ``rosbags`` (:mod:`papf.ros2`).
+4-byte encapsulation header, coded with ``rosbags`` (:mod:`common.ros2`).
 
 Wheels: the ROSbot reports no wheel torque, so :func:`wheel_states` derives them from
 two odometry samples — speeds from skid-steer kinematics, torques from a rigid-body
@@ -20,17 +20,15 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from papf import ros2
-from papf.errors import ConfigError
+from common import robot, ros2
+from common.errors import ConfigError
 from schemas import Odometry, WheelStates
 from schemas.messages import WHEEL_NAMES
 
-WHEEL_RADIUS = 0.0425          # [m] 85 mm wheels (Husarion manual, DESIGN.md §5)
-MASS = 2.84                    # [kg] with LiDAR and camera (Husarion manual)
-YAW_INERTIA = MASS * (0.200**2 + 0.235**2) / 12.0   # [kg m^2] ASSUMPTION: uniform box footprint
-# [m] effective skid-steer track: rosbot_ros diff_drive_controller wheel_separation 0.186 x
-# wheel_separation_multiplier 1.36 (the sim driver reproduces the same, nodes/base_driver/sim.py)
-EFFECTIVE_TRACK = 0.186 * 1.36
+WHEEL_RADIUS = robot.WHEEL_RADIUS_M          # [m]
+MASS = robot.MASS_KG                         # [kg]
+YAW_INERTIA = robot.YAW_INERTIA_KGM2         # [kg m^2]
+EFFECTIVE_TRACK = robot.EFFECTIVE_TRACK_M    # [m] (the sim driver reproduces the same)
 
 
 @dataclass(frozen=True)

@@ -45,6 +45,8 @@ import time
 from collections import Counter
 
 import schemas.messages as messages
+from common.errors import SchemaError
+from common.transport import Node, open_node, setup_logging
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.rosbot import (
     BridgeTopics,
@@ -55,8 +57,6 @@ from nodes.base_driver.rosbot import (
     twist_to_cdr,
     wheel_states,
 )
-from papf.errors import SchemaError
-from papf.transport import Node, open_node, setup_logging
 from schemas import Clock, Event, Odometry, Twist
 from worlds import load_world
 

@@ -45,7 +45,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pybullet as p
 
-from papf.errors import ConfigError
+from common import robot
+from common.errors import ConfigError
 from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
 from worlds import World
 from worlds.bullet import add_ground, build_world
@@ -56,26 +57,26 @@ SETTLE_STEPS = 25              # steps (0.1 s) at rest before t = 0 so the robot
 MOTOR_TORQUE_LIMIT = 1.5       # [N*m] per wheel: rosbot_description wheel joint effort limit and the
                                # Gazebo plugin's max_wheel_torque (assumption: the real gear motor
                                # delivers about this much)
-TOP_SPEED = 1.25               # [m/s] ROSbot 2.0 PRO top speed (Husarion manual, DESIGN.md §5)
+TOP_SPEED = robot.TOP_SPEED_M_S   # [m/s]
 
 
 @dataclass(frozen=True)
 class SimParams:
     """Physical and noise parameters of the simulated ROSbot (units in comments)."""
 
-    mass: float = 2.84                    # [kg] total, with LiDAR and camera (DESIGN.md §5)
-    wheel_mass: float = 0.074             # [kg] per wheel (rosbot_description wheel.urdf.xacro)
+    mass: float = robot.MASS_KG           # [kg] total, with LiDAR and camera
+    wheel_mass: float = robot.WHEEL_MASS_KG   # [kg] per wheel
     chassis_size: tuple[float, float, float] = (0.200, 0.235, 0.100)  # [m] x, y, z (footprint)
     chassis_clearance: float = 0.025      # [m] floor to chassis bottom (body collision box ~0.023)
     com_above_axle: float = 0.02          # [m] centre of mass above the wheel axles (rosbot_description)
-    wheel_radius: float = 0.0425          # [m]
-    wheel_width: float = 0.036            # [m]
-    track: float = 0.192                  # [m] left-right wheel distance
-    wheelbase: float = 0.106              # [m] front-rear wheel distance
+    wheel_radius: float = robot.WHEEL_RADIUS_M   # [m]
+    wheel_width: float = robot.WHEEL_WIDTH_M     # [m]
+    track: float = robot.TRACK_M                 # [m] left-right wheel distance
+    wheelbase: float = robot.WHEELBASE_M         # [m] front-rear wheel distance
     friction: float = 1.0                 # [-] tyre-floor Coulomb coefficient (Gazebo model: mu = 1)
     slip_eps: float = 0.05                # [m/s] Coulomb regularisation (see module doc)
     motor_torque_limit: float = MOTOR_TORQUE_LIMIT  # [N*m] per wheel
-    wheel_speed_limit: float = TOP_SPEED / 0.0425   # [rad/s] 29.4, top speed / r
+    wheel_speed_limit: float = TOP_SPEED / robot.WHEEL_RADIUS_M   # [rad/s] 29.4, top speed / r
     icr_factor: float | None = None       # [-] effective-track factor; None = 1 + (wheelbase/track)^2
     start_xy_sd: float = 0.01             # [m] start position jitter (hand placement)
     start_yaw_sd: float = math.radians(1.0)  # [rad] start heading jitter

@@ -27,8 +27,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from papf.errors import ConfigError, PapfError
-from papf.transport import add_zenoh_args, open_node, setup_logging
+from common.errors import ConfigError, PapfError
+from common.transport import add_zenoh_args, open_node, setup_logging
 
 from .core import EnergyMeter
 from .models import MODELS

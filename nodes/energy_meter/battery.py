@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from papf.errors import ConfigError, PapfError
+from common.errors import ConfigError, PapfError
 
 
 class EnergyError(PapfError, ValueError):

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
 from schemas import BatteryState, Odometry, WheelStates
 
 from .battery import Battery, EnergyError, PackParams

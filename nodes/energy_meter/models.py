@@ -32,19 +32,18 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
+from common.robot import (
+    MASS_KG,
+    WHEEL_RADIUS_M,
+    YAW_INERTIA_KGM2,
+)
 from schemas import Odometry, WheelStates
 
 from .battery import EnergyError
 
 # -- robot (Husarion ROSbot 2.0 PRO specs, DESIGN.md §5) ------------------------------------
-MASS_KG = 2.84                  # [kg] with LiDAR and camera (Husarion manual)
-BODY_LENGTH_M = 0.200           # [m] chassis box (Husarion manual: 200 x 235 x 220 mm)
-BODY_WIDTH_M = 0.235            # [m]
-# [kg m^2] yaw inertia, ASSUMPTION: uniform box of the chassis footprint, m (L^2 + W^2) / 12
-YAW_INERTIA_KGM2 = MASS_KG * (BODY_LENGTH_M**2 + BODY_WIDTH_M**2) / 12.0   # = 0.02254
-WHEEL_RADIUS_M = 0.0425         # [m] 85 mm wheels (Husarion manual)
-TOP_SPEED_M_S = 1.25            # [m/s] (Husarion manual)
+# mass, body, yaw inertia, wheel radius, top speed: common/robot.py
 GRAVITY_M_S2 = 9.81             # [m/s^2]
 
 # -- drive train -------------------------------------------------------------------------------
@@ -54,7 +53,7 @@ GEAR_EFFICIENCY = 0.80          # [-] ASSUMPTION: multi-stage spur gearbox of a 
 WINDING_RESISTANCE_OHM = 2.1    # [ohm] ASSUMPTION: 12 V / ~5.6 A stall current of a 25 mm,
                                 #       12 V brushed gear motor of this class
 NO_LOAD_CURRENT_A = 0.2         # [A] ASSUMPTION: typical no-load current of such a motor
-NOMINAL_VOLTAGE_V = 11.1        # [V] 3S nominal; ASSUMPTION: top speed is reached at it
+# ASSUMPTION: the top speed is reached at the 3S nominal voltage (NOMINAL_VOLTAGE_V)
 # [N m/A] = [V s/rad], derived: the motor reaches TOP_SPEED at NOMINAL_VOLTAGE with no load,
 # k = (V - I_0 R) / (G v_top / r) = (11.1 - 0.42) / 1000.4
 TORQUE_CONSTANT_NM_A = 0.0107

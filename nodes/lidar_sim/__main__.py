@@ -27,8 +27,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from papf.errors import PapfError
-from papf.transport import add_zenoh_args, open_node, setup_logging
+from common.errors import PapfError
+from common.transport import add_zenoh_args, open_node, setup_logging
 from worlds import load_world
 
 NAME = "lidar_sim"

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
 from schemas.messages import Scan
 from worlds import World
 from worlds.bullet import build_world

@@ -29,8 +29,8 @@ import time
 
 import numpy as np
 
-from papf import ros2
-from papf.errors import SchemaError
+from common import ros2
+from common.errors import SchemaError
 from schemas import Scan
 
 NAME = "lidar_sim"
@@ -108,8 +108,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from common.transport import open_node, setup_logging
     from nodes.base_driver.rosbot import BridgeTopics
-    from papf.transport import open_node, setup_logging
 
     log = setup_logging(NAME, getattr(args, "log_level", "INFO"))
     topics = BridgeTopics(getattr(args, "bridge_namespace", ""),

@@ -18,7 +18,7 @@ Settings: ``--planner`` (algorithm), ``--params FILE.toml`` and ``--set name=val
 (see docs/planners.md for every parameter), ``--realtime`` (pair scans with the latest
 odometry instead of the same stamp), ``--stale-timeout S`` (zero command when odometry
 or scans are older than that), ``--pair-timeout S`` (lockstep: wall time a scan waits for
-its odometry), plus the Zenoh options of :func:`papf.transport.add_zenoh_args`.
+its odometry), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
 Exit code 2 on a bad setting.
 """
 
@@ -28,10 +28,10 @@ import argparse
 import sys
 import time
 
+from common.errors import ConfigError
+from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import PLANNERS, make_planner
-from papf.errors import ConfigError
-from papf.transport import add_zenoh_args, open_node, setup_logging
 
 NODE_NAME = "planner"
 

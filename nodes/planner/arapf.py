@@ -32,9 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from common.errors import ConfigError
 from nodes.planner.apf import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
 from nodes.planner.core import Plan, ScanView
-from papf.errors import ConfigError
 
 PASSAGE_WIDTHS = ("opening", "gap")
 

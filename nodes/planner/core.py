@@ -20,10 +20,9 @@ from typing import Protocol
 
 import numpy as np
 
+from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
 from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
-
-NS_PER_S = 1_000_000_000
 
 
 @dataclass(frozen=True)

@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
+from common.errors import ConfigError
 from nodes.planner.apf import APFParams, apf_force
 from nodes.planner.arapf import ARAPFStrategy
 from nodes.planner.core import Plan, Planner, ScanView
 from nodes.planner.papf import PAPFStrategy
 from nodes.planner.wang import WangStrategy
-from papf.errors import ConfigError
 
 try:
     import tomllib

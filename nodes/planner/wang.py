@@ -33,9 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from common.errors import ConfigError
 from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
-from papf.errors import ConfigError
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,9 @@ from pathlib import Path
 
 import zenoh
 
-from papf.errors import ConfigError, PapfError
-from papf.recording.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
-from papf.transport import Node, add_zenoh_args, open_node, setup_logging
+from common.errors import ConfigError, PapfError
+from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
 
 NAME = "recorder"
 QUEUE_CAPACITY = 1_000_000  # [samples] Zenoh-side buffer: 20 s at 50 kHz before back-pressure

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from papf.errors import ConfigError
+from common.errors import ConfigError
 
 if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `papf --help` stays fast
     from rich.console import Console
@@ -126,8 +126,8 @@ class LiveFigures:
         """Once the run's router listens; False if the run ended first or Zenoh refused."""
         import zenoh
 
+        from common.transport import zenoh_config
         from papf.supervisor import wait_port
-        from papf.transport import zenoh_config
         from schemas import BatteryState, Clock, Odometry
 
         if not wait_port(self.port, 60.0, abort=abort):
@@ -300,7 +300,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import argparse
     import sys
 
-    from papf.errors import PapfError
+    from common.errors import PapfError
     from papf.report_cli import add_energy_args, cmd_energy
 
     parser = argparse.ArgumentParser(prog="python -m papf.experiments.energy",

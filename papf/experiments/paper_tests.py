@@ -121,7 +121,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
     """
-    from papf.errors import ConfigError
+    from common.errors import ConfigError
     from papf.experiments.trials import (
         markdown_table,
         progress_bar,

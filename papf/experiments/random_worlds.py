@@ -79,7 +79,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
     """
-    from papf.errors import ConfigError
+    from common.errors import ConfigError
     from papf.experiments.trials import (
         progress_bar,
         quiet_runner_logs,

@@ -89,7 +89,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
     """(N, 2) ground-truth positions [m] from a recording's ``<ns>/sim/pose`` channel."""
-    from papf.errors import RecordingError
+    from common.errors import RecordingError
     from papf.recording.reader import iter_messages
 
     pts = []

@@ -1,6 +1,6 @@
 """Run recordings (DESIGN.md §8): write, read, recover and replay MCAP files.
 
-- :class:`~papf.recording.writer.RunWriter` — crash-safe MCAP writer (one channel per key);
+- :class:`~nodes.recorder.writer.RunWriter` — crash-safe MCAP writer (one channel per key);
 - :func:`~papf.recording.reader.open_recording` / :func:`~papf.recording.reader.iter_messages`;
 - :func:`~papf.recording.recover.recover` — salvage a truncated file;
 - :func:`~papf.recording.replay.replay` — republish with the recorded timing.
@@ -9,6 +9,7 @@ Pure: nothing here imports Zenoh (the recorder node is ``python -m nodes.recorde
 See docs/recording.md.
 """
 
+from nodes.recorder.writer import RunWriter, WriterStats, peek_stamp, type_for_key
 from papf.recording.reader import (
     RawMessage,
     RecordedMessage,
@@ -20,7 +21,6 @@ from papf.recording.reader import (
 )
 from papf.recording.recover import RecoverStats, recover
 from papf.recording.replay import ReplayStats, remap_key, replay
-from papf.recording.writer import RunWriter, WriterStats, peek_stamp, type_for_key
 
 __all__ = [
     "RawMessage", "RecordedMessage", "Recording", "RecoverStats", "ReplayStats", "RunWriter",

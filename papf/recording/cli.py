@@ -11,11 +11,11 @@ import json
 import sys
 from pathlib import Path
 
-from papf.errors import PapfError
+from common.errors import PapfError
+from common.transport import StopRequested, add_zenoh_args, config_from_args
 from papf.recording.reader import Recording
 from papf.recording.recover import recover
 from papf.recording.replay import replay
-from papf.transport import StopRequested, add_zenoh_args, config_from_args
 
 
 def register(subparsers) -> None:

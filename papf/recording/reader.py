@@ -1,4 +1,4 @@
-"""Read a recording made by :mod:`papf.recording.writer` (DESIGN.md §8).
+"""Read a recording made by :mod:`nodes.recorder.writer` (DESIGN.md §8).
 
 ``with open_recording("run.mcap") as rec:`` then ``rec.run_metadata`` and
 ``for key, msg, log_time_ns in rec.messages(): ...`` — ``msg`` is the decoded
@@ -6,7 +6,7 @@
 type and the payload is valid, else the raw payload bytes.
 
 A file that is not a complete MCAP (the recorder was killed, the disk filled up, a
-copy was cut short) raises :class:`~papf.errors.RecordingError` telling the user to
+copy was cut short) raises :class:`~common.errors.RecordingError` telling the user to
 run ``papf recover``.
 """
 
@@ -19,8 +19,8 @@ from typing import NamedTuple
 
 from mcap.reader import make_reader
 
-from papf.errors import RecordingError, SchemaError
-from papf.recording.writer import RUN_METADATA
+from common.errors import RecordingError, SchemaError
+from nodes.recorder.writer import RUN_METADATA
 from schemas.base import Message
 from schemas.messages import BY_TYPE
 

@@ -24,9 +24,9 @@ from mcap.stream_reader import breakup_chunk
 from mcap.writer import Writer
 
 import papf
-from papf.errors import RecordingError
+from common.errors import RecordingError
+from nodes.recorder.writer import COMPRESSIONS
 from papf.recording.reader import MAGIC
-from papf.recording.writer import COMPRESSIONS
 
 _FRAME = struct.Struct("<BQ")  # record opcode, record length [bytes]
 

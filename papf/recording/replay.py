@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from papf.errors import RecordingError
+from common.errors import RecordingError
 from papf.recording.reader import Recording
 from schemas.keys import TOPICS
 

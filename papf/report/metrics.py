@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from papf.errors import RecordingError
+from common.errors import RecordingError
 from papf.monitor import NS, RunMonitor
 from papf.recording.reader import Recording
 from papf.report.remeter import Remeter, battery_at

@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from common.errors import PapfError
 from nodes.energy_meter.core import EnergyMeter
-from papf.errors import PapfError
 from papf.recording.reader import Recording
 from schemas import BatteryState, Odometry, WheelStates
 

@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from papf.errors import ConfigError, PapfError, RecordingError
+from common.errors import ConfigError, PapfError, RecordingError
 from papf.report import figures, tables
 from papf.report.metrics import OSCILLATION_W_RAD_S, RunMetrics, run_metrics
 from worlds import World, load_world

@@ -26,7 +26,7 @@ from contextlib import contextmanager
 
 import zenoh
 
-from papf.errors import ConfigError, SchemaError
+from common.errors import ConfigError, SchemaError
 from schemas import Keys
 from schemas.base import Message
 from schemas.keys import TOPICS

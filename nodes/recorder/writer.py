@@ -31,8 +31,8 @@ from typing import Any
 import msgpack
 from mcap.writer import CompressionType, Writer
 
-import papf
-from papf.errors import RecordingError
+import common
+from common.errors import RecordingError
 from schemas.base import Message
 from schemas.keys import TOPICS
 
@@ -105,7 +105,7 @@ def is_msgpack(data: bytes) -> bool:
 
 def default_metadata() -> dict[str, str]:
     """What every recording states about the software that made it."""
-    return {"software": "papf-stack", "software_version": papf.__version__,
+    return {"software": "papf-stack", "software_version": common.__version__,
             "python": platform.python_version(), "created_unix_ns": str(time.time_ns())}
 
 
@@ -145,7 +145,7 @@ class RunWriter:
             raise RecordingError(f"cannot create recording {str(path)!r}: {exc}") from None
         self._mcap = Writer(self._file, chunk_size=chunk_size,
                             compression=COMPRESSIONS[compression])
-        self._mcap.start(profile=PROFILE, library=f"papf-stack/{papf.__version__}")
+        self._mcap.start(profile=PROFILE, library=f"papf-stack/{common.__version__}")
         self._mcap.add_metadata(RUN_METADATA, metadata_strings({**default_metadata(),
                                                                **(metadata or {})}))
         self._file.flush()

@@ -19,7 +19,8 @@ from functools import lru_cache
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
-from papf.errors import SchemaError
+from common.errors import SchemaError
+from common.units import NS_PER_S as NS
 
 TWIST = "geometry_msgs/msg/Twist"
 ODOMETRY = "nav_msgs/msg/Odometry"
@@ -29,7 +30,6 @@ TYPES = (TWIST, ODOMETRY, BATTERY_STATE, LASER_SCAN)
 
 CDR_LE_HEADER = b"\x00\x01\x00\x00"   # encapsulation: plain CDR, little endian, no options
 CDR_HEADERS = (b"\x00\x00", b"\x00\x01")  # CDR big / little endian (first two bytes)
-NS = 1_000_000_000
 
 
 class CdrError(SchemaError):
