@@ -27,9 +27,10 @@ from contextlib import contextmanager
 import zenoh
 
 from common.errors import ConfigError, SchemaError
+from common.units import StampGuard
 from schemas import Keys
 from schemas.base import Message
-from schemas.keys import TOPICS
+from schemas.keys import STAMP_ORDERED, TOPICS
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("client", "peer", "router")
@@ -101,14 +102,16 @@ class Node:
 
     Received messages are decoded in Zenoh's callback thread and queued as
     ``(topic, message)``; :meth:`messages` hands them to the node's main thread.
-    A payload that fails to decode is logged (rate-limited), counted in
-    :attr:`bad_messages` and dropped: a bad peer never crashes a node.
+    A payload that fails to decode, or whose stamp is out of range or goes back on a
+    stamp-ordered topic (:class:`common.units.StampGuard`), is logged (rate-limited),
+    counted in :attr:`bad_messages` and dropped: a bad peer never crashes a node.
     """
 
     def __init__(self, name: str, session: zenoh.Session, keys: Keys, log: logging.Logger):
         self.name, self.session, self.keys, self.log = name, session, keys, log
         self.inbox: queue.Queue = queue.Queue()
         self.bad_messages: Counter[str] = Counter()
+        self.stamps = StampGuard(STAMP_ORDERED)
         self.stop = StopRequested()
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
@@ -148,16 +151,27 @@ class Node:
         deliver = handler or (lambda m, t=topic: self.inbox.put((t, m)))
 
         def on_sample(sample: zenoh.Sample) -> None:
-            try:
-                msg = msg_type.from_bytes(sample.payload.to_bytes())
-            except SchemaError as exc:
-                self._count_bad(topic, exc)
-                return
-            deliver(msg)
+            msg = self.accept(topic, sample.payload.to_bytes(), msg_type)
+            if msg is not None:
+                deliver(msg)
 
         self._subscribers.append(self.session.declare_subscriber(self.keys.key(topic), on_sample))
 
-    def _count_bad(self, topic: str, exc: Exception) -> None:
+    def accept(self, topic: str, payload: bytes, msg_type: type[Message] | None = None):
+        """``payload`` decoded as ``topic``'s message, or None: a bad payload or stamp is
+        counted in :attr:`bad_messages` and dropped (never an exception)."""
+        try:
+            msg = (msg_type or TOPICS[topic]).from_bytes(payload)
+        except SchemaError as exc:
+            self._count_bad(topic, exc)
+            return None
+        why = self.stamps.check(topic, msg)
+        if why:
+            self._count_bad(topic, why)
+            return None
+        return msg
+
+    def _count_bad(self, topic: str, exc: Exception | str) -> None:
         self.bad_messages[topic] += 1
         n = self.bad_messages[topic]
         if n <= 5 or n % 100 == 0:

@@ -2,6 +2,8 @@
 
 A stamp is valid when it lies in ``[0, MAX_STAMP_NS]``: a sim clock starts at 0 and
 a wall clock is nanoseconds since the epoch, both far below 2**62 (146 years).
+:class:`StampGuard` applies that to received messages, and drops stamps that go back
+on a topic whose stamps only go forward.
 """
 
 from __future__ import annotations
@@ -22,4 +24,29 @@ def ns_to_s(ns: int) -> float:
 
 def stamp_ok(stamp_ns: int) -> bool:
     """A stamp a node may act on: an integer in ``[0, MAX_STAMP_NS]``."""
-    return isinstance(stamp_ns, int) and 0 <= stamp_ns <= MAX_STAMP_NS
+    return isinstance(stamp_ns, int) and not isinstance(stamp_ns, bool) and (
+        0 <= stamp_ns <= MAX_STAMP_NS)
+
+
+class StampGuard:
+    """Decide whether a received message's stamp may be acted on.
+
+    :meth:`check` returns ``""`` for a good stamp, else why it is bad: outside
+    ``[0, MAX_STAMP_NS]``, or — on the ``ordered`` topics — older than the last good one.
+    A stamp of 0 is always in order: sim time restarts at 0 with each run.
+    """
+
+    def __init__(self, ordered: frozenset[str] | set[str] = frozenset()):
+        self.ordered = ordered
+        self.last: dict[str, int] = {}
+
+    def check(self, topic: str, msg) -> str:
+        stamp = getattr(msg, "stamp_ns", 0)
+        if not stamp_ok(stamp):
+            return f"stamp {stamp!r} ns is outside [0, {MAX_STAMP_NS}]"
+        if topic in self.ordered:
+            last = self.last.get(topic, 0)
+            if 0 < stamp < last:
+                return f"stamp {stamp} ns is older than the last one on this topic ({last} ns)"
+            self.last[topic] = stamp
+        return ""

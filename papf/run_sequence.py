@@ -15,10 +15,12 @@ from collections.abc import Callable
 
 import zenoh
 
+from common.errors import SchemaError
+from common.units import StampGuard
 from papf.monitor import NS, RunMonitor, RunResult
 from papf.supervisor import Supervisor
 from schemas import Event, Goal, Keys, PlannerStatus
-from schemas.keys import TOPICS
+from schemas.keys import STAMP_ORDERED, TOPICS
 from worlds import World
 
 log = logging.getLogger("papf.run")
@@ -37,6 +39,8 @@ class RunSequence:
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
         self.stop, self.stall_s = stop, stall_s
         self._q: queue.Queue = queue.Queue()
+        self.stamps = StampGuard(STAMP_ORDERED)
+        self.dropped = 0                     # bad payloads and bad stamps, not acted on
         self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
                           "events": monitor.on_event, "battery": monitor.on_battery,
                           "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose}
@@ -48,9 +52,14 @@ class RunSequence:
 
         def on_sample(sample: zenoh.Sample) -> None:
             try:
-                self._q.put((topic, msg_type.from_bytes(sample.payload.to_bytes())))
-            except Exception:  # a bad payload is the nodes' business, not the launcher's
-                pass
+                msg = msg_type.from_bytes(sample.payload.to_bytes())
+            except SchemaError:
+                self.dropped += 1
+                return
+            if self.stamps.check(topic, msg):
+                self.dropped += 1
+                return
+            self._q.put((topic, msg))
         return on_sample
 
     def drain(self, timeout_s: float) -> list[tuple[str, object]]:

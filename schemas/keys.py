@@ -34,6 +34,11 @@ TOPICS = {
     "events": Event,
 }
 
+# Topics with one publisher whose stamps never go back within a run (a new run restarts
+# sim time at 0): a message older than the last one on them is dropped (common.units.StampGuard).
+STAMP_ORDERED = frozenset({"scan", "odom", "wheels", "battery", "battery/measured", "clock",
+                           "sim/pose"})
+
 
 @dataclass(frozen=True)
 class Keys:

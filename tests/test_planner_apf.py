@@ -158,9 +158,9 @@ def test_params_file_and_set_overrides(tmp_path):
     f.write_text("v_max = 0.2\n[apf]\nd_o = 0.8\n[other]\nignored = 1\n")
     apf, _ = load_params("apf", f, ["k_theta=2", "apf.scale_to_scan=false"])
     assert (apf.v_max, apf.d_o, apf.k_theta, apf.scale_to_scan) == (0.2, 0.8, 2.0, False)
-    with pytest.raises(ConfigError, match="unknown planner setting 'nope'"):
+    with pytest.raises(ConfigError, match="unknown apf setting 'nope'"):
         load_params("apf", None, ["nope=1"])
-    with pytest.raises(ConfigError, match="expected a float"):
+    with pytest.raises(ConfigError, match=r"d_o=far: must be a finite number in \(0, 25\] m"):
         load_params("apf", None, ["d_o=far"])
     with pytest.raises(ConfigError, match="unknown planner 'xyz'"):
         make_planner("xyz")

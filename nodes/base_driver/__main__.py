@@ -35,7 +35,9 @@ import time
 from typing import TYPE_CHECKING
 
 from common.errors import PapfError
+from common.params import arg_type
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from nodes.base_driver.limits import OPTIONS
 from schemas.messages import Event
 from worlds import load_world
 
@@ -154,6 +156,10 @@ def main_rosbot(args: argparse.Namespace) -> int:
     return rosbot_node.main(args) or 0
 
 
+def _opt(name: str):
+    return arg_type("--" + name.replace("_", "-"), OPTIONS[name])
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.base_driver",
                                      description=__doc__.split("\n\n")[0],
@@ -162,14 +168,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--driver", choices=("sim", "rosbot"), default="sim",
                         help="simulated ROSbot (default) or the real robot over the ROS 2 bridge")
     parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed (sim; default 0)")
+    parser.add_argument("--seed", type=_opt("seed"), default=0,
+                        help="noise seed (sim; default 0)")
     parser.add_argument("--realtime", action="store_true",
                         help="pace sim time to the wall clock and never wait for commands")
-    parser.add_argument("--lockstep-timeout", type=float, default=2.0, metavar="S",
+    parser.add_argument("--lockstep-timeout", type=_opt("lockstep_timeout"),
+                        default=2.0, metavar="S",
                         help="wall seconds to wait for the cmd_vel of a scan (default 2.0)")
-    parser.add_argument("--scan-hz", type=float, default=10.0, help="scan / lockstep rate (10)")
-    parser.add_argument("--odom-hz", type=float, default=50.0, help="odometry rate (50)")
-    parser.add_argument("--watchdog", type=float, default=0.5, metavar="S",
+    parser.add_argument("--scan-hz", type=_opt("scan_hz"),
+                        default=10.0, help="scan / lockstep rate (10)")
+    parser.add_argument("--odom-hz", type=_opt("odom_hz"),
+                        default=50.0, help="odometry rate (50)")
+    parser.add_argument("--watchdog", type=_opt("watchdog"),
+                        default=0.5, metavar="S",
                         help="stop when no fresh command for S seconds (default 0.5)")
     parser.add_argument("--log-level", default="INFO")
     add_zenoh_args(parser)

@@ -21,8 +21,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from common.errors import ConfigError
+from common.params import check_value
 from common.units import NS_PER_S
-from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.limits import OPTIONS, CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimBase, SimParams
 from schemas.messages import Clock, Event, Twist
 from worlds import World
@@ -63,8 +64,8 @@ class DriverConfig:
     @classmethod
     def from_rates(cls, odom_hz: float = 50.0, scan_hz: float = 10.0, watchdog_s: float = 0.5,
                    sim: SimParams | None = None) -> DriverConfig:
-        if not (watchdog_s > 0):
-            raise ConfigError(f"watchdog = {watchdog_s!r} s must be > 0")
+        for name, value in (("odom_hz", odom_hz), ("scan_hz", scan_hz), ("watchdog", watchdog_s)):
+            check_value(name, value, OPTIONS[name])
         return cls(odom_period_ns=period_ns(odom_hz, "odometry rate"),
                    scan_period_ns=period_ns(scan_hz, "scan rate"),
                    limits=RosbotLimits(watchdog_ns=round(watchdog_s * NS_PER_S)),

@@ -24,6 +24,14 @@ from typing import NamedTuple
 
 from common import robot
 from common.errors import ConfigError
+from common.params import SEED, Spec, pos
+
+# Declared ranges of the driver's options (common.params): checked when parsed and here.
+# The watchdog is a safety setting: past 2 s a robot keeps driving on a lost command.
+OPTIONS: dict[str, Spec] = {
+    "odom_hz": pos(1000.0, "Hz"), "scan_hz": pos(100.0, "Hz"),
+    "watchdog": pos(2.0, "s", safety=True), "lockstep_timeout": pos(60.0, "s"), "seed": SEED,
+}
 
 
 @dataclass(frozen=True)

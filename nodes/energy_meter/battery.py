@@ -21,10 +21,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from common.errors import ConfigError, PapfError
+from common.errors import PapfError
+from common.params import Spec, check_all, integer, num, pos
 
 
 class EnergyError(PapfError, ValueError):
@@ -64,16 +66,13 @@ class PackParams:
     cell_resistance_ohm: float = CELL_RESISTANCE_OHM  # [ohm]
     initial_soc: float = INITIAL_SOC                   # [-] 0..1
 
+    SPECS: ClassVar[dict[str, Spec]] = {
+        "cells_series": integer(1, 100), "capacity_mAh": pos(1e6, "mAh"),
+        "cell_resistance_ohm": num(0.0, 10.0, "ohm"), "initial_soc": num(0.0, 1.0),
+    }
+
     def __post_init__(self) -> None:
-        if self.cells_series < 1:
-            raise ConfigError(f"cells_series={self.cells_series!r}: must be an integer >= 1")
-        if not (self.capacity_mAh > 0 and math.isfinite(self.capacity_mAh)):
-            raise ConfigError(f"capacity_mAh={self.capacity_mAh!r}: must be a finite number > 0")
-        if not (self.cell_resistance_ohm >= 0 and math.isfinite(self.cell_resistance_ohm)):
-            raise ConfigError(f"cell_resistance_ohm={self.cell_resistance_ohm!r}: must be "
-                              "a finite number >= 0")
-        if not 0.0 <= self.initial_soc <= 1.0:
-            raise ConfigError(f"initial_soc={self.initial_soc!r}: must be within 0..1")
+        check_all(self, self.SPECS)
 
     @property
     def resistance_ohm(self) -> float:

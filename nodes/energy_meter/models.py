@@ -31,8 +31,10 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
 from common.errors import ConfigError
+from common.params import FLAG, Spec, check_all, check_value, num, pos, unknown_name
 from common.robot import (
     MASS_KG,
     WHEEL_RADIUS_M,
@@ -78,9 +80,27 @@ MOVING_V_M_S = 1e-3             # [m/s] |v| above this counts as moving (for B)
 MOVING_W_RAD_S = 1e-2           # [rad/s] |w| above this counts as moving (for B)
 
 
+# Declared type and valid range of every model constant (common.params); the dataclasses
+# check themselves on construction, --set values are checked as they are parsed.
+PAPER_SPECS: dict[str, Spec] = {
+    "mass_kg": pos(1000.0, "kg"), "yaw_inertia_kgm2": pos(1000.0, "kg m^2"),
+    "wheel_radius_m": pos(1.0, "m"), "f_v_Nm": num(0.0, 100.0, "N m"),
+    "b_W": num(0.0, 1000.0, "W"), "p_s_W": num(0.0, 1000.0, "W"),
+    "b_while_moving_only": FLAG, "regeneration": FLAG,
+}
+MOTOR_SPECS: dict[str, Spec] = {
+    "gear_ratio": pos(1000.0), "gear_efficiency": pos(1.0),
+    "torque_constant_NmA": pos(10.0, "N m/A"), "winding_resistance_ohm": num(0.0, 100.0, "ohm"),
+    "no_load_current_A": num(0.0, 100.0, "A"), "p_s_W": num(0.0, 1000.0, "W"),
+    "regeneration": FLAG,
+}
+
+
 @dataclass(frozen=True)
 class PaperParams:
     """Constants of eq. (6); each settable with ``--set name=value``."""
+
+    SPECS: ClassVar[dict[str, Spec]] = PAPER_SPECS
 
     mass_kg: float = MASS_KG
     yaw_inertia_kgm2: float = YAW_INERTIA_KGM2
@@ -92,12 +112,14 @@ class PaperParams:
     regeneration: bool = False
 
     def __post_init__(self) -> None:
-        _positive(self, "wheel_radius_m")
+        check_all(self, PAPER_SPECS)
 
 
 @dataclass(frozen=True)
 class MotorParams:
     """Constants of the DC gear-motor model; each settable with ``--set name=value``."""
+
+    SPECS: ClassVar[dict[str, Spec]] = MOTOR_SPECS
 
     gear_ratio: float = GEAR_RATIO
     gear_efficiency: float = GEAR_EFFICIENCY
@@ -108,9 +130,7 @@ class MotorParams:
     regeneration: bool = False
 
     def __post_init__(self) -> None:
-        _positive(self, "gear_ratio", "torque_constant_NmA", "gear_efficiency")
-        if self.gear_efficiency > 1.0:
-            raise ConfigError(f"gear_efficiency={self.gear_efficiency!r}: must be within (0, 1]")
+        check_all(self, MOTOR_SPECS)
 
 
 class PaperModel:
@@ -207,40 +227,14 @@ def setting_names(params_cls) -> tuple[str, ...]:
 
 
 def build_params(params_cls, settings: Mapping[str, object]):
-    """``params_cls(**settings)`` with values coerced from strings (``--set name=value``)."""
-    valid = setting_names(params_cls)
+    """``params_cls(**settings)`` with every value checked against its declared range."""
+    specs = params_cls.SPECS
     values = {}
     for name, value in settings.items():
-        if name not in valid:
-            raise ConfigError(f"unknown setting {name!r}; valid: {', '.join(valid)}")
-        kind = next(f.type for f in dataclasses.fields(params_cls) if f.name == name)
-        values[name] = _coerce(name, value, str(kind))
+        if name not in specs:
+            raise unknown_name(name, specs)
+        values[name] = check_value(name, value, specs[name])
     return params_cls(**values)
-
-
-def _coerce(name: str, value: object, kind: str):
-    text = str(value).strip().lower()
-    if kind == "bool":
-        if isinstance(value, bool):
-            return value
-        if text in ("1", "true", "yes", "on", "0", "false", "no", "off"):
-            return text in ("1", "true", "yes", "on")
-        raise ConfigError(f"setting {name}={value!r}: expected true or false")
-    try:
-        number = int(text) if kind == "int" else float(text)
-    except ValueError:
-        what = "an integer" if kind == "int" else "a number"
-        raise ConfigError(f"setting {name}={value!r}: expected {what}") from None
-    if not math.isfinite(number) or number < 0:
-        raise ConfigError(f"setting {name}={value!r}: must be a finite number >= 0")
-    return number
-
-
-def _positive(params, *names: str) -> None:
-    for name in names:
-        value = getattr(params, name)
-        if not value > 0:
-            raise ConfigError(f"{name}={value!r}: must be > 0")
 
 
 def _dt_s(prev_ns: int, now_ns: int) -> float:

@@ -28,7 +28,9 @@ import argparse
 import sys
 
 from common.errors import PapfError
+from common.params import arg_type
 from common.transport import add_zenoh_args, open_node, setup_logging
+from nodes.lidar_sim.options import OPTIONS
 from worlds import load_world
 
 NAME = "lidar_sim"
@@ -85,6 +87,10 @@ def main_ros2(args: argparse.Namespace) -> int:
     return ros2_source.main(args) or 0
 
 
+def _opt(name: str):
+    return arg_type("--" + name.replace("_", "-"), OPTIONS[name])
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
                                      description=__doc__.split("\n\n")[0],
@@ -93,12 +99,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
                         help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")
     parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    parser.add_argument("--beams", type=int, default=300, help="rays per revolution (300)")
-    parser.add_argument("--scan-hz", type=float, default=10.0, help="scan rate in sim time (10)")
-    parser.add_argument("--noise-sd", type=float, default=0.01, metavar="M",
+    parser.add_argument("--seed", type=_opt("seed"),
+                        default=0, help="noise seed (default 0)")
+    parser.add_argument("--beams", type=_opt("beams"),
+                        default=300, help="rays per revolution (300)")
+    parser.add_argument("--scan-hz", type=_opt("scan_hz"),
+                        default=10.0, help="scan rate in sim time (10)")
+    parser.add_argument("--noise-sd", type=_opt("noise_sd"),
+                        default=0.01, metavar="M",
                         help="range noise sigma, constant part [m] (default 0.01)")
-    parser.add_argument("--noise-rel", type=float, default=0.0, metavar="F",
+    parser.add_argument("--noise-rel", type=_opt("noise_rel"),
+                        default=0.0, metavar="F",
                         help="range noise sigma, part proportional to the range (default 0)")
     parser.add_argument("--pose-source", choices=("sim", "odom"), default="sim",
                         help="pose to scan from: ground truth sim/pose (default) or odom")

@@ -29,6 +29,8 @@ import numpy as np
 import pybullet as p
 
 from common.errors import ConfigError
+from common.params import check_value
+from nodes.lidar_sim.options import OPTIONS
 from schemas.messages import Scan
 from worlds import World
 from worlds.bullet import build_world
@@ -56,15 +58,11 @@ class LidarParams:
     height: float = SENSOR_HEIGHT      # [m] scan plane above the floor
 
     def __post_init__(self) -> None:
-        if not isinstance(self.beams, int) or not 1 <= self.beams <= p.MAX_RAY_INTERSECTION_BATCH_SIZE:
-            raise ConfigError(f"lidar beams = {self.beams!r} must be an integer in "
-                              f"1..{p.MAX_RAY_INTERSECTION_BATCH_SIZE}")
+        for name in ("beams", "noise_sd", "noise_rel"):
+            check_value(name, getattr(self, name), OPTIONS[name])
         if not 0 < self.range_min < self.range_max or not math.isfinite(self.range_max):
             raise ConfigError(f"lidar ranges {self.range_min!r}..{self.range_max!r} m must satisfy "
                               "0 < range_min < range_max < inf")
-        if not (self.noise_sd >= 0 and self.noise_rel >= 0):
-            raise ConfigError(f"lidar noise_sd = {self.noise_sd!r} m and noise_rel = "
-                              f"{self.noise_rel!r} must be >= 0")
         if not self.height > 0:
             raise ConfigError(f"lidar height = {self.height!r} m must be > 0")
 

@@ -29,9 +29,11 @@ import sys
 import time
 
 from common.errors import ConfigError
+from common.params import arg_type
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import PLANNERS, make_planner
+from nodes.planner.settings import NODE
 
 NODE_NAME = "planner"
 
@@ -45,9 +47,11 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="override one setting, repeatable (e.g. --set d_o=0.8)")
     ap.add_argument("--realtime", action="store_true",
                     help="pair each scan with the latest odometry (robot / HIL)")
-    ap.add_argument("--stale-timeout", type=float, default=0.5, metavar="S",
+    ap.add_argument("--stale-timeout", type=arg_type("--stale-timeout", NODE["stale_timeout"]),
+                    default=0.5, metavar="S",
                     help="inputs older than this -> zero command [s] (default 0.5)")
-    ap.add_argument("--pair-timeout", type=float, default=0.25, metavar="S",
+    ap.add_argument("--pair-timeout", type=arg_type("--pair-timeout", NODE["pair_timeout"]),
+                    default=0.25, metavar="S",
                     help="lockstep: wall time a scan waits for its odometry [s] (default 0.25)")
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)

@@ -19,7 +19,9 @@ from __future__ import annotations
 
 from collections import OrderedDict
 
+from common.params import check_value
 from nodes.planner.core import NS_PER_S, Planner
+from nodes.planner.settings import NODE
 from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 ODOM_BUFFER = 64          # odometry messages kept for pairing (1.28 s at 50 Hz)
@@ -29,6 +31,8 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = 0.25, log=None):
+        check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
+        check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])
         self.planner, self.realtime = planner, realtime
         self.stale_ns = int(stale_timeout_s * NS_PER_S)
         self.stale_s, self.pair_timeout_s = stale_timeout_s, pair_timeout_s

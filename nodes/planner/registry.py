@@ -4,7 +4,9 @@ Each algorithm is a strategy class with a frozen ``Params`` dataclass and
 ``__init__(self, params)``; :data:`PLANNERS` maps the ``--planner`` name to it.
 Settings: :class:`~nodes.planner.apf.APFParams` (shared field and motion law) plus the
 algorithm's own ``Params``. A TOML file may give them at top level or in ``[apf]`` /
-``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``.
+``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``. Every
+value is checked against its declared type and range (:mod:`nodes.planner.settings`)
+by :func:`check_setting`, the one check for ``--set``, ``--params`` and live parameters.
 """
 
 from __future__ import annotations
@@ -16,10 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import ConfigError
+from common.params import Spec, check_all, check_value, unknown_name
 from nodes.planner.apf import APFParams, apf_force
 from nodes.planner.arapf import ARAPFStrategy
 from nodes.planner.core import Plan, Planner, ScanView
 from nodes.planner.papf import PAPFStrategy
+from nodes.planner.settings import specs_of
 from nodes.planner.wang import WangStrategy
 
 try:
@@ -56,59 +60,69 @@ PLANNERS: dict[str, type] = {
 }
 
 
-def _convert(cls, name: str, text):
-    """Parse ``text`` to the type of ``cls.name``; ConfigError names the field and type."""
-    f = {f.name: f for f in dataclasses.fields(cls)}[name]
-    kind = type(f.default)
-    if not isinstance(text, str):
-        value = text
-    elif kind is bool:
-        low = text.strip().lower()
-        if low not in ("true", "false", "1", "0", "yes", "no"):
-            raise ConfigError(f"setting {name}={text!r}: expected true or false")
-        value = low in ("true", "1", "yes")
-    else:
-        try:
-            value = kind(text)
-        except ValueError:
-            raise ConfigError(f"setting {name}={text!r}: expected a {kind.__name__}") from None
-    if kind is float and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
-    if not isinstance(value, kind):
-        raise ConfigError(f"setting {name}={value!r}: expected a {kind.__name__}")
-    return value
+def settings_of(planner: str) -> dict[str, tuple[str, Spec, object]]:
+    """Every setting of ``planner``: name -> (table, :class:`Spec`, default value).
+
+    ``table`` is ``"apf"`` (shared field and motion law) or the planner's name. For a
+    parameter panel or any other live-parameter path: list these, and pass every new
+    value through :func:`check_setting` before using it.
+    """
+    cls = _planner_class(planner)
+    out = {}
+    for table, params_cls in (("apf", APFParams), (planner, cls.Params)):
+        specs = specs_of(params_cls)
+        for f in dataclasses.fields(params_cls):
+            out[f.name] = (table, specs[f.name], f.default)
+    return out
+
+
+def check_setting(planner: str, name: str, value, table: str = "") -> tuple[str, object]:
+    """Validate one setting of ``planner`` -> (its table, the typed value).
+
+    ``value`` may be text (``--set``) or typed (TOML, a live parameter). ``table`` ''
+    means whichever table has the name. ConfigError in one line names the setting and
+    its valid range, or the valid names (with a "did you mean") for an unknown one.
+    """
+    settings = settings_of(planner)
+    if table not in ("", "apf", planner):
+        raise ConfigError(f"setting table {table!r} is not 'apf' or {planner!r}")
+    entry = settings.get(name)
+    if entry is None or (table and entry[0] != table):
+        raise unknown_name(name, settings, f"{planner} setting")
+    return entry[0], check_value(name, value, entry[1])
+
+
+def check_params(apf: APFParams, algo) -> None:
+    """Every field of both parameter sets in range (the node checks what it is given)."""
+    check_all(apf, specs_of(APFParams), "apf")
+    check_all(algo, specs_of(type(algo)), type(algo).__name__)
+
+
+def _planner_class(planner: str) -> type:
+    if planner not in PLANNERS:
+        raise unknown_name(planner, PLANNERS, "planner")
+    return PLANNERS[planner]
 
 
 def _apply(apf: APFParams, algo, items: list[tuple[str, str, object]], planner: str):
     """Apply (table, name, value) items; table '' = whichever dataclass has the name."""
+    shared = {f.name for f in dataclasses.fields(APFParams)}
     apf_vals, algo_vals = {}, {}
-    apf_names = {f.name for f in dataclasses.fields(apf)}
-    algo_names = {f.name for f in dataclasses.fields(algo)}
     for table, name, value in items:
-        if table not in ("", "apf", planner):
-            raise ConfigError(f"setting table {table!r} is not 'apf' or {planner!r}")
-        if name in algo_names and table in ("", planner):
-            algo_vals[name] = _convert(type(algo), name, value)
-        elif name in apf_names and table in ("", "apf"):
-            apf_vals[name] = _convert(APFParams, name, value)
-        else:
-            valid = sorted(apf_names | algo_names)
-            raise ConfigError(f"unknown planner setting {name!r} for {planner!r}; valid: {valid}")
-    return dataclasses.replace(apf, **apf_vals), dataclasses.replace(algo, **algo_vals)
+        typed = check_setting(planner, name, value, table)[1]
+        (apf_vals if name in shared else algo_vals)[name] = typed
+    apf, algo = dataclasses.replace(apf, **apf_vals), dataclasses.replace(algo, **algo_vals)
+    check_params(apf, algo)
+    return apf, algo
 
 
 def load_params(planner: str, file: str | Path | None = None, sets: list[str] = ()):
-    """(APFParams, algorithm Params) from defaults, then ``file``, then ``sets``."""
-    if planner not in PLANNERS:
-        raise ConfigError(f"unknown planner {planner!r}; valid: {sorted(PLANNERS)}")
-    apf, algo = APFParams(), PLANNERS[planner].Params()
+    """(APFParams, algorithm Params) from defaults, then ``file``, then ``sets``; every
+    value checked against its declared range (:mod:`nodes.planner.settings`)."""
+    apf, algo = APFParams(), _planner_class(planner).Params()
     items: list[tuple[str, str, object]] = []
     if file:
-        try:
-            data = tomllib.loads(Path(file).read_text())
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise ConfigError(f"cannot read planner params {str(file)!r}: {exc}") from None
-        for key, value in data.items():
+        for key, value in _read_toml(file).items():
             if isinstance(value, dict):
                 if key not in ("apf", planner):  # tables of other planners are ignored
                     continue
@@ -124,7 +138,20 @@ def load_params(planner: str, file: str | Path | None = None, sets: list[str] = 
     return _apply(apf, algo, items, planner)
 
 
+def _read_toml(file: str | Path) -> dict:
+    path = Path(file)
+    if not path.is_file():
+        raise ConfigError(f"planner params {str(file)!r}: no such file")
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"planner params {str(file)!r} is not a readable TOML file: "
+                          f"{msg}") from None
+
+
 def make_planner(planner: str, file: str | Path | None = None, sets: list[str] = ()) -> Planner:
     """A ready :class:`Planner` running the named algorithm."""
     apf, algo = load_params(planner, file, sets)
+    check_params(apf, algo)   # again where the values are used (load_params checked each)
     return Planner(PLANNERS[planner](algo), apf)

@@ -1,0 +1,103 @@
+"""Declared type and valid range of every planner parameter (see :mod:`common.params`).
+
+One table per params dataclass; :data:`SPECS` maps the class to its table and a test
+checks that every field has a spec and every default lies in it. Safety parameters
+(``safety=True``) are those that keep obstacle avoidance and the speed limits on:
+a repulsion range, gain or charge of the wrong sign, a zero or infinite range, or a
+speed above the ROSbot's limits is refused, so no setting can switch avoidance off.
+
+Charges: the PAPF paper's force between two charges is ``-k q_a q_b / d^2`` along the
+line (eq. 2), so obstacles repel only while ``q_V`` and ``q_O`` (and the quark charge
+``q_Q``) share a sign, and the goal attracts only while ``q_G`` has the other one. The
+ranges fix the paper's signs: ``q_V, q_O, q_Q < 0 < q_G``.
+"""
+
+from __future__ import annotations
+
+from common.params import FLAG, Spec, choice, integer, num, pos
+from common.robot import LIDAR_RANGE_MAX_M, V_MAX_M_S, W_MAX_RAD_S
+from nodes.planner.apf import APFParams
+from nodes.planner.arapf import ARAPFParams
+from nodes.planner.papf import PAPFParams
+from nodes.planner.wang import WangParams
+
+MAX_BEAMS = 100_000      # [-] LiDAR points a planner is configured for
+MAX_GAIN = 1e4           # [-] largest force constant (defaults are 1 .. 10)
+
+APF: dict[str, Spec] = {
+    "lidar_points": integer(1, MAX_BEAMS),
+    "q_v": num(-100.0, 0.0, hi_open=True, safety=True),
+    "q_o": num(-100.0, 0.0, hi_open=True, safety=True),
+    "q_g": num(0.0, 100.0, lo_open=True),
+    "k_vg": pos(MAX_GAIN),
+    "k_vo_l": pos(MAX_GAIN, safety=True),
+    "d_o": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "theta_err_max_deg": pos(180.0, "deg"),
+    "v_max": pos(V_MAX_M_S, "m/s", safety=True),
+    "k_theta": pos(100.0, "1/s"),
+    "w_max": pos(W_MAX_RAD_S, "rad/s", safety=True),
+    "scale_to_scan": FLAG,
+    "stagnation_window_s": pos(3600.0, "s"),
+    "stagnation_progress_m": pos(10.0, "m"),
+    "stagnation_roam_m": pos(100.0, "m"),
+    "stagnation_max_s": pos(86_400.0, "s"),
+}
+
+PAPF: dict[str, Spec] = {
+    "horizon_m": pos(10.0, "m"),
+    "step_m": num(0.001, 1.0, "m"),
+    "stag_fraction": pos(1.0),
+    "stag_radius_fraction": pos(1.0),
+    "k_vq_factor": num(0.0, 1000.0),
+    "q_q": num(-100.0, 0.0, hi_open=True, safety=True),
+    "max_quarks": integer(0, 1000),
+    "d_q": pos(LIDAR_RANGE_MAX_M, "m"),
+    "quark_ball_m": num(0.0, 5.0, "m"),
+    "tie_tol_m": num(0.0, 1.0, "m"),
+    "use_numba": FLAG,
+    "persist_quarks": FLAG,
+    "pull_range_fraction": num(0.0, 100.0),
+}
+
+ARAPF: dict[str, Spec] = {
+    "k_ro_l": pos(MAX_GAIN, safety=True),
+    "k_virtual_factor": num(0.0, 1000.0),
+    "alpha_deg": pos(180.0, "deg"),
+    "d_min": pos(LIDAR_RANGE_MAX_M, "m"),
+    "s_min": pos(10.0, "m"),
+    "d_max": pos(5.0, "m"),
+    "n_wall": integer(2, 1000),
+    "beta_deg": pos(180.0, "deg"),
+    "delta_gamma_deg": pos(180.0, "deg"),
+    "range_limited": FLAG,
+    "wall_range_limited": FLAG,
+    "obstacle_offset_m": num(0.0, 5.0, "m"),
+    "follow": FLAG,
+    "passage_width": choice("opening", "gap"),
+}
+
+WANG: dict[str, Spec] = {
+    "k_att": pos(1000.0),
+    "k_rep_l": pos(MAX_GAIN, safety=True),
+    "lidar_points": integer(1, MAX_BEAMS),
+    "rho_0": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "r_0": num(0.0, 5.0, "m"),
+    "control_offset_m": num(0.0, 1.0, "m"),
+}
+
+SPECS: dict[type, dict[str, Spec]] = {
+    APFParams: APF, PAPFParams: PAPF, ARAPFParams: ARAPF, WangParams: WANG,
+}
+
+
+def specs_of(params_cls: type) -> dict[str, Spec]:
+    """The table of a params class (a class with no fields has an empty one)."""
+    return SPECS.get(params_cls, {})
+
+
+# The planner node's own options (python -m nodes.planner): the stale-input stop is a
+# safety setting — past 2 s a robot drives on data that no longer describes the world.
+NODE: dict[str, Spec] = {
+    "stale_timeout": pos(2.0, "s", safety=True),
+    "pair_timeout": pos(10.0, "s"),
+}
