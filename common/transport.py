@@ -23,6 +23,7 @@ import time
 from collections import Counter
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 import zenoh
 
@@ -58,7 +59,7 @@ def zenoh_config(mode: str = "client", connect: Iterable[str] = (), listen: Iter
     if mode not in MODES:
         raise ConfigError(f"Zenoh mode {mode!r} is not one of {MODES}")
     try:
-        conf = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
+        conf = load_config_file(config_file) if config_file else zenoh.Config()
     except Exception as exc:  # zenoh raises ZError with the parser's message
         raise ConfigError(f"cannot read Zenoh config {config_file!r}: {exc}") from None
     connect, listen = list(connect), list(listen)
@@ -73,9 +74,53 @@ def zenoh_config(mode: str = "client", connect: Iterable[str] = (), listen: Iter
     return conf
 
 
+# Zenoh config fields that name files (TLS certificates and keys, the password dictionary)
+PATH_FIELDS = ("root_ca_certificate", "listen_private_key", "listen_certificate",
+               "connect_private_key", "connect_certificate", "dictionary_file")
+
+
+def load_config_file(path: str) -> zenoh.Config:
+    """A Zenoh config file whose relative file paths are relative to the file itself (so
+    a bundle of certificates and configs works wherever it is copied). A JSON5 file that
+    is not plain JSON is handed to Zenoh as it is (its paths relative to the working dir)."""
+    text = Path(path).read_text(encoding="utf-8")
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return zenoh.Config.from_file(path)
+    _resolve_paths(data, Path(path).resolve().parent)
+    return zenoh.Config.from_json5(json.dumps(data))
+
+
+def _resolve_paths(node, base: Path) -> None:
+    if isinstance(node, dict):
+        for k, v in node.items():
+            if k in PATH_FIELDS and isinstance(v, str) and not Path(v).is_absolute():
+                node[k] = str(base / v)
+            else:
+                _resolve_paths(v, base)
+    elif isinstance(node, list):
+        for v in node:
+            _resolve_paths(v, base)
+
+
 def config_from_args(args: argparse.Namespace) -> zenoh.Config:
     return zenoh_config(args.mode, args.connect, args.listen, args.multicast_scouting,
                         args.zenoh_config)
+
+
+@contextmanager
+def open_session(args: argparse.Namespace, where: str = ""):
+    """``zenoh.open`` for a command's ``args``; no reachable router is a ConfigError
+    (one line, exit 2) instead of a Zenoh traceback."""
+    try:
+        session = zenoh.open(config_from_args(args))
+    except zenoh.ZError as exc:
+        first = str(exc).split(" at /")[0].strip()
+        raise ConfigError(f"cannot reach a Zenoh router at {where or args.connect}: {first}; "
+                          "start the stack (or python -m papf.router) or give --connect") from None
+    with session:
+        yield session
 
 
 def setup_logging(name: str, level: str = "INFO") -> logging.Logger:

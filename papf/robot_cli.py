@@ -28,6 +28,8 @@ def register(sub) -> None:
                         "the laptop's connect endpoint)")
     p.add_argument("--namespace", default="rosbot", help="our key namespace (rosbot)")
     p.add_argument("--bridge-namespace", default="", help="zenoh-bridge-ros2dds namespace")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing bundle in DIR (a new CA and new passwords)")
     p.set_defaults(func=_cmd_make_certs)
 
 
@@ -111,14 +113,14 @@ def _cmd_emulator(args) -> int:
 
 def _cmd_make_certs(args) -> int:
     from nodes.base_driver.rosbot import BridgeTopics
-    from papf.security import write_bundle
+    from papf.security import where_files_go, write_bundle
 
-    b = write_bundle(args.dir, args.robot_host, args.namespace, BridgeTopics(args.bridge_namespace))
-    print(f"wrote {b.dir}: ca.pem, robot.pem/.key, laptop.pem/.key, credentials.txt, "
-          "router.json5, robot.json5, laptop.json5, observer.json5\n"
-          f"robot:  papf launch robot --router-config {b.router} --zenoh-config {b.robot} "
+    b = write_bundle(args.dir, args.robot_host, args.namespace, BridgeTopics(args.bridge_namespace),
+                     force=args.force)
+    print(f"wrote {b.dir} (README.txt says the same):\n{where_files_go()}"
+          "robot:  papf launch robot --router-config router.json5 --zenoh-config robot.json5 "
           "--listen tcp/127.0.0.1:7447 --listen tls/0.0.0.0:7448\n"
-          f"laptop: papf launch laptop --zenoh-config {b.laptop} --world W", file=sys.stderr)
+          "laptop: papf launch laptop --zenoh-config laptop.json5 --world W", file=sys.stderr)
     return 0
 
 

@@ -13,6 +13,18 @@
   credentials, read-only: for viewers, and to test that valid credentials alone cannot
   drive the robot).
 
+Identities are bound to how they connect, not to a password alone (Zenoh ACL subjects
+match user names, link protocols and certificate common names together): ``robot`` is
+the robot's password *over the loopback TCP listener* (only processes on the robot reach
+it); ``planner`` and ``observer`` are their passwords *with the laptop's certificate*
+(TLS). The robot's password over TLS, or the planner's over TCP, matches no subject and
+is denied everything.
+
+The configs name their files relative to themselves (``ca.pem``, not ``/home/…/ca.pem``;
+:func:`common.transport.load_config_file` resolves them), so the bundle works wherever it
+is copied. Which file goes to which host: :data:`HOST_FILES` (also written to
+``README.txt`` in the bundle). ``ca.key`` goes nowhere: keep it where the bundle was made.
+
 Access control (:func:`access_control`): default deny. Every authenticated identity may
 subscribe, query and hold liveliness tokens, and receive every publication; each role may
 *put* only on the keys of :data:`ROLES`. Only ``planner`` may put on ``<ns>/cmd_vel`` and
@@ -24,8 +36,10 @@ allowed keys, generated from this table.
 
 from __future__ import annotations
 
+import ipaddress
 import json
 import os
+import re
 import secrets
 import shutil
 import subprocess
@@ -48,6 +62,21 @@ ROLES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
                  "scan"), ()),
     "observer": ((), ()),
 }
+# role -> what a connection must show besides the role's password (Zenoh ACL subject fields)
+BINDINGS: dict[str, dict[str, list[str]]] = {
+    "robot": {"link_protocols": ["tcp"]},          # the loopback listener: on the robot only
+    "planner": {"cert_common_names": ["laptop"]},  # TLS with the laptop's certificate
+    "observer": {"cert_common_names": ["laptop"]},
+}
+HOST_FILES = {
+    "robot": ("ca.pem", "robot.pem", "robot.key", "credentials.txt", "router.json5",
+              "robot.json5"),
+    "laptop": ("ca.pem", "laptop.pem", "laptop.key", "laptop.json5", "observer.json5"),
+}
+BUNDLE_FILES = ("ca.pem", "ca.key", "robot.pem", "robot.key", "laptop.pem", "laptop.key",
+                "credentials.txt", "router.json5", "robot.json5", "laptop.json5",
+                "observer.json5", "README.txt")
+_LABEL = re.compile(r"^(?!-)[A-Za-z0-9-]{1,63}(?<!-)$")
 # every message type that is not a data write: declarations, queries, liveliness
 NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "liveliness_token",
            "liveliness_query", "declare_liveliness_subscriber")
@@ -64,7 +93,7 @@ def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None
     ]
     subjects, policies = [], []
     for role, (ours, bridged) in ROLES.items():
-        subjects.append({"id": role, "usernames": [role]})
+        subjects.append({"id": role, "usernames": [role], **BINDINGS[role]})
         keys = [f"{namespace}/{t}" for t in ours] + [bridge.key(getattr(bridge, t)) for t in bridged]
         names = ["talk", "receive"]
         if keys:
@@ -99,6 +128,19 @@ def _openssl(*args: str) -> None:
         raise ConfigError(f"openssl {args[0]} failed: {proc.stderr.strip()[-400:]}")
 
 
+def check_host(host: str) -> str:
+    """``host`` if it is an IP address or a DNS name; ConfigError otherwise."""
+    try:
+        return str(ipaddress.ip_address(host))
+    except ValueError:
+        pass
+    name = host[:-1] if host.endswith(".") else host
+    if 0 < len(name) <= 253 and all(_LABEL.match(label) for label in name.split(".")):
+        return host
+    raise ConfigError(f"--robot-host {host!r} is not an IP address or a DNS name "
+                      "(letters, digits, '-' and '.')")
+
+
 def make_certs(out: Path, robot_hosts: list[str], days: int = CERT_DAYS) -> None:
     """A test CA, ``robot`` (server + client) and ``laptop`` (client) EC certificates in ``out``."""
     key = ["-newkey", "ec", "-pkeyopt", f"ec_paramgen_curve:{CURVE}", "-nodes"]
@@ -106,7 +148,10 @@ def make_certs(out: Path, robot_hosts: list[str], days: int = CERT_DAYS) -> None
              "-days", str(days), "-subj", "/CN=papf-test-ca")
     sans = ["DNS:localhost", "IP:127.0.0.1"]
     for host in robot_hosts:
-        san = f"IP:{host}" if host.replace(".", "").isdigit() or ":" in host else f"DNS:{host}"
+        try:
+            san = f"IP:{ipaddress.ip_address(host)}"
+        except ValueError:
+            san = f"DNS:{host}"
         if san not in sans:
             sans.append(san)
     for who, alt in (("robot", sans), ("laptop", ["DNS:laptop"])):
@@ -125,45 +170,69 @@ def make_certs(out: Path, robot_hosts: list[str], days: int = CERT_DAYS) -> None
         k.chmod(0o600)
 
 
-def _tls(out: Path, who: str) -> dict:
-    return {"root_ca_certificate": str(out / "ca.pem"), "enable_mtls": True,
-            "connect_private_key": str(out / f"{who}.key"),
-            "connect_certificate": str(out / f"{who}.pem")}
+def _tls(who: str) -> dict:
+    """TLS settings naming the bundle's files relative to the config (module doc)."""
+    return {"root_ca_certificate": "ca.pem", "enable_mtls": True,
+            "connect_private_key": f"{who}.key", "connect_certificate": f"{who}.pem"}
 
 
 def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosbot",
                  bridge: BridgeTopics | None = None, local_port: int = LOCAL_PORT,
-                 tls_port: int = TLS_PORT) -> Bundle:
-    """Certificates, credentials and the four Zenoh configs (module doc) in directory ``out``."""
-    out = Path(out).resolve()
-    out.mkdir(parents=True, exist_ok=True)
+                 tls_port: int = TLS_PORT, force: bool = False) -> Bundle:
+    """Certificates, credentials and the four Zenoh configs (module doc) in directory ``out``.
+
+    An existing bundle in ``out`` (its CA and passwords) is replaced only with ``force``.
+    """
     if not robot_hosts:
         raise ConfigError("give at least one --robot-host (the robot's IP or DNS name the "
                           "laptop connects to)")
+    robot_hosts = [check_host(h) for h in robot_hosts]
+    out = Path(out).resolve()
+    existing = [f for f in BUNDLE_FILES if (out / f).exists()]
+    if existing and not force:
+        raise ConfigError(f"{out} already holds a bundle ({', '.join(existing[:3])}…); "
+                          "replacing it would change the CA and every password: give --force, "
+                          "or another directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot create {out}: {exc.strerror}") from None
     make_certs(out, robot_hosts)
     passwords = {role: secrets.token_urlsafe(18) for role in ROLES}
     cred = out / "credentials.txt"
     cred.write_text("".join(f"{u}:{p}\n" for u, p in passwords.items()))
     cred.chmod(0o600)
-    local, remote = f"tcp/127.0.0.1:{local_port}", f"tls/{robot_hosts[0]}:{tls_port}"
-    router_tls = {**_tls(out, "robot"), "listen_private_key": str(out / "robot.key"),
-                  "listen_certificate": str(out / "robot.pem")}
+    host = robot_hosts[0]
+    local = f"tcp/127.0.0.1:{local_port}"
+    remote = f"tls/[{host}]:{tls_port}" if ":" in host else f"tls/{host}:{tls_port}"
+    router_tls = {**_tls("robot"), "listen_private_key": "robot.key",
+                  "listen_certificate": "robot.pem"}
     configs = {
         "router": {"mode": "router",
                    "listen": {"endpoints": [local, f"tls/0.0.0.0:{tls_port}"]},
                    "transport": {"link": {"tls": router_tls},
                                  "auth": {"usrpwd": {"user": "robot", "password": passwords["robot"],
-                                                     "dictionary_file": str(cred)}}},
+                                                     "dictionary_file": "credentials.txt"}}},
                    "access_control": access_control(namespace, bridge)},
         "robot": _client(local, "robot", passwords, None),
-        "laptop": _client(remote, "planner", passwords, _tls(out, "laptop")),
-        "observer": _client(remote, "observer", passwords, _tls(out, "laptop")),
+        "laptop": _client(remote, "planner", passwords, _tls("laptop")),
+        "observer": _client(remote, "observer", passwords, _tls("laptop")),
     }
     for name, conf in configs.items():
         path = out / f"{name}.json5"
         path.write_text(json.dumps(conf, indent=2) + "\n")
         os.chmod(path, 0o600)
+    (out / "README.txt").write_text(where_files_go())
     return Bundle(out)
+
+
+def where_files_go() -> str:
+    """Which bundle file goes to which host (README.txt of the bundle, make-certs' output)."""
+    return ("Copy to the robot:  " + " ".join(HOST_FILES["robot"]) + "\n"
+            "Copy to the laptop: " + " ".join(HOST_FILES["laptop"]) + "\n"
+            "Keep ca.key here (it signs certificates; no host needs it).\n"
+            "The configs name these files relative to themselves: keep each host's files "
+            "together in one directory.\n")
 
 
 def _client(endpoint: str, user: str, passwords: dict, tls: dict | None) -> dict:

@@ -3,6 +3,9 @@ always die with the test, and a client session for the test itself."""
 
 from __future__ import annotations
 
+import os
+import shutil
+import subprocess
 import sys
 
 import pytest
@@ -36,3 +39,22 @@ def session(router):
     """A Zenoh client session of the test, connected to the router fixture."""
     with zenoh.open(zenoh_config("client", [router])) as s:
         yield s
+
+
+def tiny_disk_free(path) -> int:
+    return shutil.disk_usage(path).free
+
+
+@pytest.fixture
+def tiny_disk(tmp_path):
+    """A 256 KB tmpfs mounted at ``tmp_path/disk`` (a disk that fills up); skipped where
+    mounting is not allowed (not root, no tmpfs)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs",
+                                            str(disk)], capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here (needs root)")
+    try:
+        yield disk
+    finally:
+        subprocess.run(["umount", "-l", str(disk)], capture_output=True)

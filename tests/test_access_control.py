@@ -12,7 +12,7 @@ import zenoh
 
 from common.transport import wait_alive, zenoh_config
 from nodes.base_driver.rosbot import BridgeTopics, cdr_to_robot_odom, twist_to_cdr
-from papf.security import ROLES, access_control, write_bundle
+from papf.security import ROLES, Bundle, access_control, write_bundle
 from papf.supervisor import free_port, wait_port
 from schemas import Keys, Twist
 
@@ -41,8 +41,12 @@ def secure_robot(tmp_path_factory):
     from papf.supervisor import Supervisor
 
     tcp_port, tls_port = free_port(), free_port()
-    out = tmp_path_factory.mktemp("certs")
-    bundle = write_bundle(out, ["127.0.0.1"], NS, BridgeTopics(BRIDGE), tcp_port, tls_port)
+    made = tmp_path_factory.mktemp("made") / "bundle"
+    write_bundle(made, ["127.0.0.1"], NS, BridgeTopics(BRIDGE), tcp_port, tls_port)
+    out = tmp_path_factory.mktemp("certs") / "copied"      # the bundle works where it is copied
+    shutil.copytree(made, out)
+    shutil.rmtree(made)
+    bundle = Bundle(out)
     tcp, tls = f"tcp/127.0.0.1:{tcp_port}", f"tls/127.0.0.1:{tls_port}"
     trace = out / "trace.jsonl"
     py, robot = sys.executable, ["--zenoh-config", str(bundle.robot), "--namespace", NS]
@@ -99,6 +103,30 @@ def test_valid_credentials_but_not_the_planner_cannot_move_the_robot(secure_robo
     assert seen[-1].pose.yaw >= 0.0
 
 
+def test_robot_password_with_the_laptop_certificate_cannot_move_the_robot(secure_robot,
+                                                                          tmp_path):
+    """The ACL binds identities to how they connect: the robot's password over the external
+    TLS listener (with the laptop's certificate) matches no subject, so its cmd_vel on the
+    bridge key never reaches the robot past the driver's limits and watchdog."""
+    bundle, _, tls, trace = secure_robot
+    conf = json.loads(bundle.laptop.read_text())
+    robot_pwd = json.loads(bundle.robot.read_text())["transport"]["auth"]["usrpwd"]
+    conf["transport"]["auth"]["usrpwd"] = robot_pwd
+    path = bundle.dir / "stolen.json5"          # beside the certificates it names
+    path.write_text(json.dumps(conf))
+    try:
+        with zenoh.open(zenoh_config("client", [tls], config_file=str(path))) as s:
+            for _ in range(15):
+                s.put(f"{BRIDGE}/cmd_vel", twist_to_cdr(0.4, -2.0))
+                time.sleep(0.1)
+            time.sleep(0.5)
+    except zenoh.ZError:
+        pass                                     # refused outright is fine too
+    finally:
+        path.unlink()
+    assert not [c for c in _commands(trace) if c["w"] < -1.5], "the robot's password over TLS moved it"
+
+
 def test_the_planner_identity_moves_the_robot(secure_robot):
     bundle, _, tls, trace = secure_robot
     keys = Keys(NS)
@@ -108,6 +136,30 @@ def test_the_planner_identity_moves_the_robot(secure_robot):
             s.put(keys.cmd_vel, Twist(stamp_ns=0, v=0.3, w=0.0).to_bytes())
             time.sleep(0.1)
     assert any(c["v"] > 0 for c in _commands(trace))
+
+
+def test_make_certs_refuses_to_replace_a_bundle_and_bad_hosts(tmp_path):
+    if shutil.which("openssl") is None:
+        pytest.skip("the openssl command is needed to make test certificates")
+    import subprocess
+
+    def certs(*args):
+        return subprocess.run([sys.executable, "-m", "papf", "make-certs", *map(str, args)],
+                              capture_output=True, text=True, timeout=60)
+
+    out = tmp_path / "b"
+    p = certs(out, "--robot-host", "10.0.0.2")
+    assert p.returncode == 0 and "Copy to the robot:" in p.stderr
+    ca = (out / "ca.pem").read_bytes()
+    assert not any(str(tmp_path) in f.read_text() for f in out.glob("*.json5"))  # relative
+    p = certs(out, "--robot-host", "10.0.0.2")
+    assert p.returncode == 2 and "--force" in p.stderr and (out / "ca.pem").read_bytes() == ca
+    assert certs(out, "--robot-host", "10.0.0.2", "--force").returncode == 0
+    assert (out / "ca.pem").read_bytes() != ca
+    for host in ("bad host;x", "a..b", "-x", "$(reboot)"):
+        p = certs(tmp_path / "c", f"--robot-host={host}")
+        assert p.returncode == 2 and "is not an IP address or a DNS name" in p.stderr, host
+    assert not (tmp_path / "c").exists()
 
 
 @pytest.mark.e2e

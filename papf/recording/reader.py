@@ -21,6 +21,7 @@ from mcap.reader import make_reader
 
 from common.errors import RecordingError, SchemaError
 from nodes.recorder.writer import RUN_METADATA
+from papf.recording.scan import open_regular
 from schemas.base import Message
 from schemas.messages import BY_TYPE
 
@@ -82,13 +83,10 @@ class Recording:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
-        try:
-            self._file = open(self.path, "rb")
-        except OSError as exc:
-            raise RecordingError(f"cannot open recording {str(path)!r}: {exc}") from None
+        self._file = open_regular(self.path)
         try:
             self._check_ends()
-            self._reader = make_reader(self._file)
+            self._reader = make_reader(self._file, validate_crcs=True)
             self.summary = self._reader.get_summary()
             self.metadata = {m.name: dict(m.metadata) for m in self._reader.iter_metadata()}
         except RecordingError:
@@ -161,8 +159,11 @@ class Recording:
                 yield RawMessage(channel.topic, msg.data, msg.log_time, msg.publish_time,
                                  schema.name if schema is not None else "",
                                  channel.message_encoding)
-        except Exception as exc:
-            raise truncated_error(self.path, exc) from None
+        except Exception as exc:  # the file has its footer (checked on open): damage
+            raise RecordingError(
+                f"{self.path} is damaged: a chunk fails its CRC or does not decompress "
+                f"({exc}); its messages cannot be trusted. Salvage the rest with: "
+                f"papf recover {self.path} FIXED.mcap") from None
 
     def messages(self, keys: str | Iterable[str] | None = None,
                  log_time_order: bool = True) -> Iterator[RecordedMessage]:

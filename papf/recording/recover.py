@@ -1,54 +1,70 @@
 """Salvage a truncated or damaged recording: ``papf recover BROKEN.mcap FIXED.mcap``.
 
 A recorder killed mid-run leaves an MCAP without its summary and footer, often with
-a half-written last record. :func:`recover` reads the records sequentially, checking
-each record's framing against the file size (a cut record is never half-read),
-decompresses and CRC-checks every chunk, and re-writes every complete schema,
-channel, metadata record and message into a new, valid file (with indexes). It stops
-at the first incomplete record; a chunk that fails its CRC or does not decompress is
-skipped and counted.
+a half-written last record; a copy or a disk may flip bytes anywhere. :func:`recover`
+walks the records with :func:`papf.recording.scan.scan_records` (framing checked
+against the file size, every chunk decompressed and CRC-checked, resynchronising on
+the next intact chunk after damage) and re-writes every intact schema, channel,
+metadata record and message into a new, valid file (with indexes). What was lost is
+counted — damaged chunks, the messages they held, skipped bytes — and said.
+
+The output is written beside its final name and renamed into place only when
+complete: a full disk or a missing directory leaves no partial or empty file behind.
 """
 
 from __future__ import annotations
 
-import io
-import struct
-from collections.abc import Iterator
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from mcap.data_stream import ReadDataStream
-from mcap.opcode import Opcode
-from mcap.records import Channel, Chunk, Header, Message, Metadata, Schema
-from mcap.stream_reader import breakup_chunk
+from mcap.records import Channel, Header, Message, Metadata, Schema
 from mcap.writer import Writer
 
 import papf
 from common.errors import RecordingError
 from nodes.recorder.writer import COMPRESSIONS
-from papf.recording.reader import MAGIC
-
-_FRAME = struct.Struct("<BQ")  # record opcode, record length [bytes]
+from papf.recording.scan import ScanStats, open_regular, scan_records
 
 
 @dataclass
 class RecoverStats:
-    """What :func:`recover` kept. Times in integer nanoseconds."""
+    """What :func:`recover` kept and lost. Times in integer nanoseconds."""
 
     messages: int = 0
     channels: int = 0
     schemas: int = 0
     metadata: int = 0
-    skipped_chunks: int = 0    # chunks that failed their CRC or did not decompress
     orphan_messages: int = 0   # messages whose channel record was lost
     first_log_ns: int | None = None
     last_log_ns: int | None = None
     first_receive_ns: int | None = None
     last_receive_ns: int | None = None
-    bytes_read: int = 0        # bytes of the broken file made of complete records
-    bytes_total: int = 0
-    complete: bool = False     # the source already had its data-end record
-    stopped_at: str = ""       # why reading stopped
+    scan: ScanStats = field(default_factory=ScanStats)
+
+    @property
+    def skipped_chunks(self) -> int:
+        """Chunks that failed their CRC or did not decompress."""
+        return self.scan.bad_chunks
+
+    @property
+    def complete(self) -> bool:
+        """The source had its data-end record and nothing in it was damaged."""
+        return self.scan.data_end and not self.scan.damaged
+
+    @property
+    def lost_messages(self) -> int | None:
+        """Messages lost: what the file's own statistics say it held minus what was kept,
+        else the message indexes of the damaged chunks; None when nothing tells."""
+        if self.scan.expected_messages is not None:
+            return max(0, self.scan.expected_messages - self.messages)
+        if self.scan.data_end and (self.scan.lost_messages or not self.scan.damaged):
+            return self.scan.lost_messages + self.orphan_messages
+        return None
+
+    @property
+    def stopped_at(self) -> str:
+        return self.scan.stopped_at
 
     @property
     def log_span_s(self) -> float:
@@ -64,28 +80,41 @@ class RecoverStats:
             return 0.0
         return (self.last_receive_ns - self.first_receive_ns) / 1e9
 
+    def lost(self) -> str:
+        """What was lost, in words ('' when nothing)."""
+        sc, parts = self.scan, []
+        if sc.bad_chunks:
+            parts.append(f"{sc.bad_chunks} damaged chunk(s) failed their CRC")
+        if sc.damaged_bytes:
+            parts.append(f"{sc.damaged_bytes} damaged bytes skipped at byte(s) "
+                         + ", ".join(map(str, sc.damage_at)))
+        if self.orphan_messages:
+            parts.append(f"{self.orphan_messages} messages lost their channel")
+        cut = "" if sc.data_end else (f"the file was cut short ({sc.stopped_at}): whatever "
+                                      "was recorded after that is lost")
+        if not parts:
+            return cut
+        n = self.lost_messages
+        head = f"LOST {n} messages" if n is not None else "LOST an unknown number of messages"
+        return f"{head}: " + "; ".join(parts + ([cut] if cut else []))
+
     def summary(self) -> str:
-        return (f"kept {self.messages} messages on {self.channels} channels, "
+        total = f" of {self.scan.expected_messages}" if self.scan.expected_messages is not None \
+            else ""
+        text = (f"kept {self.messages}{total} messages on {self.channels} channels, "
                 f"log time span {self.log_span_s:.3f} s, received over "
-                f"{self.receive_span_s:.3f} s; read {self.bytes_read} of "
-                f"{self.bytes_total} bytes ({self.stopped_at})")
+                f"{self.receive_span_s:.3f} s")
+        lost = self.lost()
+        return f"{text}; {lost}" if lost else f"{text}; the file was complete, nothing lost"
 
-
-def _frames(f: io.BufferedReader, size: int, stats: RecoverStats) -> Iterator[tuple[int, bytes]]:
-    """Complete records ``(opcode, body)`` after the leading magic."""
-    pos = len(MAGIC)
-    while True:
-        if pos + _FRAME.size > size:
-            stats.stopped_at = "end of file" if pos == size else f"cut record header at byte {pos}"
-            return
-        opcode, length = _FRAME.unpack(f.read(_FRAME.size))
-        if pos + _FRAME.size + length > size:
-            stats.stopped_at = f"cut record (opcode {opcode:#04x}) at byte {pos}"
-            return
-        body = f.read(length)
-        pos += _FRAME.size + length
-        stats.bytes_read = pos
-        yield opcode, body
+    def to_json(self, output: str) -> dict:
+        sc = self.scan
+        return {"output": output, "messages": self.messages, "log_span_s": self.log_span_s,
+                "receive_span_s": self.receive_span_s, "channels": self.channels,
+                "complete": self.complete, "skipped_chunks": sc.bad_chunks,
+                "lost_messages": self.lost_messages, "expected_messages": sc.expected_messages,
+                "damaged_bytes": sc.damaged_bytes, "damage_at": sc.damage_at,
+                "truncated": not sc.data_end, "stopped_at": sc.stopped_at}
 
 
 class _Copier:
@@ -126,69 +155,43 @@ class _Copier:
         s.last_receive_ns = t if s.last_receive_ns is None else max(s.last_receive_ns, t)
 
 
-def _parse(opcode: int, body: bytes):
-    stream = ReadDataStream(io.BytesIO(body))
-    if opcode == Opcode.MESSAGE:
-        return Message.read(stream, len(body))
-    reader = {Opcode.SCHEMA: Schema.read, Opcode.CHANNEL: Channel.read,
-              Opcode.METADATA: Metadata.read, Opcode.CHUNK: Chunk.read,
-              Opcode.HEADER: Header.read}.get(opcode)
-    return reader(stream) if reader is not None else None  # indexes etc.: rebuilt by the writer
-
-
 def recover(broken: str | Path, fixed: str | Path, compression: str = "zstd") -> RecoverStats:
-    """Write every complete message of ``broken`` into a new, valid MCAP ``fixed``."""
+    """Write every intact message of ``broken`` into a new, valid MCAP ``fixed``."""
     broken, fixed = Path(broken), Path(fixed)
     if broken.resolve() == fixed.resolve():
         raise RecordingError(f"recover would overwrite its input {broken}; name another output")
-    try:
-        src = open(broken, "rb")
-    except OSError as exc:
-        raise RecordingError(f"cannot open recording {str(broken)!r}: {exc}") from None
-    with src:
-        size = src.seek(0, io.SEEK_END)
-        src.seek(0)
-        head = src.read(len(MAGIC))
-        if head != MAGIC:
-            what = (f"has only {size} bytes" if MAGIC.startswith(head)
-                    else "does not start with the MCAP magic")
-            raise RecordingError(f"{broken}: {what}; there is nothing to recover")
-        stats = RecoverStats(bytes_total=size, bytes_read=len(MAGIC))
-        with open(fixed, "wb") as out:
-            writer = Writer(out, compression=COMPRESSIONS[compression])
-            copier = _Copier(writer, stats)
-            started = False
-            for opcode, body in _frames(src, size, stats):
-                if opcode == Opcode.DATA_END:
-                    stats.complete, stats.stopped_at = True, "data end: the file was complete"
-                    break
-                try:
-                    rec = _parse(opcode, body)
-                except Exception as exc:  # a record with intact framing but bad content
-                    stats.stopped_at = f"unreadable record (opcode {opcode:#04x}): {exc}"
-                    break
-                if isinstance(rec, Header) and not started:
-                    writer.start(profile=rec.profile, library=f"papf-stack/{papf.__version__}")
-                    started = True
-                    continue
-                if not started:
-                    writer.start(library=f"papf-stack/{papf.__version__}")
-                    started = True
-                _copy(copier, rec, stats)
-            if not started:
-                writer.start(library=f"papf-stack/{papf.__version__}")
-            writer.finish()
+    if not fixed.parent.is_dir():
+        raise RecordingError(f"output directory {str(fixed.parent)!r} does not exist")
+    stats = RecoverStats()
+    with open_regular(broken) as src:
+        tmp = fixed.with_name(f".{fixed.name}.partial")
+        try:
+            with open(tmp, "wb") as out:
+                _copy_all(src, out, stats, compression)
+            os.replace(tmp, fixed)
+        except OSError as exc:
+            tmp.unlink(missing_ok=True)
+            raise RecordingError(f"cannot write {fixed}: {exc.strerror or exc}; nothing was "
+                                 "written (free some space, or recover elsewhere)") from None
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
     return stats
 
 
-def _copy(copier: _Copier, rec: object, stats: RecoverStats) -> None:
-    if not isinstance(rec, Chunk):
+def _copy_all(src, out, stats: RecoverStats, compression: str) -> None:
+    writer = Writer(out, compression=COMPRESSIONS[compression])
+    copier = _Copier(writer, stats)
+    started = False
+    for rec in scan_records(src, stats.scan):
+        if isinstance(rec, Header) and not started:
+            writer.start(profile=rec.profile, library=f"papf-stack/{papf.__version__}")
+            started = True
+            continue
+        if not started:
+            writer.start(library=f"papf-stack/{papf.__version__}")
+            started = True
         copier.record(rec)
-        return
-    try:
-        records = breakup_chunk(rec, validate_crc=True)
-    except Exception:  # CRC mismatch, bad compression: this chunk is lost
-        stats.skipped_chunks += 1
-        return
-    for inner in records:
-        copier.record(inner)
+    if not started:
+        writer.start(library=f"papf-stack/{papf.__version__}")
+    writer.finish()

@@ -6,6 +6,10 @@ namespace) byte for byte, in log-time order. Message ``i`` goes out
 as possible. Log time is the messages' ``stamp_ns`` (sim time), so a lockstep run
 that took 5 s of wall time for 60 s of sim time replays over 60 s at rate 1.
 
+Recorded keys that are not Zenoh keys are mapped the way ``zenoh-bridge-ros2dds`` maps
+ROS 2 topic names (``/some/topic`` -> ``some/topic``); a key that still is not one
+(empty chunks, wildcards) is skipped and counted, never a crash.
+
 A jump in log time longer than ``max_gap_s`` (e.g. from sim-time stamps to messages
 stamped with their wall-clock receive time, which had no ``stamp_ns``) is replayed
 as ``max_gap_s``, so one odd stamp cannot stall a replay for decades.
@@ -16,6 +20,7 @@ with ``declare_publisher(key)`` (a Zenoh session); no Zenoh import here.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -36,6 +41,7 @@ Publish = Callable[[str, bytes], None]
 @dataclass
 class ReplayStats:
     messages: int = 0
+    skipped_keys: dict[str, int] = field(default_factory=dict)   # recorded key -> messages
     bytes: int = 0
     log_span_s: float = 0.0      # recorded time covered [s]
     wall_s: float = 0.0          # how long the replay took [s]
@@ -54,6 +60,34 @@ def recorded_namespace(rec: Recording) -> str | None:
             if key.endswith("/" + suffix):
                 return key[: -len(suffix) - 1]
     return None
+
+
+_NOT_IN_KEYS = set("*$?#")
+
+
+def zenoh_key(topic: str) -> str | None:
+    """The Zenoh key a recorded topic is replayed on (``/a/b`` -> ``a/b``), or None."""
+    key = topic[1:] if topic.startswith("/") else topic
+    if not key or key.endswith("/") or "//" in key or _NOT_IN_KEYS & set(key):
+        return None
+    return key
+
+
+def target_namespaces(rec: Recording, keys=None, namespace: str | None = None) -> set[str]:
+    """Namespaces a replay of ``rec`` would publish under: ``namespace`` if given, else
+    the recorded one, else the first chunk of each replayed key."""
+    if namespace:
+        return {namespace}
+    ns = recorded_namespace(rec)
+    if ns:
+        return {ns}
+    return {k.split("/")[0] for k in map(zenoh_key, rec.keys(keys)) if k}
+
+
+def check_rate(rate: float | None) -> None:
+    if rate is not None and not (math.isfinite(rate) and rate >= 0):
+        raise RecordingError(f"replay rate {rate} must be a finite number > 0 "
+                             "(or 0 for as fast as possible)")
 
 
 def remap_key(key: str, old_ns: str | None, new_ns: str | None) -> str:
@@ -138,23 +172,26 @@ def replay(path: str | Path, target: Publish | Any, rate: float | None = 1.0,
     ``namespace``: publish under this namespace instead of the recorded one;
     ``progress(done, total)`` is called about ten times a second; ``stop()`` aborts.
     """
-    if rate is not None and rate < 0:
-        raise RecordingError(f"replay rate {rate} must be > 0 (or 0 for as fast as possible)")
+    check_rate(rate)
     stats = ReplayStats()
     publishers = _Publishers(target)
     with Recording(path) as rec:
         old_ns = recorded_namespace(rec) if namespace else None
         counts = rec.counts()
         total = sum(counts.get(k, 0) for k in rec.keys(keys))
+        valid = {k: zenoh_key(remap_key(k, old_ns, namespace)) for k in rec.keys(keys)}
         try:
-            publishers.prepare(remap_key(k, old_ns, namespace) for k in rec.keys(keys))
+            publishers.prepare(k for k in valid.values() if k)
             pacer = _Pacer(rate, max_gap_s, stop, clock, sleep)
             next_progress = pacer.start
             for raw in rec.raw(keys):
+                key = valid.get(raw.key)
+                if key is None:
+                    stats.skipped_keys[raw.key] = stats.skipped_keys.get(raw.key, 0) + 1
+                    continue
                 pacer.wait(raw.log_time_ns)
                 if stop():
                     break
-                key = remap_key(raw.key, old_ns, namespace)
                 publishers.put(key, raw.data)
                 stats.messages += 1
                 stats.bytes += len(raw.data)

@@ -45,6 +45,9 @@ def find_recordings(inputs: Iterable[str | Path]) -> list[Path]:
             found += sorted(f for f in p.glob("*.mcap") if f.is_file())
         elif p.is_file():
             found.append(p)
+        elif p.exists():
+            raise RecordingError(f"{str(item)!r} is not a regular file (a FIFO or device); "
+                                 "give .mcap files or directories")
         else:
             raise RecordingError(f"{str(item)!r}: no such file or directory")
     if not found:
@@ -71,17 +74,25 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     """Read the recordings, write report.md, report.csv and the PNGs into ``out_dir``."""
     if energy_model not in (None, "paper", "motor"):
         raise ConfigError(f"energy model {energy_model!r} is not one of paper, motor")
-    runs = collect(find_recordings(inputs), energy_model, energy_params)
+    recordings = find_recordings(inputs)
     out = Path(out_dir) if out_dir is not None else default_out(inputs)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RecordingError(f"cannot create the report directory {str(out)!r}: "
+                             f"{exc.strerror}") from None
+    runs = collect(recordings, energy_model, energy_params)
     summaries = tables.summarise(runs)
     report = Report(runs, summaries, out)
     world = _world(runs)
-    report.files += [figures.trajectories_png(runs, world, out / TRAJECTORIES_PNG),
-                     figures.charge_png(runs, summaries, out / CHARGE_PNG),
-                     figures.motion_png(runs, out / MOTION_PNG)]
-    tables.write_csv(out / REPORT_CSV, runs, summaries)
-    (out / REPORT_MD).write_text(markdown(report))
+    try:
+        report.files += [figures.trajectories_png(runs, world, out / TRAJECTORIES_PNG),
+                         figures.charge_png(runs, summaries, out / CHARGE_PNG),
+                         figures.motion_png(runs, out / MOTION_PNG)]
+        tables.write_csv(out / REPORT_CSV, runs, summaries)
+        (out / REPORT_MD).write_text(markdown(report))
+    except OSError as exc:
+        raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}") from None
     report.files += [out / REPORT_CSV, out / REPORT_MD]
     return report
 
