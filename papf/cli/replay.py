@@ -1,0 +1,88 @@
+"""``papf replay F.mcap``: republish a recording on its keys with its timing (:mod:`papf.recording.replay`)."""
+
+from __future__ import annotations
+
+import sys
+
+from common.errors import ConfigError, PapfError
+from common.transport import (
+    DEFAULT_ENDPOINT,
+    StopRequested,
+    add_zenoh_args,
+    alive_nodes,
+    open_session,
+)
+from schemas import Keys
+
+
+def register(sub) -> None:
+    p = sub.add_parser("replay", help="republish a recording with its timing",
+                       description="Republish a recording on its keys, in log-time "
+                                   "order, with the recorded timing scaled by --rate.")
+    p.add_argument("file", metavar="F.mcap")
+    p.add_argument("--rate", type=float, default=1.0,
+                   help="speed factor; 0 = as fast as possible (default 1)")
+    p.add_argument("--keys", action="append", metavar="EXPR",
+                   help="replay only keys matching this key expression, repeatable (default all)")
+    p.add_argument("--into-live", action="store_true",
+                   help="replay even where a live stack runs in the target namespace "
+                        "(its nodes would act on the recorded messages)")
+    add_zenoh_args(p)
+    # --namespace from add_zenoh_args: here it remaps; unset = the recorded keys as they are.
+    p.set_defaults(func=cmd_replay, namespace=None)
+
+
+def cmd_replay(args) -> int:
+    """Check the file, the rate and where it would publish before publishing anything."""
+    from papf.recording.reader import Recording  # mcap: only when replaying
+    from papf.recording.replay import check_rate, replay, target_namespaces
+
+    stop = StopRequested()
+    try:
+        check_rate(args.rate)
+        with Recording(args.file) as rec:
+            namespaces = target_namespaces(rec, args.keys, args.namespace)
+        where = ", ".join(args.connect) or ("the --zenoh-config endpoints" if args.zenoh_config
+                                             else DEFAULT_ENDPOINT)
+        with open_session(args, where) as session:
+            _refuse_live(session, namespaces, args.into_live)
+            print(f"papf replay: publishing {args.file} into the Zenoh router at {where}, "
+                  f"namespace {', '.join(sorted(namespaces)) or '(none)'}", file=sys.stderr)
+            stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,
+                           progress=_progress_printer(), stop=lambda: bool(stop))
+    except PapfError as exc:
+        print(f"papf replay: {exc}", file=sys.stderr)
+        return 2
+    print(f"replayed {stats.messages} messages ({stats.log_span_s:.2f} s of recorded time) "
+          f"in {stats.wall_s:.2f} s", file=sys.stderr)
+    if stats.skipped_keys:
+        print(f"papf replay: skipped {sum(stats.skipped_keys.values())} messages on recorded "
+              f"topics that are not Zenoh keys: {', '.join(sorted(stats.skipped_keys))}",
+              file=sys.stderr)
+    return 130 if stop else 0
+
+
+def _refuse_live(session, namespaces: set[str], into_live: bool) -> None:
+    """A live stack in a target namespace would act on recorded messages: refuse."""
+    for ns in sorted(namespaces):
+        try:
+            alive = alive_nodes(session, Keys(ns))
+        except ValueError:
+            continue
+        if alive and not into_live:
+            raise ConfigError(f"a live stack runs in namespace {ns!r} (alive: "
+                              f"{', '.join(sorted(alive))}); replaying would feed it recorded "
+                              "messages. Replay under another --namespace, or give --into-live")
+
+
+def _progress_printer():
+    """``progress(done, total)`` that rewrites one status line on a terminal, else stays quiet."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(done: int, total: int) -> None:
+        print(f"\rreplay {done}/{total} messages", end="", file=sys.stderr, flush=True)
+        if done >= total:
+            print(file=sys.stderr)
+
+    return show
