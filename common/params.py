@@ -50,8 +50,9 @@ class Spec:
         what = "an integer" if self.kind is int else "a finite number"
         if self.lo is None and self.hi is None:
             return what
-        lo = "-inf" if self.lo is None else f"{self.lo:g}"
-        hi = "inf" if self.hi is None else f"{self.hi:g}"
+        fmt = (lambda v: str(int(v))) if self.kind is int else (lambda v: f"{v:g}")
+        lo = "-inf" if self.lo is None else fmt(self.lo)
+        hi = "inf" if self.hi is None else fmt(self.hi)
         left = "(" if self.lo_open or self.lo is None else "["
         right = ")" if self.hi_open or self.hi is None else "]"
         return f"{what} in {left}{lo}, {hi}{right}" + (f" {self.unit}" if self.unit else "")
@@ -79,6 +80,8 @@ def integer(lo: int | None, hi: int | None, unit: str = "") -> Spec:
 
 FLAG = Spec(bool)
 SEED = Spec(int, 0, 2**32 - 1)   # every noise seed (numpy's SeedSequence takes any, pybullet not)
+TIMEOUT = Spec(float, 0.0, 1e6, lo_open=True, unit="s")   # a run's limit: 11.6 days, not forever
+PORT = Spec(int, 1, 65535)       # a TCP port
 
 
 def choice(*values: str) -> Spec:

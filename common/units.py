@@ -33,11 +33,14 @@ class StampGuard:
 
     :meth:`check` returns ``""`` for a good stamp, else why it is bad: outside
     ``[0, MAX_STAMP_NS]``, or — on the ``ordered`` topics — older than the last good one.
-    A stamp of 0 is always in order: sim time restarts at 0 with each run.
+    A stamp of 0 is in order for a node that serves run after run (sim time restarts at 0
+    with each run); ``restart_at_zero=False`` for a watcher of one run (the launcher).
     """
 
-    def __init__(self, ordered: frozenset[str] | set[str] = frozenset()):
+    def __init__(self, ordered: frozenset[str] | set[str] = frozenset(),
+                 restart_at_zero: bool = True):
         self.ordered = ordered
+        self.restart_at_zero = restart_at_zero
         self.last: dict[str, int] = {}
 
     def check(self, topic: str, msg) -> str:
@@ -46,7 +49,7 @@ class StampGuard:
             return f"stamp {stamp!r} ns is outside [0, {MAX_STAMP_NS}]"
         if topic in self.ordered:
             last = self.last.get(topic, 0)
-            if 0 < stamp < last:
+            if stamp < last and (stamp > 0 or not self.restart_at_zero):
                 return f"stamp {stamp} ns is older than the last one on this topic ({last} ns)"
             self.last[topic] = stamp
         return ""

@@ -13,6 +13,7 @@ import time
 
 import zenoh
 
+from common import runauth
 from common.errors import ConfigError
 from common.transport import StopRequested, wait_alive, zenoh_config
 from papf.graph import LaunchOptions, Profile, load_profile, resolve
@@ -41,7 +42,8 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     show = (lambda n, line: True) if opt.verbose else (
         lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:", "ready as")))
     keys = Keys(opt.namespace)
-    with Supervisor(show=show) as sup:
+    run_key = runauth.new_key() if prof.run else None
+    with Supervisor(show=show, env={runauth.ENV: run_key} if run_key else None) as sup:
         if prof.router:
             sup.start("router", list(graph.processes[0].argv))
             host, _, port = connect[0].partition("/")[2].rpartition(":")
@@ -63,8 +65,9 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
                 return _failed(reason, opt, prof)
             print(f"papf launch {prof.name}: ready ({', '.join(wanted)} alive)", file=sys.stderr,
                   flush=True)
-            if prof.run:
-                return _drive_run(session, keys, sup, prof, opt, stop)
+            if prof.run:   # the goal is signed only for a planner this launcher started
+                key = bytes.fromhex(run_key) if "planner" in cmds else None
+                return _drive_run(session, keys, sup, prof, opt, stop, key)
             while not stop and not sup.dead():   # a serving host: until Ctrl-C or a death
                 stop.event.wait(0.2)
             return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
@@ -86,12 +89,12 @@ def _result(monitor: RunMonitor, opt: LaunchOptions, prof: Profile, wall_s: floa
 
 # -- the run sequence (docs/architecture.md "Start and end of a run", real time) ---------------
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
-               stop: StopRequested) -> RunResult:
+               stop: StopRequested, run_key: bytes | None = None) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
-    monitor = RunMonitor(opt.timeout_s)
+    monitor = RunMonitor(opt.timeout_s, goal=(world.goal[0], world.goal[1], world.tolerance))
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
-                      stall_s=opt.stall_s or STALL_S)
+                      stall_s=opt.stall_s or STALL_S, run_key=run_key)
     try:
         if seq.handshake(world):
             seq.start(f"profile={prof.name} world={world.name}")

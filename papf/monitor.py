@@ -3,17 +3,29 @@
 The outcome is fixed at a sim time ``t_end`` (docs/architecture.md, "Start and end
 of a run") and every figure is taken at exactly ``t_end``, so two runs with the
 same seed give identical summaries whatever the process scheduling.
+
+Trust: given the world's goal, a planner's ``reached`` counts only when the ground truth
+(the pose samples: sim pose, or odometry on the robot) at that stamp lies within the
+goal's tolerance; a refuted claim is counted, not obeyed. Memory is constant however
+long a run lasts: pose and battery samples are kept in ring buffers (:data:`POSE_WINDOW`,
+:data:`BATTERY_WINDOW`) with the path length as a running sum.
 """
 
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
+from collections import deque
 from dataclasses import asdict, dataclass
 
 from common.units import NS_PER_S as NS
 from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist
 
 MOVING_SPEED = 0.01  # [m/s] |v| above which the robot counts as moving (duration_s starts)
+POSE_WINDOW = 4096     # [-] pose samples kept: 82 s at 50 Hz, far more than the launcher lags
+BATTERY_WINDOW = 4096  # [-] battery samples kept
+MAX_FAULTS = 20        # [-] node_fault events kept verbatim (the rest are counted)
+GOAL_SLACK_M = 1e-6    # [m] rounding allowance of the ground-truth goal check
 
 OUTCOMES = ("reached", "stagnated", "collision", "timeout", "failed")
 EXIT_CODES = {"reached": 0, "stagnated": 3, "collision": 4, "timeout": 5, "failed": 6}
@@ -43,10 +55,11 @@ class RunResult:
         return EXIT_CODES.get(self.outcome, 6)
 
     def to_json(self) -> dict:
+        """Plain JSON: a missing figure (e.g. no battery sample) is null, never NaN."""
         d = asdict(self)
         for k in ("duration_s", "path_length_m", "charge_mAh", "energy_J", "sim_time_s",
                   "wall_time_s"):
-            d[k] = round(d[k], 6)
+            d[k] = round(d[k], 6) if math.isfinite(d[k]) else None
         if d["stop_latency_s"] is None:
             del d["stop_latency_s"]
         if d["faults"]:  # a fault (e.g. lockstep timeout) makes the run not bit-reproducible
@@ -56,23 +69,44 @@ class RunResult:
         return d
 
 
-class RunMonitor:
-    """Feed it the run's messages (any order per topic is fine except per-topic order)."""
+class _Pose:
+    """A pose sample with the path length driven up to it (running sum)."""
 
-    def __init__(self, timeout_s: float, stop_on_collision: bool = True):
+    __slots__ = ("stamp_ns", "x", "y", "v", "w", "path_m")
+
+    def __init__(self, msg: Odometry, path_m: float):
+        self.stamp_ns, self.x, self.y, self.v, self.w = msg.stamp_ns, msg.x, msg.y, msg.v, msg.w
+        self.path_m = path_m
+
+
+class RunMonitor:
+    """Feed it the run's messages (any order per topic is fine except per-topic order).
+
+    ``goal``: the world's goal ``(x, y, tolerance)``; with it, ``reached`` needs ground
+    truth (module doc).
+    """
+
+    def __init__(self, timeout_s: float, stop_on_collision: bool = True,
+                 goal: tuple[float, float, float] | None = None):
         self.timeout_ns = int(round(timeout_s * NS))
         self.stop_on_collision = stop_on_collision
+        self.goal = goal
         self.outcome: str | None = None
         self.reason = ""
         self.t_end_ns: int | None = None
         self.clock_ns = -1
         self.status: PlannerStatus | None = None
-        self.collisions: list[int] = []
-        self.batteries: list[BatteryState] = []
-        self._poses: list[Odometry] = []
+        self.collisions: deque[int] = deque(maxlen=BATTERY_WINDOW)
+        self._old_collisions = 0              # collisions pushed out of the window
+        self.batteries: deque[BatteryState] = deque(maxlen=BATTERY_WINDOW)
+        self._poses: deque[_Pose] = deque(maxlen=POSE_WINDOW)
+        self._motion_start_ns: int | None = None
+        self._claim: PlannerStatus | None = None   # a "reached" waiting for its pose sample
+        self.refuted_claims = 0               # "reached" claims the ground truth denied
         self.last_cmd_ns: int | None = None
         self.watchdog_stop_ns: int | None = None
         self.faults: list[str] = []
+        self.more_faults = 0
 
     # -- inputs ---------------------------------------------------------------
     def on_clock(self, msg: Clock) -> None:
@@ -82,11 +116,16 @@ class RunMonitor:
 
     def on_status(self, msg: PlannerStatus) -> None:
         self.status = msg
-        if msg.state in ("reached", "stagnated", "failed"):
+        if msg.state == "reached" and self.goal is not None:
+            self._claim = msg
+            self._check_claim()
+        elif msg.state in ("reached", "stagnated", "failed"):
             self._decide(msg.state, msg.stamp_ns, msg.reason)
 
     def on_event(self, msg: Event) -> None:
         if msg.kind == "collision":
+            if len(self.collisions) == self.collisions.maxlen:
+                self._old_collisions += 1
             self.collisions.append(msg.stamp_ns)
             if self.stop_on_collision:
                 self._decide("collision", msg.stamp_ns,
@@ -94,25 +133,55 @@ class RunMonitor:
         elif msg.kind == "watchdog_stop" and self.watchdog_stop_ns is None:
             self.watchdog_stop_ns = msg.stamp_ns
         elif msg.kind == "node_fault":
-            self.faults.append(f"{msg.source} at {msg.stamp_ns / NS:.2f} s: {msg.detail}")
+            if len(self.faults) < MAX_FAULTS:
+                self.faults.append(f"{msg.source} at {msg.stamp_ns / NS:.2f} s: {msg.detail}")
+            else:
+                self.more_faults += 1
 
     def on_battery(self, msg: BatteryState) -> None:
         self.batteries.append(msg)
 
     def on_pose(self, msg: Odometry) -> None:
-        self._poses.append(msg)
+        last = self._poses[-1] if self._poses else None
+        path = 0.0 if last is None else last.path_m + math.hypot(msg.x - last.x, msg.y - last.y)
+        self._poses.append(_Pose(msg, path))
+        if self._motion_start_ns is None and abs(msg.v) > MOVING_SPEED:
+            self._motion_start_ns = msg.stamp_ns
+        if self._claim is not None:
+            self._check_claim()
 
     def on_cmd(self, msg: Twist) -> None:
         self.last_cmd_ns = msg.stamp_ns if self.last_cmd_ns is None else max(self.last_cmd_ns,
                                                                              msg.stamp_ns)
 
-    def fail(self, reason: str) -> None:
-        """A non-deterministic failure (a node died, the stack stalled)."""
-        self._decide("failed", max(self.clock_ns, 0), reason)
+    def fail(self, reason: str, at_ns: int | None = None) -> None:
+        """A non-deterministic failure (a node died, the stack stalled), at sim time
+        ``at_ns`` (default: the clock now), never past the timeout."""
+        t = max(self.clock_ns, 0) if at_ns is None else max(at_ns, 0)
+        self._decide("failed", min(t, self.timeout_ns), reason)
 
     def _decide(self, outcome: str, t_ns: int, reason: str) -> None:
         if self.outcome is None or t_ns < (self.t_end_ns or 0):
             self.outcome, self.t_end_ns, self.reason = outcome, t_ns, reason
+
+    def _check_claim(self) -> None:
+        """Judge a ``reached`` claim by the pose sample at its stamp (once that arrived)."""
+        claim = self._claim
+        if not self._poses or self._poses[-1].stamp_ns < claim.stamp_ns:
+            return                                    # the pose of that instant is not here yet
+        self._claim = None
+        pose = self._pose_at(claim.stamp_ns)
+        x, y, tol = self.goal
+        if pose is not None and math.hypot(pose.x - x, pose.y - y) <= tol + GOAL_SLACK_M:
+            self._decide("reached", claim.stamp_ns, claim.reason)
+        else:
+            self.refuted_claims += 1
+
+    def _pose_at(self, t_ns: int) -> _Pose | None:
+        """The last pose sample with ``stamp <= t_ns`` still in the window, or None."""
+        poses = self._poses
+        i = bisect_right([p.stamp_ns for p in poses], t_ns) if poses[0].stamp_ns <= t_ns else 0
+        return poses[i - 1] if i else None
 
     # -- outputs --------------------------------------------------------------
     @property
@@ -134,17 +203,13 @@ class RunMonitor:
         return best
 
     def path_length_m(self) -> float:
-        total, prev = 0.0, None
-        for p in self._poses:
-            if p.stamp_ns > (self.t_end_ns or 0):
-                break
-            if prev is not None:
-                total += math.hypot(p.x - prev.x, p.y - prev.y)
-            prev = p
-        return total
+        if not self._poses:
+            return 0.0
+        pose = self._pose_at(self.t_end_ns or 0)
+        return pose.path_m if pose is not None else 0.0
 
     def motion_start_ns(self) -> int | None:
-        return next((p.stamp_ns for p in self._poses if abs(p.v) > MOVING_SPEED), None)
+        return self._motion_start_ns
 
     def distance_to(self, x: float, y: float) -> float:
         if not self._poses:
@@ -155,6 +220,13 @@ class RunMonitor:
         return bool(self._poses) and abs(self._poses[-1].v) < MOVING_SPEED and abs(
             self._poses[-1].w) < 0.05
 
+    def last_stamp(self, topic: str) -> int | None:
+        """Stamp of the newest sample of a figure's topic (``battery``, ``pose``, ``status``)."""
+        newest = {"battery": self.batteries[-1] if self.batteries else None,
+                  "pose": self._poses[-1] if self._poses else None,
+                  "status": self.status}[topic]
+        return None if newest is None else newest.stamp_ns
+
     def result(self, planner: str, world: str, seed: int, wall_time_s: float) -> RunResult:
         t_end = self.t_end_ns or 0
         battery = self.battery_at_end()
@@ -164,13 +236,15 @@ class RunMonitor:
             latency = (self.watchdog_stop_ns - self.last_cmd_ns) / NS
             if latency < 0:  # the stop belonged to an earlier outage the run recovered from
                 latency = None
+        faults = tuple(self.faults) + ((f"... and {self.more_faults} more node faults",)
+                                       if self.more_faults else ())
         return RunResult(
             outcome=self.outcome or "failed", planner=planner, world=world, seed=seed,
             duration_s=max(0, t_end - start) / NS if start is not None else 0.0,
             path_length_m=self.path_length_m(),
             charge_mAh=battery.charge_used_mAh if battery else math.nan,
             energy_J=battery.energy_J if battery else math.nan,
-            collisions=sum(1 for c in self.collisions if c <= t_end),
+            collisions=self._old_collisions + sum(1 for c in self.collisions if c <= t_end),
             sim_time_s=t_end / NS, wall_time_s=wall_time_s, reason=self.reason,
-            stop_latency_s=latency, faults=tuple(self.faults),
+            stop_latency_s=latency, faults=faults,
         )

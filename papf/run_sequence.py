@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import zenoh
 
+from common import runauth
 from common.errors import SchemaError
 from common.units import StampGuard
 from papf.monitor import NS, RunMonitor, RunResult
@@ -36,12 +37,13 @@ class RunSequence:
 
     def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
                  pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
-                 stall_s: float = STALL_S):
+                 stall_s: float = STALL_S, run_key: bytes | None = None):
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
         self.stop, self.stall_s = stop, stall_s
+        self.run_key = run_key               # goals signed, statuses verified (common.runauth)
         self._q: queue.Queue = queue.Queue()
-        self.stamps = StampGuard(STAMP_ORDERED)
-        self.dropped = 0                     # bad payloads and bad stamps, not acted on
+        self.stamps = StampGuard(STAMP_ORDERED, restart_at_zero=False)
+        self.dropped = 0                     # bad payloads, stamps and tags: not acted on
         self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
                           "events": monitor.on_event, "battery": monitor.on_battery,
                           "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose}
@@ -57,7 +59,8 @@ class RunSequence:
             except SchemaError:
                 self.dropped += 1
                 return
-            if self.stamps.check(topic, msg):
+            if self.stamps.check(topic, msg) or (
+                    topic == "planner/status" and not runauth.verify(msg, self.run_key)):
                 self.dropped += 1
                 return
             self._q.put((topic, msg))
@@ -78,7 +81,7 @@ class RunSequence:
     # -- the sequence ---------------------------------------------------------
     def handshake(self, world: World) -> bool:
         """Publish the goal every 0.5 s until the planner answers ``ready``."""
-        goal = goal_message(world)
+        goal = runauth.sign(goal_message(world), self.run_key)
         deadline = time.monotonic() + GOAL_HANDSHAKE_S
         while time.monotonic() < deadline and not self.stop() and not self.sup.dead():
             self.session.put(self.keys.goal, goal.to_bytes())
@@ -118,15 +121,19 @@ class RunSequence:
         self._wait_for_figures()
 
     def _on_node_death(self) -> None:
-        """A node died: record why, and (unless it was the driver) let the robot stop first."""
+        """A node died: the figures freeze at its last output (the meter's last battery, the
+        planner's last status, else the clock now), never past the timeout, and the reason
+        names it. After a planner's death the robot's stop is still watched (stop latency)."""
         m = self.monitor
-        m.fail(self.sup.death_reason())
-        if any(c.name in ("base_driver", "router") for c in self.sup.dead()):
+        dead = self.sup.dead()[0].name
+        at = {"energy_meter": m.last_stamp("battery"), "planner": m.last_stamp("status")}.get(dead)
+        m.fail(self.sup.death_reason(), at)
+        m.reason += f" (figures frozen at {(m.t_end_ns or 0) / NS:.2f} s)"
+        if dead != "planner":
             return
         deadline = time.monotonic() + 10.0  # the driver's lockstep timeout + its watchdog
         while time.monotonic() < deadline and not (m.watchdog_stop_ns and m.robot_stopped()):
             self.drain(0.05)
-        m.t_end_ns = max(m.clock_ns, 0)
 
     def _wait_for_figures(self) -> None:
         deadline = time.monotonic() + FIGURES_S
@@ -140,10 +147,13 @@ class RunSequence:
                         (self.monitor.t_end_ns or 0) / NS)
 
     def end(self, result: RunResult) -> None:
-        """``run_ended`` with the result as JSON; then stop listening."""
+        """``run_ended`` with the result as JSON; then stop listening. Not when this run's
+        router died: whatever the session reaches then is not this run's."""
         for sub in self._subs:
             sub.undeclare()
         self._subs.clear()
+        if any(c.name == "router" for c in self.sup.dead()):
+            return
         self.session.put(self.keys.events, Event(
             stamp_ns=self.monitor.t_end_ns or max(self.monitor.clock_ns, 0), kind="run_ended",
             source="launcher", detail=json.dumps(result.to_json())).to_bytes())

@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 
 import zenoh
 
+from common import runauth
 from common.transport import wait_alive, zenoh_config
+from papf.checks import check_run
 from papf.graph import LaunchOptions, Resolved, load_profile, resolve
 from papf.monitor import RunMonitor, RunResult
 from papf.progress import RunProgress
@@ -76,6 +78,8 @@ def _show_line(verbose: bool):
 def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = load_world(cfg.world)  # WorldError before anything starts
+    check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
+              cfg.planner_args)   # ConfigError/WorldError before anything starts
     port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
     if cfg.port is None and port != DEFAULT_PORT:
         log.warning("port %d is in use; the embedded router listens on %d instead",
@@ -83,16 +87,20 @@ def run(cfg: RunConfig) -> RunResult:
     graph = resolve_run(cfg, port)
     endpoint = graph.connect[0]
     wall0 = time.monotonic()
-    monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision)
+    monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision,
+                         goal=(world.goal[0], world.goal[1], world.tolerance))
     keys = Keys(cfg.namespace)
-    with Supervisor(show=_show_line(cfg.verbose), last=("recorder", "router")) as sup:
+    run_key = runauth.new_key()    # to the nodes through their environment only
+    with Supervisor(show=_show_line(cfg.verbose), last=("recorder", "router"),
+                    env={runauth.ENV: run_key}) as sup:
         sup.start("router", list(graph.processes[0].argv))
-        if not wait_port(port, 15.0, abort=lambda: bool(sup.dead())):
+        up = wait_port(port, 15.0, abort=lambda: bool(sup.dead()))
+        if not up or sup.dead():   # whatever listens there then is not this run's router
             monitor.fail(f"the embedded router did not come up on {endpoint}: "
                          + " | ".join(sup.children[0].tail))
             return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
-            seq = RunSequence(session, keys, sup, monitor)
+            seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key))
             try:
                 _drive(cfg, world, graph.nodes, sup, session, keys, seq)
             finally:

@@ -43,11 +43,12 @@ class Supervisor:
     """Owns the node processes of one run. Use as a context manager."""
 
     def __init__(self, log_stream: TextIO | None = None, show=lambda name, line: True,
-                 last: tuple[str, ...] = ()):
+                 last: tuple[str, ...] = (), env: dict | None = None):
         self.children: list[Child] = []
         self.last = last  # names stopped after all others, in this order (see stop())
         self.log_stream = log_stream or sys.stderr
         self.show = show
+        self.env = env or {}       # added to every child's environment (e.g. the run key)
         self._lock = threading.Lock()
 
     def start(self, name: str, argv: list[str], env: dict | None = None) -> Child:
@@ -55,7 +56,7 @@ class Supervisor:
         proc = subprocess.Popen(
             argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
             start_new_session=True, preexec_fn=_die_with_parent, text=True, bufsize=1,
-            env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
+            env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env, **(env or {})},
         )
         child = Child(name, proc)
         self.children.append(child)
@@ -81,6 +82,9 @@ class Supervisor:
         if not dead:
             return ""
         c = dead[0]
+        errors = [line.split(" ERROR ", 1)[-1].strip() for line in c.tail if " ERROR " in line]
+        if errors:   # a node that says why it stops: that line, not its last six
+            return f"{c.name} exited with code {c.returncode}: {errors[-1]}"
         return f"{c.name} exited with code {c.returncode}: " + " | ".join(list(c.tail)[-6:])
 
     def stop(self, grace_s: float = 3.0, last: tuple[str, ...] = (), settle_s: float = 0.3) -> None:

@@ -47,8 +47,11 @@ class Keys:
     ns: str = "rosbot"
 
     def __post_init__(self) -> None:
-        if not self.ns or self.ns.startswith("/") or self.ns.endswith("/") or "*" in self.ns:
-            raise ValueError(f"namespace {self.ns!r} must be a plain key like 'rosbot' or 'lab/r1'")
+        ns = self.ns
+        if (not ns or ns.startswith("/") or ns.endswith("/") or "//" in ns
+                or set(ns) & set("*$?# \t\n")):
+            raise ValueError(f"namespace {ns!r} must be a plain key like 'rosbot' or 'lab/r1' "
+                             "(no empty parts, no spaces, no * $ ? #)")
 
     def key(self, suffix: str) -> str:
         return f"{self.ns}/{suffix}"

@@ -109,6 +109,8 @@ class Goal(Message):
     road_lanes: int = field(0, doc="number of lanes; 0 = no road")
     road_y_min: float = field(0.0, unit="m", doc="right road edge (solid line)")
     road_lane_width: float = field(0.0, unit="m", doc="lane width d_w")
+    auth: str = field("", doc="the run's tag (common.runauth): a planner started by a run "
+                              "acts only on goals that carry it")
 
 
 @message("PlannerState", 1)
@@ -144,6 +146,8 @@ class PlannerStatus(Message):
     state: str = field(choices=PLANNER_STATES)
     reason: str = field("")
     distance_to_goal: float = field(float("nan"), unit="m", nonfinite=True)
+    auth: str = field("", doc="the run's tag (common.runauth): the launcher acts only on "
+                              "statuses that carry it")
 
 
 @message("Clock", 1)

@@ -22,6 +22,10 @@ except ModuleNotFoundError:  # Python 3.10
 
 DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (DESIGN.md §9)
 KINDS = ("box", "cylinder", "wall", "sphere")
+# [m] largest coordinate or size a world may use: the simulator works in single precision
+# in places (LiDAR ranges) and a planner's 1/r^2 field vanishes long before; 1 km is far
+# beyond any indoor robot's world
+MAX_COORD_M = 1000.0
 CENTER_MATCH = 1e-6  # [m] a moving obstacle's center, if given, must be its track at t = 0
 
 
@@ -177,7 +181,8 @@ def _motion(ctx: _Ctx, t, where: str, yaw0: float) -> Motion:
         ctx.fail(f"{where}.track", f"must be a non-empty array of [t s, x m, y m], got {raw!r}")
     track = []
     for i, sample in enumerate(raw):
-        track.append(tuple(ctx.vec({"s": sample}, "s", (3,), f"{where}.track[{i}]")))
+        track.append(tuple(ctx.vec({"s": sample}, "s", (3,), f"{where}.track[{i}]",
+                                   bounded=slice(1, 3))))   # x, y; not the time
         if i and track[i][0] <= track[i - 1][0]:
             ctx.fail(f"{where}.track[{i}]", f"time {track[i][0]} s must be after the previous "
                      f"sample's {track[i - 1][0]} s (times strictly increasing)")
@@ -268,6 +273,8 @@ class _Ctx:
         v = self._get(t, key, where, default)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             self.fail(where, f"must be a finite number, got {v!r}")
+        if abs(v) > MAX_COORD_M:
+            self.fail(where, f"{v:g} is beyond the {MAX_COORD_M:g} m a world may span")
         return float(v)
 
     def positive(self, t: dict, key: str, where: str, default=_MISSING) -> float:
@@ -276,11 +283,14 @@ class _Ctx:
             self.fail(where, f"must be > 0, got {v}")
         return v
 
-    def vec(self, t: dict, key: str, lengths: tuple[int, ...], where: str, default=_MISSING):
+    def vec(self, t: dict, key: str, lengths: tuple[int, ...], where: str, default=_MISSING,
+            bounded: slice = slice(None)):
         v = self._get(t, key, where, default)
         ok = isinstance(v, list) and len(v) in lengths and all(
             isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
         if not ok:
             want = " or ".join(f"{n} numbers" for n in lengths)
             self.fail(where, f"must be an array of {want}, got {v!r}")
+        if any(abs(x) > MAX_COORD_M for x in v[bounded]):
+            self.fail(where, f"{v} is beyond the {MAX_COORD_M:g} m a world may span")
         return [float(x) for x in v]

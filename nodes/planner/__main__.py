@@ -16,6 +16,7 @@ import argparse
 import sys
 import time
 
+from common import runauth
 from common.errors import ConfigError
 from common.params import arg_type
 from common.ports import describe
@@ -57,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
         log.error("%s", exc)
         return 2
     warm_up(planner)
-    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log)
+    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
+                       runauth.key_from_env())
     with open_node(NODE_NAME, args, log) as node:
         for topic in ("scan", "odom", "goal"):
             node.subscribe(topic)

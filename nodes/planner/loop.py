@@ -10,7 +10,9 @@
 - **realtime**: each scan is paired with the latest odometry; odometry older than
   ``stale_timeout_s`` (vs the scan stamp) -> zero command. No scan for ``stale_timeout_s``
   of wall time -> a zero command every ``STALE_REPEAT_S``.
-- A goal -> :meth:`Planner.set_goal` and a ``ready`` status with the goal's stamp.
+- A goal -> :meth:`Planner.set_goal` and a ``ready`` status with the goal's stamp. With a
+  run key (:mod:`common.runauth`), only a goal signed with it counts (others are dropped
+  and counted in ``rejected_goals``), and every status is signed.
 - Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
   and ``planner/status``.
 """
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 
+from common import runauth
 from common.params import check_value
 from nodes.planner.core import NS_PER_S, Planner
 from nodes.planner.settings import NODE
@@ -30,7 +33,7 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
-                 pair_timeout_s: float = 0.25, log=None):
+                 pair_timeout_s: float = 0.25, log=None, run_key: bytes | None = None):
         check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
         check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])
         self.planner, self.realtime = planner, realtime
@@ -44,10 +47,30 @@ class PlannerLoop:
         self.last_stamp = 0
         self.cycles = 0
         self.stale_cycles = 0
+        self.run_key = run_key
+        self.rejected_goals = 0
 
     # -- inputs ---------------------------------------------------------------
     def on_message(self, topic: str, msg, now: float) -> list:
+        return self._sign(self._on_message(topic, msg, now))
+
+    def poll(self, now: float) -> list:
+        """Time-driven work: overdue pairings (lockstep), stale scans (realtime)."""
+        return self._sign(self._poll(now))
+
+    def _sign(self, out: list) -> list:
+        if self.run_key is None:
+            return out
+        return [(t, runauth.sign(m, self.run_key) if t == "planner/status" else m) for t, m in out]
+
+    def _on_message(self, topic: str, msg, now: float) -> list:
         if topic == "goal" and isinstance(msg, Goal):
+            if not runauth.verify(msg, self.run_key):
+                self.rejected_goals += 1
+                if self.log and self.rejected_goals <= 5:
+                    self.log.warning("ignored a goal (%.2f, %.2f) that is not this run's",
+                                     msg.x, msg.y)
+                return []
             return [("planner/status", self.planner.set_goal(msg))]
         if topic == "odom" and isinstance(msg, Odometry):
             self._store_odom(msg)
@@ -64,8 +87,7 @@ class PlannerLoop:
             self.pending.append((msg, now))
         return []
 
-    def poll(self, now: float) -> list:
-        """Time-driven work: overdue pairings (lockstep), stale scans (realtime)."""
+    def _poll(self, now: float) -> list:
         out = self._release(lambda s: False, now)
         if self.realtime and self.planner.goal is not None:
             since = None if self.last_scan_wall is None else now - self.last_scan_wall

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import zenoh
 
-from common.errors import ConfigError, PapfError
+from common.errors import ConfigError, PapfError, RecordingError
 from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.recorder.ports import PORTS, VARIANTS
@@ -63,6 +63,13 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
             deadline = time.monotonic() + FINAL_DRAIN_S
             while drain(sub, writer, BATCH) and time.monotonic() < deadline:
                 pass
+            writer.close()
+        except OSError as exc:   # the disk is full (or gone): stop, keep what is written
+            writer.abandon()
+            raise RecordingError(
+                f"cannot write {out} ({exc.strerror or exc}) after {writer.stats.messages} "
+                f"messages: the recording stops here; salvage it with: papf recover {out} "
+                "FIXED.mcap") from None
         finally:
             sub.undeclare()
     node.log.info("closed %s: %d messages, %d bytes, %d channels", out, writer.stats.messages,

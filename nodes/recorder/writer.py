@@ -235,6 +235,17 @@ class RunWriter:
         self._last_flush = self._clock()
         self._dirty = False
 
+    def abandon(self) -> None:
+        """Stop writing without a summary (the disk is full, say): what reached the disk
+        stays, a truncated recording that ``papf recover`` salvages."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self._file.close()
+        except OSError:
+            pass
+
     def close(self) -> None:
         """Write the summary (indexes, statistics) and the footer; the file is then complete."""
         if self.closed:

@@ -39,8 +39,15 @@ COMMANDS = (run, worlds, launch, plan, experiment, report, record, replay, recov
             emulator, certs)
 
 
+class _Parser(argparse.ArgumentParser):
+    """A usage error is one line (what was wrong and what is valid) and exit 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="papf", description=__doc__.split("\n\n")[0])
+    parser = _Parser(prog="papf", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in COMMANDS:
         module.register(sub)

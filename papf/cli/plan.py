@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from common.params import SEED, TIMEOUT, arg_type
+
 
 def register(sub) -> None:
     p = sub.add_parser("plan", help="run a planner on a world offline (no processes)",
@@ -13,8 +15,9 @@ def register(sub) -> None:
                        "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
     p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
-    p.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
-    p.add_argument("--timeout", type=float, default=300.0, metavar="S",
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0,
+                   help="LiDAR noise seed (default 0)")
+    p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
     p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",

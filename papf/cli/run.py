@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from common.params import PORT, SEED, TIMEOUT, arg_type
+
 
 def register(sub) -> None:
     p = sub.add_parser("run", help="run the whole simulated stack once, to an outcome",
@@ -14,13 +16,15 @@ def register(sub) -> None:
                                    "5 timeout, 6 failed, 2 usage error.")
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
     p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
-    p.add_argument("--seed", type=int, default=0, help="seed of all noise (default 0)")
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0,
+                   help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
-    p.add_argument("--timeout", type=float, default=300.0, metavar="S",
+    p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit in seconds (default 300)")
     p.add_argument("--realtime", action="store_true", help="pace sim time to the wall clock")
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
-    p.add_argument("--port", type=int, help="embedded router port (default 7447, or a free one)")
+    p.add_argument("--port", type=arg_type("--port", PORT),
+                   help="embedded router port (default 7447, or a free one)")
     p.add_argument("--namespace", default="rosbot", help="robot key namespace")
     p.add_argument("--zenoh-mode", choices=("client", "peer"), default="client",
                    help="nodes' Zenoh mode: client (all through the router, default) or peer "

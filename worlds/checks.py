@@ -1,0 +1,79 @@
+"""Can a world be run at all? Checks made before any process starts.
+
+A world file can be valid TOML in the fixed format and still describe a run that cannot
+succeed or that the simulator cannot serve: :func:`check_runnable` refuses (WorldError,
+one line naming the limit) a start inside an obstacle, a goal that no robot position
+within the tolerance can reach without overlapping an obstacle, and more obstacles than
+:data:`MAX_SIM_OBSTACLES`. Coordinate bounds are checked when the file is parsed
+(:data:`worlds.MAX_COORD_M`).
+
+Geometry (pure, no pybullet): signed distances to boxes (rotated), cylinders and spheres.
+"""
+
+from __future__ import annotations
+
+import math
+
+from common.errors import WorldError
+from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
+from worlds import Obstacle, World
+
+# [-] obstacles the simulated stack serves in real time on one laptop core: measured with
+# `papf run --world W --timeout 10` on worlds of N small cylinders (docs/worlds.md,
+# "Limits"); above it the sim falls behind the wall clock and start-up grows with N.
+MAX_SIM_OBSTACLES = 1000
+START_CLEAR_M = min(BODY_LENGTH_M, BODY_WIDTH_M) / 2   # [m] the chassis' inscribed half-width
+
+
+def signed_distance(ob: Obstacle, point: tuple[float, ...]) -> float:
+    """Distance [m] from ``point`` to the obstacle's outline (< 0 inside), in the plane
+    (3-D for spheres)."""
+    if ob.shape == "sphere":
+        return math.dist(point[:3], ob.center[:3]) - ob.radius
+    px, py = point[0] - ob.center[0], point[1] - ob.center[1]
+    if ob.shape == "cylinder":
+        return math.hypot(px, py) - ob.radius
+    c, s = math.cos(ob.yaw), math.sin(ob.yaw)
+    lx, ly = c * px + s * py, -s * px + c * py              # into the box frame
+    dx, dy = abs(lx) - ob.size[0] / 2, abs(ly) - ob.size[1] / 2
+    outside = math.hypot(max(dx, 0.0), max(dy, 0.0))
+    return outside + min(max(dx, dy), 0.0)
+
+
+def nearest_obstacle(world: World, point: tuple[float, ...]) -> tuple[int, float] | None:
+    """(index, signed distance) of the obstacle nearest to ``point``, or None."""
+    best = None
+    for i, ob in enumerate(world.obstacles):
+        if (ob.shape == "sphere") != (world.dims == 3):
+            continue
+        d = signed_distance(ob, point)
+        if best is None or d < best[1]:
+            best = (i, d)
+    return best
+
+
+def check_runnable(world: World, max_obstacles: int = MAX_SIM_OBSTACLES,
+                   robot_radius_m: float = START_CLEAR_M) -> None:
+    """WorldError when the world cannot give a run (module doc)."""
+    where = f"world {world.name!r} ({world.source or 'no file'})"
+    if len(world.obstacles) > max_obstacles:
+        raise WorldError(f"{where} has {len(world.obstacles)} obstacles; the simulated stack "
+                         f"serves at most {max_obstacles} (more fall behind real time)")
+    start = world.start[:world.dims]
+    near = nearest_obstacle(world, start)
+    clear = 0.0 if world.dims == 3 else START_CLEAR_M
+    if near is not None and near[1] < clear:
+        ob = world.obstacles[near[0]]
+        raise WorldError(f"{where}: the start {_xy(start)} is inside obstacles[{near[0]}] "
+                         f"({ob.kind}); the robot would begin in a collision")
+    near = nearest_obstacle(world, world.goal)
+    need = (0.0 if world.dims == 3 else robot_radius_m) - world.tolerance
+    if near is not None and near[1] < need:
+        ob = world.obstacles[near[0]]
+        raise WorldError(f"{where}: the goal {_xy(world.goal)} lies inside obstacles[{near[0]}] "
+                         f"({ob.kind}); no position within the {world.tolerance:g} m tolerance "
+                         "keeps the robot off it, so the goal can never be reached")
+
+
+def _xy(p) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in p) + ")"
