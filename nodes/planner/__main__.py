@@ -7,7 +7,8 @@ key                        type            dir    when
 =========================  ==============  =====  ==========================================
 ``<ns>/scan``              Scan            in     each scan -> one cycle
 ``<ns>/odom``              Odometry        in     paired with the scan (see below)
-``<ns>/goal``              Goal            in     sets the goal; answered with status ``ready``
+``<ns>/goal``              Goal            in     sets the goal (and the road); status ``ready``
+``<ns>/objects``           Objects         in     ``--objects``: obstacle tracks, paired like odom
 ``<ns>/cmd_vel``           Twist           out    one per scan, ``stamp_ns`` = scan stamp
 ``<ns>/planner/state``     PlannerState    out    after each cmd_vel (debug geometry)
 ``<ns>/planner/status``    PlannerStatus   out    after each state; ``ready`` on a goal
@@ -18,7 +19,8 @@ Settings: ``--planner`` (algorithm), ``--params FILE.toml`` and ``--set name=val
 (see docs/planners.md for every parameter), ``--realtime`` (pair scans with the latest
 odometry instead of the same stamp), ``--stale-timeout S`` (zero command when odometry
 or scans are older than that), ``--pair-timeout S`` (lockstep: wall time a scan waits for
-its odometry), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
+its odometry), ``--objects`` (take obstacle tracks from ``<ns>/objects``, sim ground
+truth or the tracker node, and wait for the scan's own in lockstep), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
 Exit code 2 on a bad setting.
 """
 
@@ -49,6 +51,8 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="inputs older than this -> zero command [s] (default 0.5)")
     ap.add_argument("--pair-timeout", type=float, default=0.25, metavar="S",
                     help="lockstep: wall time a scan waits for its odometry [s] (default 0.25)")
+    ap.add_argument("--objects", action="store_true",
+                    help="subscribe to <ns>/objects and pair each scan with its obstacle tracks")
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)
     return ap.parse_args(argv)
@@ -62,9 +66,10 @@ def run(args: argparse.Namespace) -> int:
         log.error("%s", exc)
         return 2
     warm_up(planner)
-    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log)
+    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
+                       objects=args.objects)
     with open_node(NODE_NAME, args, log) as node:
-        for topic in ("scan", "odom", "goal"):
+        for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
         node.declare_publishers("cmd_vel", "planner/state", "planner/status")
         node.ready()

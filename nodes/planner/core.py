@@ -7,6 +7,12 @@ is a small *strategy* (:class:`Strategy`) that turns the situation into a force 
 debug geometry the papers drew in RViz; strategies are looked up by name in
 :mod:`nodes.planner.registry`.
 
+What the run tells the planner beyond scan and odometry: the **road** comes with the
+goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
+never reads a world file) and the **obstacle tracks** of the cycle come as an optional
+``Objects`` message paired with the scan. A strategy that wants them defines
+``observe(road, objects, odom)``; it is called before each ``plan``.
+
 Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 """
 
@@ -22,7 +28,8 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from worlds.traffic import Road
 
 
 @dataclass(frozen=True)
@@ -98,6 +105,7 @@ class Planner:
         self.strategy = strategy
         self.apf = apf or APFParams()
         self.goal: Goal | None = None
+        self.road: Road | None = None   # the run's road, from the goal handshake
         self.state = "idle"
         self.reason = ""
         self._best = math.inf           # best distance to goal at the last progress [m]
@@ -111,6 +119,7 @@ class Planner:
         """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
         same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
             goal.x, goal.y, goal.tolerance)
+        self.road = Road.from_fields(goal.road_lanes, goal.road_y_min, goal.road_lane_width)
         if not same:
             self.goal = goal
             self.state, self.reason = "ready", ""
@@ -120,8 +129,12 @@ class Planner:
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
     # -- one cycle ----------------------------------------------------------
-    def step(self, scan: Scan, odom: Odometry) -> tuple[Twist, PlannerState, PlannerStatus]:
-        """One control cycle for ``scan`` (the command carries the scan's stamp)."""
+    def step(self, scan: Scan, odom: Odometry, objects: Objects | None = None
+             ) -> tuple[Twist, PlannerState, PlannerStatus]:
+        """One control cycle for ``scan`` (the command carries the scan's stamp).
+
+        ``objects``: the obstacle tracks paired with this scan, if the run provides them.
+        """
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:
@@ -135,6 +148,9 @@ class Planner:
             return self._stop(t, "reached", f"within {self.goal.tolerance} m of the goal", dist, t0)
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom)
+        observe = getattr(self.strategy, "observe", None)
+        if observe is not None:
+            observe(self.road, objects, odom)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
         why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
         if why:
