@@ -7,16 +7,7 @@ it publishes ``scan`` with that stamp. A pose stamp going backwards (a new run)
 restarts the schedule. ``--source ros2`` hands over to the real sensor's bridge
 (``nodes.lidar_sim.ros2_source.main``).
 
-Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
-
-=================  ========  ===  =====================================================
-key                type      dir  what
-=================  ========  ===  =====================================================
-``<ns>/sim/pose``  Odometry  in   ground-truth pose (``--pose-source sim``, default)
-``<ns>/odom``      Odometry  in   odometry pose (``--pose-source odom``)
-``<ns>/scan``      Scan      out  one scan per scan instant, stamped with the pose's stamp
-``<ns>/objects``   Objects   out  ``--truth-objects``: the world's obstacles at that instant
-=================  ========  ===  =====================================================
+Ports: :mod:`nodes.lidar_sim.ports` (``--help`` prints them).
 
 Moving obstacles are placed at each scan's sim time. With ``--truth-objects`` the node
 also publishes the ground truth (pose, velocity, size of every obstacle within the
@@ -34,7 +25,9 @@ import argparse
 import sys
 
 from common.errors import PapfError
+from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
+from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
 from worlds import load_world
 from worlds.messages import truth_objects
 
@@ -99,7 +92,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1])
+                                     epilog=__doc__.split("\n\n", 1)[1] + "\n"
+                                     + describe(PORTS, VARIANTS, EXTRAS))
     parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
                         help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")
     parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")

@@ -4,16 +4,7 @@ Turns LiDAR scans into tracked obstacles (:mod:`nodes.tracker.core`: scan-order
 clustering, Hungarian association, constant-velocity Kalman filter), so a planner gets
 the same ``Objects`` from a real sensor as from the sim's ground truth.
 
-Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
-
-=====================  ==========  ===  ===============================================
-key                    type        dir  what
-=====================  ==========  ===  ===============================================
-``<ns>/scan``          Scan        in   each scan -> one tracker cycle
-``<ns>/odom``          Odometry    in   the robot pose of the scan (same stamp in lockstep)
-``<ns>/objects``       Objects     out  confirmed tracks, stamped with the scan's stamp
-``<ns>/alive/tracker`` liveliness  out  once subscribed
-=====================  ==========  ===  ===============================================
+Ports: :mod:`nodes.tracker.ports` (``--help`` prints them).
 
 Settings: ``--realtime`` (pair each scan with the latest pose instead of the same
 stamp), ``--pair-timeout S``, ``--set name=value`` (any field of
@@ -29,13 +20,13 @@ import sys
 import time
 
 from common.errors import ConfigError
+from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.tracker.core import Tracker, TrackerParams
 from nodes.tracker.loop import TrackerLoop
+from nodes.tracker.ports import PORTS, VARIANTS
 
 NODE_NAME = "tracker"
-INPUTS = ("scan", "odom")
-OUTPUTS = ("objects",)
 
 
 def params_from(items: list[str]) -> TrackerParams:
@@ -59,9 +50,9 @@ def run(args: argparse.Namespace, params: TrackerParams) -> int:
     log = setup_logging(NODE_NAME, args.log_level)
     loop = TrackerLoop(Tracker(params), args.realtime, args.pair_timeout)
     with open_node(NODE_NAME, args, log) as node:
-        for topic in INPUTS:
+        for _, topic, _ in (p for p in PORTS if p[0] == "in"):
             node.subscribe(topic)
-        node.declare_publishers(*OUTPUTS)
+        node.declare_publishers(*(topic for d, topic, _ in PORTS if d == "out"))
         node.ready()
         for topic, msg in node.messages(tick_s=0.05):
             now = time.monotonic()
@@ -77,7 +68,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nodes.tracker",
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1])
+                                     epilog=__doc__.split("\n\n", 1)[1] + "\n\n"
+                                     + describe(PORTS, VARIANTS))
     parser.add_argument("--realtime", action="store_true",
                         help="pair each scan with the latest pose (robot / HIL)")
     parser.add_argument("--pair-timeout", type=float, default=0.25, metavar="S",
