@@ -48,6 +48,8 @@ from common.errors import ConfigError
 from common.units import NS_PER_S
 from schemas.messages import Objects, ObjectTrack, Odometry, Scan
 
+GATED_COST = 1e6   # assignment cost of a pair beyond the gate (rejected afterwards)
+
 
 @dataclass(frozen=True)
 class TrackerParams:
@@ -105,63 +107,89 @@ class ScanPoints:
 def scan_points(scan: Scan, odom: Odometry, max_range: float) -> ScanPoints:
     """The valid beams within ``max_range`` [m] of the sensor, in world coordinates."""
     ranges = np.asarray(scan.ranges, dtype=float)
-    with np.errstate(invalid="ignore"):
-        ok = (np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
-              & (ranges <= max_range))
+    # comparisons with nan are False (no warning): nan and inf drop out here
+    ok = (ranges >= scan.range_min) & (ranges <= min(scan.range_max, max_range))
     c, s = math.cos(odom.yaw), math.sin(odom.yaw)
     ox = odom.x + c * scan.sensor_x - s * scan.sensor_y
     oy = odom.y + s * scan.sensor_x + c * scan.sensor_y
     beams = np.flatnonzero(ok)
     a = odom.yaw + scan.sensor_yaw + scan.angle_min + scan.angle_increment * beams
-    r = ranges[ok]
-    return ScanPoints(np.column_stack([ox + r * np.cos(a), oy + r * np.sin(a)]), r, beams,
-                      len(ranges), abs(scan.angle_increment))
+    r = ranges[beams]
+    xy = np.empty((len(beams), 2))
+    xy[:, 0] = ox + r * np.cos(a)
+    xy[:, 1] = oy + r * np.sin(a)
+    return ScanPoints(xy, r, beams, len(ranges), abs(scan.angle_increment))
+
+
+def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
+    """(order, starts): the points rotated so that no segment crosses the array's end, and
+    the index in ``order`` where each segment starts (see module doc, step 2)."""
+    n = len(sp.beams)
+    nxt = np.arange(1, n + 1)
+    nxt[-1] = 0                                           # the seam: last point -> first
+    gap = (sp.beams[nxt] - sp.beams) % sp.beam_count      # beams between successive returns
+    gap[gap == 0] = sp.beam_count                         # a single return
+    dphi = gap * sp.increment
+    lam = p.breakpoint_angle
+    joinable = (dphi < lam) & (gap <= p.max_beam_gap + 1)
+    limit = np.zeros(n)
+    adaptive = sp.ranges[joinable] * np.sin(dphi[joinable]) / np.sin(lam - dphi[joinable])
+    limit[joinable] = np.maximum(p.cluster_radius, adaptive + 3 * p.range_sd)
+    d = sp.xy[nxt] - sp.xy
+    cut = np.flatnonzero(d[:, 0] ** 2 + d[:, 1] ** 2 > limit ** 2)   # a break after point i
+    if len(cut) == 0:
+        return np.arange(n), np.zeros(1, dtype=int)
+    first = (cut[-1] + 1) % n                             # start after the last break
+    order = (np.arange(n) + first) % n
+    return order, np.sort((cut + 1 - first) % n)
 
 
 def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
     """Index arrays (into ``sp.xy``) of the scan-order segments (see module doc, step 2)."""
-    n = len(sp.beams)
-    if n == 0:
+    if len(sp.beams) == 0:
         return []
-    nxt = np.roll(np.arange(n), -1)                       # each point's successor, seam wrapped
-    gap = (sp.beams[nxt] - sp.beams) % sp.beam_count      # beams between successive returns
-    dphi = np.where(gap == 0, sp.beam_count, gap) * sp.increment
-    with np.errstate(divide="ignore", invalid="ignore"):
-        adaptive = np.where(dphi < p.breakpoint_angle,
-                            sp.ranges * np.sin(dphi) / np.sin(p.breakpoint_angle - dphi), 0.0)
-    limit = np.maximum(p.cluster_radius, adaptive + 3 * p.range_sd)
-    limit[(dphi >= p.breakpoint_angle) | (gap > p.max_beam_gap + 1)] = 0.0   # always a break
-    dist = np.linalg.norm(sp.xy[nxt] - sp.xy, axis=1)
-    cut = np.flatnonzero(dist > limit)                    # a break after point i
-    if len(cut) == 0:
-        return [np.arange(n)]
-    start = (cut + 1) % n                                 # segments start after each break
-    ends = np.roll(start, -1)
-    return [np.arange(s, e if e > s else e + n) % n for s, e in zip(start, ends, strict=True)]
+    order, starts = _breaks(sp, p)
+    return np.split(order, starts[1:])
 
 
 def cluster_points(sp: ScanPoints, p: TrackerParams) -> list[Cluster]:
-    """Object-sized clusters of a scan (see module doc, step 2), in scan order."""
-    out = []
-    for idx in segments(sp, p):
-        if len(idx) >= p.min_points:
-            cl = _measure(sp.xy[idx])
-            if cl.length <= p.max_extent:
-                out.append(cl)
-    return out
+    """Object-sized clusters of a scan (see module doc, step 2), in scan order.
+
+    Each cluster is measured by :func:`_measure`'s box, for all segments at once.
+    """
+    n = len(sp.beams)
+    if n < p.min_points:
+        return []
+    order, starts = _breaks(sp, p)
+    counts = np.diff(starts, append=n)
+    big = counts >= p.min_points
+    if not big.any():
+        return []
+    xy = sp.xy[order]
+    boxes = _measure(xy, starts, counts)
+    return [Cluster(*box) for box, keep in zip(boxes.tolist(), big.tolist(), strict=True)
+            if keep and box[3] <= p.max_extent]
 
 
-def _measure(pts: np.ndarray) -> Cluster:
-    """Bounding box of ``pts`` in their principal axes (the eigenvectors of the covariance)."""
-    mean = pts.mean(axis=0)
-    d = pts - mean
-    cov = d.T @ d
-    axis = 0.5 * math.atan2(2 * cov[0, 1], cov[0, 0] - cov[1, 1])   # major axis angle
-    c, s = math.cos(axis), math.sin(axis)
-    u, v = d @ np.array([c, s]), d @ np.array([-s, c])
-    cu, cv = (u.max() + u.min()) / 2, (v.max() + v.min()) / 2
-    return Cluster(float(mean[0] + c * cu - s * cv), float(mean[1] + s * cu + c * cv), axis,
-                   float(u.max() - u.min()), float(v.max() - v.min()))
+def _measure(xy: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Per segment (``xy[starts[i]:starts[i] + counts[i]]``): the bounding box of its points
+    in their principal axes (the eigenvectors of the covariance) as rows
+    ``(x, y, axis, length, width)`` — centre [m], major-axis angle [rad], extents [m]."""
+    mean = np.add.reduceat(xy, starts) / counts[:, None]
+    d = xy - np.repeat(mean, counts, axis=0)
+    sxx = np.add.reduceat(d[:, 0] * d[:, 0], starts)
+    syy = np.add.reduceat(d[:, 1] * d[:, 1], starts)
+    sxy = np.add.reduceat(d[:, 0] * d[:, 1], starts)
+    axis = 0.5 * np.arctan2(2 * sxy, sxx - syy)
+    c, s = np.cos(axis), np.sin(axis)
+    cp, sp_ = np.repeat(c, counts), np.repeat(s, counts)
+    u = d[:, 0] * cp + d[:, 1] * sp_
+    v = d[:, 1] * cp - d[:, 0] * sp_
+    umax, umin = np.maximum.reduceat(u, starts), np.minimum.reduceat(u, starts)
+    vmax, vmin = np.maximum.reduceat(v, starts), np.minimum.reduceat(v, starts)
+    cu, cv = (umax + umin) / 2, (vmax + vmin) / 2
+    return np.column_stack([mean[:, 0] + c * cu - s * cv, mean[:, 1] + s * cu + c * cv, axis,
+                            umax - umin, vmax - vmin])
 
 
 @dataclass
@@ -190,6 +218,7 @@ class Tracker:
         self.tracks = _Tracks()
         self.t_ns: int | None = None
         self._next_id = 1
+        self._model: tuple | None = None     # (dt, F, F^T, Q) of the last prediction
 
     def update(self, scan: Scan, odom: Odometry) -> Objects:
         """One cycle on ``scan`` taken at pose ``odom``; the confirmed tracks, scan-stamped."""
@@ -222,13 +251,16 @@ class Tracker:
         """x <- F x, P <- F P F^T + Q (constant velocity, white-noise acceleration)."""
         if dt <= 0 or not len(self.tracks.ids):
             return
-        F = np.eye(4)
-        F[0, 2] = F[1, 3] = dt
-        q = self.params.accel_sd ** 2
-        a, b, c = dt ** 4 / 4 * q, dt ** 3 / 2 * q, dt ** 2 * q
-        Q = np.array([[a, 0, b, 0], [0, a, 0, b], [b, 0, c, 0], [0, b, 0, c]])
-        self.tracks.x = self.tracks.x @ F.T
-        self.tracks.P = F @ self.tracks.P @ F.T + Q
+        if self._model is None or self._model[0] != dt:   # lockstep: the same dt every scan
+            F = np.eye(4)
+            F[0, 2] = F[1, 3] = dt
+            q = self.params.accel_sd ** 2
+            a, b, c = dt ** 4 / 4 * q, dt ** 3 / 2 * q, dt ** 2 * q
+            Q = np.array([[a, 0, b, 0], [0, a, 0, b], [b, 0, c, 0], [0, b, 0, c]])
+            self._model = (dt, F, F.T.copy(), Q)
+        _, F, FT, Q = self._model
+        self.tracks.x = self.tracks.x @ FT
+        self.tracks.P = F @ self.tracks.P @ FT + Q
 
     def _associate(self, clusters: list[Cluster]) -> tuple[list[int], list[int]]:
         """(track rows, cluster indices) of the gated optimal assignment."""
@@ -236,9 +268,10 @@ class Tracker:
         if not clusters or not tr.ids:
             return [], []
         z = np.array([(c.x, c.y) for c in clusters])
-        cost = np.linalg.norm(tr.x[:, None, :2] - z[None, :, :], axis=2)
-        big = 1e6
-        rows, cols = linear_sum_assignment(np.where(cost <= self.params.gate, cost, big))
+        diff = tr.x[:, None, :2] - z[None, :, :]
+        cost = np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2)
+        gated = np.where(cost <= self.params.gate, cost, GATED_COST)
+        rows, cols = linear_sum_assignment(gated)
         ok = cost[rows, cols] <= self.params.gate
         return rows[ok].tolist(), cols[ok].tolist()
 
@@ -249,9 +282,14 @@ class Tracker:
         tr, p = self.tracks, self.params
         x, P = tr.x[rows], tr.P[rows]
         z = np.array([(c.x, c.y) for c in clusters])
-        S = P[:, :2, :2] + np.eye(2) * p.meas_sd ** 2
-        K = P[:, :, :2] @ np.linalg.inv(S)                                  # (M, 4, 2)
-        tr.x[rows] = x + np.einsum("mij,mj->mi", K, z - x[:, :2])
+        r2 = p.meas_sd ** 2
+        a, b, d = P[:, 0, 0] + r2, P[:, 0, 1], P[:, 1, 1] + r2           # S = [[a, b], [b, d]]
+        det = a * d - b * b
+        s_inv = np.empty((len(rows), 2, 2))                                # closed-form 2x2
+        s_inv[:, 0, 0], s_inv[:, 1, 1] = d / det, a / det
+        s_inv[:, 0, 1] = s_inv[:, 1, 0] = -b / det
+        K = P[:, :, :2] @ s_inv                                            # (M, 4, 2)
+        tr.x[rows] = x + (K @ (z - x[:, :2])[:, :, None])[:, :, 0]
         tr.P[rows] = P - K @ P[:, :2, :]
         for i, c in zip(rows, clusters, strict=True):
             tr.hits[i] += 1
@@ -267,7 +305,7 @@ class Tracker:
         for i in range(len(tr.ids)):
             if i not in hit:
                 tr.misses[i] += 1
-        if tr.ids:
+        if any(m >= self.params.max_misses for m in tr.misses):
             tr.keep(np.array([m < self.params.max_misses for m in tr.misses]))
 
     def _start(self, c: Cluster) -> None:
