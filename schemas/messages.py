@@ -154,7 +154,7 @@ class Clock(Message):
 
 
 EVENT_KINDS = ("run_started", "run_ended", "goal_reached", "collision", "timeout",
-               "stagnated", "node_fault", "watchdog_stop", "info")
+               "stagnated", "node_fault", "watchdog_stop", "info", "recording_closed")
 
 
 @message("Event", 1)
