@@ -104,3 +104,16 @@ class CommandGate:
         w = w0 + _clamp(w_t - w0, lim.alpha_max * dt_s)
         self._out = (v, w)
         return GateOutput(v, w, stopped)
+
+
+def unicycle(x: float, y: float, yaw: float, v: float, w: float, dt: float):
+    """Exact integration of a unicycle with constant (v, w) over ``dt``: the arc it drives.
+
+    The kinematics of every non-physics model of the ROSbot (the offline planner loop,
+    the ROSbot emulator); yaw is not wrapped.
+    """
+    if abs(w) < 1e-9:
+        return x + v * dt * math.cos(yaw), y + v * dt * math.sin(yaw), yaw
+    yaw2 = yaw + w * dt
+    return (x + v / w * (math.sin(yaw2) - math.sin(yaw)),
+            y - v / w * (math.cos(yaw2) - math.cos(yaw)), yaw2)
