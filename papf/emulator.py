@@ -1,6 +1,6 @@
 """`papf rosbot-emulator`: the ROSbot as seen through ``zenoh-bridge-ros2dds``, without a robot.
 
-What a driver sees of the real robot (DESIGN.md §5), on the bridge keys
+What a driver sees of the real robot (docs/architecture.md "The robot"), on the bridge keys
 ``[<bridge-ns>/]<topic>``, all CDR with the encapsulation header:
 
 =======================  ===========================  ===  ==================================
@@ -41,7 +41,7 @@ from worlds import load_world
 
 NAME = "rosbot_emulator"
 BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
-SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (DESIGN.md §5)
+SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (docs/architecture.md "The robot")
 NO_TIMEOUT_NS = 10**18              # "never": --cmd-timeout 0
 
 

@@ -204,7 +204,7 @@ def generate_solvable(n: int, seed: int = 0, kinds=KINDS) -> tuple[list[World], 
 
 
 def world_to_toml(world: World) -> str:
-    """The world in the TOML format of DESIGN.md §9 (walls written as yawed boxes)."""
+    """The world in the TOML format of docs/worlds.md (walls written as yawed boxes)."""
     def v(x):
         return "[" + ", ".join(repr(float(a)) for a in x) + "]"
 

@@ -1,4 +1,4 @@
-"""Every message of the stack, defined once (DESIGN.md §3).
+"""Every message of the stack, defined once (docs/architecture.md "Messages").
 
 Conventions: time is integer nanoseconds of *sim time* in sim runs (``stamp_ns``);
 lengths in metres, angles in radians, speeds in m/s and rad/s. Poses are in the

@@ -1,6 +1,6 @@
 """Simulated ROSbot 2.0 PRO base: pybullet rigid-body physics, no transport (pure core).
 
-The robot (DESIGN.md §5; geometry and masses from husarion/rosbot_ros
+The robot (docs/architecture.md "The robot"; geometry and masses from husarion/rosbot_ros
 ``rosbot_description``): a chassis box of 0.200 x 0.235 x 0.100 m (the footprint,
 so it covers the wheels; obstacle contacts are found on it) and four wheels of
 r = 0.0425 m, 0.036 m wide, 0.074 kg each, at x = +-wheelbase/2 = +-0.053 m,

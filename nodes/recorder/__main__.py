@@ -1,4 +1,4 @@
-"""Recorder node: every sample under a key expression into a crash-safe MCAP (DESIGN.md §8).
+"""Recorder node: every sample under a key expression into a crash-safe MCAP (docs/recording.md).
 
     python -m nodes.recorder --out run.mcap [--keys 'rosbot/**'] [--meta world=energy ...]
 
