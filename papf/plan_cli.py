@@ -47,7 +47,8 @@ def register(subparsers) -> None:
                               "ROSbot limits, 3-D worlds (spheres) with a point robot. Exit code: "
                               "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang | iapf (default apf); "
+                   "car-scale worlds (iapf-case-*): iapf, iapf-np, apf (the paper's baseline)")
     p.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
@@ -101,8 +102,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from worlds import load_world
 
     world = load_world(args.world)
-    result = plan(world, args.planner, params=args.set, seed=args.seed, max_time_s=args.timeout,
-                  dt=args.dt, params_file=args.params)
+    if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
+        from papf.plan_road import plan_car
+
+        result = plan_car(world, args.planner, args.set, args.params, max_time_s=args.timeout)
+    else:
+        result = plan(world, args.planner, params=args.set, seed=args.seed,
+                      max_time_s=args.timeout, dt=args.dt, params_file=args.params)
     if args.out:
         write_path(result, args.out)
     if args.plot:

@@ -67,13 +67,14 @@ class RoadRun:
     """One run: per step time [s], x, y [m], v [m/s], yaw [rad], plus what the planner did."""
 
     planner: str
+    outcome: str                    # reached (passed the finish line) | collision | timeout
     times: np.ndarray
     states: np.ndarray              # (N, 4) x, y, v, yaw
     temp_goal: np.ndarray           # (N,) y of the active temporary goal, nan when none
     local_counts: np.ndarray        # (N,) eq. 24 count of each step
     step_us: np.ndarray             # (N-1,) wall time of each planning step [us]
     min_clearance_m: float
-    collisions: int
+    collisions: int                 # contact episodes (a vehicle touching the host, once each)
     left_road: bool
     lane_changes: int
     others: list = field(default_factory=list)   # per vehicle (N, 3) x, y, yaw
@@ -96,26 +97,52 @@ def outside_road(corners: np.ndarray, lanes: Lanes) -> bool:
     return bool((corners[:, 1] < lanes.y_min).any() or (corners[:, 1] > lanes.y_max).any())
 
 
+class _Contacts:
+    """Clearance and contact episodes of the host against every vehicle."""
+
+    def __init__(self, n: int):
+        self.min_clear, self.episodes = math.inf, 0
+        self.touching = [False] * n
+
+    def check(self, host: np.ndarray, tracks) -> bool:
+        hit = False
+        for i, ob in enumerate(tracks):
+            c = rect_clearance(host, rect_corners(ob.x, ob.y, ob.yaw, ob.length, ob.width))
+            self.min_clear = min(self.min_clear, c)
+            now = c < 0.0
+            self.episodes += now and not self.touching[i]
+            self.touching[i] = now
+            hit |= now
+        return hit
+
+
 def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: Lanes,
-             duration_s: float, name: str = "iapf", y_goal: float | None = None) -> RoadRun:
-    """Run ``core`` from ``start`` for ``duration_s`` of sim time among ``movers``."""
+             duration_s: float, name: str = "iapf", y_goal: float | None = None,
+             finish_x: float | None = None, stop_on_collision: bool = False) -> RoadRun:
+    """Run ``core`` from ``start`` among ``movers`` for ``duration_s`` of sim time, or until the
+    host passes ``finish_x`` (outcome ``reached``) or, with ``stop_on_collision``, touches a
+    vehicle (``collision``)."""
     p = core.p
     core.reset()
     n = int(round(duration_s / p.step_s))
     s = start
     rows, temp, counts, times_us = [(0.0, s.x, s.y, s.v, s.yaw)], [math.nan], [0], []
     others = [[] for _ in movers]
-    min_clear, collided, left = math.inf, False, False
+    contacts, left, outcome = _Contacts(len(movers)), False, "timeout"
     for k in range(n + 1):
         t = k * p.step_s
         tracks = [m(t) for m in movers]
-        host = rect_corners(s.x, s.y, s.yaw, p.host_length, p.host_width)
         for i, ob in enumerate(tracks):
             others[i].append((ob.x, ob.y, ob.yaw))
-            c = rect_clearance(host, rect_corners(ob.x, ob.y, ob.yaw, ob.length, ob.width))
-            min_clear = min(min_clear, c)
-            collided |= c < 0.0
+        host = rect_corners(s.x, s.y, s.yaw, p.host_length, p.host_width)
+        hit = contacts.check(host, tracks)
         left |= outside_road(host, lanes)
+        if hit and stop_on_collision:
+            outcome = "collision"
+            break
+        if finish_x is not None and s.x >= finish_x:
+            outcome = "reached"
+            break
         if k == n:
             break
         t0 = time.perf_counter_ns()
@@ -125,8 +152,25 @@ def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: L
         temp.append(math.nan if info.temp_goal_y is None else info.temp_goal_y)
         counts.append(info.local_count)
     arr = np.array(rows)
-    return RoadRun(planner=name, times=arr[:, 0], states=arr[:, 1:], temp_goal=np.array(temp),
-                   local_counts=np.array(counts), step_us=np.array(times_us),
-                   min_clearance_m=float(min_clear), collisions=int(collided), left_road=left,
+    return RoadRun(planner=name, outcome=outcome, times=arr[:, 0], states=arr[:, 1:],
+                   temp_goal=np.array(temp), local_counts=np.array(counts),
+                   step_us=np.array(times_us), min_clearance_m=float(contacts.min_clear),
+                   collisions=contacts.episodes, left_road=left,
                    lane_changes=lane_changes(arr[:, 2], lanes),
                    others=[np.array(o) for o in others])
+
+
+def road_figures(lanes: Lanes, times: np.ndarray, path: np.ndarray, headings: np.ndarray,
+                 size: tuple[float, float]) -> dict:
+    """``left_road``, ``lane_changes``, ``min_speed_mps``, ``max_speed_mps`` of a path on a road
+    (footprint ``size`` = (length, width) [m] along the heading; speeds from the path)."""
+    left = any(outside_road(rect_corners(x, y, h, *size), lanes)
+               for (x, y), h in zip(path, headings, strict=True))
+    v = np.zeros(1)
+    if path.shape[0] > 1:
+        dt = np.diff(times)
+        ok = dt > 0
+        if ok.any():
+            v = np.linalg.norm(np.diff(path, axis=0), axis=1)[ok] / dt[ok]
+    return {"left_road": bool(left), "lane_changes": lane_changes(path[:, 1], lanes),
+            "min_speed_mps": round(float(v.min()), 4), "max_speed_mps": round(float(v.max()), 4)}

@@ -221,12 +221,15 @@ def test_registry_and_planner_step_with_road_and_tracks():
 
     planner = make_planner("iapf")
     planner.set_goal(Goal(stamp_ns=0, x=20.0, y=0.15, tolerance=0.2))
+    assert planner.road is None
     scan = Scan(stamp_ns=0, angle_min=0.0, angle_increment=0.1, range_min=0.1, range_max=5.0,
                 ranges=np.full(8, np.inf, dtype=np.float32))
     odom = Odometry(stamp_ns=0, x=0.0, y=0.15, yaw=0.0, v=0.3, w=0.0)
     cmd, state, _ = planner.step(scan, odom)
     assert cmd.v == 0.0 and state.mode == "no-road"            # no road announced yet
-    planner.set_road(Lanes(-0.15, 0.6, 2))
+    planner.set_goal(Goal(stamp_ns=0, x=20.0, y=0.15, tolerance=0.2, road_lanes=2,
+                          road_y_min=-0.15, road_lane_width=0.6))   # the handshake's road
+    assert planner.road == Lanes(-0.15, 0.6, 2)
     planner.set_objects([Track(1.0, 0.15, 0.0, 0.1, 0.0, 0.5, 0.3)])
     cmd, state, _ = planner.step(scan, odom)
     assert state.algorithm == "iapf" and 0.0 < cmd.v <= 0.36

@@ -22,6 +22,7 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
+from nodes.planner.iapf_fields import Lanes
 from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
@@ -118,8 +119,8 @@ class Planner:
         """The latest obstacle tracks (:class:`nodes.planner.iapf_fields.Track`)."""
         self.objects = tuple(tracks)
 
-    def set_road(self, road) -> None:
-        """The road of the run (:class:`nodes.planner.iapf_fields.Lanes`) or None."""
+    def set_road(self, road: Lanes | None) -> None:
+        """The road of the run, or None (normally it comes with the goal, :meth:`set_goal`)."""
         self.road = road
 
     # -- goal ---------------------------------------------------------------
@@ -127,6 +128,9 @@ class Planner:
         """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
         same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
             goal.x, goal.y, goal.tolerance)
+        # the goal handshake carries the run's road (none: road_lanes = 0)
+        self.road = (Lanes(goal.road_y_min, goal.road_lane_width, goal.road_lanes)
+                     if goal.road_lanes > 0 and goal.road_lane_width > 0 else None)
         if not same:
             self.goal = goal
             self.state, self.reason = "ready", ""

@@ -72,7 +72,7 @@ class IAPFParams:
     literal_rotation: bool = False  # eq. 10 as printed (turns the field by -phi)
     prediction: bool = True      # Algorithm 1 on (off: "IAPF without prediction", Table 2)
     traditional: bool = False    # the traditional APF baseline (eq. 12, constant speed)
-    k_trad: float = 200.0        # eq. 12 k of the baseline (ours)
+    k_trad: float = 3000.0       # eq. 12 k of the baseline (ours)
     lane_width_ref: float = 4.0  # [m] the lane width d_w these values are for (Table 1)
     cruise_speed: float = 0.3    # [m/s] V_c of the planner node on the run's road (ours, ROSbot)
 
