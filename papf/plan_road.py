@@ -18,7 +18,7 @@ from common.errors import ConfigError
 from nodes.planner.iapf import HostState, IAPFCore, IAPFParams
 from nodes.planner.iapf_fields import Lanes, Track
 from nodes.planner.registry import load_params
-from papf.plan import PlanResult
+from papf.plan_result import PlanResult
 from papf.road_sim import RoadRun, run_road
 from worlds import Obstacle, World
 
