@@ -37,9 +37,9 @@ from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.iapf_fields import Lanes
 from nodes.planner.registry import make_planner
 from papf.monitor import MOVING_SPEED
-from papf.road_sim import road_figures
 from papf.plan3d import plan_3d
 from papf.plan_result import PlanResult, write_path  # noqa: F401 - part of this module's API
+from papf.road_sim import road_figures
 from schemas.messages import Odometry
 from worlds import World, load_world
 from worlds.bullet import build_world

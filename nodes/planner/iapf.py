@@ -173,8 +173,10 @@ class IAPFCore:
 
     # -- forces -------------------------------------------------------------------------
     def force(self, x: float, y: float, v: float, tracks, lanes: Lanes | None,
-              y_goal: float | None, b3: float) -> tuple[float, float, float, int]:
-        """``(F_X, F_Y, F_oX, active)``: eq. 13's resultant and the obstacles' X part."""
+              y_goal: float | None, b3: float, shift: float = 0.0) -> tuple[float, float, float, int]:
+        """``(F_X, F_Y, F_oX, active)``: eq. 13's resultant and the obstacles' X part, with the
+        obstacles moved on at constant velocity for ``shift`` [s] (the fields depend on the
+        host's position relative to each obstacle only, so the host is moved back instead)."""
         p = self.p
         half = p.goal_half_period_lanes * (lanes.width if lanes else 1.0)
         _, gx, gy = attraction_gradient(x, y, p.b1, p.b2, b3, y_goal, half)
@@ -183,12 +185,13 @@ class IAPFCore:
         ox = oy = 0.0
         active = 0
         for ob in tracks:
+            hx, hy = x - ob.vx * shift, y - ob.vy * shift
             if p.traditional:
-                _, ux, uy = traditional_gradient(x, y, ob, p.k_trad)
+                _, ux, uy = traditional_gradient(hx, hy, ob, p.k_trad)
             else:
-                if gap(x, y, p.host_length, ob) >= safety_distance(v, ob.speed, p.a_b, p.s_m):
+                if gap(hx, hy, p.host_length, ob) >= safety_distance(v, ob.speed, p.a_b, p.s_m):
                     continue
-                _, ux, uy = obstacle_gradient(x, y, ob, p.obstacle_gain, p.a_x, p.a_y,
+                _, ux, uy = obstacle_gradient(hx, hy, ob, p.obstacle_gain, p.a_x, p.a_y,
                                               p.literal_rotation)
             active += 1
             ox -= ux
@@ -196,10 +199,10 @@ class IAPFCore:
         return -gx + ox, -gy + oy, ox, active
 
     def advance(self, s: HostState, tracks, lanes: Lanes | None, y_goal: float | None, b3: float,
-                dt: float) -> tuple[HostState, tuple[float, float, float, float, int]]:
+                dt: float, shift: float = 0.0) -> tuple[HostState, tuple]:
         """One move of ``dt``: velocity update (eqs. 25-26), heading and position (21-22)."""
         p = self.p
-        fx, fy, fox, active = self.force(s.x, s.y, s.v, tracks, lanes, y_goal, b3)
+        fx, fy, fox, active = self.force(s.x, s.y, s.v, tracks, lanes, y_goal, b3, shift)
         accel = 0.0
         v = s.v
         if not p.traditional:
@@ -221,10 +224,9 @@ class IAPFCore:
         the field without the temporary goal (the future the vehicle would drive into)."""
         p = self.p
         pts = []
-        moved = tracks
-        for k in range(1, p.f_step + 1):
-            s, _ = self.advance(s, moved, lanes, y_goal, p.b3, p.predict_step_s)
-            moved = [ob.moved(k * p.predict_step_s) for ob in tracks]
+        for k in range(p.f_step):
+            s, _ = self.advance(s, tracks, lanes, y_goal, p.b3, p.predict_step_s,
+                                k * p.predict_step_s)
             pts.append((s.x, s.y))
         return pts
 
