@@ -23,10 +23,13 @@ from pathlib import Path
 
 from common.errors import ConfigError
 from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
+from nodes.planner.iapf_fields import Lanes
 from nodes.planner.registry import make_planner
 from papf.plan3d import plan_3d
 from papf.plan_result import PlanResult, write_path  # noqa: F401 - part of this module's API
+from papf.road_sim import road_figures
 from papf.sim2d import FootprintChecker, closed_loop, start_pose  # noqa: F401 - API, as above
 from worlds import World, load_world
 
@@ -69,8 +72,14 @@ def _plan_2d(world, planner, name, seed, max_time_s, dt, lidar, keep_states) -> 
     with LidarSim(world, lidar, seed) as sensor:
         checker = FootprintChecker(world)
         try:
-            return closed_loop(world, planner, name, seed, start_pose(world, seed), sensor.scan,
-                               checker.clearance, max_time_s, dt, CommandGate(RosbotLimits()),
-                               keep_states)
+            result = closed_loop(world, planner, name, seed, start_pose(world, seed),
+                                 sensor.scan, checker.clearance, max_time_s, dt,
+                                 CommandGate(RosbotLimits()), keep_states)
         finally:
             checker.close()
+    if world.road is not None:
+        lanes = Lanes(world.road.y_min, world.road.lane_width, world.road.lanes)
+        size = SimParams().chassis_size
+        result.road = road_figures(lanes, result.times, result.path, result.headings,
+                                   (size[0], size[1]))
+    return result

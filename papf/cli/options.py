@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+PLANNER_HELP = "apf | papf | arapf | wang | iapf (default apf)"
 
-def add_world_and_planner(p) -> None:
+
+def add_world_and_planner(p, planner_help: str = PLANNER_HELP) -> None:
     """``--world`` (required) and ``--planner``."""
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    p.add_argument("--planner", default="apf", help=planner_help)
 
 
 def add_planner_settings(p) -> None:

@@ -13,7 +13,9 @@ def register(sub) -> None:
                        "stack: 2-D worlds with the simulated LiDAR and a unicycle with the "
                        "ROSbot limits, 3-D worlds (spheres) with a point robot. Exit code: "
                        "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
-    add_world_and_planner(p)
+    add_world_and_planner(p, "apf | papf | arapf | wang | iapf (default apf); on car-scale "
+                             "worlds (iapf-case-*): iapf, iapf-np (no prediction), apf (the "
+                             "paper's baseline)")
     p.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
@@ -31,8 +33,13 @@ def cmd_plan(args) -> int:
     from worlds import load_world
 
     world = load_world(args.world)
-    result = plan(world, args.planner, params=args.set, seed=args.seed, max_time_s=args.timeout,
-                  dt=args.dt, params_file=args.params)
+    if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
+        from papf.plan_road import plan_car
+
+        result = plan_car(world, args.planner, args.set, args.params, max_time_s=args.timeout)
+    else:
+        result = plan(world, args.planner, params=args.set, seed=args.seed,
+                      max_time_s=args.timeout, dt=args.dt, params_file=args.params)
     if args.out:
         write_path(result, args.out)
     if args.plot:
