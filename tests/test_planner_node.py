@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from common.transport import wait_alive
+from nodes.planner.iapf_fields import Lanes
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner
 from schemas import Keys
@@ -21,7 +22,6 @@ from schemas.messages import (
     Scan,
     Twist,
 )
-from worlds.traffic import Road
 
 MS = 1_000_000
 
@@ -67,16 +67,17 @@ def test_lockstep_missing_odom_falls_back_after_pair_timeout():
 
 
 class Seen:
-    """Records what the planner shows a strategy through ``observe``."""
+    """Records what the planner shows a strategy through ``observe``: (road, track x, t [ns])."""
 
     def __init__(self, planner):
         self.calls = []
-        planner.strategy.observe = lambda road, objects, odom: self.calls.append(
-            (road, None if objects is None else objects.stamp_ns, odom.stamp_ns))
+        planner.strategy.observe = lambda objects, road, t, v: self.calls.append(
+            (road, tuple(o.x for o in objects), round(t * 1e9)))
 
 
 def objects(t):
-    return Objects(stamp_ns=t, source="truth", tracks=(ObjectTrack(id=1, x=2.0, y=0.0),))
+    """Tracks of instant t: one object at x = 1 + t [s] (so each instant's is recognisable)."""
+    return Objects(stamp_ns=t, source="truth", tracks=(ObjectTrack(id=1, x=1.0 + t / 1e9, y=0.0),))
 
 
 def test_lockstep_with_objects_waits_for_the_scans_own_tracks():
@@ -89,7 +90,7 @@ def test_lockstep_with_objects_waits_for_the_scans_own_tracks():
     assert lp.on_message("odom", odom(100 * MS), 0.0) == []          # objects(100 ms) missing
     out = lp.on_message("objects", objects(100 * MS), 0.0)
     assert out[0][1].stamp_ns == 100 * MS
-    assert seen.calls == [(Road(-0.3, 0.6, 2), 100 * MS, 100 * MS)]
+    assert seen.calls == [(Lanes(-0.3, 0.6, 2), (1.1,), 100 * MS)]
 
 
 def test_lockstep_objects_fall_back_to_the_newest_older_after_pair_timeout():
@@ -99,7 +100,7 @@ def test_lockstep_objects_fall_back_to_the_newest_older_after_pair_timeout():
     lp.on_message("odom", odom(100 * MS), 0.0)
     assert lp.on_message("scan", scan(100 * MS), 0.0) == []
     assert lp.poll(0.3)[0][1].stamp_ns == 100 * MS
-    assert seen.calls == [(None, 0, 100 * MS)]                          # no road in this goal
+    assert seen.calls == [(None, (1.0,), 100 * MS)]                    # objects(0); no road
 
 
 def test_without_objects_the_loop_ignores_them():
@@ -108,7 +109,7 @@ def test_without_objects_the_loop_ignores_them():
     lp.on_message("objects", objects(100 * MS), 0.0)
     lp.on_message("odom", odom(100 * MS), 0.0)
     assert lp.on_message("scan", scan(100 * MS), 0.0)[0][1].stamp_ns == 100 * MS
-    assert seen.calls == [(None, None, 100 * MS)]
+    assert seen.calls == [(None, (), 100 * MS)]
 
 
 def test_realtime_uses_latest_odom_and_stops_when_stale():
@@ -159,7 +160,7 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
 def test_help_lists_every_planner():
     r = subprocess.run([sys.executable, "-m", "nodes.planner", "--help"], capture_output=True,
                        text=True, timeout=60, start_new_session=True)
-    assert r.returncode == 0 and "{apf,arapf,papf,wang}" in r.stdout
+    assert r.returncode == 0 and "{apf,arapf,iapf,papf,wang}" in r.stdout
 
 
 def test_bad_setting_exits_2():
