@@ -16,8 +16,8 @@ One cycle (:meth:`Tracker.update`) per scan, everything in the world frame:
    Clusters with fewer than ``min_points`` points are noise; clusters longer than
    ``max_extent`` are walls or other structure, not objects (the planner still sees them
    in the scan). Why not a library clustering (scipy ``cKDTree`` + ``connected_components``,
-   scikit-learn DBSCAN): on a scan the neighbours are already ordered, and the library
-   calls cost ~0.5 ms per scan in set-up alone (measured), the whole budget of a cycle.
+   scikit-learn DBSCAN): on a scan the neighbours are already ordered, and the sparse-graph
+   set-up took most of the cycle in our first version (nodes/tracker/README.md).
    A cluster's measurement is the centre of its bounding box in its principal axes
    (the visible part of the object: a car seen from behind is measured at its rear).
 3. **Association**: predicted tracks vs clusters by centre distance, globally optimal
