@@ -1,9 +1,9 @@
-"""``papf topic list|echo|hz``, ``papf goal X Y`` and ``papf teleop`` (argparse and handlers).
+"""``papf topic list|echo|hz``: what the bus carries, what it says, how often (like ``ros2 topic``).
 
-Each takes the Zenoh options every node takes (``--connect``, ``--mode``, ``--namespace``,
-``--zenoh-config`` …: :func:`common.transport.add_zenoh_args`), so it reaches whatever
-the nodes reach — the embedded router of ``papf run``/``papf launch`` by default, a
-robot with ``--connect tcp/<robot>:7447``, a secure split with ``--zenoh-config``.
+Takes the Zenoh options every node takes (``--connect``, ``--mode``, ``--namespace``,
+``--zenoh-config`` …), so it reaches whatever the nodes reach: the embedded router of
+``papf run``/``papf launch`` by default, a robot with ``--connect tcp/<robot>:7447``, a
+secure split with ``--zenoh-config``. The work is :mod:`papf.bus.topics`.
 """
 
 from __future__ import annotations
@@ -23,16 +23,6 @@ Our messages are decoded by their msgpack type, the bridge's CDR by the key
 
 
 def register(sub) -> None:
-    _add_topic(sub)
-    _add_goal(sub)
-    _add_teleop(sub)
-
-
-def _zenoh(p: argparse.ArgumentParser) -> None:
-    add_zenoh_args(p)
-
-
-def _add_topic(sub) -> None:
     p = sub.add_parser("topic", help="list, echo and measure the bus's topics (like ros2 topic)",
                        description="Poke the bus: what is published, what it says, how often.")
     tsub = p.add_subparsers(dest="topic_command", required=True, metavar="list|echo|hz")
@@ -42,7 +32,7 @@ def _add_topic(sub) -> None:
     q.add_argument("--duration", type=float, default=2.0, metavar="S",
                    help="how long to listen [s] (default 2)")
     q.add_argument("--json", action="store_true", help="one JSON object per key")
-    _zenoh(q)
+    add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_list)
     q = tsub.add_parser("echo", help="print the messages on a key", epilog=TOPIC_EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -56,7 +46,7 @@ def _add_topic(sub) -> None:
     q.add_argument("--json", action="store_true", help="one JSON object per message")
     q.add_argument("--ros-type", metavar="TYPE", help="decode CDR as this ROS 2 type "
                    "(e.g. sensor_msgs/msg/LaserScan) instead of guessing from the key")
-    _zenoh(q)
+    add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_echo)
     q = tsub.add_parser("hz", help="print the rate of a key in Hz", epilog=TOPIC_EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -68,49 +58,8 @@ def _add_topic(sub) -> None:
     q.add_argument("--duration", type=float, default=0.0, metavar="S",
                    help="stop after S seconds (default: until Ctrl-C)")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of CDR payloads (stamps)")
-    _zenoh(q)
+    add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_hz)
-
-
-def _add_goal(sub) -> None:
-    p = sub.add_parser("goal", help="send the planner a goal and follow it to an outcome",
-                       description="Publish a goal until the planner acknowledges it, then "
-                                   "follow its status: exit 0 reached, 3 stagnated, 4 collision, "
-                                   "5 timeout, 6 failed or no planner. In a `papf launch` "
-                                   "session this re-targets the running planner; with nodes "
-                                   "started alone, --start-run also starts the run.")
-    p.add_argument("x", type=float, nargs="?", help="goal x [m] in the world frame")
-    p.add_argument("y", type=float, nargs="?", help="goal y [m]")
-    p.add_argument("--world", help="take the goal (and tolerance) of this world instead")
-    p.add_argument("--tolerance", type=float, help="[m] (default 0.1, or the world's)")
-    p.add_argument("--start-run", action="store_true",
-                   help="publish run_started after the acknowledgement (nodes started alone)")
-    p.add_argument("--no-wait", action="store_true", help="return once the planner acknowledged")
-    p.add_argument("--timeout", type=float, default=0.0, metavar="S",
-                   help="exit 5 without an outcome after S wall seconds (default: none)")
-    _zenoh(p)
-    p.set_defaults(func=cmd_goal)
-
-
-def _add_teleop(sub) -> None:
-    from papf.bus.teleop import HELP
-
-    p = sub.add_parser("teleop", help="drive the robot with the keyboard (cmd_vel, in a terminal)",
-                       description="Keyboard teleoperation on <ns>/cmd_vel, through the base "
-                                   "driver's limits and 0.5 s watchdog like the planner's "
-                                   f"commands. Keys: {HELP}. Run no planner at the same time "
-                                   "(both would command the robot).")
-    p.add_argument("--max-v", type=float, default=0.3, metavar="M_S",
-                   help="teleop speed limit [m/s] (default 0.3; the driver's is 0.9)")
-    p.add_argument("--max-w", type=float, default=1.0, metavar="RAD_S",
-                   help="teleop turn-rate limit [rad/s] (default 1.0; the driver's is 3.0)")
-    p.add_argument("--step-v", type=float, default=0.05, help="[m/s] per key press (0.05)")
-    p.add_argument("--step-w", type=float, default=0.2, help="[rad/s] per key press (0.2)")
-    p.add_argument("--rate", type=float, default=10.0, help="commands per second (10)")
-    p.add_argument("--start-run", action="store_true",
-                   help="publish run_started first (a sim driver started alone waits for it)")
-    _zenoh(p)
-    p.set_defaults(func=cmd_teleop)
 
 
 def _session(args):
@@ -170,41 +119,3 @@ def cmd_topic_hz(args) -> int:
     return 0
 
 
-def cmd_goal(args) -> int:
-    from common.errors import ConfigError
-    from papf.bus.goal import send_goal
-
-    if args.world:
-        if args.x is not None:
-            raise ConfigError("give either X Y or --world W, not both")
-        from worlds import load_world
-
-        world = load_world(args.world)
-        x, y = world.goal[:2]
-        tol = args.tolerance if args.tolerance is not None else world.tolerance
-    elif args.x is None or args.y is None:
-        raise ConfigError("give the goal as X Y [m] (e.g. papf goal 9 0) or --world W")
-    else:
-        x, y, tol = args.x, args.y, 0.1 if args.tolerance is None else args.tolerance
-    if not tol > 0:
-        raise ConfigError(f"--tolerance {tol} must be > 0 m")
-    stop = StopRequested()
-    with _session(args) as s:
-        res = send_goal(s, Keys(args.namespace), x, y, tol, start_run=args.start_run,
-                        wait=not args.no_wait, timeout_s=args.timeout, out=_out,
-                        stop=lambda: bool(stop))
-    if res.outcome not in ("acknowledged", "reached"):
-        print(f"papf goal: {res.outcome}: {res.reason}", file=sys.stderr)
-    return res.exit_code
-
-
-def cmd_teleop(args) -> int:
-    from papf.bus.teleop import TeleopState, run
-
-    state = TeleopState(args.max_v, args.max_w, args.step_v, args.step_w)
-    if not args.rate > 0:
-        print("papf teleop: --rate must be > 0", file=sys.stderr)
-        return 2
-    with _session(args) as s:
-        return run(s, Keys(args.namespace), state, period_s=1.0 / args.rate,
-                   start_run=args.start_run)
