@@ -27,9 +27,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
 
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from common.units import NS_PER_S as NS
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
@@ -42,6 +42,8 @@ from schemas.messages import Odometry
 from worlds import World, load_world
 from worlds.bullet import build_world
 from worlds.messages import goal_message
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 SUBSTEP_S = 0.02          # [s] integration and collision-check step (driver odometry period)
 CLEARANCE_CAP_M = 1.0     # [m] clearances above this are not resolved (reported as the cap)
