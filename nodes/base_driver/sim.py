@@ -43,13 +43,15 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import pybullet as p
 
 from common import robot
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
 from worlds import World
 from worlds.bullet import MovingBodies, add_ground, build_world
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 GRAVITY = 9.81                 # [m/s^2]
 STEP_NS = 4_000_000            # [ns] physics step, 250 Hz (docs/architecture.md "Time")

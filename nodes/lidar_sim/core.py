@@ -26,12 +26,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from schemas.messages import Scan
 from worlds import World
 from worlds.bullet import MovingBodies, build_world
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
