@@ -1,4 +1,4 @@
-"""Every message of the stack, defined once (DESIGN.md §3).
+"""Every message of the stack, defined once (docs/architecture.md "Messages").
 
 Conventions: time is integer nanoseconds of *sim time* in sim runs (``stamp_ns``);
 lengths in metres, angles in radians, speeds in m/s and rad/s. Poses are in the
@@ -131,7 +131,11 @@ class PlannerState(Message):
     top_quarks: Points = field((), unit="m")
     virtual_walls: Paths = field((), unit="m", doc="polylines of virtual wall points")
     virtual_obstacles: Points = field((), unit="m")
-    obstacle_count: int = field(0, doc="obstacle points used this cycle")
+    obstacle_count: int = field(0, doc="obstacle points (IAPF: tracks) used this cycle")
+    local_minimum_count: int = field(0, doc="IAPF eq. 24: predicted points near the solid line")
+    lane_goal_y: float = field(float("nan"), unit="m", nonfinite=True,
+                               doc="IAPF temporary lane goal y; nan when none")
+    v_target: float = field(0.0, unit="m/s", doc="speed the planner aims at (IAPF eq. 26)")
     compute_ns: int = field(0, unit="ns", doc="wall time the cycle took (not deterministic)")
 
 
@@ -158,7 +162,7 @@ class Clock(Message):
 
 
 EVENT_KINDS = ("run_started", "run_ended", "goal_reached", "collision", "timeout",
-               "stagnated", "node_fault", "watchdog_stop", "info")
+               "stagnated", "node_fault", "watchdog_stop", "info", "recording_closed")
 
 
 @message("Event", 1)
@@ -173,12 +177,38 @@ class Event(Message):
     y: float = field(float("nan"), unit="m", nonfinite=True)
 
 
+@message("ObjectTrack", 1)
+class ObjectTrack(Message):
+    """One obstacle seen around the robot (an element of :class:`Objects`), world frame."""
+
+    id: int = field(doc="track id, stable while the object is tracked")
+    x: float = field(unit="m", doc="centre")
+    y: float = field(unit="m")
+    yaw: float = field(0.0, unit="rad", doc="heading (direction of travel)")
+    vx: float = field(0.0, unit="m/s")
+    vy: float = field(0.0, unit="m/s")
+    length: float = field(0.0, unit="m", doc="extent along the heading")
+    width: float = field(0.0, unit="m", doc="extent across the heading")
+
+
+OBJECT_SOURCES = ("truth", "tracker")
+
+
+@message("Objects", 1)
+class Objects(Message):
+    """The obstacles around the robot at one instant: from the sim's ground truth or a tracker."""
+
+    stamp_ns: int = field(unit="ns", doc="the scan instant they belong to")
+    source: str = field(choices=OBJECT_SOURCES)
+    tracks: tuple[ObjectTrack, ...] = field(())
+
+
 ALL_MESSAGES: tuple[type[Message], ...] = (
     Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
-    PlannerStatus, Clock, Event,
+    PlannerStatus, Clock, Event, Objects,
 )
 BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
 
 __all__ = [m.__name__ for m in ALL_MESSAGES] + [
-    "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "PLANNER_STATES", "WHEEL_NAMES", "Points",
+    "ObjectTrack", "OBJECT_SOURCES", "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "PLANNER_STATES", "WHEEL_NAMES", "Points",
 ]

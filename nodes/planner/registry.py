@@ -22,6 +22,7 @@ from common.params import Spec, check_all, check_value, unknown_name
 from nodes.planner.apf import APFParams, apf_force
 from nodes.planner.arapf import ARAPFStrategy
 from nodes.planner.core import Plan, Planner, ScanView
+from nodes.planner.iapf_strategy import IAPFStrategy
 from nodes.planner.papf import PAPFStrategy
 from nodes.planner.settings import specs_of
 from nodes.planner.wang import WangStrategy
@@ -57,6 +58,7 @@ PLANNERS: dict[str, type] = {
     "papf": PAPFStrategy,
     "arapf": ARAPFStrategy,
     "wang": WangStrategy,
+    "iapf": IAPFStrategy,
 }
 
 

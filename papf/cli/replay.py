@@ -34,6 +34,7 @@ def register(sub) -> None:
 
 def cmd_replay(args) -> int:
     """Check the file, the rate and where it would publish before publishing anything."""
+    from papf.progress import DecileProgress
     from papf.recording.reader import Recording  # mcap: only when replaying
     from papf.recording.replay import check_rate, replay, target_namespaces
 
@@ -44,12 +45,12 @@ def cmd_replay(args) -> int:
             namespaces = target_namespaces(rec, args.keys, args.namespace)
         where = ", ".join(args.connect) or ("the --zenoh-config endpoints" if args.zenoh_config
                                              else DEFAULT_ENDPOINT)
-        with open_session(args, where) as session:
+        with open_session(args, where) as session, DecileProgress("replay") as bar:
             _refuse_live(session, namespaces, args.into_live)
             print(f"papf replay: publishing {args.file} into the Zenoh router at {where}, "
                   f"namespace {', '.join(sorted(namespaces)) or '(none)'}", file=sys.stderr)
             stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,
-                           progress=_progress_printer(), stop=lambda: bool(stop))
+                           progress=_progress_printer(bar), stop=lambda: bool(stop))
     except PapfError as exc:
         print(f"papf replay: {exc}", file=sys.stderr)
         return 2
@@ -75,14 +76,10 @@ def _refuse_live(session, namespaces: set[str], into_live: bool) -> None:
                               "messages. Replay under another --namespace, or give --into-live")
 
 
-def _progress_printer():
-    """``progress(done, total)`` that rewrites one status line on a terminal, else stays quiet."""
-    if not sys.stderr.isatty():
-        return None
-
+def _progress_printer(bar):
+    """``progress(done, total)`` feeding a :class:`papf.progress.DecileProgress`: a live bar
+    on a terminal, else one line per 10 % of the messages."""
     def show(done: int, total: int) -> None:
-        print(f"\rreplay {done}/{total} messages", end="", file=sys.stderr, flush=True)
-        if done >= total:
-            print(file=sys.stderr)
+        bar.fraction(done / total if total else 1.0, f"{done}/{total} messages")
 
     return show
