@@ -94,7 +94,7 @@ IAPF: dict[str, Spec] = {
     "a_y": num(-100.0, 0.0, "1/m^2", hi_open=True, safety=True),
     "eta1": num(0.0, 100.0), "eta2": num(0.0, 100.0),
     "step_s": pos(1.0, "s"), "horizon_s": pos(60.0, "s"),
-    "s_m": num(0.0, 100.0, "m", safety=True), "a_b": pos(20.0, "m/s^2", safety=True),
+    "s_m": pos(100.0, "m", safety=True), "a_b": pos(20.0, "m/s^2", safety=True),
     "f_step": integer(1, 1000), "c_f": integer(1, 1000), "t_c": pos(60.0, "s"),
     "v_cruise": pos(50.0, "m/s"), "obstacle_gain": pos(1e6, safety=True), "mass": pos(1e5, "kg"),
     "a_max": pos(20.0, "m/s^2"), "v_max_factor": num(1.0, 3.0),
