@@ -176,7 +176,7 @@ def test_worlds_refuse_unreachable_goals_starts_in_obstacles_and_huge_coordinate
     check_runnable(_world([3.0, 0.62], obstacles=[box]))     # beside it: fine
     with pytest.raises(WorldError, match="beyond the 1000 m"):
         _world([1e300, 0.0])
-    many = [{"kind": "cylinder", "center": [i * 0.5, 50.0], "radius": 0.1}
+    many = [{"kind": "cylinder", "center": [i * 0.5 - 200.0, 50.0], "radius": 0.1}
             for i in range(MAX_SIM_OBSTACLES + 1)]
     with pytest.raises(WorldError, match=f"serves at most {MAX_SIM_OBSTACLES}"):
         check_runnable(_world([5.0, 0.0], obstacles=many))

@@ -18,10 +18,11 @@ from common.errors import WorldError
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from worlds import Obstacle, World
 
-# [-] obstacles the simulated stack serves in real time on one laptop core: measured with
-# `papf run --world W --timeout 10` on worlds of N small cylinders (docs/worlds.md,
-# "Limits"); above it the sim falls behind the wall clock and start-up grows with N.
-MAX_SIM_OBSTACLES = 1000
+# [-] obstacles the simulated driver + LiDAR loop still runs faster than real time with:
+# `papf bench sim --sim-s 5 --world W` on worlds of N small cylinders (docs/worlds.md,
+# "Limits", docs/data/obstacle-limit.csv): 500 -> 1.6x, 1000 -> 0.42x, 2000 -> 0.12x real
+# time (the cost grows about as N^2); 100,000 never came up within the 60 s start-up.
+MAX_SIM_OBSTACLES = 500
 START_CLEAR_M = min(BODY_LENGTH_M, BODY_WIDTH_M) / 2   # [m] the chassis' inscribed half-width
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 from common.params import SEED, TIMEOUT, arg_type
 from papf.cli.options import add_planner_settings, add_world_and_planner
@@ -33,8 +34,10 @@ def cmd_plan(args) -> int:
     from papf.monitor import EXIT_CODES
     from papf.plan import plan, write_path  # pybullet: only when planning
     from worlds import load_world
+    from worlds.checks import check_runnable
 
     world = load_world(args.world)
+    check_runnable(world, max_obstacles=sys.maxsize)   # offline: no obstacle limit
     if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
         from papf.plan_road import plan_car
 
