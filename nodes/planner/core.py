@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -122,6 +123,16 @@ class Planner:
     # -- one cycle ----------------------------------------------------------
     def step(self, scan: Scan, odom: Odometry) -> tuple[Twist, PlannerState, PlannerStatus]:
         """One control cycle for ``scan`` (the command carries the scan's stamp)."""
+        cmd, finish = self.command(scan, odom)
+        return (cmd, *finish())
+
+    def command(self, scan: Scan, odom: Odometry) -> tuple[Twist, Callable[[], tuple]]:
+        """The cycle's command now; ``finish()`` -> ``(PlannerState, PlannerStatus)`` after.
+
+        The node publishes the command before it builds the debug message (tens of
+        microseconds with PAPF's abandoned paths): the command's latency is the
+        algorithm's alone. ``compute_ns`` is the time to the command.
+        """
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:
@@ -144,9 +155,10 @@ class Planner:
         v = speed_ref(float(np.linalg.norm(plan.force)), err, apf)
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
-        state = self._state(t, plan, view, theta_ref, v, w, t0)
-        return (Twist(stamp_ns=t, v=v, w=w), state,
-                PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
+        compute_ns = time.perf_counter_ns() - t0
+        return Twist(stamp_ns=t, v=v, w=w), lambda: (
+            self._state(t, plan, view, theta_ref, v, w, compute_ns),
+            PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
 
     # -- helpers ------------------------------------------------------------
     def _params_for(self, beams: int) -> APFParams:
@@ -181,11 +193,12 @@ class Planner:
             self.state, self.reason = state, reason
         plan = plan or Plan(force=np.zeros(2), mode="stop")
         plan.mode = "stop" if state != "idle" else "idle"
-        ps = self._state(t, plan, view, 0.0, 0.0, 0.0, t0)
-        return (Twist(stamp_ns=t, v=0.0, w=0.0), ps,
-                PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
+        compute_ns = time.perf_counter_ns() - t0
+        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda: (
+            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns),
+            PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
 
-    def _state(self, t, plan: Plan, view, theta_ref, v, w, t0) -> PlannerState:
+    def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
         force = np.asarray(plan.force, dtype=float)
         return PlannerState(
             stamp_ns=t, algorithm=self.strategy.name, mode=plan.mode,
@@ -198,4 +211,4 @@ class Planner:
             virtual_walls=tuple(_points(p) for p in plan.virtual_walls),
             virtual_obstacles=_points(plan.virtual_obstacles),
             obstacle_count=0 if view is None else int(view.points.shape[0]),
-            compute_ns=time.perf_counter_ns() - t0)
+            compute_ns=compute_ns)
