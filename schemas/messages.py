@@ -94,12 +94,21 @@ class BatteryVoltage(Message):
 
 @message("Goal", 1)
 class Goal(Message):
-    """The global goal position in the world frame."""
+    """The global goal position in the world frame, and the road the run is on, if any.
+
+    The road fields describe the world's ``[road]`` (a straight one-way road along +x,
+    ``road_lanes`` lanes of ``road_lane_width`` stacked towards +y from the right edge
+    ``road_y_min``); ``road_lanes = 0`` means no road. They were added with defaults, so
+    goals recorded before them still decode (as "no road").
+    """
 
     stamp_ns: int = field(unit="ns")
     x: float = field(unit="m")
     y: float = field(unit="m")
     tolerance: float = field(0.1, unit="m")
+    road_lanes: int = field(0, doc="number of lanes; 0 = no road")
+    road_y_min: float = field(0.0, unit="m", doc="right road edge (solid line)")
+    road_lane_width: float = field(0.0, unit="m", doc="lane width d_w")
 
 
 @message("PlannerState", 1)
@@ -120,7 +129,11 @@ class PlannerState(Message):
     top_quarks: Points = field((), unit="m")
     virtual_walls: Paths = field((), unit="m", doc="polylines of virtual wall points")
     virtual_obstacles: Points = field((), unit="m")
-    obstacle_count: int = field(0, doc="obstacle points used this cycle")
+    obstacle_count: int = field(0, doc="obstacle points (IAPF: tracks) used this cycle")
+    local_minimum_count: int = field(0, doc="IAPF eq. 24: predicted points near the solid line")
+    lane_goal_y: float = field(float("nan"), unit="m", nonfinite=True,
+                               doc="IAPF temporary lane goal y; nan when none")
+    v_target: float = field(0.0, unit="m/s", doc="speed the planner aims at (IAPF eq. 26)")
     compute_ns: int = field(0, unit="ns", doc="wall time the cycle took (not deterministic)")
 
 
