@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
-from nodes.planner.registry import PLANNERS
 from papf.experiments.energy import TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
 
@@ -85,6 +84,8 @@ def _add_random(exp) -> None:
 
 def planner_list(text: str) -> list[str]:
     """``"apf,papf"`` -> ``["apf", "papf"]``; ConfigError names the unknown ones."""
+    from nodes.planner.registry import PLANNERS  # numba: not when building the parser
+
     names = [p.strip() for p in text.split(",") if p.strip()]
     bad = [p for p in names if p not in PLANNERS]
     if bad or not names:
