@@ -24,7 +24,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from papf.experiments.sweep import SweepOptions
+from common.errors import ConfigError
+from papf.experiments.sweep import SweepOptions, map_runs
+from papf.experiments.trials import (
+    markdown_table,
+    quiet_runner_logs,
+    run_job,
+    trial_job,
+    trial_line,
+    write_csv,
+)
+from worlds import load_world, world_path
 
 PAPF_WORLDS = tuple(f"papf-test-{i}" for i in range(1, 7))
 ARAPF_WORLDS = tuple(f"arapf-test-{i}" for i in range(1, 4))
@@ -125,17 +135,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
     """
-    from common.errors import ConfigError
-    from papf.experiments.sweep import map_runs
-    from papf.experiments.trials import (
-        markdown_table,
-        quiet_runner_logs,
-        run_job,
-        trial_job,
-        write_csv,
-    )
-    from papf.plots import plot_paths
-    from worlds import load_world, world_path
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
@@ -147,7 +147,8 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
             for name in worlds for planner in planners]
     jobs = [dataclasses.replace(job, index=i) for i, job in enumerate(jobs)]
     opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
-    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="paper tests")
+    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="paper tests",
+                    line=lambda _j, r: trial_line(r[0]))
     trials = [trial for trial, _ in done]
     for job, (_trial, data) in zip(jobs, done, strict=True):
         if data is not None:  # recorded where it ran; kept here

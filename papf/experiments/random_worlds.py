@@ -20,7 +20,17 @@ import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
-from papf.experiments.sweep import SweepOptions
+from common.errors import ConfigError
+from papf.experiments.sweep import SweepOptions, map_runs
+from papf.experiments.trials import (
+    markdown_table,
+    quiet_runner_logs,
+    run_job,
+    trial_job,
+    trial_line,
+    write_csv,
+)
+from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
 
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
 WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
@@ -39,7 +49,6 @@ def _rate(trials) -> float:
 def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
     """Per planner: worlds, rate of each outcome [%], success rate per kind and, given the
     worlds' bottleneck widths, on the worlds whose bottleneck is >= / < WIDE_M [%]."""
-    from papf.randworlds import KINDS
 
     bottleneck = bottleneck or {}
     rows = []
@@ -60,8 +69,6 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
 
 def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected: int) -> str:
-    from papf.experiments.trials import markdown_table
-    from papf.randworlds import KINDS
 
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
               *[f"reached: {k} [%]" for k in KINDS],
@@ -83,11 +90,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
     """
-    from common.errors import ConfigError
-    from papf.experiments.sweep import map_runs
-    from papf.experiments.trials import quiet_runner_logs, run_job, trial_job, write_csv
-    from papf.plots import plot_paths
-    from papf.randworlds import bottleneck_width, generate_solvable, world_to_toml
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
@@ -106,7 +109,8 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
                            sets=tuple(sets), record=plots and mode == "stack", index=len(jobs) + k)
                  for k, planner in enumerate(planners)]
     opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
-    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="random worlds")
+    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="random worlds",
+                    line=lambda _j, r: trial_line(r[0]))
     trials = [trial for trial, _ in done]
     for job, (_trial, data) in zip(jobs, done, strict=True):
         if data is not None:  # recorded where it ran; kept here

@@ -67,20 +67,22 @@ def run_namespace(index: int) -> str:
 
 
 def map_runs(fn: Callable[[J], R], jobs: Sequence[J], opts: SweepOptions,
-             label: Callable[[J], str] = str, title: str = "sweep") -> list[R]:
+             label: Callable[[J], str] = str, title: str = "sweep",
+             line: Callable[[J, R], str] | None = None) -> list[R]:
     """``[fn(job) for job in jobs]`` (job order), on Dask when ``opts`` asks; see module doc.
 
     ``fn`` and the jobs must pickle (a module-level function, dataclass jobs) when
-    distributed; ``label(job)`` names a run on the progress bar and in the piped lines.
+    distributed; ``label(job)`` names a run on the progress bar; ``line(job, result)`` is
+    the line printed per finished run (default: label, outcome, wall time).
     """
     opts.validate()
-    with SweepProgress(len(jobs), title, opts.progress) as progress:
+    with SweepProgress(len(jobs), title, opts.progress, line) as progress:
         if not opts.distributed:
             out = []
             for job in jobs:
                 t0 = time.monotonic()
                 out.append(fn(job))
-                progress.done(label(job), out[-1], time.monotonic() - t0)
+                progress.done(job, label(job), out[-1], time.monotonic() - t0)
             return out
         return _map_dask(fn, jobs, opts, label, progress)
 
@@ -106,7 +108,7 @@ def _map_dask(fn, jobs, opts: SweepOptions, label, progress: SweepProgress) -> l
         for future in as_completed(futures):
             i = index[future.key]
             results[i], wall = future.result()   # a run's exception is raised here
-            progress.done(label(jobs[i]), results[i], wall)
+            progress.done(jobs[i], label(jobs[i]), results[i], wall)
         return results
     finally:
         client.close()
@@ -122,7 +124,7 @@ def _timed(fn, job):
 class SweepProgress:
     """One bar over the whole sweep on a terminal; else one line per finished run (stderr)."""
 
-    def __init__(self, total: int, title: str, enabled: bool | None = None):
+    def __init__(self, total: int, title: str, enabled: bool | None = None, line=None):
         from rich.console import Console
         from rich.progress import (
             BarColumn,
@@ -134,7 +136,7 @@ class SweepProgress:
 
         console = Console(stderr=True)
         self.bar = console.is_terminal if enabled is None else enabled
-        self.total, self.count, self.title = total, 0, title
+        self.total, self.count, self.title, self.line = total, 0, title, line
         self._progress = Progress(TextColumn("{task.description}"), BarColumn(),
                                   MofNCompleteColumn(), TimeElapsedColumn(), console=console,
                                   disable=not self.bar)
@@ -145,14 +147,15 @@ class SweepProgress:
         self._task = self._progress.add_task(self.title, total=self.total)
         return self
 
-    def done(self, label: str, result, wall_s: float) -> None:
+    def done(self, job, label: str, result, wall_s: float) -> None:
         self.count += 1
-        outcome = getattr(result, "outcome", "")
-        if self.bar:
+        text = (self.line(job, result) if self.line else
+                f"{label}: {getattr(result, 'outcome', 'done')} ({wall_s:.1f} s wall)")
+        if self.bar:  # the line above the bar
             self._progress.update(self._task, advance=1, description=f"{self.title}: {label}")
+            self._progress.console.print(text, highlight=False, markup=False, soft_wrap=True)
         else:
-            print(f"[{self.count}/{self.total}] {label}: {outcome} ({wall_s:.1f} s wall)",
-                  file=sys.stderr, flush=True)
+            print(f"[{self.count}/{self.total}] {text}", file=sys.stderr, flush=True)
 
     def __exit__(self, *exc) -> None:
         self._progress.__exit__(*exc)
