@@ -22,6 +22,7 @@ sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
+from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.supervisor import Supervisor, free_port, wait_port  # noqa: E402
 from schemas import Keys  # noqa: E402
@@ -79,7 +80,7 @@ def bench(sim_s: float, world: str, beams: int) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--sim-s", type=float, default=30.0, help="sim seconds to run (30)")
     parser.add_argument("--world", default="energy")
     parser.add_argument("--beams", type=int, default=300)
