@@ -2,9 +2,6 @@
 
 - :func:`draw_world` — obstacles (boxes/walls as their footprints, cylinders as discs,
   spheres as wireframes on a 3-D axes), start and goal (with its tolerance) on an axes.
-- :func:`plot_paths` — one figure: the world plus one line per labelled path, saved as PNG.
-  2-D worlds give a 2-D plot (equal axes, the world's extent); 3-D worlds a 3-D view with
-  top and side projections and the clearance over time (:mod:`papf.plots3d`).
 - :func:`path_style` — line width, dash and end marker of the i-th path, so paths that lie
   on top of each other stay visible (the first is widest and underneath);
 - :func:`view_extent` / :func:`set_view` — axes limits covering the world and every path,
@@ -18,7 +15,6 @@ Used by ``papf plan``, the paper-tests and random-world experiments and the ener
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 
 import matplotlib
 
@@ -184,29 +180,3 @@ def draw_paths(ax, paths: Mapping[str, np.ndarray], dims: int = 2) -> None:
             ax.plot(arr[:, 0], arr[:, 1], color=c, label=label, **style)
             ax.plot(arr[-1, 0], arr[-1, 1], marker, color=c, mec="k", mew=0.5, ms=7,
                     zorder=style["zorder"] + 1)
-
-
-def plot_paths(world: World, paths: Mapping[str, np.ndarray], out_png: str | Path,
-               title: str = "", times: Mapping[str, np.ndarray] | None = None) -> Path:
-    """Save a PNG of ``world`` with every path of ``{label: (N, 2|3) array}``; returns the path.
-
-    ``times`` (label -> (N,) [s]) dates the points of 3-D paths for the clearance plot.
-    """
-    if world.dims == 3:
-        from papf.plots3d import plot_paths_3d  # the 3-D figure: its own module
-
-        return plot_paths_3d(world, paths, out_png, title, times)
-    fig, ax = new_axes(world)
-    try:
-        draw_world(ax, world)
-        draw_paths(ax, paths, world.dims)
-        set_view(ax, view_extent(world, paths.values()))
-        ax.set_title(title or world.name)
-        fig.legend(loc="outside lower center", ncol=min(len(paths) + 2, 4), fontsize=8,
-                   frameon=False)
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
-    return out

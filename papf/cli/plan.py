@@ -45,7 +45,7 @@ def cmd_plan(args) -> int:
     if args.out:
         write_path(result, args.out)
     if args.plot:
-        from papf.plots import plot_paths  # matplotlib: only with --plot
+        from papf.path_plot import plot_paths  # matplotlib: only with --plot
 
         label = f"{args.planner} ({result.outcome})"
         plot_paths(world, {label: result.path}, args.plot,

@@ -133,7 +133,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
     """
-    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
+    from papf.path_plot import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
