@@ -7,6 +7,13 @@ is a small *strategy* (:class:`Strategy`) that turns the situation into a force 
 debug geometry the papers drew in RViz; strategies are looked up by name in
 :mod:`nodes.planner.registry`.
 
+What the run tells the planner beyond scan and odometry: the **road** comes with the
+goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
+never reads a world file) and the **obstacle tracks** of the cycle come as an optional
+``Objects`` message paired with the scan (:meth:`Planner.step`), kept as
+:attr:`Planner.objects`. A strategy that wants them defines ``observe(objects, road, t, v)``;
+it is called before each ``plan``.
+
 Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 """
 
@@ -15,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -22,8 +30,8 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from nodes.planner.iapf_fields import Lanes
-from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from nodes.planner.iapf_fields import Lanes, Track
+from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
 @dataclass(frozen=True)
@@ -140,8 +148,27 @@ class Planner:
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
     # -- one cycle ----------------------------------------------------------
-    def step(self, scan: Scan, odom: Odometry) -> tuple[Twist, PlannerState, PlannerStatus]:
-        """One control cycle for ``scan`` (the command carries the scan's stamp)."""
+    def step(self, scan: Scan, odom: Odometry, objects: Objects | None = None
+             ) -> tuple[Twist, PlannerState, PlannerStatus]:
+        """One control cycle for ``scan`` (the command carries the scan's stamp).
+
+        ``objects``: the obstacle tracks paired with this scan, if the run provides them
+        (None: keep the last ones).
+        """
+        cmd, finish = self.command(scan, odom, objects)
+        return (cmd, *finish())
+
+    def command(self, scan: Scan, odom: Odometry, objects: Objects | None = None
+                ) -> tuple[Twist, Callable[[], tuple]]:
+        """The cycle's command now; ``finish()`` -> ``(PlannerState, PlannerStatus)`` after.
+
+        The node publishes the command before it builds the debug message (tens of
+        microseconds with PAPF's abandoned paths): the command's latency is the
+        algorithm's alone. ``compute_ns`` is the time to the command.
+        """
+        if objects is not None:
+            self.set_objects(Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id)
+                             for o in objects.tracks)
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:
@@ -170,9 +197,10 @@ class Planner:
             v = max(0.0, plan.v_ref * math.cos(err))
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
-        state = self._state(t, plan, view, theta_ref, v, w, t0)
-        return (Twist(stamp_ns=t, v=v, w=w), state,
-                PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
+        compute_ns = time.perf_counter_ns() - t0
+        return Twist(stamp_ns=t, v=v, w=w), lambda: (
+            self._state(t, plan, view, theta_ref, v, w, compute_ns),
+            PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
 
     # -- helpers ------------------------------------------------------------
     def _params_for(self, beams: int) -> APFParams:
@@ -207,11 +235,12 @@ class Planner:
             self.state, self.reason = state, reason
         plan = plan or Plan(force=np.zeros(2), mode="stop")
         plan.mode = "stop" if state != "idle" else "idle"
-        ps = self._state(t, plan, view, 0.0, 0.0, 0.0, t0)
-        return (Twist(stamp_ns=t, v=0.0, w=0.0), ps,
-                PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
+        compute_ns = time.perf_counter_ns() - t0
+        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda: (
+            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns),
+            PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
 
-    def _state(self, t, plan: Plan, view, theta_ref, v, w, t0) -> PlannerState:
+    def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
         force = np.asarray(plan.force, dtype=float)
         return PlannerState(
             stamp_ns=t, algorithm=self.strategy.name, mode=plan.mode,
@@ -227,4 +256,4 @@ class Planner:
                             0 if view is None else int(view.points.shape[0])),
             local_minimum_count=int(plan.local_count), lane_goal_y=float(plan.lane_goal_y),
             v_target=float(plan.v_ref) if plan.v_ref is not None else float(v),
-            compute_ns=time.perf_counter_ns() - t0)
+            compute_ns=compute_ns)
