@@ -48,7 +48,7 @@ class RunConfig:
     startup_timeout_s: float = 60.0    # [s wall] for every node to become alive
     lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
-    zenoh_mode: str = "client"         # nodes' Zenoh mode: client (via the router) or peer
+    zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
     objects: str | None = None         # none | truth | tracker; None: per planner (objects_for)
 
 
