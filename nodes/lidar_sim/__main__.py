@@ -26,7 +26,7 @@ import sys
 
 from common.errors import PapfError
 from common.params import arg_type
-from common.ports import describe
+from common.ports import describe, plain
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.lidar_sim.options import OPTIONS
 from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
@@ -96,9 +96,9 @@ def _opt(name: str):
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
-                                     description=__doc__.split("\n\n")[0],
+                                     description=plain(__doc__.split("\n\n")[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1] + "\n"
+                                     epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"
                                      + describe(PORTS, VARIANTS, EXTRAS))
     parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
                         help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")

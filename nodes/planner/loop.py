@@ -16,12 +16,14 @@
   run key (:mod:`common.runauth`), only a goal signed with it counts (others are dropped
   and counted in ``rejected_goals``), and every status is signed.
 - Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
-  and ``planner/status``.
+  and ``planner/status``. With ``send_command`` the command goes out through it as soon as
+  it exists (before the debug state is built; the returned list then holds the rest).
 """
 
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Callable
 
 from common import runauth
 from common.params import check_value
@@ -37,10 +39,11 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = 0.25, log=None, run_key: bytes | None = None,
-                 objects: bool = False):
+                 objects: bool = False, send_command: Callable[[Twist], None] | None = None):
         check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
         check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])
         self.planner, self.realtime, self.use_objects = planner, realtime, objects
+        self.send_command = send_command
         self.stale_ns = int(stale_timeout_s * NS_PER_S)
         self.stale_s, self.pair_timeout_s = stale_timeout_s, pair_timeout_s
         self.log = log
@@ -132,8 +135,13 @@ class PlannerLoop:
             return self._stale(scan, odom)
         if objects is not None and scan.stamp_ns - objects.stamp_ns > self.stale_ns:
             objects = None
-        cmd, state, status = self.planner.step(scan, odom, objects)
-        return [("cmd_vel", cmd), ("planner/state", state), ("planner/status", status)]
+        cmd, finish = self.planner.command(scan, odom, objects)
+        out = [("cmd_vel", cmd)]
+        if self.send_command is not None:  # out now: the driver waits for it in lockstep
+            self.send_command(cmd)
+            out = []
+        state, status = finish()
+        return [*out, ("planner/state", state), ("planner/status", status)]
 
     def _stale(self, scan: Scan, odom: Odometry | None) -> list:
         self.stale_cycles += 1

@@ -23,7 +23,10 @@ def cmd_info(args) -> int:
     try:
         with Recording(args.file) as rec:
             first, last = rec.time_span_ns()
+            channels = rec.channels()
             info = {"file": args.file, "metadata": rec.metadata, "messages": rec.counts(),
+                    "channels": {k: {"schema": s, "schema_encoding": se, "message_encoding": me}
+                                 for k, (s, se, me) in channels.items()},
                     "first_log_ns": first, "last_log_ns": last}
         scan, intact = scan_file(args.file)
     except PapfError as exc:
@@ -34,11 +37,7 @@ def cmd_info(args) -> int:
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        print(f"{args.file}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
-        for name, meta in info["metadata"].items():
-            print(f"  metadata {name}: " + ", ".join(f"{k}={v}" for k, v in meta.items()))
-        for key, n in sorted(info["messages"].items()):
-            print(f"  {key:<40} {n:>8}")
+        _print_info(args.file, info, channels, first, last)
     if scan.damaged:
         total = sum(info["messages"].values())
         print(f"papf info: {args.file} is damaged: {scan.bad_chunks} chunk(s) fail their "
@@ -47,3 +46,15 @@ def cmd_info(args) -> int:
               file=sys.stderr)
         return 2
     return 0
+
+
+def _print_info(file, info: dict, channels: dict, first: int, last: int) -> None:
+    print(f"{file}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
+    for name, meta in info["metadata"].items():
+        print(f"  metadata {name}: " + ", ".join(f"{k}={v}" for k, v in meta.items()))
+    width = max((len(k) for k in channels), default=10)
+    print(f"  {'KEY':<{width}} {'MESSAGES':>8}  {'SCHEMA':<24} ENCODING (message / schema)")
+    for key, (schema, schema_enc, msg_enc) in sorted(channels.items()):
+        n = info["messages"].get(key, 0)
+        enc = f"{msg_enc} / {schema_enc}" if schema_enc else f"{msg_enc} / no schema (raw)"
+        print(f"  {key:<{width}} {n:>8}  {schema or '-':<24} {enc}")
