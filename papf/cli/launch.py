@@ -28,6 +28,9 @@ def register(sub) -> None:
                         "tracker node, or none (default: truth for iapf where a sim runs, else none)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--energy-model", choices=("motor", "paper"))
+    p.add_argument("--realtime", action="store_true",
+                   help="sim profile: pace sim time to the wall clock (to watch, steer with "
+                        "papf goal, or drive with papf teleop)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner parameter, repeatable")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="run-time limit (300)")
@@ -47,6 +50,7 @@ def cmd_launch(args) -> int:
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,
               "bridge_namespace": args.bridge_namespace,
+              "realtime": "1" if args.realtime else None,
               "objects": args.objects if args.objects or not args.planner
               else objects_for(args.planner, None)}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
