@@ -10,6 +10,11 @@ forged ``reached``. A planner started without a key (alone, for tests) accepts a
 
 The tag is HMAC-SHA256 (RFC 2104) over the message's msgpack form without its ``auth``
 field, truncated to 128 bits.
+
+An operator on the same host re-targets a running session with ``papf goal X Y``: the
+launcher leaves the key in a file only its user can read (:func:`publish_key`, mode 600
+in a mode-700 directory), ``papf goal`` signs with it, and the launcher then judges the
+run against that goal. Another user, host or stack has no key and stays ignored.
 """
 
 from __future__ import annotations
@@ -18,7 +23,10 @@ import dataclasses
 import hashlib
 import hmac
 import os
+import re
 import secrets
+import tempfile
+from pathlib import Path
 
 import msgpack
 
@@ -38,6 +46,41 @@ def key_from_env(environ=os.environ) -> bytes | None:
         return bytes.fromhex(text) if text else None
     except ValueError:
         return None
+
+
+def key_file(namespace: str) -> Path:
+    """Where the launcher of ``namespace`` leaves its run key for this user's tools."""
+    base = Path(os.environ.get("XDG_RUNTIME_DIR") or tempfile.gettempdir())
+    return base / f"papf-{os.getuid()}" / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', namespace)}.key"
+
+
+def publish_key(namespace: str, key_hex: str) -> Path:
+    """Write the run key for this user's ``papf goal`` (see module doc)."""
+    path = key_file(namespace)
+    path.parent.mkdir(mode=0o700, exist_ok=True)
+    os.chmod(path.parent, 0o700)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "w") as f:
+        f.write(key_hex)
+    return path
+
+
+def read_key(namespace: str) -> bytes | None:
+    """The run key a launcher of ``namespace`` left for this user, or None."""
+    try:
+        return bytes.fromhex(key_file(namespace).read_text().strip())
+    except (OSError, ValueError):
+        return None
+
+
+def withdraw_key(namespace: str, key_hex: str) -> None:
+    """Remove the key file if it still holds this run's key."""
+    path = key_file(namespace)
+    try:
+        if path.read_text().strip() == key_hex:
+            path.unlink()
+    except OSError:
+        pass
 
 
 def _tag(msg, key: bytes) -> str:

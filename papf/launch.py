@@ -42,12 +42,24 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     if opt.dry_run:
         print(graph.to_json())
         return None
-    cmds, connect = graph.nodes, graph.connect
     stop = stop or StopRequested()
     show = (lambda n, line: True) if opt.verbose else (
         lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:", "ready as")))
     keys = Keys(opt.namespace)
     run_key = runauth.new_key() if prof.run else None
+    if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
+        runauth.publish_key(opt.namespace, run_key)
+    try:
+        return _launch(opt, prof, graph, stop, show, keys, run_key)
+    finally:
+        if run_key:
+            runauth.withdraw_key(opt.namespace, run_key)
+
+
+def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show, keys: Keys,
+            run_key: str | None) -> RunResult | None:
+    """:func:`launch` once the graph is resolved: start, wait alive, drive or serve."""
+    cmds, connect = graph.nodes, graph.connect
     with Supervisor(show=show, env={runauth.ENV: run_key} if run_key else None) as sup:
         if prof.router:
             sup.start("router", list(graph.processes[0].argv))

@@ -19,7 +19,7 @@ from collections import deque
 from dataclasses import asdict, dataclass
 
 from common.units import NS_PER_S as NS
-from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist
+from schemas import BatteryState, Clock, Event, Goal, Odometry, PlannerStatus, Twist
 
 MOVING_SPEED = 0.01  # [m/s] |v| above which the robot counts as moving (duration_s starts)
 POSE_WINDOW = 4096     # [-] pose samples kept: 82 s at 50 Hz, far more than the launcher lags
@@ -149,6 +149,11 @@ class RunMonitor:
             self._motion_start_ns = msg.stamp_ns
         if self._claim is not None:
             self._check_claim()
+
+    def on_goal(self, msg: Goal) -> None:
+        """A goal of this run (verified by the caller) replaces the one judged against."""
+        if self.goal is not None:
+            self.goal = (msg.x, msg.y, msg.tolerance)
 
     def on_cmd(self, msg: Twist) -> None:
         self.last_cmd_ns = msg.stamp_ns if self.last_cmd_ns is None else max(self.last_cmd_ns,

@@ -48,7 +48,8 @@ class RunSequence:
         self.dropped = 0                     # bad payloads, stamps and tags: not acted on
         self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
                           "events": monitor.on_event, "battery": monitor.on_battery,
-                          "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose}
+                          "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose,
+                          "goal": monitor.on_goal}
         self._subs = [session.declare_subscriber(keys.key(t), self._callback(t))
                       for t in self._handlers]
 
@@ -62,7 +63,7 @@ class RunSequence:
                 self.dropped += 1
                 return
             if self.stamps.check(topic, msg) or (
-                    topic == "planner/status" and not runauth.verify(msg, self.run_key)):
+                    topic in ("planner/status", "goal") and not runauth.verify(msg, self.run_key)):
                 self.dropped += 1
                 return
             self._q.put((topic, msg))

@@ -196,3 +196,21 @@ def test_check_errors_are_config_errors():
 
     with pytest.raises(ConfigError, match="did you mean 'arapf'"):
         planner_name("ARAPF")
+
+
+def test_a_launched_sessions_key_is_readable_by_its_user_only(tmp_path, monkeypatch):
+    """`papf goal` on the same host signs with the session's key; nobody else gets it."""
+    import os
+    import stat
+
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    key = runauth.new_key()
+    path = runauth.publish_key("lab/r1", key)
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o600
+    assert stat.S_IMODE(os.stat(path.parent).st_mode) == 0o700
+    assert runauth.read_key("lab/r1") == bytes.fromhex(key)
+    m = RunMonitor(timeout_s=100, goal=(5.0, 0.0, 0.1))
+    m.on_goal(runauth.sign(Goal(stamp_ns=0, x=1.5, y=1.0), bytes.fromhex(key)))
+    assert m.goal == (1.5, 1.0, 0.1)
+    runauth.withdraw_key("lab/r1", key)
+    assert runauth.read_key("lab/r1") is None

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import zenoh
 
+from common import runauth
 from papf.monitor import EXIT_CODES
 from papf.progress import DecileProgress
 from schemas import Event, Goal, Keys, PlannerStatus
@@ -79,7 +80,8 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
     """See the module doc. ``timeout_s`` 0: wait for an outcome as long as it takes."""
     watch = _Watch(session, keys)
     try:
-        goal = Goal(stamp_ns=0, x=float(x), y=float(y), tolerance=float(tolerance))
+        goal = runauth.sign(Goal(stamp_ns=0, x=float(x), y=float(y), tolerance=float(tolerance)),
+                            runauth.read_key(keys.ns))   # a launched session's key, if any
         if not _handshake(session, keys, goal, watch, stop):
             return GoalResult("interrupted" if stop() else "no_planner",
                               "interrupted" if stop() else
