@@ -235,3 +235,20 @@ def test_registry_and_planner_step_with_road_and_tracks():
     assert state.algorithm == "iapf" and 0.0 < cmd.v <= 0.36
     assert len(state.predicted_path) == IAPFParams().f_step and state.obstacle_count == 1
     assert state.v_target == pytest.approx(cmd.v, rel=0.1)
+
+
+@pytest.mark.parametrize("traditional", [False, True])
+def test_prediction_kernel_matches_the_step_by_step_core(traditional):
+    from nodes.planner.iapf_kernel import HAVE_NUMBA
+
+    p = dataclasses.replace(IAPFParams(), traditional=traditional, literal_rotation=traditional)
+    tracks = [Track(14.0, 5.5, 0.1, 5.0, 0.3, 4.5, 1.8), Track(-6.0, 6.2, 0.0, 9.0, 0.0, 4.5, 1.8)]
+    s0 = HostState(0.0, 6.3, 9.5, 0.05)
+    s, ref = s0, []
+    core = IAPFCore(p)
+    for k in range(p.f_step):      # the readable path: iapf_fields through IAPFCore.advance
+        s, _ = core.advance(s, tracks, ROAD, 2.0, p.b3, p.predict_step_s, k * p.predict_step_s)
+        ref.append((s.x, s.y))
+    for use_numba in ([False, True] if HAVE_NUMBA else [False]):
+        got = IAPFCore(p, use_numba=use_numba).predict(s0, tracks, ROAD, 2.0)
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12)

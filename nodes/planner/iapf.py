@@ -35,6 +35,7 @@ from nodes.planner.iapf_fields import (
     safety_distance,
     traditional_gradient,
 )
+from nodes.planner.iapf_kernel import HALF, pack_obstacles, pack_params, rollout
 
 
 @dataclass(frozen=True)
@@ -145,7 +146,7 @@ def local_count(points, y_now: float, lanes: Lanes) -> int:
     total = 0
     for _, y in points:
         s = (y - mid) * toward
-        total += (s > 0.0) - (s < 0.0)
+        total += 1 if s > 0.0 else (-1 if s < 0.0 else 0)
     return total
 
 
@@ -163,10 +164,12 @@ def temporary_goal(y_now: float, lanes: Lanes) -> float:
 class IAPFCore:
     """One IAPF planner (or the traditional baseline) with its temporary-goal memory."""
 
-    def __init__(self, params: IAPFParams | None = None):
+    def __init__(self, params: IAPFParams | None = None, use_numba: bool = True):
         self.p = params or IAPFParams()
+        self.use_numba = use_numba
         self.temp_goal_y: float | None = None
         self.t_goal = -math.inf
+        self._prm = None       # the kernel's params vector (packed once)
 
     def reset(self) -> None:
         self.temp_goal_y, self.t_goal = None, -math.inf
@@ -221,14 +224,17 @@ class IAPFCore:
     # -- Algorithm 1 --------------------------------------------------------------------
     def predict(self, s: HostState, tracks, lanes: Lanes, y_goal: float | None) -> list:
         """Step 1: ``f_step`` points ``predict_step_s`` apart, obstacles at constant velocity,
-        the field without the temporary goal (the future the vehicle would drive into)."""
+        the field without the temporary goal (the future the vehicle would drive into).
+
+        Runs :func:`nodes.planner.iapf_kernel.rollout` (numba when available; ``use_numba``)."""
         p = self.p
-        pts = []
-        for k in range(p.f_step):
-            s, _ = self.advance(s, tracks, lanes, y_goal, p.b3, p.predict_step_s,
-                                k * p.predict_step_s)
-            pts.append((s.x, s.y))
-        return pts
+        if self._prm is None:
+            self._prm = pack_params(p)
+        self._prm[HALF] = p.goal_half_period_lanes * lanes.width
+        out = rollout((s.x, s.y, s.v, s.yaw), pack_obstacles(tracks), self._prm,
+                      (lanes.y_min, lanes.width, lanes.count), y_goal, p.b3, p.predict_step_s,
+                      p.f_step, self.use_numba)
+        return [(float(r[0]), float(r[1])) for r in out]
 
     def step(self, s: HostState, tracks, lanes: Lanes | None, t: float,
              y_goal: float | None = None, dt: float | None = None) -> tuple[HostState, StepInfo]:

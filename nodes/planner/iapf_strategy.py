@@ -49,6 +49,12 @@ class IAPFStrategy:
             self._core.reset()
         self.v = None
 
+    def warm_up(self, apf: APFParams) -> None:
+        """Compile the prediction kernel (numba) before the node declares itself ready."""
+        core = IAPFCore(self.params)
+        core.predict(HostState(0.0, 0.0, 1.0), [Track(5.0, 0.0, 0.0, 1.0, 0.0, 4.5, 1.8)],
+                     Lanes(-2.0, 4.0, 2), 0.0)
+
     def observe(self, tracks, lanes: Lanes | None, t_s: float, v_odom: float) -> None:
         """The latest obstacle tracks, the road (None: not known yet), sim time [s], speed."""
         self.tracks = tuple(tracks)

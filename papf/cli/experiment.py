@@ -1,4 +1,4 @@
-"""``papf experiment energy | paper-tests | random``: many runs, a table, plots.
+"""``papf experiment energy | paper-tests | random | iapf``: many runs, a table, plots.
 
 ``energy`` is the PAPF paper's energy experiment (IV-C) through the process stack,
 recorded (:mod:`papf.experiments.energy`); ``paper-tests`` every paper world with every
@@ -26,6 +26,7 @@ def register(sub) -> None:
     _add_energy(exp)
     _add_paper_tests(exp)
     _add_random(exp)
+    _add_iapf(exp)
 
 
 def _add_energy(exp) -> None:
@@ -81,6 +82,42 @@ def _add_random(exp) -> None:
     mode.add_argument("--stack", dest="mode", action="store_const", const="stack",
                       help="every run through the whole process stack (slow)")
     p.set_defaults(func=cmd_random, mode="offline")
+
+
+def _add_iapf(exp) -> None:
+    p = exp.add_parser("iapf", help="the IAPF paper's cases A-D at car scale: a Table-2 table, figures",
+                       description="Cases A-D (worlds iapf-case-a ... d) for the paper's case times "
+                                   "with IAPF, IAPF without prediction and the traditional APF, in "
+                                   "the paper's vehicle model (0.02 s steps); write iapf.md, "
+                                   "iapf.csv, one CSV per run and one PNG per case into --out.")
+    p.add_argument("--out", default="iapf-cases", metavar="DIR", help="output directory")
+    p.add_argument("--planners", default="iapf,iapf-np,apf",
+                   help="comma-separated: iapf, iapf-np, apf (default all three)")
+    p.add_argument("--cases", default="a,b,c,d", help="comma-separated subset of a,b,c,d")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="IAPF setting for every run, repeatable (e.g. --set t_c=0.4)")
+    p.add_argument("--no-horizon", action="store_true",
+                   help="skip timing the T = 5 s trajectory plans (faster)")
+    p.set_defaults(func=cmd_iapf)
+
+
+def cmd_iapf(args) -> int:
+    from papf.experiments.iapf import CASES, run_iapf_experiment  # matplotlib: when run
+    from papf.plan_road import CAR_PLANNERS
+
+    planners = [p.strip() for p in args.planners.split(",") if p.strip()]
+    bad = [p for p in planners if p not in CAR_PLANNERS]
+    cases = [f"iapf-case-{c.strip()}" for c in args.cases.split(",") if c.strip()]
+    bad_cases = [c for c in cases if c not in CASES]
+    if bad or not planners:
+        raise ConfigError(f"--planners {args.planners!r}: unknown {bad}; valid: {sorted(CAR_PLANNERS)}")
+    if bad_cases or not cases:
+        raise ConfigError(f"--cases {args.cases!r}: valid: a, b, c, d")
+    run_iapf_experiment(args.out, planners, cases, args.set, horizon=not args.no_horizon,
+                        progress=lambda m: print(m, file=sys.stderr))
+    print((Path(args.out) / "iapf.md").read_text())
+    print(f"wrote {args.out}/iapf.md, iapf.csv, per-run CSVs and one PNG per case", file=sys.stderr)
+    return 0
 
 
 def planner_list(text: str) -> list[str]:
