@@ -24,6 +24,7 @@ import json
 import math
 import platform
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -75,10 +76,9 @@ def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
     for scan, odom in zip(scans, odoms, strict=True):
         planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1], **road))
         planner.state = "driving"                          # keep timing the algorithm
-        if road:
-            planner.set_objects(road_tracks(odom.x))
+        objects = SimpleNamespace(tracks=road_tracks(odom.x)) if road else None
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-        _, state, _ = planner.step(scan, odom)
+        _, state, _ = planner.step(scan, odom, objects)
         times.append(time.perf_counter_ns() - t0)
         cpu.append(time.thread_time_ns() - c0)
         quarks = max(quarks, len(state.top_quarks))

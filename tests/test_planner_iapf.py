@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -227,11 +228,11 @@ def test_registry_and_planner_step_with_road_and_tracks():
     odom = Odometry(stamp_ns=0, x=0.0, y=0.15, yaw=0.0, v=0.3, w=0.0)
     cmd, state, _ = planner.step(scan, odom)
     assert cmd.v == 0.0 and state.mode == "no-road"            # no road announced yet
+    objects = SimpleNamespace(tracks=[Track(1.0, 0.15, 0.0, 0.1, 0.0, 0.5, 0.3, 7)])
     planner.set_goal(Goal(stamp_ns=0, x=20.0, y=0.15, tolerance=0.2, road_lanes=2,
                           road_y_min=-0.15, road_lane_width=0.6))   # the handshake's road
-    assert planner.road == Lanes(-0.15, 0.6, 2)
-    planner.set_objects([Track(1.0, 0.15, 0.0, 0.1, 0.0, 0.5, 0.3)])
-    cmd, state, _ = planner.step(scan, odom)
+    assert (planner.road.y_min, planner.road.lane_width, planner.road.lanes) == (-0.15, 0.6, 2)
+    cmd, state, _ = planner.step(scan, odom, objects)
     assert state.algorithm == "iapf" and 0.0 < cmd.v <= 0.36
     assert len(state.predicted_path) == IAPFParams().f_step and state.obstacle_count == 1
     assert state.v_target == pytest.approx(cmd.v, rel=0.1)

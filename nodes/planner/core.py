@@ -7,6 +7,12 @@ is a small *strategy* (:class:`Strategy`) that turns the situation into a force 
 debug geometry the papers drew in RViz; strategies are looked up by name in
 :mod:`nodes.planner.registry`.
 
+What the run tells the planner beyond scan and odometry: the **road** comes with the
+goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
+never reads a world file) and the **obstacle tracks** of the cycle come as an optional
+``Objects`` message paired with the scan. A strategy that wants them defines
+``observe(road, objects, odom)``; it is called before each ``plan``.
+
 Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 """
 
@@ -22,8 +28,8 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from nodes.planner.iapf_fields import Lanes
 from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from worlds.traffic import Road
 
 
 @dataclass(frozen=True)
@@ -104,6 +110,7 @@ class Planner:
         self.strategy = strategy
         self.apf = apf or APFParams()
         self.goal: Goal | None = None
+        self.road: Road | None = None   # the run's road, from the goal handshake
         self.state = "idle"
         self.reason = ""
         self._best = math.inf           # best distance to goal at the last progress [m]
@@ -111,26 +118,13 @@ class Planner:
         self._win_ns = 0                # scan time the current window began [ns]
         self._anchor = None             # robot position where the current window began [m]
         self._apf_for_l: dict[int, APFParams] = {}
-        self.objects: tuple = ()        # latest obstacle tracks (strategies that use them)
-        self.road = None                # the road of the run, once announced
-
-    # -- inputs beyond scan and odometry -------------------------------------
-    def set_objects(self, tracks) -> None:
-        """The latest obstacle tracks (:class:`nodes.planner.iapf_fields.Track`)."""
-        self.objects = tuple(tracks)
-
-    def set_road(self, road: Lanes | None) -> None:
-        """The road of the run, or None (normally it comes with the goal, :meth:`set_goal`)."""
-        self.road = road
 
     # -- goal ---------------------------------------------------------------
     def set_goal(self, goal: Goal) -> PlannerStatus:
         """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
         same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
             goal.x, goal.y, goal.tolerance)
-        # the goal handshake carries the run's road (none: road_lanes = 0)
-        self.road = (Lanes(goal.road_y_min, goal.road_lane_width, goal.road_lanes)
-                     if goal.road_lanes > 0 and goal.road_lane_width > 0 else None)
+        self.road = Road.from_fields(goal.road_lanes, goal.road_y_min, goal.road_lane_width)
         if not same:
             self.goal = goal
             self.state, self.reason = "ready", ""
@@ -140,8 +134,12 @@ class Planner:
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
     # -- one cycle ----------------------------------------------------------
-    def step(self, scan: Scan, odom: Odometry) -> tuple[Twist, PlannerState, PlannerStatus]:
-        """One control cycle for ``scan`` (the command carries the scan's stamp)."""
+    def step(self, scan: Scan, odom: Odometry, objects=None
+             ) -> tuple[Twist, PlannerState, PlannerStatus]:
+        """One control cycle for ``scan`` (the command carries the scan's stamp).
+
+        ``objects``: the obstacle tracks paired with this scan, if the run provides them.
+        """
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:
@@ -157,7 +155,7 @@ class Planner:
         view = scan_view(scan, odom)
         observe = getattr(self.strategy, "observe", None)
         if observe is not None:
-            observe(self.objects, self.road, t / NS_PER_S, odom.v)
+            observe(self.road, objects, odom)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
         why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
         if why:

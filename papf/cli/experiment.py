@@ -98,6 +98,9 @@ def _add_iapf(exp) -> None:
                    help="IAPF setting for every run, repeatable (e.g. --set t_c=0.4)")
     p.add_argument("--no-horizon", action="store_true",
                    help="skip timing the T = 5 s trajectory plans (faster)")
+    p.add_argument("--readings", action="store_true",
+                   help="instead: every case with each of our readings switched back to the "
+                        "paper (readings.md, readings.csv)")
     p.set_defaults(func=cmd_iapf)
 
 
@@ -113,6 +116,12 @@ def cmd_iapf(args) -> int:
         raise ConfigError(f"--planners {args.planners!r}: unknown {bad}; valid: {sorted(CAR_PLANNERS)}")
     if bad_cases or not cases:
         raise ConfigError(f"--cases {args.cases!r}: valid: a, b, c, d")
+    if args.readings:
+        from papf.experiments.iapf_readings import run_readings
+
+        run_readings(args.out, progress=lambda m: print(m, file=sys.stderr))
+        print((Path(args.out) / "readings.md").read_text())
+        return 0
     run_iapf_experiment(args.out, planners, cases, args.set, horizon=not args.no_horizon,
                         progress=lambda m: print(m, file=sys.stderr))
     print((Path(args.out) / "iapf.md").read_text())
