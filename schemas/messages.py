@@ -1,4 +1,4 @@
-"""Every message of the stack, defined once (DESIGN.md §3).
+"""Every message of the stack, defined once (docs/architecture.md "Messages").
 
 Conventions: time is integer nanoseconds of *sim time* in sim runs (``stamp_ns``);
 lengths in metres, angles in radians, speeds in m/s and rad/s. Poses are in the
@@ -158,7 +158,7 @@ class Clock(Message):
 
 
 EVENT_KINDS = ("run_started", "run_ended", "goal_reached", "collision", "timeout",
-               "stagnated", "node_fault", "watchdog_stop", "info")
+               "stagnated", "node_fault", "watchdog_stop", "info", "recording_closed")
 
 
 @message("Event", 1)

@@ -1,4 +1,4 @@
-"""A :class:`worlds.World` as static pybullet bodies (DESIGN.md §9).
+"""A :class:`worlds.World` as static pybullet bodies (docs/worlds.md).
 
 Shared by the simulated base driver (collisions) and the simulated LiDAR (ray
 casting), so both see exactly the same geometry. Every obstacle is a static body
@@ -14,9 +14,10 @@ Only pybullet is imported here; the caller owns the client (``p.connect(p.DIRECT
 
 from __future__ import annotations
 
-import pybullet as p
-
+from common.quiet import import_quietly
 from worlds import Obstacle, World
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 GROUND_FRICTION = 1.0  # [-] lateral friction of the floor; the product with the wheel's is used
 

@@ -1,6 +1,6 @@
 """Simulated RPLIDAR A3 on the ROSbot: pybullet ray casting, no transport (pure core).
 
-A 360 deg planar scan (DESIGN.md §5): ``beams`` rays (300 by default, the L of the
+A 360 deg planar scan (docs/architecture.md "The robot"): ``beams`` rays (300 by default, the L of the
 PAPF paper's Table 1) at ``angle_min + i * angle_increment`` with ``angle_min = -pi``,
 ``angle_increment = 2 pi / beams``, counter-clockwise in the sensor frame, like the
 ``sensor_msgs/LaserScan`` that ``rplidar_ros`` publishes. Ranges 0.2-25 m
@@ -26,12 +26,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from schemas.messages import Scan
 from worlds import World
 from worlds.bullet import build_world
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)

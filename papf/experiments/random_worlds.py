@@ -19,6 +19,18 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from common.errors import ConfigError
+from papf.experiments.trials import (
+    markdown_table,
+    progress_bar,
+    quiet_runner_logs,
+    run_offline,
+    run_stack,
+    trial_line,
+    write_csv,
+)
+from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
+
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
 WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
 DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
@@ -36,7 +48,6 @@ def _rate(trials) -> float:
 def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
     """Per planner: worlds, rate of each outcome [%], success rate per kind and, given the
     worlds' bottleneck widths, on the worlds whose bottleneck is >= / < WIDE_M [%]."""
-    from papf.randworlds import KINDS
 
     bottleneck = bottleneck or {}
     rows = []
@@ -57,8 +68,6 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
 
 def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected: int) -> str:
-    from papf.experiments.trials import markdown_table
-    from papf.randworlds import KINDS
 
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
               *[f"reached: {k} [%]" for k in KINDS],
@@ -79,16 +88,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
     """
-    from common.errors import ConfigError
-    from papf.experiments.trials import (
-        progress_bar,
-        quiet_runner_logs,
-        run_offline,
-        run_stack,
-        write_csv,
-    )
-    from papf.plots import plot_paths
-    from papf.randworlds import bottleneck_width, generate_solvable, world_to_toml
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
@@ -116,6 +116,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
                                       planner_args=[a for kv in sets for a in ("--set", kv)])
                 mine.append(trial)
                 bar.advance(task)
+                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
             trials += mine
             if plots:
                 plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},

@@ -20,6 +20,8 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from common.errors import RecordingError
+from papf.supervisor import free_port
 from worlds import World, load_world
 
 MODES = ("offline", "stack")
@@ -59,7 +61,7 @@ def _r(x: float, nd: int = 3):
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
                 params=None) -> Trial:
     """One offline run (:func:`papf.plan.plan`)."""
-    from papf.plan import plan
+    from papf.plan import plan  # pybullet: only for offline runs
 
     t0 = time.monotonic()
     r = plan(world, planner, params=params, seed=seed, max_time_s=timeout_s)
@@ -71,8 +73,7 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
               record: str | Path | None = None, planner_args: Sequence[str] = ()) -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
-    from papf.runner import RunConfig, run
-    from papf.supervisor import free_port
+    from papf.runner import RunConfig, run  # zenoh: only for stack runs
 
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
@@ -89,8 +90,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
     """(N, 2) ground-truth positions [m] from a recording's ``<ns>/sim/pose`` channel."""
-    from common.errors import RecordingError
-    from papf.recording.reader import iter_messages
+    from papf.recording.reader import iter_messages  # mcap: only with a recording
 
     pts = []
     try:
@@ -133,6 +133,14 @@ def progress_bar(enabled: bool | None = None) -> Progress:
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeElapsedColumn(), console=console,
                     disable=not (console.is_terminal if enabled is None else enabled))
+
+
+def trial_line(t: Trial) -> str:
+    """One line per finished trial (printed in a terminal and when piped alike)."""
+    extra = f"  {t.charge_mAh:7.2f} mAh" if math.isfinite(t.charge_mAh) else ""
+    return (f"{t.world:>16} {t.planner:<6} seed {t.seed:<3} {t.outcome:<9} "
+            f"{t.duration_s:7.2f} s  {t.path_length_m:6.2f} m{extra}  wall {t.wall_time_s:5.1f} s"
+            + (f"  {t.reason}" if t.outcome != "reached" and t.reason else ""))
 
 
 def quiet_runner_logs() -> None:
