@@ -47,7 +47,7 @@ SCENES = {  # world, start x range [m], goal
     "open": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
     "energy": (ENERGY, (0.0, 2.0), (10.0, 0.0)),
     "trap": (RING, (-0.05, 0.05), (3.0, 0.0)),
-    "road": (ToyWorld(), (0.0, 2.0), (10.0, 0.0)),
+    "road": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
 }
 ONLY = {"iapf": ("road",)}   # IAPF needs the road and obstacle tracks
 CASES = [  # (label, planner, --set overrides)
