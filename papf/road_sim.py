@@ -119,7 +119,8 @@ class _Contacts:
 
 def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: Lanes,
              duration_s: float, name: str = "iapf", y_goal: float | None = None,
-             finish_x: float | None = None, stop_on_collision: bool = False) -> RoadRun:
+             finish_x: float | None = None, stop_on_collision: bool = False,
+             goal_x: float | None = None) -> RoadRun:
     """Run ``core`` from ``start`` among ``movers`` for ``duration_s`` of sim time, or until the
     host passes ``finish_x`` (outcome ``reached``) or, with ``stop_on_collision``, touches a
     vehicle (``collision``)."""
@@ -147,7 +148,7 @@ def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: L
         if k == n:
             break
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-        s, info = core.step(s, tracks, lanes, t, y_goal)
+        s, info = core.step(s, tracks, lanes, t, y_goal, goal_x=goal_x)
         cpu_us.append((time.thread_time_ns() - c0) / 1e3)
         times_us.append((time.perf_counter_ns() - t0) / 1e3)
         rows.append((t + p.step_s, s.x, s.y, s.v, s.yaw))

@@ -15,10 +15,12 @@ updated speed v_c (eq. 26), which the planner's heading controller then tracks.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
+from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams
 from nodes.planner.core import Plan, ScanView
@@ -71,7 +73,11 @@ class IAPFStrategy:
             p = self.params
             s = lanes.width / p.lane_width_ref
             tau = s * p.v_cruise / p.cruise_speed
-            self._core, self._core_for = IAPFCore(scaled(p, s, tau)), lanes
+            # the robot's heading controller limits its turn rate: no particle rate limit on top
+            # and the safety gaps are measured from the robot's own footprint
+            q = dataclasses.replace(scaled(p, s, tau), yaw_rate_max_deg=0.0,
+                                    host_length=BODY_LENGTH_M, host_width=BODY_WIDTH_M)
+            self._core, self._core_for = IAPFCore(q), lanes
         return self._core
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
@@ -79,11 +85,12 @@ class IAPFStrategy:
         if self.lanes is None:
             return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw)
         core = self.core_for(self.lanes)
-        if self.v is None:   # the paper's cases start at the cruise speed; the robot's own
-            self.v = core.p.v_cruise   # acceleration limits bring it there (ours)
+        if self.v is None:   # the planned speed starts at the robot's own
+            self.v = max(0.0, self.v_odom)
         state = HostState(float(pos[0]), float(pos[1]), self.v, yaw)
         y_goal = self.lanes.centre(self.lanes.lane_of(float(goal[1])))
-        new, info = core.step(state, self.tracks, self.lanes, self.t_s, y_goal)
+        new, info = core.step(state, self.tracks, self.lanes, self.t_s, y_goal,
+                              goal_x=float(goal[0]))
         self.v = new.v
         temp = ()
         if info.temp_goal_y is not None:

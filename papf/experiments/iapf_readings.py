@@ -32,6 +32,8 @@ READINGS = [
     ("rotation as printed (eq. 10)", "iapf", ["literal_rotation=true"]),
     ("prediction step 0.02 s (= t)", "iapf", ["predict_step_s=0.02"]),
     ("no safety cut-off (D_S huge)", "iapf", ["s_m=1000"]),
+    ("no slow-leader lane change (Sec. 2.1 rule off)", "iapf", ["follow_min_frac=0"]),
+    ("temporary goal b3 = 25 (below the ridge k2 d_w / sin 45 deg)", "iapf", ["b3_temp=25"]),
     ("no prediction", "iapf-np", []),
     ("traditional APF k = 200", "apf", ["k_trad=200"]),
     ("traditional APF k = 1000", "apf", ["k_trad=1000"]),
