@@ -231,7 +231,7 @@ def test_registry_and_planner_step_with_road_and_tracks():
     objects = SimpleNamespace(tracks=[Track(1.0, 0.15, 0.0, 0.1, 0.0, 0.5, 0.3, 7)])
     planner.set_goal(Goal(stamp_ns=0, x=20.0, y=0.15, tolerance=0.2, road_lanes=2,
                           road_y_min=-0.15, road_lane_width=0.6))   # the handshake's road
-    assert (planner.road.y_min, planner.road.lane_width, planner.road.lanes) == (-0.15, 0.6, 2)
+    assert planner.road == Lanes(-0.15, 0.6, 2)
     cmd, state, _ = planner.step(scan, odom, objects)
     assert state.algorithm == "iapf" and 0.0 < cmd.v <= 0.36
     assert len(state.predicted_path) == IAPFParams().f_step and state.obstacle_count == 1

@@ -10,8 +10,9 @@ debug geometry the papers drew in RViz; strategies are looked up by name in
 What the run tells the planner beyond scan and odometry: the **road** comes with the
 goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
 never reads a world file) and the **obstacle tracks** of the cycle come as an optional
-``Objects`` message paired with the scan. A strategy that wants them defines
-``observe(road, objects, odom)``; it is called before each ``plan``.
+``Objects`` message paired with the scan (:meth:`Planner.step`), kept as
+:attr:`Planner.objects`. A strategy that wants them defines ``observe(objects, road, t, v)``;
+it is called before each ``plan``.
 
 Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 """
@@ -28,8 +29,8 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
-from worlds.traffic import Road
+from nodes.planner.iapf_fields import Lanes, Track
+from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
 @dataclass(frozen=True)
@@ -110,7 +111,6 @@ class Planner:
         self.strategy = strategy
         self.apf = apf or APFParams()
         self.goal: Goal | None = None
-        self.road: Road | None = None   # the run's road, from the goal handshake
         self.state = "idle"
         self.reason = ""
         self._best = math.inf           # best distance to goal at the last progress [m]
@@ -118,13 +118,26 @@ class Planner:
         self._win_ns = 0                # scan time the current window began [ns]
         self._anchor = None             # robot position where the current window began [m]
         self._apf_for_l: dict[int, APFParams] = {}
+        self.objects: tuple = ()        # latest obstacle tracks (strategies that use them)
+        self.road = None                # the road of the run, once announced
+
+    # -- inputs beyond scan and odometry -------------------------------------
+    def set_objects(self, tracks) -> None:
+        """The latest obstacle tracks (:class:`nodes.planner.iapf_fields.Track`)."""
+        self.objects = tuple(tracks)
+
+    def set_road(self, road: Lanes | None) -> None:
+        """The road of the run, or None (normally it comes with the goal, :meth:`set_goal`)."""
+        self.road = road
 
     # -- goal ---------------------------------------------------------------
     def set_goal(self, goal: Goal) -> PlannerStatus:
         """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
         same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
             goal.x, goal.y, goal.tolerance)
-        self.road = Road.from_fields(goal.road_lanes, goal.road_y_min, goal.road_lane_width)
+        # the goal handshake carries the run's road (none: road_lanes = 0)
+        self.road = (Lanes(goal.road_y_min, goal.road_lane_width, goal.road_lanes)
+                     if goal.road_lanes > 0 and goal.road_lane_width > 0 else None)
         if not same:
             self.goal = goal
             self.state, self.reason = "ready", ""
@@ -134,12 +147,16 @@ class Planner:
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
     # -- one cycle ----------------------------------------------------------
-    def step(self, scan: Scan, odom: Odometry, objects=None
+    def step(self, scan: Scan, odom: Odometry, objects: Objects | None = None
              ) -> tuple[Twist, PlannerState, PlannerStatus]:
         """One control cycle for ``scan`` (the command carries the scan's stamp).
 
-        ``objects``: the obstacle tracks paired with this scan, if the run provides them.
+        ``objects``: the obstacle tracks paired with this scan, if the run provides them
+        (None: keep the last ones).
         """
+        if objects is not None:
+            self.set_objects(Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id)
+                             for o in objects.tracks)
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:
@@ -155,7 +172,7 @@ class Planner:
         view = scan_view(scan, odom)
         observe = getattr(self.strategy, "observe", None)
         if observe is not None:
-            observe(self.road, objects, odom)
+            observe(self.objects, self.road, t / NS_PER_S, odom.v)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
         why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
         if why:

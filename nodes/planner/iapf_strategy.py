@@ -1,9 +1,9 @@
 """IAPF as a strategy of the planner node (``--planner iapf``): the core of
 :mod:`nodes.planner.iapf` on obstacle tracks and the road the run announced.
 
-Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the road (from the goal
-handshake) and the obstacle tracks paired with the scan (``<ns>/objects``: ground truth or
-the LiDAR tracker) — the planner never reads a world file. The scan itself is not used: IAPF's fields are
+Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the latest obstacle tracks
+(``<ns>/objects``: ground truth or the LiDAR tracker, paired with the scan by the planner
+core) and the road (from the goal handshake) — the planner never reads a world file. The scan itself is not used: IAPF's fields are
 built from tracked vehicles (Sec. 2.2.3), and the road is lines on the floor.
 
 Scale: :class:`IAPFParams` are the paper's car-scale values (lanes of ``lane_width_ref``
@@ -21,7 +21,6 @@ import math
 import numpy as np
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
-from common.units import NS_PER_S
 from nodes.planner.apf import APFParams
 from nodes.planner.core import Plan, ScanView
 from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
@@ -58,14 +57,11 @@ class IAPFStrategy:
         core.predict(HostState(0.0, 0.0, 1.0), [Track(5.0, 0.0, 0.0, 1.0, 0.0, 4.5, 1.8)],
                      Lanes(-2.0, 4.0, 2), 0.0)
 
-    def observe(self, road, objects, odom) -> None:
-        """The run's road (``y_min``, ``lane_width``, ``lanes``; None: not known), the obstacle
-        tracks paired with this scan (an ``Objects`` message: ``tracks`` with id, x, y, yaw,
-        vx, vy, length, width; None: none) and the odometry (its stamp is the step's time)."""
-        self.lanes = None if road is None else Lanes(road.y_min, road.lane_width, road.lanes)
-        self.tracks = () if objects is None else tuple(
-            Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id) for o in objects.tracks)
-        self.t_s, self.v_odom = odom.stamp_ns / NS_PER_S, odom.v
+    def observe(self, tracks, lanes: Lanes | None, t_s: float, v_odom: float) -> None:
+        """The latest obstacle tracks, the road (None: not known yet), sim time [s], speed."""
+        self.tracks = tuple(tracks)
+        self.lanes = lanes
+        self.t_s, self.v_odom = t_s, v_odom
 
     def core_for(self, lanes: Lanes) -> IAPFCore:
         """The core with parameters scaled to this road (kept while the road is the same)."""
