@@ -67,7 +67,7 @@ class IAPFParams:
     v_max_factor: float = 1.2    # v <= factor * V_c (ours: "accelerate when passing")
     predict_step_s: float = 0.15  # [s] step of the low-resolution prediction (ours)
     goal_half_period_lanes: float = 2.0  # D_g / d_w of eqs. 8, 19 (ours; 1 = eq. 8 as printed)
-    b3_temp: float = 50.0        # lane-goal amplitude while a temporary goal is active (ours)
+    b3_temp: float = 70.0        # lane-goal amplitude while a temporary goal is active (ours)
     heading_max_deg: float = 30.0  # [deg] |phi_E| limit about +x (ours; 90 = none)
     yaw_rate_max_deg: float = 90.0  # [deg/s] heading change limit (ours; 0 = none, as eq. 21)
     host_length: float = 4.5     # [m] host footprint along its heading (ours: a car)
@@ -244,8 +244,8 @@ class IAPFCore:
 
     def lane_free(self, y_lane: float, s: HostState, tracks, lanes: Lanes) -> bool:
         """No vehicle in the lane centred at ``y_lane`` beside the host or ahead within the
-        safety distance at the cruise speed, and none behind within its own safety distance to
-        the host (ours: the "decision module" the paper assumes)."""
+        safety distance at the cruise speed, and none behind closing in within its own (ours:
+        the "decision module" the paper assumes)."""
         p = self.p
         for ob in tracks:
             if abs(ob.y - y_lane) >= 0.5 * lanes.width:
@@ -254,8 +254,8 @@ class IAPFCore:
             if ob.x > s.x - 0.5 * (p.host_length + ob.length):      # beside or ahead
                 if g < safety_distance(p.v_cruise, ob.speed, p.a_b, p.s_m):
                     return False
-            elif g < safety_distance(ob.speed, s.v, p.a_b, p.s_m):
-                return False                                         # behind, within its D_S
+            elif ob.vx > s.v and g < safety_distance(ob.speed, s.v, p.a_b, p.s_m):
+                return False                                         # closing from behind
         return True
 
     def _cannot_follow(self, s: HostState, tracks, lanes: Lanes) -> bool:
