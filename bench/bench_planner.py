@@ -2,7 +2,10 @@
 
 Prints one JSON object per (planner, scene) with the time of ``Planner.step`` (scan
 conversion + algorithm + messages) in microseconds: wall time p50, p99, max, and the
-thread's CPU time p50, p99 (less disturbed when other processes share the cores). Scenes:
+thread's CPU time p50, p99 (less disturbed when other processes share the cores); and
+``cmd_*``: the same up to the command (:meth:`Planner.command`: what the node publishes
+first — the debug ``PlannerState`` is built after). Every registered planner is timed
+on every scene. Scenes:
 
 - ``open``: no returns (inf everywhere);
 - ``energy``: the energy world's three obstacles seen from along the approach;
@@ -10,8 +13,8 @@ thread's CPU time p50, p99 (less disturbed when other processes share the cores)
   PAPF prediction stagnates, so with ``persist_quarks=false`` each cycle places all
   M = 10 top quarks and runs M + 1 predictions — the PAPF worst case;
 - ``road``: a two-lane ROSbot road (0.6 m lanes) with three tracked vehicles near the robot
-  (a slow leader, one in the other lane, one behind); IAPF runs only here, with its
-  F_step = 20 prediction every cycle.
+  (a slow leader, one in the other lane, one behind), handed over as obstacle tracks; IAPF
+  (which needs the road and the tracks) runs only here, with its F_step = 20 prediction.
 
 PAPF is also timed with the numpy fallback (``use_numba=false``). Speed is reported,
 never asserted (tests/ do not time anything).
@@ -24,12 +27,12 @@ import json
 import math
 import platform
 import time
-from types import SimpleNamespace
 
 import numpy as np
 
+from common.ports import plain
 from nodes.planner.iapf_fields import Track
-from nodes.planner.registry import make_planner
+from nodes.planner.registry import PLANNERS, make_planner
 from papf.toysim import box_segments, cast_scan, toy_world
 from schemas.messages import Goal, Odometry
 
@@ -39,22 +42,20 @@ RING = toy_world(segments=tuple(
                       np.linspace(0.05, 2 * math.pi - 0.05, 41)[1:], strict=True)))
 ENERGY = toy_world(circles=((5.0, -0.2, 0.2),),
                   segments=box_segments(2.5, 0.1, 0.4, 0.4) + box_segments(7.5, 0.15, 0.05, 0.7))
-ROAD = dict(road_lanes=2, road_y_min=-0.3, road_lane_width=0.6)   # ROSbot-scale two-lane road
-# vehicles relative to the robot: (dx, y, vx) [m, m, m/s], 0.5 x 0.3 m: a slow leader, one in
-# the other lane, one behind (each within IAPF's safety distance: all fields evaluated)
-ROAD_VEHICLES = ((1.0, 0.0, 0.1), (1.6, 0.6, 0.2), (-0.8, 0.0, 0.25))
 SCENES = {  # world, start x range [m], goal
     "open": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
     "energy": (ENERGY, (0.0, 2.0), (10.0, 0.0)),
     "trap": (RING, (-0.05, 0.05), (3.0, 0.0)),
     "road": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
 }
+ROAD = dict(road_lanes=2, road_y_min=-0.3, road_lane_width=0.6)   # ROSbot-scale two-lane road
+# vehicles relative to the robot: (dx, y, vx) [m, m, m/s], 0.5 x 0.3 m: a slow leader, one in
+# the other lane, one behind (each within IAPF's safety distance: all fields evaluated)
+ROAD_VEHICLES = ((1.0, 0.0, 0.1), (1.6, 0.6, 0.2), (-0.8, 0.0, 0.25))
 ONLY = {"iapf": ("road",)}   # IAPF needs the road and obstacle tracks
-CASES = [  # (label, planner, --set overrides)
-    ("apf", "apf", []), ("papf", "papf", []),
+CASES = [(name, name, []) for name in sorted(PLANNERS)] + [  # (label, planner, --set overrides)
     ("papf_worst_numba", "papf", ["persist_quarks=false"]),
     ("papf_worst_numpy", "papf", ["persist_quarks=false", "use_numba=false"]),
-    ("arapf", "arapf", []), ("wang", "wang", []), ("iapf", "iapf", []),
 ]
 
 
@@ -68,26 +69,34 @@ def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
     planner = make_planner(planner_name, sets=sets)
     xs = np.linspace(x0, x1, cycles)
     scans = [cast_scan(world, x, 0.0, 0.0, stamp_ns=k) for k, x in enumerate(xs)]
-    odoms = [Odometry(stamp_ns=k, x=x, y=0.0, yaw=0.0, v=0.3, w=0.0) for k, x in enumerate(xs)]
+    odoms = [Odometry(stamp_ns=k, x=x, y=0.0, yaw=0.0, v=0.0, w=0.0) for k, x in enumerate(xs)]
     road = ROAD if scene == "road" else {}
     planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1], **road))
     planner.step(scans[0], odoms[0])                     # warm-up (JIT compile)
-    times, cpu, quarks = [], [], 0
+    times, cpu, cmd_times, cmd_cpu, quarks = [], [], [], [], 0
     for scan, odom in zip(scans, odoms, strict=True):
         planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1], **road))
         planner.state = "driving"                          # keep timing the algorithm
-        objects = SimpleNamespace(tracks=road_tracks(odom.x)) if road else None
+        if road:
+            planner.set_objects(road_tracks(odom.x))
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-        _, state, _ = planner.step(scan, odom, objects)
+        _, finish = planner.command(scan, odom)
+        t1, c1 = time.perf_counter_ns(), time.thread_time_ns()
+        state, _ = finish()
         times.append(time.perf_counter_ns() - t0)
         cpu.append(time.thread_time_ns() - c0)
+        cmd_times.append(t1 - t0)
+        cmd_cpu.append(c1 - c0)
         quarks = max(quarks, len(state.top_quarks))
-    us, cpu_us = np.array(times) / 1e3, np.array(cpu) / 1e3
-    return {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
-            "beams": int(scans[0].ranges.size), "max_top_quarks": quarks,
-            "p50_us": _r(np.percentile(us, 50)), "p99_us": _r(np.percentile(us, 99)),
-            "max_us": _r(us.max()), "cpu_p50_us": _r(np.percentile(cpu_us, 50)),
-            "cpu_p99_us": _r(np.percentile(cpu_us, 99))}
+    out = {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
+           "beams": int(scans[0].ranges.size), "max_top_quarks": quarks}
+    for prefix, wall, thread in (("", times, cpu), ("cmd_", cmd_times, cmd_cpu)):
+        us, cpu_us = np.array(wall) / 1e3, np.array(thread) / 1e3
+        out.update({f"{prefix}p50_us": _r(np.percentile(us, 50)),
+                    f"{prefix}p99_us": _r(np.percentile(us, 99)), f"{prefix}max_us": _r(us.max()),
+                    f"{prefix}cpu_p50_us": _r(np.percentile(cpu_us, 50)),
+                    f"{prefix}cpu_p99_us": _r(np.percentile(cpu_us, 99))})
+    return out
 
 
 def _r(x) -> float:
@@ -95,7 +104,7 @@ def _r(x) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="papf bench planner", description=plain(__doc__.split("\n")[0]))
     ap.add_argument("--cycles", type=int, default=300)
     args = ap.parse_args()
     print(json.dumps({"machine": platform.processor() or platform.machine(),

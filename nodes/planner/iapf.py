@@ -296,7 +296,7 @@ class IAPFCore:
             self.temp_goal_y = None
         if p.prediction and not p.traditional and lanes is not None:
             future = self.predict(s, tracks, lanes, y_goal)
-            info.predicted = [(float(r[0]), float(r[1])) for r in future]
+            info.predicted = [tuple(r) for r in future[:, :2].tolist()]
             info.predicted_speed = float(future[-1, 2])
             info.local_count = local_count(info.predicted, s.y, lanes)      # Step 2
             info.cannot_follow = self._cannot_follow(s, tracks, lanes)

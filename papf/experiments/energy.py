@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from common.errors import ConfigError
+from papf.experiments.sweep import SweepOptions
 
 if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `papf --help` stays fast
     from rich.console import Console
@@ -48,6 +49,7 @@ class EnergyExperiment:
     world: str = WORLD
     timeout_s: float = TIMEOUT_S
     energy_model: str = "motor"
+    sweep: SweepOptions = SweepOptions()   # how the runs are spread (papf.experiments.sweep)
 
 
 @dataclass(frozen=True)
@@ -209,6 +211,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     run_fn = run_fn or run
 
     validate(exp)
+    exp.sweep.validate()
     console = console or Console(stderr=True)
     world = load_world(exp.world)
     out = Path(exp.out)
@@ -216,6 +219,11 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     specs = plan(exp)
     _warn_foreign_files(out, specs, console)
     wall0 = time.monotonic()
+    if exp.sweep.distributed:
+        results = _run_spread(exp, specs, console)
+        report = build_report([s.path for s, _r in results], out)
+        return ExperimentResult(results, report, time.monotonic() - wall0,
+                                _mismatches(results, report))
     results: list[tuple[RunSpec, RunResult]] = []
     columns = (TextColumn("[bold]energy experiment[/]"), BarColumn(bar_width=16), MofNCompleteColumn(),
                TimeElapsedColumn(), TextColumn("{task.fields[live]}"))
@@ -229,12 +237,47 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
                 result = _one_run(exp, spec, progress, task, world.goal[:2], run_fn)
                 results.append((spec, result))
                 progress.advance(task)
-                console.print(_result_line(spec, result), highlight=False)
+                console.print(_result_line(spec, result), highlight=False, soft_wrap=True)
     finally:
         run_log.setLevel(level)
     report = build_report([s.path for s, _r in results], out)
     wall = time.monotonic() - wall0
     return ExperimentResult(results, report, wall, _mismatches(results, report))
+
+
+def _run_spread(exp: EnergyExperiment, specs: list[RunSpec], console: Console) -> list:
+    """Every run on Dask (:mod:`papf.experiments.sweep`), recorded where it runs, each file
+    written here under its usual name: the report sees the same files as a sequential one."""
+    from papf.experiments.sweep import map_runs
+
+    jobs = [(exp, spec, i) for i, spec in enumerate(specs)]
+    done = map_runs(energy_job, jobs, exp.sweep, label=lambda j: f"{j[1].name} seed {j[1].seed}",
+                    title="energy experiment")
+    results = []
+    for spec, (result, data) in zip(specs, done, strict=True):
+        if data is not None:
+            spec.path.write_bytes(data)
+        results.append((spec, result))
+        console.print(_result_line(spec, result), highlight=False)
+    return results
+
+
+def energy_job(job: tuple[EnergyExperiment, RunSpec, int]) -> tuple[RunResult, bytes | None]:
+    """One recorded run of a spread experiment: (its result, its recording's bytes)."""
+    import dataclasses
+    import tempfile
+
+    from papf.experiments.sweep import run_namespace
+    from papf.runner import run
+    from papf.supervisor import free_port
+
+    exp, spec, index = job
+    with tempfile.TemporaryDirectory(prefix="papf-energy-") as tmp:
+        local = dataclasses.replace(spec, path=Path(tmp) / spec.path.name)
+        cfg = dataclasses.replace(run_config(exp, local, free_port()),
+                                  namespace=run_namespace(index))
+        result = run(cfg)
+        return result, (local.path.read_bytes() if local.path.exists() else None)
 
 
 def _warn_foreign_files(out: Path, specs: Sequence[RunSpec], console: Console) -> None:
@@ -272,12 +315,14 @@ def print_summary(res, console=None) -> None:
     from rich.console import Console  # rich: only to print
     from rich.table import Table
 
-    from papf.report.report import REPORT_MD  # matplotlib: only once reported
     from papf.report.tables import PAPER, change_pct
 
     console = console or Console()
-    t = Table(title="energy experiment (runs that reached the goal: mean ± sd)")
-    for col in ("planner", "reached", "charge [mAh]", "energy [J]", "duration [s]", "path [m]"):
+    model = res.report.model
+    t = Table(title=f"energy experiment on {', '.join(sorted({s.world for s in res.report.summaries}))}"
+                    f" (runs that reached the goal: mean ± sd; {model} model)")
+    for col in ("planner", "reached", f"charge [mAh, {model}]", f"energy [J, {model}]",
+                "duration [s]", "path [m]"):
         t.add_column(col, justify="right")
     for s in res.report.summaries:
         st = s.stats
@@ -293,6 +338,6 @@ def print_summary(res, console=None) -> None:
                           f"   paper: {PAPER[attr]}", highlight=False)
     for m in res.mismatches:
         console.print(f"[red]report differs from the live run:[/] {m}")
-    console.print(f"report: {res.report.out_dir / REPORT_MD}")
+    console.print(f"report: {res.report.files[-1]}")
     console.print(f"wall time: {res.wall_s:.1f} s for {len(res.results)} runs and the report",
                   highlight=False)
