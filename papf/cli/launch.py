@@ -29,6 +29,9 @@ def register(sub) -> None:
                         "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--energy-model", choices=("motor", "paper"))
+    p.add_argument("--realtime", action="store_true",
+                   help="sim profile: pace sim time to the wall clock (to watch, steer with "
+                        "papf goal, or drive with papf teleop)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner parameter, repeatable")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="run-time limit (300)")
@@ -48,6 +51,7 @@ def cmd_launch(args) -> int:
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,
               "bridge_namespace": args.bridge_namespace,
+              "realtime": "1" if args.realtime else None,
               "objects": args.objects}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
