@@ -298,3 +298,19 @@ def test_goal_lane_pull_near_the_goal():
     assert core.lane_goal(s, blocked, ROAD, 2.0, 50.0) == (2.0, p.b3)
     # b3_temp crosses the broken line's ridge k2 d_w unaided: b3_temp sin(pi/4) > k2 d_w
     assert p.b3_temp * math.sin(math.pi / 4) > p.k2 * ROAD.width
+
+
+def test_brake_priority_suspends_the_return_to_cruise():
+    p = dataclasses.replace(IAPFParams(), brake_priority=True)
+    ob = Track(10.5, 2.0, 0.0, 0.0, 0.0, 4.5, 1.8)
+    _, ux, _ = obstacle_gradient(0.0, 2.0, ob, p.obstacle_gain, p.a_x, p.a_y)
+    _, info = IAPFCore(p).step(HostState(0.0, 2.0, 6.0), [ob], ROAD, 0.0)
+    assert info.accel == pytest.approx(max(-p.a_b, 0.63 * -ux))      # eta1 F_oX alone
+    _, plain = IAPFCore(IAPFParams()).step(HostState(0.0, 2.0, 6.0), [ob], ROAD, 0.0)
+    assert plain.accel > 0.0                                        # eq. 25: (V_c - v)^3 wins
+    from nodes.planner.iapf_kernel import HAVE_NUMBA
+    s0 = HostState(0.0, 2.0, 6.0)
+    ref = IAPFCore(p, use_numba=False).predict(s0, [ob], ROAD, 2.0)
+    if HAVE_NUMBA:
+        np.testing.assert_allclose(IAPFCore(p).predict(s0, [ob], ROAD, 2.0), ref, rtol=1e-12)
+    assert ref[-1, 2] < 6.0

@@ -76,6 +76,7 @@ class IAPFParams:
     prediction: bool = True      # Algorithm 1 on (off: "IAPF without prediction", Table 2)
     traditional: bool = False    # the traditional APF baseline (eq. 12, constant speed)
     k_trad: float = 3000.0       # eq. 12 k of the baseline (ours)
+    brake_priority: bool = False  # an obstacle pushing back suspends eq. 25's return to V_c (ours)
     follow_min_frac: float = 0.5  # leader slower than this * V_c: change lanes if free (ours; 0 = off)
     goal_lane_s: float = 6.0     # [s] of cruise before the goal: pull to its lane (ours; 0 = off)
     lane_width_ref: float = 4.0  # [m] the lane width d_w these values are for (Table 1)
@@ -218,7 +219,10 @@ class IAPFCore:
         v = s.v
         if not p.traditional:
             dv = p.v_cruise - v
-            accel = (p.eta1 * fox + p.eta2 * dv * dv * dv) / p.mass
+            back = p.eta2 * dv * dv * dv
+            if p.brake_priority and fox < 0.0:
+                back = min(back, 0.0)
+            accel = (p.eta1 * fox + back) / p.mass
             accel = min(max(accel, -p.a_b), p.a_max)
             v = min(max(v + accel * dt, 0.0), p.v_max_factor * p.v_cruise)
         lim = math.radians(p.heading_max_deg)

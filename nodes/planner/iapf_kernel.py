@@ -23,7 +23,7 @@ HAVE_NUMBA = numba is not None
 
 # params vector layout (see pack_params)
 (K1, K2, B1, B2, AX, AY, ETA1, ETA2, AB, SM, GAIN, MASS, AMAX, VMAX, VC, HALF, HMAX, YRATE,
- HLEN, LITERAL, TRAD, KTRAD) = range(22)
+ HLEN, LITERAL, TRAD, KTRAD, BRAKE) = range(23)
 # obstacle row layout: x, y, yaw, vx, vy, speed, length
 OBS_COLS = 7
 
@@ -107,7 +107,10 @@ def _rollout(state, obs, prm, road, y_goal, has_goal, b3, dt, n, shift0, out):
         fy = -gy + oy
         if not trad:
             dv = prm[VC] - v
-            accel = (prm[ETA1] * ox + prm[ETA2] * dv * dv * dv) / prm[MASS]
+            back = prm[ETA2] * dv * dv * dv
+            if prm[BRAKE] > 0.5 and ox < 0.0:
+                back = min(back, 0.0)
+            accel = (prm[ETA1] * ox + back) / prm[MASS]
             accel = min(max(accel, -prm[AB]), prm[AMAX])
             v = min(max(v + accel * dt, 0.0), prm[VMAX])
         new_yaw = min(max(math.atan2(fy, fx), -prm[HMAX]), prm[HMAX])
@@ -129,7 +132,7 @@ def pack_params(p) -> np.ndarray:
     vals = [p.k1, p.k2, p.b1, p.b2, p.a_x, p.a_y, p.eta1, p.eta2, p.a_b, p.s_m, p.obstacle_gain,
             p.mass, p.a_max, p.v_max_factor * p.v_cruise, p.v_cruise, 0.0,
             math.radians(p.heading_max_deg), math.radians(p.yaw_rate_max_deg), p.host_length,
-            float(p.literal_rotation), float(p.traditional), p.k_trad]
+            float(p.literal_rotation), float(p.traditional), p.k_trad, float(p.brake_priority)]
     return np.array(vals, dtype=np.float64)
 
 

@@ -71,7 +71,9 @@ class IAPFStrategy:
             tau = s * p.v_cruise / p.cruise_speed
             # the robot's heading controller limits its turn rate: no particle rate limit on top
             # and the safety gaps are measured from the robot's own footprint
-            q = dataclasses.replace(scaled(p, s, tau), yaw_rate_max_deg=0.0,
+            # the robot must be able to stop behind a vehicle: an obstacle pushing back
+            # suspends the return to cruise (eq. 25's cubic beats any braking force otherwise)
+            q = dataclasses.replace(scaled(p, s, tau), yaw_rate_max_deg=0.0, brake_priority=True,
                                     host_length=BODY_LENGTH_M, host_width=BODY_WIDTH_M)
             self._core, self._core_for = IAPFCore(q), lanes
         return self._core
