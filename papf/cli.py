@@ -36,6 +36,9 @@ def _add_run(sub) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
     p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper read "
+                        "literally, docs/planners.md \"Presets\")")
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
@@ -43,9 +46,10 @@ def _add_run(sub) -> None:
 
 
 def _cmd_run(args) -> int:
+    from nodes.planner.registry import preset_sets
     from papf.runner import RunConfig, run
 
-    planner_args = [x for kv in args.set for x in ("--set", kv)]
+    planner_args = [x for kv in (*preset_sets(args.preset), *args.set) for x in ("--set", kv)]
     if args.params:
         planner_args += ["--params", args.params]
     cfg = RunConfig(world=args.world, planner=args.planner, seed=args.seed,

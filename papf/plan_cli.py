@@ -39,6 +39,18 @@ def _planner_list(text: str) -> list[str]:
     return names
 
 
+def preset_list(text: str) -> list[str]:
+    """``default,paper`` -> ["default", "paper"]; ConfigError names the valid presets."""
+    from common.errors import ConfigError
+    from nodes.planner.registry import PRESETS
+
+    names = [p.strip() for p in text.split(",") if p.strip()]
+    bad = [p for p in names if p not in PRESETS]
+    if bad or not names:
+        raise ConfigError(f"--presets {text!r}: unknown {bad}; valid: {list(PRESETS)}")
+    return list(dict.fromkeys(names))
+
+
 def register(subparsers) -> None:
     """Add ``plan`` and ``experiment paper-tests`` / ``experiment random``."""
     p = subparsers.add_parser("plan", help="run a planner on a world offline (no processes)",
@@ -55,6 +67,8 @@ def register(subparsers) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
     p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper literally)")
     p.add_argument("--plot", metavar="OUT.png", help="write a PNG of the world and the path")
     p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
     p.add_argument("--json", action="store_true", help="print one JSON summary object")
@@ -73,6 +87,9 @@ def register(subparsers) -> None:
     e.add_argument("--offline", action="store_true", help="offline planner runs (no processes)")
     e.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
+    e.add_argument("--presets", default="default", metavar="P1,P2",
+                   help="planner presets side by side: default, paper or default,paper "
+                        "(a planner whose paper preset changes nothing runs once)")
     e.set_defaults(func=cmd_paper_tests)
 
     r = sub.add_parser("random", help="success and collision rates on seeded random worlds",
@@ -87,6 +104,9 @@ def register(subparsers) -> None:
     r.add_argument("--plots", action="store_true", help="one PNG per world with every path")
     r.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
+    r.add_argument("--presets", default="default", metavar="P1,P2",
+                   help="planner presets side by side: default, paper or default,paper "
+                        "(a planner whose paper preset changes nothing runs once)")
     mode = r.add_mutually_exclusive_group()
     mode.add_argument("--offline", dest="mode", action="store_const", const="offline",
                       help="offline planner runs (default; fast)")
@@ -96,12 +116,14 @@ def register(subparsers) -> None:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    from nodes.planner.registry import preset_sets
     from papf.monitor import EXIT_CODES
     from papf.plan import plan, write_path
     from worlds import load_world
 
     world = load_world(args.world)
-    result = plan(world, args.planner, params=args.set, seed=args.seed, max_time_s=args.timeout,
+    result = plan(world, args.planner, params=[*preset_sets(args.preset), *args.set],
+                  seed=args.seed, max_time_s=args.timeout,
                   dt=args.dt, params_file=args.params)
     if args.out:
         write_path(result, args.out)
@@ -131,7 +153,8 @@ def cmd_paper_tests(args: argparse.Namespace) -> int:
         if bad:
             raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
     run_paper_tests(args.out, _planner_list(args.planners), args.seed,
-                    "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set)
+                    "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set,
+                    presets=preset_list(args.presets))
     print((Path(args.out) / "paper-tests.md").read_text())
     print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
     return 0
@@ -141,7 +164,7 @@ def cmd_random(args: argparse.Namespace) -> int:
     from papf.experiments.random_worlds import run_random
 
     run_random(args.out, args.n, args.seed, _planner_list(args.planners), args.mode, args.timeout,
-               args.plots, sets=args.set)
+               args.plots, sets=args.set, presets=preset_list(args.presets))
     print((Path(args.out) / "random.md").read_text())
     print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
     return 0

@@ -56,6 +56,10 @@ class PAPFParams:
     use_numba: bool = True          # numba kernel if installed (identical results to numpy)
     persist_quarks: bool = True     # keep quarks (world frame) across cycles (ours)
     pull_range_fraction: float = 1.0  # prediction: goal pull as if the goal were <= this * lambda away (ours; 0: literal)
+    motion_quarks_within_d_o: bool = True  # motion law: quarks act within d_o (ours; false: within d_q, as the prediction)
+    unresolved_global_goal: bool = True    # after M repetitions: eq. 7 with the global goal (ours; false: eq. 8 on the last path)
+    stop_at_goal: bool = True       # the prediction stops within Delta of the goal (ours; false: always i_max + n_stag steps)
+    quark_restarts_watch: bool = True      # a cycle that places a quark restarts the stagnation watch (ours)
 
     @property
     def i_max(self) -> int:
@@ -107,8 +111,8 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
     abandoned = []
     while True:
         path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
-                                pp.step_m, pp.i_max + pp.n_stag, pp.step_m, pp.use_numba,
-                                pp.pull_range)
+                                pp.step_m, pp.i_max + pp.n_stag, pp.step_m if pp.stop_at_goal else 0.0,
+                                pp.use_numba, pp.pull_range)
         if reached:
             return Prediction(path, quarks, abandoned, True, True)
         main = path[: pp.i_max + 1]
@@ -153,10 +157,18 @@ def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.n
         return force
     r = np.asarray(quarks, dtype=float) - pos
     dist = np.sqrt(np.sum(r * r, axis=1))
-    keep = (dist > EPS_M) & (dist <= apf.d_o)
+    keep = (dist > EPS_M) & (dist <= (apf.d_o if pp.motion_quarks_within_d_o else pp.d_q))
     soft = np.maximum(dist[keep], pp.quark_ball_m)
     gain = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
     return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
+
+
+#: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off, one
+#: quark range d_q = d_o for prediction and motion (eq. 7's where-clause defines d_o only).
+PAPER_PRESET = {"pull_range_fraction": 0.0, "motion_quarks_within_d_o": False, "quark_ball_m": 0.0,
+                "unresolved_global_goal": False, "stop_at_goal": False,
+                "quark_restarts_watch": False, "persist_quarks": False, "tie_tol_m": 0.0,
+                "d_q": 0.5}
 
 
 class PAPFStrategy:
@@ -164,6 +176,7 @@ class PAPFStrategy:
 
     name = "papf"
     Params = PAPFParams
+    PAPER_PRESET = PAPER_PRESET
 
     def __init__(self, params: PAPFParams | None = None):
         self.params = params or PAPFParams()
@@ -183,14 +196,14 @@ class PAPFStrategy:
         kept = self.quarks if pp.persist_quarks else None
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
-        if pred.resolved:
+        if pred.resolved or not pp.unresolved_global_goal:
             f_apf = apf_force(pos, goal, obstacles, apf)          # eq. 2: the direction line
             direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
             target = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
-            mode = "bypass" if pred.quarks.shape[0] else "drive"
+            mode = ("bypass" if pred.quarks.shape[0] else "drive") if pred.resolved else "unresolved"
         else:   # no stagnation-free path after M repetitions: eq. 7 with the global goal
             target, mode = goal, "unresolved"
         force = apf_force(pos, target, obstacles, apf) + quark_force(pos, pred.quarks, apf, pp)
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
-                    top_quarks=pred.quarks, searching=bool(pred.abandoned))
+                    top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)

@@ -135,6 +135,8 @@ class WangStrategy:
 
     name = "wang"
     Params = WangParams
+    #: ``--preset paper``: the force at the robot itself (Wang moves a point along it).
+    PAPER_PRESET = {"control_offset_m": 0.0}
 
     def __init__(self, params: WangParams | None = None):
         self.params = params or WangParams()

@@ -62,14 +62,15 @@ def _num(x, nd=2) -> str:
 
 
 def table_rows(trials) -> list[list[str]]:
-    """Markdown rows: world, planner, ours (outcome, duration, change, length, change), paper."""
-    by = {(t.world, t.planner): t for t in trials}
+    """Markdown rows: world, planner (preset), ours (outcome, duration, change, length,
+    change), paper. Changes are against the default-preset APF of the same world."""
+    by = {(t.world, t.label): t for t in trials}
     rows = []
     for t in trials:
         apf = by.get((t.world, "apf"))
         both = apf is not None and apf.outcome == t.outcome == "reached" and t.planner != "apf"
         ref = PAPER.get(t.world, {}).get(t.planner)
-        rows.append([t.world, t.planner, t.outcome, _num(t.duration_s, 1),
+        rows.append([t.world, t.label, t.outcome, _num(t.duration_s, 1),
                      _pct(t.duration_s, apf.duration_s) if both else "",
                      _num(t.path_length_m), _pct(t.path_length_m, apf.path_length_m) if both else "",
                      ref.outcome if ref else "", _num(ref.duration_s) if ref and ref.duration_s else "",
@@ -79,47 +80,63 @@ def table_rows(trials) -> list[list[str]]:
 
 HEADER = ["world", "planner", "outcome", "duration [s]", "vs APF", "path [m]", "vs APF",
           "paper outcome", "paper duration [s]", "paper path [m]"]
+DURATION_TOL, PATH_TOL = 0.15, 0.10   # issue 14's acceptance band around Table 2
+
+
+def table2_check(trials, label: str) -> tuple[int, int, int]:
+    """(reached, durations within 15 %, paths within 10 %) of ``label`` in Tests I-VI vs Table 2."""
+    mine = {t.world: t for t in trials if t.label == label and t.world in PAPF_WORLDS}
+    reached = dur = path = 0
+    for w, t in mine.items():
+        ref = PAPER[w]["papf"]
+        if t.outcome != "reached":
+            continue
+        reached += 1
+        dur += abs(t.duration_s - ref.duration_s) <= DURATION_TOL * ref.duration_s
+        path += abs(t.path_length_m - ref.path_length_m) <= PATH_TOL * ref.path_length_m
+    return reached, dur, path
 
 
 def acceptance(trials) -> list[str]:
-    """Issue 3's checks on the PAPF-paper worlds, as sentences."""
-    by = {(t.world, t.planner): t for t in trials}
+    """Issue 3's and 14's checks on the PAPF-paper worlds, as sentences."""
+    by = {(t.world, t.label): t for t in trials}
     lines = []
-    papf = [by[(w, "papf")] for w in PAPF_WORLDS if (w, "papf") in by]
-    if papf:
-        reached = sum(t.outcome == "reached" for t in papf)
+    for label in dict.fromkeys(t.label for t in trials if t.planner == "papf"):
+        papf = [by[(w, label)] for w in PAPF_WORLDS if (w, label) in by]
+        reached, dur, path = table2_check(trials, label)
         coll = sum(t.collisions for t in papf)
-        lines.append(f"PAPF reached the goal in {reached}/{len(papf)} PAPF-paper worlds, "
-                     f"{coll} collision(s).")
-        pairs = [(by[(w, "apf")], by[(w, "papf")]) for w in PAPF_WORLDS
-                 if (w, "apf") in by and (w, "papf") in by
-                 and by[(w, "apf")].outcome == by[(w, "papf")].outcome == "reached"]
+        lines.append(f"{label}: reached {reached}/{len(papf)} PAPF-paper worlds, {coll} collision(s); "
+                     f"duration within 15 % of Table 2 in {dur}/{len(papf)}, path within 10 % in "
+                     f"{path}/{len(papf)}.")
+        pairs = [(by[(w, "apf")], by[(w, label)]) for w in PAPF_WORLDS
+                 if (w, "apf") in by and (w, label) in by
+                 and by[(w, "apf")].outcome == by[(w, label)].outcome == "reached"]
         if pairs:
             ok = sum(p.duration_s <= a.duration_s for a, p in pairs)
-            lines.append(f"PAPF duration <= APF's in {ok}/{len(pairs)} worlds where both reached.")
+            lines.append(f"{label}: duration <= APF's in {ok}/{len(pairs)} worlds where both reached.")
     apf_dead = [by[(w, "apf")] for w in ("papf-test-4", "papf-test-5", *ARAPF_WORLDS) if (w, "apf") in by]
     if apf_dead:
         st = sum(t.outcome == "stagnated" for t in apf_dead)
         lines.append(f"APF reported `stagnated` in {st}/{len(apf_dead)} dead-end worlds "
                      "(PAPF Tests IV-V, AR-APF Tests I-III).")
-    ar = [by[(w, "arapf")] for w in ARAPF_WORLDS if (w, "arapf") in by]
-    if ar:
-        lines.append(f"AR-APF reached the goal in {sum(t.outcome == 'reached' for t in ar)}/{len(ar)} "
-                     "AR-APF-paper worlds.")
-    wang = [by[(w, "wang")] for w in WANG_WORLDS if (w, "wang") in by]
-    if wang:
-        lines.append(f"Wang reached the goal in {sum(t.outcome == 'reached' for t in wang)}/{len(wang)} "
-                     "Wang worlds.")
+    for planner, worlds, name in (("arapf", ARAPF_WORLDS, "AR-APF"), ("wang", WANG_WORLDS, "Wang")):
+        for label in dict.fromkeys(t.label for t in trials if t.planner == planner):
+            mine = [by[(w, label)] for w in worlds if (w, label) in by]
+            if mine:
+                lines.append(f"{label}: reached {sum(t.outcome == 'reached' for t in mine)}/{len(mine)} "
+                             f"{name}-paper worlds.")
     return lines
 
 
 def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS, seed: int = 0,
                     mode: str = "stack", worlds: Sequence[str] = PAPER_WORLDS,
                     timeout_s: float = 300.0, progress: bool | None = None,
-                    sets: Sequence[str] = ()) -> list:
-    """Run every (world, planner); write the table, CSV and plots into ``out``; return the trials.
+                    sets: Sequence[str] = (), presets: Sequence[str] = ("default",)) -> list:
+    """Run every (world, planner, preset); write the table, CSV and plots into ``out``; return
+    the trials.
 
-    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
+    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
+    ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
     from common.errors import ConfigError
     from papf.experiments.trials import (
@@ -128,6 +145,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
         quiet_runner_logs,
         run_offline,
         run_stack,
+        variants,
         write_csv,
     )
     from papf.plots import plot_paths
@@ -139,21 +157,25 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     out.mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()
     trials = []
+    runs = variants(planners, presets)
     with progress_bar(progress) as bar:
-        task = bar.add_task("paper tests", total=len(worlds) * len(planners))
+        task = bar.add_task("paper tests", total=len(worlds) * len(runs))
         for name in worlds:
             world = load_world(name)
-            for planner in planners:
-                bar.update(task, description=f"{name} {planner}")
+            for planner, preset in runs:
+                bar.update(task, description=f"{name} {planner} {preset}")
                 if mode == "offline":
-                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets))
+                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets),
+                                        preset=preset)
                 else:
+                    stem = name + "-" + planner + ("" if preset == "default" else "-" + preset)
                     trial = run_stack(world_path(name), planner, seed, timeout_s,
-                                      record=out / "recordings" / f"{name}-{planner}.mcap",
-                                      planner_args=[a for kv in sets for a in ("--set", kv)])
+                                      record=out / "recordings" / f"{stem}.mcap",
+                                      planner_args=[a for kv in sets for a in ("--set", kv)],
+                                      preset=preset)
                 trials.append(trial)
                 bar.advance(task)
-            paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}
+            paths = {f"{t.label} ({t.outcome})": t.path for t in trials if t.world == world.name}
             plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
     write_csv([t.row() for t in trials], out / "paper-tests.csv")
     text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, table_rows(trials))

@@ -40,8 +40,8 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
     bottleneck = bottleneck or {}
     rows = []
-    for planner in dict.fromkeys(t.planner for t in trials):
-        mine = [t for t in trials if t.planner == planner]
+    for planner in dict.fromkeys(t.label for t in trials):
+        mine = [t for t in trials if t.label == planner]
         row = {"planner": planner, "worlds": len(mine)}
         for o in OUTCOMES:
             row[o] = 100.0 * sum(t.outcome == o for t in mine) / len(mine)
@@ -74,10 +74,11 @@ def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected
 def run_random(out: str | Path, n: int = 50, seed: int = 0,
                planners: Sequence[str] = DEFAULT_PLANNERS, mode: str = "offline",
                timeout_s: float = 300.0, plots: bool = False, progress: bool | None = None,
-               sets: Sequence[str] = ()):
+               sets: Sequence[str] = (), presets: Sequence[str] = ("default",)):
     """Run the experiment; write its files into ``out``; return (trials, summary rows).
 
-    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
+    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
+    ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
     from common.errors import ConfigError
     from papf.experiments.trials import (
@@ -85,6 +86,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
         quiet_runner_logs,
         run_offline,
         run_stack,
+        variants,
         write_csv,
     )
     from papf.plots import plot_paths
@@ -100,25 +102,29 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     worlds, rejected = generate_solvable(n, seed)
     bottleneck = {w.name: bottleneck_width(w) for w in worlds}
     trials = []
+    runs = variants(planners, presets)
     with progress_bar(progress) as bar:
-        task = bar.add_task("random worlds", total=len(worlds) * len(planners))
+        task = bar.add_task("random worlds", total=len(worlds) * len(runs))
         for world in worlds:
             file = out / "worlds" / f"{world.name}.toml"
             file.write_text(world_to_toml(world))
             mine = []
-            for planner in planners:
-                bar.update(task, description=f"{world.name} {planner}")
+            for planner, preset in runs:
+                bar.update(task, description=f"{world.name} {planner} {preset}")
                 if mode == "offline":
-                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets))
+                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets),
+                                        preset=preset)
                 else:
-                    rec = out / "recordings" / f"{world.name}-{planner}.mcap" if plots else None
+                    stem = world.name + "-" + planner + ("" if preset == "default" else "-" + preset)
+                    rec = out / "recordings" / f"{stem}.mcap" if plots else None
                     trial = run_stack(file, planner, seed, timeout_s, record=rec,
-                                      planner_args=[a for kv in sets for a in ("--set", kv)])
+                                      planner_args=[a for kv in sets for a in ("--set", kv)],
+                                      preset=preset)
                 mine.append(trial)
                 bar.advance(task)
             trials += mine
             if plots:
-                plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},
+                plot_paths(world, {f"{t.label} ({t.outcome})": t.path for t in mine},
                            out / "plots" / f"{world.name}.png", world.name)
     summary = summarize(trials, bottleneck)
     write_csv([{**t.row(), "bottleneck_m": round(bottleneck[t.world], 3)} for t in trials],

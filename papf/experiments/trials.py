@@ -42,14 +42,42 @@ class Trial:
     charge_mAh: float = math.nan        # stack only [mAh]
     wall_time_s: float = 0.0
     path: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (N, 2|3) [m]
+    preset: str = "default"             # planner preset (nodes.planner.registry.PRESETS)
+
+    @property
+    def label(self) -> str:
+        """``planner`` for the default preset, ``planner (paper)`` otherwise (table rows)."""
+        return variant_label(self.planner, self.preset)
 
     def row(self) -> dict:
         """The CSV row (no path)."""
-        return {"world": self.world, "planner": self.planner, "seed": self.seed, "mode": self.mode,
+        return {"world": self.world, "planner": self.planner, "preset": self.preset,
+                "seed": self.seed, "mode": self.mode,
                 "outcome": self.outcome, "duration_s": round(self.duration_s, 3),
                 "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
                 "min_clearance_m": _r(self.min_clearance_m), "charge_mAh": _r(self.charge_mAh),
                 "wall_time_s": round(self.wall_time_s, 2), "reason": self.reason}
+
+
+def variant_label(planner: str, preset: str) -> str:
+    return planner if preset == "default" else f"{planner} ({preset})"
+
+
+def variants(planners: Sequence[str], presets: Sequence[str] = ("default",)) -> list[tuple[str, str]]:
+    """(planner, preset) pairs to run. A planner whose paper preset changes nothing (APF: eq. 2
+    as written) runs once, as ``default``: both presets would give the same run."""
+    from nodes.planner.registry import preset_settings
+
+    out = []
+    for planner in planners:
+        for preset in presets:
+            if preset != "default" and not preset_settings(planner, preset):
+                if (planner, "default") not in out:
+                    out.append((planner, "default"))
+                continue
+            if (planner, preset) not in out:
+                out.append((planner, preset))
+    return out
 
 
 def _r(x: float, nd: int = 3):
@@ -57,23 +85,28 @@ def _r(x: float, nd: int = 3):
 
 
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
-                params=None) -> Trial:
-    """One offline run (:func:`papf.plan.plan`)."""
-    from papf.plan import plan
+                params=None, preset: str = "default") -> Trial:
+    """One offline run (:func:`papf.plan.plan`) with the planner's ``preset``."""
+    from nodes.planner.registry import preset_sets
+    from papf.plan import param_sets, plan
 
     t0 = time.monotonic()
-    r = plan(world, planner, params=params, seed=seed, max_time_s=timeout_s)
+    r = plan(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
+             max_time_s=timeout_s)
     return Trial(r.world, planner, seed, "offline", r.outcome, r.duration_s, r.length_m,
                  r.collisions, r.reason, min_clearance_m=r.min_clearance_m,
-                 wall_time_s=time.monotonic() - t0, path=r.path)
+                 wall_time_s=time.monotonic() - t0, path=r.path, preset=preset)
 
 
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
-              record: str | Path | None = None, planner_args: Sequence[str] = ()) -> Trial:
+              record: str | Path | None = None, planner_args: Sequence[str] = (),
+              preset: str = "default") -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
+    from nodes.planner.registry import preset_sets
     from papf.runner import RunConfig, run
     from papf.supervisor import free_port
 
+    planner_args = [*(a for kv in preset_sets(preset) for a in ("--set", kv)), *planner_args]
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
         Path(record).unlink(missing_ok=True)
@@ -84,7 +117,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
     path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
     return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,
                  res.collisions, res.reason, charge_mAh=res.charge_mAh,
-                 wall_time_s=res.wall_time_s, path=path)
+                 wall_time_s=res.wall_time_s, path=path, preset=preset)
 
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
