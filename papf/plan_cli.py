@@ -69,6 +69,9 @@ def register(subparsers) -> None:
     p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper literally)")
+    p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
+                   help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
+                        "the obstacles' centres known (planners wang-apf and wang only)")
     p.add_argument("--plot", metavar="OUT.png", help="write a PNG of the world and the path")
     p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
     p.add_argument("--json", action="store_true", help="print one JSON summary object")
@@ -114,6 +117,14 @@ def register(subparsers) -> None:
                       help="every run through the whole process stack (slow)")
     r.set_defaults(func=cmd_random, mode="offline")
 
+    w = sub.add_parser("wang", help="Wang's Figs. 5-12: the published point simulation and the ROSbot",
+                       description="Each of Wang's figures as published (a point stepping 0.5 along "
+                                   "the force, J = 200, Table 1 gains) and with the wang-apf / wang "
+                                   "planners offline; writes wang.md and wang.csv into --out.")
+    w.add_argument("--out", default="wang-figs", metavar="DIR", help="output directory")
+    w.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    w.set_defaults(func=cmd_wang)
+
 
 def cmd_plan(args: argparse.Namespace) -> int:
     from nodes.planner.registry import preset_sets
@@ -122,6 +133,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from worlds import load_world
 
     world = load_world(args.world)
+    if args.motion == "fixed-step":
+        return _fixed_step(world, args)
     result = plan(world, args.planner, params=[*preset_sets(args.preset), *args.set],
                   seed=args.seed, max_time_s=args.timeout,
                   dt=args.dt, params_file=args.params)
@@ -140,6 +153,34 @@ def cmd_plan(args: argparse.Namespace) -> int:
               f"{s['path_length_m']:.2f} m, min clearance {s['min_clearance_m']:.2f} m"
               + (f" ({s['reason']})" if s["reason"] else ""))
     return EXIT_CODES.get(result.outcome, 6)
+
+
+def _fixed_step(world, args) -> int:
+    from common.errors import ConfigError
+    from papf.pointsim import fixed_step
+
+    methods = {"wang-apf": "traditional", "wang": "improved"}
+    if args.planner not in methods:
+        raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
+    r = fixed_step(world, methods[args.planner])
+    if args.plot:
+        from papf.plots import plot_paths
+
+        plot_paths(world, {f"{args.planner} ({r.outcome})": r.path}, args.plot,
+                   f"{world.name}: {args.planner}, fixed step (Wang's simulation)")
+    s = r.summary()
+    print(json.dumps(s) if args.json else
+          f"{s['world']} {args.planner} (fixed step): {s['outcome']} after {s['iterations']} "
+          f"iterations, path {s['path_length']:.2f}, min clearance {s['min_clearance']:.2f}")
+    return {"reached": 0, "collision": 4}.get(r.outcome, 3)
+
+
+def cmd_wang(args: argparse.Namespace) -> int:
+    from papf.experiments.wang_figs import run_wang
+
+    run_wang(args.out, args.seed)
+    print((Path(args.out) / "wang.md").read_text())
+    return 0
 
 
 def cmd_paper_tests(args: argparse.Namespace) -> int:

@@ -58,6 +58,11 @@ def add_energy_args(p: argparse.ArgumentParser) -> None:
                    help="directory for the recordings and the report (default energy-experiment)")
     p.add_argument("--seed", type=int, default=0, help="base seed S: run k uses S+k (default 0)")
     p.add_argument("--world", default=WORLD, help=f"world (default {WORLD})")
+    p.add_argument("--worlds", metavar="W1,W2",
+                   help="several worlds, each into DIR/<world>/, plus DIR/energy-worlds.md/.csv "
+                        "(e.g. energy,energy-blocking,energy-empty)")
+    p.add_argument("--presets", default="default", metavar="P1,P2",
+                   help="planner presets side by side: default, paper or default,paper")
     p.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="S",
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
@@ -99,9 +104,19 @@ def cmd_energy(args: argparse.Namespace) -> int:
     from papf.experiments.energy import EnergyExperiment, run_experiment
 
     planners = tuple(p.strip() for p in args.planners.split(",") if p.strip())
+    presets = tuple(p.strip() for p in args.presets.split(",") if p.strip())
     exp = EnergyExperiment(out=Path(args.out), runs=args.runs, planners=planners, seed=args.seed,
                            world=args.world, timeout_s=args.timeout,
-                           energy_model=args.energy_model)
+                           energy_model=args.energy_model, presets=presets)
+    if args.worlds:
+        from papf.experiments.energy_worlds import run_energy_worlds
+
+        worlds = [w.strip() for w in args.worlds.split(",") if w.strip()]
+        results = run_energy_worlds(exp, worlds)
+        for r in results:
+            print_summary(r)
+        print((Path(args.out) / "energy-worlds.md").read_text())
+        return max(r.exit_code for r in results)
     result = run_experiment(exp)
     print_summary(result)
     return result.exit_code

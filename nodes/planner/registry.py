@@ -20,7 +20,7 @@ from nodes.planner.apf import APFParams, apf_force
 from nodes.planner.arapf import ARAPFStrategy
 from nodes.planner.core import Plan, Planner, ScanView
 from nodes.planner.papf import PAPFStrategy
-from nodes.planner.wang import WangStrategy
+from nodes.planner.wang import WangAPFStrategy, WangStrategy
 
 try:
     import tomllib
@@ -57,6 +57,7 @@ PLANNERS: dict[str, type] = {
     "papf": PAPFStrategy,
     "arapf": ARAPFStrategy,
     "wang": WangStrategy,
+    "wang-apf": WangAPFStrategy,
 }
 
 

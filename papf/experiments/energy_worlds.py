@@ -1,0 +1,74 @@
+"""``papf experiment energy --worlds energy,energy-blocking,energy-empty``: the energy
+experiment on several worlds, and one table that separates the effects (issue 14).
+
+- ``energy`` — the paper's course (goal 10 m, three obstacles beside the line);
+- ``energy-blocking`` — the same course with the obstacles across the line, so PAPF's
+  temporary goal and top quarks have to work;
+- ``energy-empty`` — the control: no obstacle; any saving there comes from the motion law
+  alone (APF's 5 / r^2 pull is below V_max beyond 7.1 m, PAPF's temporary goal <= lambda
+  away always pulls with >= 5).
+
+Each world runs as :func:`papf.experiments.energy.run_experiment` into ``OUT/<world>/``
+(recordings, report); then ``OUT/energy-worlds.csv`` and ``.md``: per world and planner
+(preset) the runs that reached, mean charge, duration and path, the charge change against
+APF in the same world, and what PAPF did (:mod:`papf.report.activity`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+WORLDS = ("energy", "energy-blocking", "energy-empty")
+HEADER = ["world", "planner", "reached", "charge [mAh]", "duration [s]", "path [m]",
+          "charge vs APF", "max temporary-goal offset [m]", "quarks away from the goal"]
+
+
+def _num(x: float, nd: int) -> str:
+    return "" if not math.isfinite(x) else f"{x:.{nd}f}"
+
+
+def world_rows(world: str, report) -> list[dict]:
+    """CSV rows of one world's report (means over the runs that reached)."""
+    from papf.report.activity import papf_activity
+
+    apf = report.summary("apf")
+    rows = []
+    for s in report.summaries:
+        files = [report.out_dir / m.file for m in report.runs if m.planner == s.planner]
+        acts = [papf_activity(f) for f in files]
+        charge = s.stats["charge_mAh"].mean
+        base = apf.stats["charge_mAh"].mean if apf and apf.reached else math.nan
+        change = 100.0 * (charge - base) / base if math.isfinite(base) and s.planner != "apf" else math.nan
+        rows.append({"world": world, "planner": s.planner, "reached": f"{s.reached}/{s.runs}",
+                     "charge_mAh": _num(charge, 2), "charge_sd_mAh": _num(s.stats["charge_mAh"].sd, 2),
+                     "duration_s": _num(s.stats["duration_s"].mean, 1),
+                     "path_m": _num(s.stats["path_length_m"].mean, 2),
+                     "charge_vs_apf_pct": _num(change, 1),
+                     "max_goal_offset_m": _num(max(a.max_goal_offset_m for a in acts), 2) if acts else "",
+                     "quarks_away": max(a.quarks_away for a in acts) if acts else 0})
+    return rows
+
+
+def run_energy_worlds(exp, worlds: Sequence[str] = WORLDS, console=None) -> list:
+    """Run ``exp`` on each world (into ``exp.out/<world>``); write the combined table."""
+    from papf.experiments.energy import run_experiment
+    from papf.experiments.trials import markdown_table, write_csv
+
+    out = Path(exp.out)
+    results, rows = [], []
+    for world in worlds:
+        res = run_experiment(dataclasses.replace(exp, out=out / world, world=world), console)
+        results.append(res)
+        rows += world_rows(world, res.report)
+    write_csv(rows, out / "energy-worlds.csv")
+    md = [[r["world"], r["planner"], r["reached"],
+           f"{r['charge_mAh']} ± {r['charge_sd_mAh']}" if r["charge_sd_mAh"] else r["charge_mAh"],
+           r["duration_s"], r["path_m"], f"{r['charge_vs_apf_pct']} %" if r["charge_vs_apf_pct"] else "",
+           r["max_goal_offset_m"], r["quarks_away"]] for r in rows]
+    (out / "energy-worlds.md").write_text(f"# Energy worlds ({exp.runs} runs each, seeds "
+                                          f"{exp.seed + 1}-{exp.seed + exp.runs})\n\n"
+                                          + markdown_table(HEADER, md))
+    return results
