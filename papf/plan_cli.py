@@ -125,6 +125,23 @@ def register(subparsers) -> None:
     w.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
     w.set_defaults(func=cmd_wang)
 
+    h = sub.add_parser("horizon", help="PAPF's horizon of prediction (paper Fig. 7), offline",
+                       description="PAPF with lambda in {0.5, 1, 1.5, 2} m (both presets) and APF on "
+                                   "the Fig. 7-like world papf-horizon: path, duration, turning, cycle "
+                                   "time; writes horizon.md and horizon.csv into --out.")
+    h.add_argument("--out", default="horizon", metavar="DIR", help="output directory")
+    h.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    h.set_defaults(func=cmd_horizon)
+
+    d = sub.add_parser("deviations", help="each PAPF deviation from the paper switched alone, offline",
+                       description="PAPF default and paper presets, and each deviation switched on "
+                                   "alone over the paper preset and off alone from the default, on N "
+                                   "random worlds and the paper worlds; writes deviations.md/.csv.")
+    d.add_argument("--out", default="deviations", metavar="DIR", help="output directory")
+    d.add_argument("--n", type=int, default=20, help="random worlds (default 20)")
+    d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
+    d.set_defaults(func=cmd_deviations)
+
 
 def cmd_plan(args: argparse.Namespace) -> int:
     from nodes.planner.registry import preset_sets
@@ -180,6 +197,25 @@ def cmd_wang(args: argparse.Namespace) -> int:
 
     run_wang(args.out, args.seed)
     print((Path(args.out) / "wang.md").read_text())
+    return 0
+
+
+def cmd_horizon(args: argparse.Namespace) -> int:
+    from papf.experiments.paper_study import run_horizon
+
+    run_horizon(args.out, args.seed)
+    print((Path(args.out) / "horizon.md").read_text())
+    return 0
+
+
+def cmd_deviations(args: argparse.Namespace) -> int:
+    from common.errors import ConfigError
+    from papf.experiments.paper_study import run_deviations
+
+    if args.n < 1:
+        raise ConfigError(f"--n {args.n}: need at least 1 world")
+    run_deviations(args.out, args.n, args.seed)
+    print((Path(args.out) / "deviations.md").read_text())
     return 0
 
 
