@@ -8,7 +8,7 @@ experiment on several worlds, and one table that separates the effects (issue 14
   alone (APF's 5 / r^2 pull is below V_max beyond 7.1 m, PAPF's temporary goal <= lambda
   away always pulls with >= 5).
 
-Each world runs as :func:`papf.experiments.energy.run_experiment` into ``OUT/<world>/``
+Each world runs as :func:`papf.experiments.energy.run_experiment` into ``OUT/world-<world>/``
 (recordings, report); then ``OUT/energy-worlds.csv`` and ``.md``: per world and planner
 (preset) the runs that reached, mean charge, duration and path, the charge change against
 APF in the same world, and what PAPF did (:mod:`papf.report.activity`).
@@ -53,14 +53,15 @@ def world_rows(world: str, report) -> list[dict]:
 
 
 def run_energy_worlds(exp, worlds: Sequence[str] = WORLDS, console=None) -> list:
-    """Run ``exp`` on each world (into ``exp.out/<world>``); write the combined table."""
+    """Run ``exp`` on each world (into ``exp.out/world-<world>``); write the combined table."""
     from papf.experiments.energy import run_experiment
     from papf.experiments.trials import markdown_table, write_csv
 
     out = Path(exp.out)
     results, rows = [], []
     for world in worlds:
-        res = run_experiment(dataclasses.replace(exp, out=out / world, world=world), console)
+        res = run_experiment(dataclasses.replace(exp, out=out / f"world-{world}", world=world),
+                             console)
         results.append(res)
         rows += world_rows(world, res.report)
     write_csv(rows, out / "energy-worlds.csv")

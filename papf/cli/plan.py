@@ -1,0 +1,80 @@
+"""``papf plan``: a planner on a world offline, no processes (:mod:`papf.plan`)."""
+
+from __future__ import annotations
+
+import json
+
+
+def register(sub) -> None:
+    p = sub.add_parser("plan", help="run a planner on a world offline (no processes)",
+                       description="Run the planner core on a world without the process "
+                       "stack: 2-D worlds with the simulated LiDAR and a unicycle with the "
+                       "ROSbot limits, 3-D worlds (spheres) with a point robot. Exit code: "
+                       "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
+    p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
+    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    p.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    p.add_argument("--timeout", type=float, default=300.0, metavar="S",
+                   help="sim-time limit [s] (default 300)")
+    p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
+    p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper literally)")
+    p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
+                   help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
+                        "the obstacles' centres known (planners wang-apf and wang only)")
+    p.add_argument("--plot", metavar="OUT.png", help="write a PNG of the world and the path")
+    p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
+    p.add_argument("--json", action="store_true", help="print one JSON summary object")
+    p.set_defaults(func=cmd_plan)
+
+
+def cmd_plan(args) -> int:
+    from nodes.planner.registry import preset_sets
+    from papf.monitor import EXIT_CODES
+    from papf.plan import plan, write_path  # pybullet: only when planning
+    from worlds import load_world
+
+    world = load_world(args.world)
+    if args.motion == "fixed-step":
+        return _fixed_step(world, args)
+    result = plan(world, args.planner, params=[*preset_sets(args.preset), *args.set],
+                  seed=args.seed, max_time_s=args.timeout, dt=args.dt, params_file=args.params)
+    if args.out:
+        write_path(result, args.out)
+    if args.plot:
+        from papf.plots import plot_paths  # matplotlib: only with --plot
+
+        plot_paths(world, {f"{args.planner} ({result.outcome})": result.path}, args.plot,
+                   f"{world.name}: {args.planner} (offline, seed {args.seed})")
+    s = result.summary()
+    if args.json:
+        print(json.dumps(s))
+    else:
+        print(f"{s['world']} {s['planner']}: {s['outcome']} after {s['duration_s']:.1f} s, "
+              f"{s['path_length_m']:.2f} m, min clearance {s['min_clearance_m']:.2f} m"
+              + (f" ({s['reason']})" if s["reason"] else ""))
+    return EXIT_CODES.get(result.outcome, 6)
+
+
+def _fixed_step(world, args) -> int:
+    """Wang's published simulation (:func:`papf.pointsim.fixed_step`)."""
+    from common.errors import ConfigError
+    from papf.pointsim import fixed_step
+
+    methods = {"wang-apf": "traditional", "wang": "improved"}
+    if args.planner not in methods:
+        raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
+    r = fixed_step(world, methods[args.planner])
+    if args.plot:
+        from papf.plots import plot_paths
+
+        plot_paths(world, {f"{args.planner} ({r.outcome})": r.path}, args.plot,
+                   f"{world.name}: {args.planner}, fixed step (Wang's simulation)")
+    s = r.summary()
+    print(json.dumps(s) if args.json else
+          f"{s['world']} {args.planner} (fixed step): {s['outcome']} after {s['iterations']} "
+          f"iterations, path {s['path_length']:.2f}, min clearance {s['min_clearance']:.2f}")
+    return {"reached": 0, "collision": 4}.get(r.outcome, 3)
