@@ -44,8 +44,10 @@ def world_rows(world: str, report) -> list[dict]:
         change = 100.0 * (charge - base) / base if math.isfinite(base) and s.planner != "apf" else math.nan
         rows.append({"world": world, "planner": s.planner, "reached": f"{s.reached}/{s.runs}",
                      "charge_mAh": _num(charge, 2), "charge_sd_mAh": _num(s.stats["charge_mAh"].sd, 2),
-                     "duration_s": _num(s.stats["duration_s"].mean, 1),
-                     "path_m": _num(s.stats["path_length_m"].mean, 2),
+                     "duration_s": _num(s.stats["duration_s"].mean, 2),
+                     "duration_sd_s": _num(s.stats["duration_s"].sd, 2),
+                     "path_m": _num(s.stats["path_length_m"].mean, 3),
+                     "path_sd_m": _num(s.stats["path_length_m"].sd, 3),
                      "charge_vs_apf_pct": _num(change, 1),
                      "max_goal_offset_m": _num(max(a.max_goal_offset_m for a in acts), 2) if acts else "",
                      "quarks_away": max(a.quarks_away for a in acts) if acts else 0})
@@ -55,21 +57,27 @@ def world_rows(world: str, report) -> list[dict]:
 def run_energy_worlds(exp, worlds: Sequence[str] = WORLDS, console=None) -> list:
     """Run ``exp`` on each world (into ``exp.out/world-<world>``); write the combined table."""
     from papf.experiments.energy import run_experiment
-    from papf.experiments.trials import markdown_table, write_csv
 
     out = Path(exp.out)
-    results, rows = [], []
+    results = []
     for world in worlds:
         res = run_experiment(dataclasses.replace(exp, out=out / f"world-{world}", world=world),
                              console)
         results.append(res)
-        rows += world_rows(world, res.report)
+    write_tables(out, [(w, r.report) for w, r in zip(worlds, results, strict=True)], exp.runs, exp.seed)
+    return results
+
+
+def write_tables(out: Path, reports, runs: int, seed: int) -> None:
+    """``out/energy-worlds.csv`` and ``.md`` from (world, report) pairs."""
+    from papf.experiments.trials import markdown_table, write_csv
+
+    rows = [row for world, report in reports for row in world_rows(world, report)]
     write_csv(rows, out / "energy-worlds.csv")
     md = [[r["world"], r["planner"], r["reached"],
            f"{r['charge_mAh']} ± {r['charge_sd_mAh']}" if r["charge_sd_mAh"] else r["charge_mAh"],
            r["duration_s"], r["path_m"], f"{r['charge_vs_apf_pct']} %" if r["charge_vs_apf_pct"] else "",
            r["max_goal_offset_m"], r["quarks_away"]] for r in rows]
-    (out / "energy-worlds.md").write_text(f"# Energy worlds ({exp.runs} runs each, seeds "
-                                          f"{exp.seed + 1}-{exp.seed + exp.runs})\n\n"
+    (out / "energy-worlds.md").write_text(f"# Energy worlds ({runs} runs each, seeds "
+                                          f"{seed + 1}-{seed + runs})\n\n"
                                           + markdown_table(HEADER, md))
-    return results
