@@ -43,9 +43,9 @@ def add_paper_studies(exp) -> None:
     d = exp.add_parser("deviations", help="each PAPF deviation from the paper switched alone, offline",
                        description="PAPF default and paper presets, and each deviation switched on "
                                    "alone over the paper preset and off alone from the default, on N "
-                                   "random worlds and the paper worlds; writes deviations.md/.csv.")
+                                   "random worlds and PAPF Tests I-VI; writes deviations.md/.csv.")
     d.add_argument("--out", default="deviations", metavar="DIR", help="output directory")
-    d.add_argument("--n", type=int, default=20, help="random worlds (default 20)")
+    d.add_argument("--n", type=int, default=10, help="random worlds (default 10)")
     d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
     d.set_defaults(func=cmd_deviations)
 

@@ -80,6 +80,8 @@ def table_rows(trials) -> list[list[str]]:
 
 HEADER = ["world", "planner", "outcome", "duration [s]", "vs APF", "path [m]", "vs APF",
           "paper outcome", "paper duration [s]", "paper path [m]"]
+TABLE_KEYS = ["world", "planner", "outcome", "duration_s", "duration_vs_apf", "path_m",
+              "path_vs_apf", "paper_outcome", "paper_duration_s", "paper_path_m"]
 DURATION_TOL, PATH_TOL = 0.15, 0.10   # issue 14's acceptance band around Table 2
 
 
@@ -140,7 +142,6 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     """
     from common.errors import ConfigError
     from papf.experiments.trials import (
-        markdown_table,
         progress_bar,
         quiet_runner_logs,
         run_offline,
@@ -178,7 +179,24 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
             paths = {f"{t.label} ({t.outcome})": t.path for t in trials if t.world == world.name}
             plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
     write_csv([t.row() for t in trials], out / "paper-tests.csv")
-    text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, table_rows(trials))
-            + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")
-    (out / "paper-tests.md").write_text(text)
+    write_tables(out, trials, mode, seed)
     return trials
+
+
+def write_tables(out: Path, trials, mode: str, seed: int) -> None:
+    """``paper-tests.md`` and ``paper-tests-table.csv`` (the Markdown table's rows)."""
+    from papf.experiments.trials import markdown_table, write_csv
+
+    rows = table_rows(trials)
+    write_csv([dict(zip(TABLE_KEYS, r, strict=True)) for r in rows], Path(out) / "paper-tests-table.csv")
+    text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, rows)
+            + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")
+    (Path(out) / "paper-tests.md").write_text(text)
+
+
+def rebuild(out: str | Path) -> None:
+    """Rewrite ``paper-tests.md`` and ``paper-tests-table.csv`` from ``paper-tests.csv``."""
+    from papf.experiments.trials import trials_from_csv
+
+    trials = trials_from_csv(Path(out) / "paper-tests.csv")
+    write_tables(Path(out), trials, trials[0].mode if trials else "", trials[0].seed if trials else 0)

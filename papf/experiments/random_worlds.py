@@ -130,4 +130,28 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     write_csv([{**t.row(), "bottleneck_m": round(bottleneck[t.world], 3)} for t in trials],
               out / "random.csv")
     (out / "random.md").write_text(summary_markdown(summary, len(worlds), seed, mode, rejected))
+    write_summary_csv(summary, out / "random-summary.csv")
     return trials, summary
+
+
+def write_summary_csv(summary: list[dict], path: Path) -> None:
+    """The summary rows (rates rounded to 0.1 %), the CSV of ``random.md``'s table."""
+    from papf.experiments.trials import write_csv
+
+    write_csv([{k: (round(v, 1) if isinstance(v, float) else v) for k, v in r.items()}
+               for r in summary], path)
+
+
+def rebuild_summary(out: str | Path) -> list[dict]:
+    """``random-summary.csv`` from ``random.csv`` (per-run rows with ``bottleneck_m``)."""
+    import csv
+
+    from papf.experiments.trials import trials_from_csv
+
+    out = Path(out)
+    trials = trials_from_csv(out / "random.csv")
+    with (out / "random.csv").open(newline="") as fh:
+        bottleneck = {r["world"]: float(r["bottleneck_m"]) for r in csv.DictReader(fh)}
+    summary = summarize(trials, bottleneck)
+    write_summary_csv(summary, out / "random-summary.csv")
+    return summary

@@ -135,6 +135,19 @@ def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
     return np.array(pts, dtype=float).reshape(-1, 2)
 
 
+def trials_from_csv(path: str | Path) -> list[Trial]:
+    """The trials of an experiment's per-run CSV (no paths): to rebuild its tables."""
+    def num(x):
+        return float(x) if x not in ("", None) else math.nan
+
+    with Path(path).open(newline="") as fh:
+        return [Trial(r["world"], r["planner"], int(r["seed"]), r["mode"], r["outcome"],
+                      num(r["duration_s"]), num(r["path_length_m"]), int(r["collisions"]),
+                      r.get("reason", ""), num(r.get("min_clearance_m")), num(r.get("charge_mAh")),
+                      num(r.get("wall_time_s")), preset=r.get("preset") or "default")
+                for r in csv.DictReader(fh)]
+
+
 def load_all(names: Sequence[str]) -> list[World]:
     return [load_world(n) for n in names]
 
