@@ -34,10 +34,12 @@ from common.units import NS_PER_S as NS
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
+from nodes.planner.iapf_fields import Lanes
 from nodes.planner.registry import make_planner
 from papf.monitor import MOVING_SPEED
 from papf.plan3d import plan_3d
 from papf.plan_result import PlanResult, write_path  # noqa: F401 - part of this module's API
+from papf.road_sim import road_figures
 from schemas.messages import Odometry
 from worlds import World, load_world
 from worlds.bullet import build_world
@@ -183,8 +185,13 @@ def _plan_2d(world, planner, name, seed, max_time_s, dt, lidar, keep_states) -> 
             checker.close()
     arr = np.array(rows)
     start_ns = moved_ns if moved_ns is not None else t_end
+    road = {}
+    if world.road is not None:
+        lanes = Lanes(world.road.y_min, world.road.lane_width, world.road.lanes)
+        size = SimParams().chassis_size
+        road = road_figures(lanes, arr[:, 0], arr[:, 1:3], arr[:, 3], (size[0], size[1]))
     return PlanResult(world=world.name, planner=name, seed=seed, outcome=outcome, reason=reason,
                       path=arr[:, 1:3], times=arr[:, 0], headings=arr[:, 3],
                       duration_s=max(0, t_end - start_ns) / NS, sim_time_s=t_end / NS,
                       min_clearance_m=float(min_clear), collisions=int(outcome == "collision"),
-                      states=states)
+                      states=states, road=road)

@@ -129,7 +129,11 @@ class PlannerState(Message):
     top_quarks: Points = field((), unit="m")
     virtual_walls: Paths = field((), unit="m", doc="polylines of virtual wall points")
     virtual_obstacles: Points = field((), unit="m")
-    obstacle_count: int = field(0, doc="obstacle points used this cycle")
+    obstacle_count: int = field(0, doc="obstacle points (IAPF: tracks) used this cycle")
+    local_minimum_count: int = field(0, doc="IAPF eq. 24: predicted points near the solid line")
+    lane_goal_y: float = field(float("nan"), unit="m", nonfinite=True,
+                               doc="IAPF temporary lane goal y; nan when none")
+    v_target: float = field(0.0, unit="m/s", doc="speed the planner aims at (IAPF eq. 26)")
     compute_ns: int = field(0, unit="ns", doc="wall time the cycle took (not deterministic)")
 
 

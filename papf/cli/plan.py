@@ -12,7 +12,9 @@ def register(sub) -> None:
                        "ROSbot limits, 3-D worlds (spheres) with a point robot. Exit code: "
                        "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    p.add_argument("--planner", default="apf",
+                   help="apf | papf | arapf | wang | iapf (default apf); on car-scale worlds "
+                        "(iapf-case-*): iapf, iapf-np (no prediction), apf (the paper's baseline)")
     p.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
@@ -40,8 +42,14 @@ def cmd_plan(args) -> int:
     world = load_world(args.world)
     if args.motion == "fixed-step":
         return _fixed_step(world, args)
-    result = plan(world, args.planner, params=[*preset_sets(args.preset), *args.set],
-                  seed=args.seed, max_time_s=args.timeout, dt=args.dt, params_file=args.params)
+    sets = [*preset_sets(args.preset), *args.set]
+    if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
+        from papf.plan_road import plan_car
+
+        result = plan_car(world, args.planner, sets, args.params, max_time_s=args.timeout)
+    else:
+        result = plan(world, args.planner, params=sets, seed=args.seed,
+                      max_time_s=args.timeout, dt=args.dt, params_file=args.params)
     if args.out:
         write_path(result, args.out)
     if args.plot:

@@ -13,7 +13,7 @@ def register(sub) -> None:
                                    "summary. Exit code: 0 reached, 3 stagnated, 4 collision, "
                                    "5 timeout, 6 failed, 2 usage error.")
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang | iapf (default apf)")
     p.add_argument("--seed", type=int, default=0, help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
