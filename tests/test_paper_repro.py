@@ -62,7 +62,8 @@ def test_energy_experiment_runs_a_paper_variant_only_where_it_differs(tmp_path):
 
 
 def test_deviation_variants_switch_one_setting_each():
-    v = dict(_variants())
+    v = dict(_variants(both=True))
+    assert len(_variants()) == 2 + len(DEVIATIONS)
     assert v["paper"] == ["preset=paper"] and v["default"] == []
     for name, on, off, _what in DEVIATIONS:
         assert v[f"paper + {name}"] == ["preset=paper", f"{name}={on}"]

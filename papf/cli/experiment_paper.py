@@ -42,10 +42,13 @@ def add_paper_studies(exp) -> None:
 
     d = exp.add_parser("deviations", help="each PAPF deviation from the paper switched alone, offline",
                        description="PAPF default and paper presets, and each deviation switched on "
-                                   "alone over the paper preset and off alone from the default, on N "
+                                   "alone over the paper preset (--both: and off alone from the "
+                                   "default), on N "
                                    "random worlds and PAPF Tests I-VI; writes deviations.md/.csv.")
     d.add_argument("--out", default="deviations", metavar="DIR", help="output directory")
-    d.add_argument("--n", type=int, default=10, help="random worlds (default 10)")
+    d.add_argument("--n", type=int, default=3, help="random worlds (default 3: a field, a dead end, a gap)")
+    d.add_argument("--both", action="store_true",
+                   help="also switch each deviation off alone from the default preset")
     d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
     d.set_defaults(func=cmd_deviations)
 
@@ -71,6 +74,6 @@ def cmd_deviations(args) -> int:
 
     if args.n < 1:
         raise ConfigError(f"--n {args.n}: need at least 1 world")
-    run_deviations(args.out, args.n, args.seed)
+    run_deviations(args.out, args.n, args.seed, both=args.both)
     print((Path(args.out) / "deviations.md").read_text())
     return 0

@@ -78,6 +78,33 @@ def write_tables(out: Path, reports, runs: int, seed: int) -> None:
            f"{r['charge_mAh']} ± {r['charge_sd_mAh']}" if r["charge_sd_mAh"] else r["charge_mAh"],
            r["duration_s"], r["path_m"], f"{r['charge_vs_apf_pct']} %" if r["charge_vs_apf_pct"] else "",
            r["max_goal_offset_m"], r["quarks_away"]] for r in rows]
-    (out / "energy-worlds.md").write_text(f"# Energy worlds ({runs} runs each, seeds "
-                                          f"{seed + 1}-{seed + runs})\n\n"
-                                          + markdown_table(HEADER, md))
+    split = decomposition(rows)
+    text = (f"# Energy worlds ({runs} runs each, seeds {seed + 1}-{seed + runs})\n\n"
+            + markdown_table(HEADER, md))
+    if split:
+        write_csv(split, out / "energy-decomposition.csv")
+        text += "\n## Where the saving in `energy` comes from\n\n" + markdown_table(
+            list(split[0]), [list(r.values()) for r in split])
+    (out / "energy-worlds.md").write_text(text)
+
+
+def decomposition(rows: list[dict], course: str = "energy", control: str = "energy-empty") -> list[dict]:
+    """Split each planner's saving against APF on ``course`` into the part it already makes on
+    the empty ``control`` course (speed far from the goal: the motion law alone) and the rest
+    (avoidance). Empty when a world or APF's figure is missing."""
+    by = {(r["world"], r["planner"]): r for r in rows}
+    try:
+        apf_c, apf_e = float(by[(course, "apf")]["charge_mAh"]), float(by[(control, "apf")]["charge_mAh"])
+    except (KeyError, ValueError):
+        return []
+    out = []
+    for (world, planner), r in by.items():
+        if world != course or planner == "apf" or (control, planner) not in by or not r["charge_mAh"]:
+            continue
+        total = apf_c - float(r["charge_mAh"])
+        speed = apf_e - float(by[(control, planner)]["charge_mAh"])
+        out.append({"planner": planner, "saving_mAh": round(total, 2), "from_speed_mAh": round(speed, 2),
+                    "from_avoidance_mAh": round(total - speed, 2),
+                    "speed_share_pct": round(100 * speed / total, 1) if total else "",
+                    "avoidance_share_pct": round(100 * (total - speed) / total, 1) if total else ""})
+    return out

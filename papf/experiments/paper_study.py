@@ -69,16 +69,23 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
     return rows
 
 
-def _variants() -> list[tuple[str, list[str]]]:
+def _variants(both: bool = False) -> list[tuple[str, list[str]]]:
+    """default, paper, and each deviation switched on alone over the paper preset; with
+    ``both`` also each deviation switched off alone from the default."""
     out = [("default", []), ("paper", ["preset=paper"])]
     for name, on, off, _what in DEVIATIONS:
         out.append((f"paper + {name}", ["preset=paper", f"{name}={on}"]))
-        out.append((f"default - {name}", [f"{name}={off}"]))
+        if both:
+            out.append((f"default - {name}", [f"{name}={off}"]))
     return out
 
 
-def run_deviations(out: str | Path, n: int = 10, seed: int = 1, timeout_s: float = 300.0) -> list[dict]:
-    """Every variant of :func:`_variants` on ``n`` random worlds and PAPF Tests I-VI."""
+def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float = 300.0,
+                   part: tuple[int, int] = (0, 1), both: bool = False) -> list[dict]:
+    """Every variant of :func:`_variants` on ``n`` random worlds and PAPF Tests I-VI.
+
+    ``part = (k, K)``: only every K-th variant from the k-th, written to
+    ``deviations-<k>.csv`` (split a long study over processes; concatenate the CSVs)."""
     from papf.experiments.paper_tests import PAPF_WORLDS, table2_check
     from papf.experiments.trials import markdown_table, progress_bar, run_offline, write_csv
     from papf.randworlds import generate_solvable
@@ -86,7 +93,8 @@ def run_deviations(out: str | Path, n: int = 10, seed: int = 1, timeout_s: float
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     worlds, _rejected = generate_solvable(n, seed)
-    variants = _variants()
+    k, parts = part
+    variants = _variants(both)[k::parts]
     rows = []
     with progress_bar() as bar:
         task = bar.add_task("deviations", total=len(variants) * (len(worlds) + len(PAPF_WORLDS)))
@@ -110,7 +118,7 @@ def run_deviations(out: str | Path, n: int = 10, seed: int = 1, timeout_s: float
                          "tests_I_VI_path_within_10pct": f"{path}/{len(PAPF_WORLDS)}",
                          "tests_I_VI_duration_s": " ".join(f"{t.duration_s:.1f}" if t.outcome == "reached"
                                                            else t.outcome for t in paper)})
-    write_csv(rows, out / "deviations.csv")
+    write_csv(rows, out / ("deviations.csv" if parts == 1 else f"deviations-{k}.csv"))
     (out / "deviations.md").write_text(
         f"# PAPF deviations, each alone (offline; random set {seed}, {len(worlds)} worlds; PAPF "
         f"Tests I-VI seed 0)\n\n" + markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
