@@ -10,8 +10,8 @@ from nodes.planner.apf import APFParams
 from nodes.planner.core import scan_view
 from nodes.planner.papf import PAPER_PRESET, PAPFParams, PAPFStrategy, predict, quark_force
 from nodes.planner.registry import PLANNERS, load_params, preset_sets, preset_settings
-from nodes.planner.toysim import ToyWorld, cast_scan
 from papf.experiments.trials import variants
+from papf.toysim import cast_scan, toy_world
 from schemas.messages import Odometry
 
 APF = APFParams()
@@ -83,7 +83,7 @@ def test_motion_quark_range_and_ball_switch_alone():
 def _ring_view():
     angles = np.linspace(0.05, 2 * np.pi - 0.05, 300)
     ring = 0.6 * np.column_stack([np.cos(angles), np.sin(angles)])
-    view = scan_view(cast_scan(ToyWorld(circles=()), 0.0, 0.0, 0.0),
+    view = scan_view(cast_scan(toy_world(circles=()), 0.0, 0.0, 0.0),
                      Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     return type(view)(view.origin, view.angles, view.ranges, ring, view.valid)
 

@@ -1,4 +1,4 @@
-"""World files (DESIGN.md §9, **fixed** TOML format): parse, validate, find by name.
+"""World files (docs/worlds.md, **fixed** TOML format): parse, validate, find by name.
 
 ``load_world("energy")`` finds a packaged world by name; any path to a ``.toml``
 file works too. Every problem raises :class:`WorldError` naming the file, the
@@ -20,7 +20,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (DESIGN.md §9)
+DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (docs/worlds.md)
 KINDS = ("box", "cylinder", "wall", "sphere")
 VEHICLES = ("rosbot", "car")  # [robot].vehicle: the ROSbot stack, or the IAPF paper's car model
 CENTER_MATCH = 1e-6  # [m] a moving obstacle's center, if given, must be its track at t = 0

@@ -1,6 +1,6 @@
 """Simulated ROSbot 2.0 PRO base: pybullet rigid-body physics, no transport (pure core).
 
-The robot (DESIGN.md §5; geometry and masses from husarion/rosbot_ros
+The robot (docs/architecture.md "The robot"; geometry and masses from husarion/rosbot_ros
 ``rosbot_description``): a chassis box of 0.200 x 0.235 x 0.100 m (the footprint,
 so it covers the wheels; obstacle contacts are found on it) and four wheels of
 r = 0.0425 m, 0.036 m wide, 0.074 kg each, at x = +-wheelbase/2 = +-0.053 m,
@@ -43,13 +43,15 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import pybullet as p
 
 from common import robot
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
 from worlds import World
-from worlds.bullet import add_ground, build_world
+from worlds.bullet import MovingBodies, add_ground, build_world
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 GRAVITY = 9.81                 # [m/s^2]
 STEP_NS = 4_000_000            # [ns] physics step, 250 Hz (docs/architecture.md "Time")
@@ -113,6 +115,16 @@ class Contact:
     y: float
 
 
+def jittered_start(start, rng: np.random.Generator, prm: SimParams | None = None,
+                   ) -> tuple[float, float, float]:
+    """``start`` (x, y, yaw) plus the hand-placement jitter: three normal draws from ``rng``
+    scaled by ``start_xy_sd`` / ``start_yaw_sd``. The sim draws them first from
+    ``default_rng(seed)``, so the offline tools get the same start for the same seed."""
+    prm = prm or SimParams()
+    jitter = rng.normal(0.0, 1.0, 3) * (prm.start_xy_sd, prm.start_xy_sd, prm.start_yaw_sd)
+    return tuple(float(c) for c in np.add(start, jitter))  # type: ignore[return-value]
+
+
 class SimBase:
     """One simulated ROSbot in a pybullet DIRECT client holding ``world``'s obstacles."""
 
@@ -122,7 +134,7 @@ class SimBase:
         self.params = prm = params or SimParams()
         self.world = world
         rng = np.random.default_rng(seed)
-        jitter = rng.normal(0.0, 1.0, 3) * (prm.start_xy_sd, prm.start_xy_sd, prm.start_yaw_sd)
+        start = jittered_start(world.start, rng, prm)       # the first draws of the run's rng
         mu = prm.friction * np.clip(1 + prm.friction_sd * rng.normal(0.0, 1.0, 4), 0.5, 1.5)
         r_eff = prm.wheel_radius * (1 + prm.radius_sd * rng.normal(0.0, 1.0, 4))
         self._mu = [float(m) for m in mu]                             # [-] per wheel
@@ -135,7 +147,7 @@ class SimBase:
         self.t_ns = 0
         self.cid = p.connect(p.DIRECT)
         try:
-            self._setup(world, tuple(float(c) for c in np.add(world.start, jitter)))
+            self._setup(world, start)
         except Exception:
             p.disconnect(self.cid)
             raise
@@ -148,6 +160,7 @@ class SimBase:
         p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=cid)
         self.ground = add_ground(cid)
         self.obstacles = build_world(cid, world)
+        self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
         self._obstacle_index = {body: i for i, body in enumerate(self.obstacles)}
         self.robot = self._build_robot(start)
         for _ in range(SETTLE_STEPS):
@@ -198,7 +211,13 @@ class SimBase:
         return left, right
 
     def step(self) -> None:
-        """Advance the physics by one step (4 ms) with the current wheel targets."""
+        """Advance the physics by one step (4 ms) with the current wheel targets.
+
+        Moving obstacles are placed at the step's end time first, so after the step the
+        whole scene (robot, obstacles, contacts) belongs to sim time ``t_ns``.
+        """
+        if self.moving:
+            self.moving.place(self.t_ns + self.params.step_ns)
         self._physics_step()
         self.t_ns += self.params.step_ns
 

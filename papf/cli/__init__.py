@@ -24,6 +24,7 @@ from papf.cli import (
     certs,
     emulator,
     experiment,
+    goal,
     info,
     launch,
     plan,
@@ -32,11 +33,13 @@ from papf.cli import (
     replay,
     report,
     run,
+    teleop,
+    topic,
     worlds,
 )
 
-COMMANDS = (run, worlds, launch, plan, experiment, report, record, replay, recover, info, bench,
-            emulator, certs)
+COMMANDS = (run, worlds, launch, topic, goal, teleop, plan, experiment, report, record, replay,
+            recover, info, bench, emulator, certs)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -18,6 +18,7 @@ BENCHES = {
     "sim": "sim-time / wall-time ratio of the lockstep driver + LiDAR loop",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
+    "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
 }
 
 

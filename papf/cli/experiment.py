@@ -1,4 +1,4 @@
-"""``papf experiment energy | paper-tests | random``: many runs, a table, plots.
+"""``papf experiment energy | paper-tests | random | traffic``: many runs, a table, plots.
 
 ``energy`` is the PAPF paper's energy experiment (IV-C) through the process stack,
 recorded (:mod:`papf.experiments.energy`); ``paper-tests`` every paper world with every
@@ -27,6 +27,7 @@ def register(sub) -> None:
     _add_energy(exp)
     _add_paper_tests(exp)
     _add_random(exp)
+    _add_traffic(exp)
     add_paper_studies(exp)
 
 
@@ -94,6 +95,36 @@ def _add_random(exp) -> None:
     mode.add_argument("--stack", dest="mode", action="store_const", const="stack",
                       help="every run through the whole process stack (slow)")
     p.set_defaults(func=cmd_random, mode="offline")
+
+
+def _add_traffic(exp) -> None:
+    p = exp.add_parser("traffic", help="IAPF (truth and tracker tracks), APF, PAPF, AR-APF on "
+                                       "the road-* worlds, through the stack",
+                       description="Every road-* world with IAPF (--objects truth and tracker) "
+                                   "and APF, PAPF, AR-APF, each run recorded; writes traffic.md "
+                                   "and traffic.csv (outcome, collisions, left_road, lane "
+                                   "changes, speeds) into --out.")
+    p.add_argument("--out", default="traffic", metavar="DIR", help="output directory")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument("--timeout", type=float, default=150.0, metavar="S",
+                   help="sim-time limit per run (default 150)")
+    p.add_argument("--worlds", help="comma-separated subset of the road-* worlds")
+    p.set_defaults(func=cmd_traffic)
+
+
+def cmd_traffic(args) -> int:
+    from papf.experiments.traffic import ROAD_WORLDS, run_traffic  # zenoh, mcap: when run
+
+    worlds = ROAD_WORLDS
+    if args.worlds:
+        worlds = tuple(w.strip() for w in args.worlds.split(",") if w.strip())
+        bad = [w for w in worlds if w not in ROAD_WORLDS]
+        if bad:
+            raise ConfigError(f"--worlds: {bad} are not road worlds; valid: {list(ROAD_WORLDS)}")
+    run_traffic(args.out, worlds, seed=args.seed, timeout_s=args.timeout,
+                echo=lambda line: print(line, file=sys.stderr, flush=True))
+    print((Path(args.out) / "traffic.md").read_text())
+    return 0
 
 
 def planner_list(text: str) -> list[str]:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from papf.cli.options import add_planner_settings, add_world_and_planner
+
 
 def register(sub) -> None:
     p = sub.add_parser("run", help="run the whole simulated stack once, to an outcome",
@@ -12,8 +14,7 @@ def register(sub) -> None:
                                    "recorder with --record); drive to the world's goal; print a "
                                    "summary. Exit code: 0 reached, 3 stagnated, 4 collision, "
                                    "5 timeout, 6 failed, 2 usage error.")
-    p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang | iapf (default apf)")
+    add_world_and_planner(p)
     p.add_argument("--seed", type=int, default=0, help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
@@ -26,14 +27,15 @@ def register(sub) -> None:
                    help="nodes' Zenoh mode: client (all through the router, default) or peer "
                         "(direct loopback links too; a few %% faster)")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
-    p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
+    add_planner_settings(p)
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper read "
                         "literally, docs/planners.md \"Presets\")")
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
+    p.add_argument("--objects", choices=("none", "truth", "tracker"),
+                   help="obstacle tracks for the planner: the sim's ground truth, the tracker "
+                        "node on the scans, or none (default: truth for iapf, else none)")
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
@@ -53,7 +55,7 @@ def run_config(args):
                      port=args.port, namespace=args.namespace, planner_args=planner_args,
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
-                     zenoh_mode=args.zenoh_mode,
+                     zenoh_mode=args.zenoh_mode, objects=args.objects,
                      progress=None if not args.json else False)
 
 

@@ -23,6 +23,19 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from common.errors import ConfigError
+from papf.experiments.trials import (
+    markdown_table,
+    progress_bar,
+    quiet_runner_logs,
+    run_offline,
+    run_stack,
+    trial_line,
+    variants,
+    write_csv,
+)
+from worlds import load_world, world_path
+
 PAPF_WORLDS = tuple(f"papf-test-{i}" for i in range(1, 7))
 ARAPF_WORLDS = tuple(f"arapf-test-{i}" for i in range(1, 4))
 WANG_WORLDS = ("wang-local-minimum", "wang-unreachable-goal")
@@ -140,17 +153,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
-    from common.errors import ConfigError
-    from papf.experiments.trials import (
-        progress_bar,
-        quiet_runner_logs,
-        run_offline,
-        run_stack,
-        variants,
-        write_csv,
-    )
-    from papf.plots import plot_paths
-    from worlds import load_world, world_path
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
@@ -176,6 +179,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
                                       preset=preset)
                 trials.append(trial)
                 bar.advance(task)
+                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
             paths = {f"{t.label} ({t.outcome})": t.path for t in trials if t.world == world.name}
             plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
     write_csv([t.row() for t in trials], out / "paper-tests.csv")
@@ -185,8 +189,6 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
 
 def write_tables(out: Path, trials, mode: str, seed: int) -> None:
     """``paper-tests.md`` and ``paper-tests-table.csv`` (the Markdown table's rows)."""
-    from papf.experiments.trials import markdown_table, write_csv
-
     rows = table_rows(trials)
     write_csv([dict(zip(TABLE_KEYS, r, strict=True)) for r in rows], Path(out) / "paper-tests-table.csv")
     text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, rows)

@@ -19,6 +19,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from common.errors import ConfigError
+from papf.experiments.trials import (
+    markdown_table,
+    progress_bar,
+    quiet_runner_logs,
+    run_offline,
+    run_stack,
+    trial_line,
+    variants,
+    write_csv,
+)
+from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
+
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
 WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
 DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
@@ -36,7 +49,6 @@ def _rate(trials) -> float:
 def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
     """Per planner: worlds, rate of each outcome [%], success rate per kind and, given the
     worlds' bottleneck widths, on the worlds whose bottleneck is >= / < WIDE_M [%]."""
-    from papf.randworlds import KINDS
 
     bottleneck = bottleneck or {}
     rows = []
@@ -57,8 +69,6 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
 
 def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected: int) -> str:
-    from papf.experiments.trials import markdown_table
-    from papf.randworlds import KINDS
 
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
               *[f"reached: {k} [%]" for k in KINDS],
@@ -80,17 +90,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
-    from common.errors import ConfigError
-    from papf.experiments.trials import (
-        progress_bar,
-        quiet_runner_logs,
-        run_offline,
-        run_stack,
-        variants,
-        write_csv,
-    )
-    from papf.plots import plot_paths
-    from papf.randworlds import bottleneck_width, generate_solvable, world_to_toml
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")
@@ -122,6 +122,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
                                       preset=preset)
                 mine.append(trial)
                 bar.advance(task)
+                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
             trials += mine
             if plots:
                 plot_paths(world, {f"{t.label} ({t.outcome})": t.path for t in mine},
@@ -136,8 +137,6 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
 
 def write_summary_csv(summary: list[dict], path: Path) -> None:
     """The summary rows (rates rounded to 0.1 %), the CSV of ``random.md``'s table."""
-    from papf.experiments.trials import write_csv
-
     write_csv([{k: (round(v, 1) if isinstance(v, float) else v) for k, v in r.items()}
                for r in summary], path)
 

@@ -20,6 +20,8 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from common.errors import RecordingError
+from papf.supervisor import free_port
 from worlds import World, load_world
 
 MODES = ("offline", "stack")
@@ -88,7 +90,7 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
                 params=None, preset: str = "default") -> Trial:
     """One offline run (:func:`papf.plan.plan`) with the planner's ``preset``."""
     from nodes.planner.registry import preset_sets
-    from papf.plan import param_sets, plan
+    from papf.plan import param_sets, plan  # pybullet: only for offline runs
 
     t0 = time.monotonic()
     r = plan(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
@@ -100,11 +102,10 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
 
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
               record: str | Path | None = None, planner_args: Sequence[str] = (),
-              preset: str = "default") -> Trial:
+              objects: str | None = None, preset: str = "default") -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
     from nodes.planner.registry import preset_sets
-    from papf.runner import RunConfig, run
-    from papf.supervisor import free_port
+    from papf.runner import RunConfig, run  # zenoh: only for stack runs
 
     planner_args = [*(a for kv in preset_sets(preset) for a in ("--set", kv)), *planner_args]
     if record is not None:
@@ -112,7 +113,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
         Path(record).unlink(missing_ok=True)
     cfg = RunConfig(world=str(world_file), planner=planner, seed=seed, timeout_s=timeout_s,
                     record=str(record) if record else None, port=free_port(), progress=False,
-                    planner_args=list(planner_args))
+                    planner_args=list(planner_args), objects=objects)
     res = run(cfg)
     path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
     return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,
@@ -122,8 +123,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
     """(N, 2) ground-truth positions [m] from a recording's ``<ns>/sim/pose`` channel."""
-    from common.errors import RecordingError
-    from papf.recording.reader import iter_messages
+    from papf.recording.reader import iter_messages  # mcap: only with a recording
 
     pts = []
     try:
@@ -179,6 +179,14 @@ def progress_bar(enabled: bool | None = None) -> Progress:
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeElapsedColumn(), console=console,
                     disable=not (console.is_terminal if enabled is None else enabled))
+
+
+def trial_line(t: Trial) -> str:
+    """One line per finished trial (printed in a terminal and when piped alike)."""
+    extra = f"  {t.charge_mAh:7.2f} mAh" if math.isfinite(t.charge_mAh) else ""
+    return (f"{t.world:>16} {t.label:<6} seed {t.seed:<3} {t.outcome:<9} "
+            f"{t.duration_s:7.2f} s  {t.path_length_m:6.2f} m{extra}  wall {t.wall_time_s:5.1f} s"
+            + (f"  {t.reason}" if t.outcome != "reached" and t.reason else ""))
 
 
 def quiet_runner_logs() -> None:
