@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
-from nodes.planner.registry import PLANNERS
 from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
@@ -51,6 +50,7 @@ def _add_energy(exp) -> None:
                    help="several worlds, each into DIR/world-<name>/, plus DIR/energy-worlds.md/.csv "
                         "(e.g. energy,energy-blocking,energy-empty)")
     _add_presets(p)
+    _add_sweep(p)
     p.set_defaults(func=cmd_energy)
 
 
@@ -58,6 +58,24 @@ def _add_presets(p) -> None:
     p.add_argument("--presets", default="default", metavar="P1,P2",
                    help="planner presets side by side: default, paper or default,paper "
                         "(a planner whose paper preset changes nothing runs once)")
+
+
+def _add_sweep(p) -> None:
+    g = p.add_argument_group("sweep (docs/sweeps.md)")
+    g.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="runs at once on a local Dask cluster of N worker processes "
+                        "(default 1: one after the other, no Dask)")
+    g.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                   help="run on an existing Dask cluster; results are gathered here")
+
+
+def sweep_options(args):
+    """The sweep options of ``--workers`` / ``--scheduler`` (ConfigError on a bad value)."""
+    from papf.experiments.sweep import SweepOptions
+
+    opts = SweepOptions(workers=args.workers, scheduler=args.scheduler)
+    opts.validate()
+    return opts
 
 
 def _add_common(p, default_out: str) -> None:
@@ -68,6 +86,7 @@ def _add_common(p, default_out: str) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
     _add_presets(p)
+    _add_sweep(p)
 
 
 def _add_paper_tests(exp) -> None:
@@ -129,6 +148,8 @@ def cmd_traffic(args) -> int:
 
 def planner_list(text: str) -> list[str]:
     """``"apf,papf"`` -> ``["apf", "papf"]``; ConfigError names the unknown ones."""
+    from nodes.planner.registry import PLANNERS  # numba: not when building the parser
+
     names = [p.strip() for p in text.split(",") if p.strip()]
     bad = [p for p in names if p not in PLANNERS]
     if bad or not names:
@@ -143,6 +164,7 @@ def cmd_energy(args) -> int:
     exp = EnergyExperiment(out=Path(args.out), runs=args.runs, planners=planners, seed=args.seed,
                            world=args.world, timeout_s=args.timeout,
                            energy_model=args.energy_model,
+                           sweep=sweep_options(args),
                            presets=tuple(preset_list(args.presets)))  # validated by run_experiment
     if args.worlds:
         from papf.experiments.energy_worlds import run_energy_worlds
@@ -168,7 +190,7 @@ def cmd_paper_tests(args) -> int:
             raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
     run_paper_tests(args.out, planner_list(args.planners), args.seed,
                     "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set,
-                    presets=preset_list(args.presets))
+                    sweep=sweep_options(args), presets=preset_list(args.presets))
     print((Path(args.out) / "paper-tests.md").read_text())
     print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
     return 0
@@ -178,7 +200,8 @@ def cmd_random(args) -> int:
     from papf.experiments.random_worlds import run_random  # pybullet, matplotlib: when run
 
     run_random(args.out, args.n, args.seed, planner_list(args.planners), args.mode, args.timeout,
-               args.plots, sets=args.set, presets=preset_list(args.presets))
+               args.plots, sets=args.set, sweep=sweep_options(args),
+               presets=preset_list(args.presets))
     print((Path(args.out) / "random.md").read_text())
     print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
     return 0
