@@ -1,0 +1,119 @@
+"""The 3-D scene as foxglove.SceneUpdate dicts (pure): the world, the robot, the planner's mind.
+
+- :func:`world_scene` — obstacles (boxes and walls as cubes, cylinders, spheres in 3-D
+  worlds), start and goal (a disc of the goal tolerance), in frame ``world``;
+- :func:`footprint_scene` — the robot's chassis (``common.robot``) in frame ``base_link``,
+  frame-locked so it follows the robot;
+- :func:`mind_scene` — one planner cycle (``planner/state``): predicted path, abandoned
+  predictions, top quarks, temporary goal, the force vector at the robot, AR-APF's virtual
+  walls and obstacles, and the mode as a label (what the PAPF paper drew in RViz).
+
+Colours are shared with the matplotlib pictures (``MIND_COLOURS``) so a PNG, a GIF and
+the live view read alike.
+"""
+
+from __future__ import annotations
+
+import math
+
+from common.robot import BODY_HEIGHT_M, BODY_LENGTH_M, BODY_WIDTH_M
+from nodes.viewer.convert import (
+    BASE,
+    LINE_STRIP,
+    WORLD,
+    arrow,
+    colour,
+    cube,
+    cylinder,
+    entity,
+    line,
+    scene_update,
+    sphere,
+    text,
+)
+from schemas.messages import PlannerState
+from worlds import World
+
+# (r, g, b, a) 0..1; the matplotlib pictures use the same.
+MIND_COLOURS = {
+    "obstacle": (0.35, 0.35, 0.35, 1.0),
+    "start": (0.17, 0.63, 0.17, 1.0),
+    "goal": (0.84, 0.15, 0.16, 1.0),
+    "robot": (0.12, 0.47, 0.71, 0.6),
+    "prediction": (1.0, 0.5, 0.05, 1.0),
+    "abandoned": (0.5, 0.5, 0.5, 0.5),
+    "quark": (0.84, 0.15, 0.16, 0.9),
+    "temporary_goal": (0.09, 0.75, 0.81, 1.0),
+    "force": (0.58, 0.4, 0.74, 1.0),
+    "virtual_wall": (0.89, 0.47, 0.76, 1.0),
+    "virtual_obstacle": (0.89, 0.47, 0.76, 0.9),
+}
+QUARK_DIAMETER_M = 0.12
+TEMP_GOAL_DIAMETER_M = 0.16
+VIRTUAL_OBSTACLE_DIAMETER_M = 0.1
+FORCE_MIN_M, FORCE_MAX_M = 0.15, 0.8   # [m] drawn length of the force arrow (log-scaled |F|)
+
+
+def c(name: str) -> dict:
+    return colour(*MIND_COLOURS[name])
+
+
+def world_scene(world: World, stamp_ns: int = 0) -> dict:
+    """The world's obstacles, start and goal (entity ``world``, frame ``world``)."""
+    cubes, cyls, spheres, texts = [], [], [], []
+    for ob in world.obstacles:
+        if ob.shape == "box":
+            cubes.append(cube(ob.center[0], ob.center[1], ob.height / 2, ob.yaw,
+                              (ob.size[0], ob.size[1], ob.height), c("obstacle")))
+        elif ob.shape == "sphere" and len(ob.center) == 3:
+            spheres.append(sphere(*ob.center[:3], 2 * ob.radius, c("obstacle")))
+        else:
+            cyls.append(cylinder(ob.center[0], ob.center[1], ob.height / 2, ob.radius, ob.height,
+                                 c("obstacle")))
+    gx, gy = world.goal[0], world.goal[1]
+    gz = world.goal[2] if world.dims == 3 else 0.0
+    cyls.append(cylinder(gx, gy, gz + 0.005, world.tolerance, 0.01, {**c("goal"), "a": 0.35}))
+    texts.append(text(gx, gy, gz + 0.35, "goal", c("goal")))
+    sx, sy = world.start[0], world.start[1]
+    arrows = [arrow(sx, sy, 0.01, world.start[2] if world.dims == 2 else 0.0, 0.3, c("start"))]
+    return scene_update([entity(stamp_ns, WORLD, "world", cubes=cubes, cylinders=cyls,
+                                spheres=spheres, texts=texts, arrows=arrows)])
+
+
+def footprint_scene(stamp_ns: int = 0) -> dict:
+    """The chassis box and a heading arrow in ``base_link`` (entity ``robot``)."""
+    body = cube(0.0, 0.0, BODY_HEIGHT_M / 2, 0.0, (BODY_LENGTH_M, BODY_WIDTH_M, BODY_HEIGHT_M),
+                c("robot"))
+    heading = arrow(0.0, 0.0, BODY_HEIGHT_M + 0.02, 0.0, 0.25, {**c("robot"), "a": 1.0})
+    return scene_update([entity(stamp_ns, BASE, "robot", locked=True, cubes=[body],
+                                arrows=[heading])])
+
+
+def _force_arrow(state: PlannerState, robot_xy: tuple[float, float] | None) -> list[dict]:
+    fx, fy = state.force
+    mag = math.hypot(fx, fy)
+    if robot_xy is None or not (mag > 0 and math.isfinite(mag)):
+        return []
+    length = min(FORCE_MAX_M, FORCE_MIN_M + 0.15 * math.log1p(mag))
+    return [arrow(robot_xy[0], robot_xy[1], 0.3, math.atan2(fy, fx), length, c("force"))]
+
+
+def mind_scene(state: PlannerState, robot_xy: tuple[float, float] | None = None) -> dict:
+    """One planner cycle as entity ``mind`` (replaces the previous cycle's)."""
+    lines = [line(p, c("abandoned"), 0.015) for p in state.abandoned_paths if len(p) > 1]
+    if len(state.predicted_path) > 1:
+        lines.append(line(state.predicted_path, c("prediction"), 0.035, z=0.03))
+    lines += [line(w, c("virtual_wall"), 0.05, z=0.05, kind=LINE_STRIP)
+              for w in state.virtual_walls if len(w) > 1]
+    spheres = [sphere(q[0], q[1], 0.1, QUARK_DIAMETER_M, c("quark")) for q in state.top_quarks]
+    spheres += [sphere(o[0], o[1], 0.1, VIRTUAL_OBSTACLE_DIAMETER_M, c("virtual_obstacle"))
+                for o in state.virtual_obstacles]
+    if len(state.temporary_goal) >= 2:
+        tg = state.temporary_goal
+        spheres.append(sphere(tg[0], tg[1], 0.08, TEMP_GOAL_DIAMETER_M, c("temporary_goal")))
+    texts = []
+    if robot_xy is not None:
+        texts.append(text(robot_xy[0], robot_xy[1], 0.55, f"{state.algorithm}: {state.mode}",
+                          {**c("force"), "a": 1.0}, 0.12))
+    return scene_update([entity(state.stamp_ns, WORLD, "mind", lines=lines, spheres=spheres,
+                                arrows=_force_arrow(state, robot_xy), texts=texts)])
