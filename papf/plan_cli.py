@@ -55,7 +55,10 @@ def register(subparsers) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
     p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
-    p.add_argument("--plot", metavar="OUT.png", help="write a PNG of the world and the path")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="write a PNG: world, path, footprints, and the planner's prediction, "
+                        "abandoned predictions, top quarks and temporary goal at its most "
+                        "telling cycle")
     p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
     p.add_argument("--json", action="store_true", help="print one JSON summary object")
     p.set_defaults(func=cmd_plan)
@@ -102,14 +105,20 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     world = load_world(args.world)
     result = plan(world, args.planner, params=args.set, seed=args.seed, max_time_s=args.timeout,
-                  dt=args.dt, params_file=args.params)
+                  dt=args.dt, params_file=args.params, keep_states=bool(args.plot))
     if args.out:
         write_path(result, args.out)
     if args.plot:
-        from papf.plots import plot_paths
+        title = f"{world.name}: {args.planner} (offline, seed {args.seed})"
+        if world.dims == 2:  # with the planner's mind and the robot's footprint
+            from papf.mind_plots import plot_plan
 
-        plot_paths(world, {f"{args.planner} ({result.outcome})": result.path}, args.plot,
-                   f"{world.name}: {args.planner} (offline, seed {args.seed})")
+            plot_plan(world, result, args.plot, title)
+        else:
+            from papf.plots import plot_paths
+
+            plot_paths(world, {f"{args.planner} ({result.outcome})": result.path}, args.plot,
+                       title)
     if args.json:
         print(json.dumps(result.summary()))
     else:

@@ -16,6 +16,7 @@ import jsonschema
 import numpy as np
 import pytest
 
+from bench.foxglove_ws import FoxgloveClient
 from common.transport import wait_alive
 from nodes.viewer.core import CHANNELS, schema_json
 from papf.supervisor import free_port
@@ -30,7 +31,6 @@ from schemas.messages import (
     Scan,
     Twist,
 )
-from tests.foxglove_ws import FoxgloveClient
 
 pytestmark = pytest.mark.e2e
 KEYS = Keys("rosbot")
