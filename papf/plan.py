@@ -37,9 +37,10 @@ from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.registry import make_planner
 from papf.monitor import MOVING_SPEED
-from schemas.messages import Goal, Odometry
+from schemas.messages import Odometry
 from worlds import World, load_world
 from worlds.bullet import build_world
+from worlds.messages import goal_message
 
 SUBSTEP_S = 0.02          # [s] integration and collision-check step (driver odometry period)
 CLEARANCE_CAP_M = 1.0     # [m] clearances above this are not resolved (reported as the cap)
@@ -177,7 +178,7 @@ def _plan_2d(world, planner, name, seed, max_time_s, dt, lidar, keep_states) -> 
     x, y, yaw = start_pose(world, seed)
     v = w = 0.0
     gate = CommandGate(RosbotLimits())
-    planner.set_goal(Goal(stamp_ns=0, x=world.goal[0], y=world.goal[1], tolerance=world.tolerance))
+    planner.set_goal(goal_message(world))
     rows, states = [(0.0, x, y, yaw)], []
     outcome, reason, t_end, moved_ns = "", "", 0, None
     with LidarSim(world, lidar, seed) as sensor:

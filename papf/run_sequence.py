@@ -17,9 +17,10 @@ import zenoh
 
 from papf.monitor import NS, RunMonitor, RunResult
 from papf.supervisor import Supervisor
-from schemas import Event, Goal, Keys, PlannerStatus
+from schemas import Event, Keys, PlannerStatus
 from schemas.keys import TOPICS
 from worlds import World
+from worlds.messages import goal_message
 
 log = logging.getLogger("papf.run")
 
@@ -68,7 +69,7 @@ class RunSequence:
     # -- the sequence ---------------------------------------------------------
     def handshake(self, world: World) -> bool:
         """Publish the goal every 0.5 s until the planner answers ``ready``."""
-        goal = Goal(stamp_ns=0, x=world.goal[0], y=world.goal[1], tolerance=world.tolerance)
+        goal = goal_message(world)
         deadline = time.monotonic() + GOAL_HANDSHAKE_S
         while time.monotonic() < deadline and not self.stop() and not self.sup.dead():
             self.session.put(self.keys.goal, goal.to_bytes())

@@ -94,12 +94,21 @@ class BatteryVoltage(Message):
 
 @message("Goal", 1)
 class Goal(Message):
-    """The global goal position in the world frame."""
+    """The global goal position in the world frame, and the road the run is on, if any.
+
+    The road fields describe the world's ``[road]`` (a straight one-way road along +x,
+    ``road_lanes`` lanes of ``road_lane_width`` stacked towards +y from the right edge
+    ``road_y_min``); ``road_lanes = 0`` means no road. They were added with defaults, so
+    goals recorded before them still decode (as "no road").
+    """
 
     stamp_ns: int = field(unit="ns")
     x: float = field(unit="m")
     y: float = field(unit="m")
     tolerance: float = field(0.1, unit="m")
+    road_lanes: int = field(0, doc="number of lanes; 0 = no road")
+    road_y_min: float = field(0.0, unit="m", doc="right road edge (solid line)")
+    road_lane_width: float = field(0.0, unit="m", doc="lane width d_w")
 
 
 @message("PlannerState", 1)

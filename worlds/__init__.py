@@ -8,11 +8,12 @@ entry and what would be valid.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
 from common.errors import WorldError
+from worlds.traffic import Motion, ObstacleState, Road, state_at
 
 try:
     import tomllib
@@ -21,6 +22,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (DESIGN.md §9)
 KINDS = ("box", "cylinder", "wall", "sphere")
+CENTER_MATCH = 1e-6  # [m] a moving obstacle's center, if given, must be its track at t = 0
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,24 @@ class Obstacle:
     radius: float = 0.0
     yaw: float = 0.0
     height: float = DEFAULT_HEIGHT
+    motion: Motion | None = None  # a kinematic track; ``center``/``yaw`` are its pose at t = 0
+
+    @property
+    def moving(self) -> bool:
+        return self.motion is not None
+
+    def state_at(self, t: float) -> ObstacleState:
+        """Pose and velocity at sim time ``t`` [s] (a static obstacle: its pose, zero velocity)."""
+        if self.motion is None:
+            return ObstacleState(self.center[0], self.center[1], self.yaw, 0.0, 0.0)
+        return state_at(self.motion, t)
+
+    def at(self, t: float) -> Obstacle:
+        """This obstacle placed where it is at sim time ``t`` [s] (itself when static)."""
+        if self.motion is None:
+            return self
+        s = state_at(self.motion, t)
+        return replace(self, center=(s.x, s.y), yaw=s.yaw)
 
     def corners(self) -> list[tuple[float, float]]:
         """The 4 corners of a box footprint (counter-clockwise), world frame [m]."""
@@ -60,10 +80,20 @@ class World:
     tolerance: float                             # [m]
     obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
     source: str = ""                             # file it came from
+    road: Road | None = None                     # the optional ``[road]``
 
     @property
     def dims(self) -> int:
         return len(self.goal)
+
+    @property
+    def has_motion(self) -> bool:
+        """True when any obstacle moves."""
+        return any(ob.moving for ob in self.obstacles)
+
+    def obstacles_at(self, t: float) -> tuple[Obstacle, ...]:
+        """Every obstacle placed where it is at sim time ``t`` [s], in file order."""
+        return tuple(ob.at(t) for ob in self.obstacles)
 
 
 def packaged_worlds() -> list[str]:
@@ -116,9 +146,42 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         ctx.fail("obstacles", "must be an array of tables ([[obstacles]])")
     for i, ob in enumerate(raw):
         obstacles.append(_obstacle(ctx, ob, f"obstacles[{i}]", len(goal)))
+    road = _road(ctx, data["road"]) if "road" in data else None
+    if road is not None and len(goal) != 2:
+        ctx.fail("[road]", "a road needs a 2-D world (goal.position with 2 numbers)")
     return World(name=name, description=ctx.str(data, "description", default=""),
                  start=tuple(start), goal=tuple(goal), tolerance=tolerance,
-                 obstacles=tuple(obstacles), source=source)
+                 obstacles=tuple(obstacles), source=source, road=road)
+
+
+def _road(ctx: _Ctx, t) -> Road:
+    if not isinstance(t, dict):
+        ctx.fail("[road]", "must be a table with y_min, lane_width, lanes")
+    lanes = t.get("lanes", ctx._MISSING)
+    if lanes is ctx._MISSING:
+        ctx.fail("road.lanes", "is missing")
+    if isinstance(lanes, bool) or not isinstance(lanes, int) or lanes < 1:
+        ctx.fail("road.lanes", f"must be an integer >= 1, got {lanes!r}")
+    return Road(y_min=ctx.number(t, "y_min", "road.y_min"),
+                lane_width=ctx.positive(t, "lane_width", "road.lane_width"), lanes=lanes)
+
+
+def _motion(ctx: _Ctx, t, where: str, yaw0: float) -> Motion:
+    """``[obstacles.motion]``: a track of [t, x, y] samples, t strictly increasing."""
+    if not isinstance(t, dict):
+        ctx.fail(where, "must be a table with a track = [[t, x, y], ...]")
+    raw = t.get("track", ctx._MISSING)
+    if raw is ctx._MISSING:
+        ctx.fail(f"{where}.track", "is missing")
+    if not isinstance(raw, list) or not raw:
+        ctx.fail(f"{where}.track", f"must be a non-empty array of [t s, x m, y m], got {raw!r}")
+    track = []
+    for i, sample in enumerate(raw):
+        track.append(tuple(ctx.vec({"s": sample}, "s", (3,), f"{where}.track[{i}]")))
+        if i and track[i][0] <= track[i - 1][0]:
+            ctx.fail(f"{where}.track[{i}]", f"time {track[i][0]} s must be after the previous "
+                     f"sample's {track[i - 1][0]} s (times strictly increasing)")
+    return Motion(track=tuple(track), yaw0=yaw0)
 
 
 def _obstacle(ctx: _Ctx, ob: dict, where: str, dims: int) -> Obstacle:
@@ -127,6 +190,25 @@ def _obstacle(ctx: _Ctx, ob: dict, where: str, dims: int) -> Obstacle:
     kind = ctx.str(ob, "kind", where=f"{where}.kind")
     if kind not in KINDS:
         ctx.fail(f"{where}.kind", f"{kind!r} is not one of {', '.join(KINDS)}")
+    if "motion" not in ob:
+        return _shape(ctx, ob, where, kind)
+    if kind == "sphere" or dims != 2:
+        ctx.fail(f"{where}.motion", "only 2-D kinds (box, cylinder, wall) in 2-D worlds may move")
+    motion = _motion(ctx, ob["motion"], f"{where}.motion", 0.0)
+    start = state_at(motion, 0.0)
+    given = ob.get("center")
+    static = _shape(ctx, {"center": [start.x, start.y], **ob}, where, kind)
+    if given is not None and math.dist(static.center, (start.x, start.y)) > CENTER_MATCH:
+        ctx.fail(f"{where}.center", f"{list(static.center)} is not where the track is at t = 0 "
+                 f"({[start.x, start.y]}); omit center on a moving obstacle or make them agree")
+    yaw0 = ctx.number(ob, "yaw", f"{where}.yaw", default=static.yaw)
+    motion = replace(motion, yaw0=yaw0)
+    return replace(static, center=(start.x, start.y), motion=motion,
+                   yaw=state_at(motion, 0.0).yaw)
+
+
+def _shape(ctx: _Ctx, ob: dict, where: str, kind: str) -> Obstacle:
+    """The obstacle's geometry and pose as written (static, or a moving one at t = 0)."""
     height = ctx.positive(ob, "height", f"{where}.height", default=DEFAULT_HEIGHT)
     if kind == "wall":
         a = ctx.vec(ob, "from", (2,), f"{where}.from")
