@@ -9,6 +9,7 @@ import signal
 import sys
 
 from common.errors import PapfError
+from papf.viewer_cli import add_view_flag
 
 log = logging.getLogger("papf")
 
@@ -39,6 +40,7 @@ def _add_run(sub) -> None:
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    add_view_flag(p)
     p.set_defaults(func=_cmd_run)
 
 
@@ -53,7 +55,7 @@ def _cmd_run(args) -> int:
                     port=args.port, namespace=args.namespace, planner_args=planner_args,
                     energy_model=args.energy_model,
                     stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
-                    zenoh_mode=args.zenoh_mode,
+                    zenoh_mode=args.zenoh_mode, view=args.view,
                     progress=None if not args.json else False)
     result = run(cfg)
     if args.json:

@@ -14,6 +14,7 @@ MODULES = (
     "papf.plan_cli",        # plan, experiment paper-tests, experiment random
     "papf.report_cli",      # report, experiment energy
     "papf.robot_cli",       # launch, rosbot-emulator, make-certs
+    "papf.viewer_cli",      # view, export foxglove, animate
 )
 
 

@@ -25,6 +25,7 @@ from common.transport import StopRequested, wait_alive, zenoh_config
 from papf.monitor import RunMonitor, RunResult
 from papf.run_sequence import STALL_S, RunSequence
 from papf.supervisor import Supervisor, wait_port
+from papf.viewer_cli import viewer_argv
 from schemas import Keys
 from schemas.keys import TOPICS
 from worlds import load_world, world_path
@@ -108,6 +109,7 @@ class LaunchOptions:
     stall_s: float = STALL_S                 # [s wall]
     verbose: bool = False
     dry_run: bool = False
+    view: int | None = None                  # also serve a Foxglove view on this port
 
 
 def local_endpoint(listen: str) -> str:
@@ -146,6 +148,9 @@ def plan(prof: Profile, opt: LaunchOptions) -> tuple[dict[str, list[str]], list[
             args += opt.planner_args
         cmds[spec.name] = [sys.executable, "-m", spec.module, *_fill(args, values, prof, spec),
                            *common]
+    if opt.view is not None:   # goals from the viewer are set: a launch session is live
+        cmds["viewer"] = [sys.executable, "-m", "nodes.viewer",
+                          *viewer_argv(opt.view, values.get("world_file"), "accept"), *common]
     return cmds, connect
 
 

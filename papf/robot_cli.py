@@ -9,6 +9,8 @@ import argparse
 import json
 import sys
 
+from papf.viewer_cli import add_view_flag
+
 
 def register(sub) -> None:
     _add_launch(sub)
@@ -79,6 +81,7 @@ def _add_launch(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
     p.add_argument("--dry-run", action="store_true", help="print the commands, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    add_view_flag(p)
     p.set_defaults(func=_cmd_launch)
 
 
@@ -91,7 +94,8 @@ def _cmd_launch(args) -> int:
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,
-                        args.startup_timeout, args.stall_timeout, args.verbose, args.dry_run)
+                        args.startup_timeout, args.stall_timeout, args.verbose, args.dry_run,
+                        view=args.view)
     result = launch(opt)
     if result is None:
         return 0

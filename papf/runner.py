@@ -19,6 +19,7 @@ from papf.monitor import RunMonitor, RunResult
 from papf.progress import RunProgress
 from papf.run_sequence import RunSequence
 from papf.supervisor import Supervisor, free_port, port_in_use, wait_port
+from papf.viewer_cli import viewer_argv
 from schemas import Keys
 from worlds import World, load_world, world_path
 
@@ -46,6 +47,7 @@ class RunConfig:
     lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
     zenoh_mode: str = "client"         # nodes' Zenoh mode: client (via the router) or peer
+    view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
 
 
 def node_commands(cfg: RunConfig, world_file: str, endpoint: str) -> dict[str, list[str]]:
@@ -69,6 +71,9 @@ def node_commands(cfg: RunConfig, world_file: str, endpoint: str) -> dict[str, l
     cmds["base_driver"] = [*py, "nodes.base_driver", *z, "--driver", "sim", "--world", world_file,
                            "--seed", str(cfg.seed), "--lockstep-timeout",
                            str(cfg.lockstep_timeout_s), *rt]
+    if cfg.view is not None:  # goals from the viewer: refused in lockstep (deterministic runs)
+        goals = "accept" if cfg.realtime else "refuse"
+        cmds["viewer"] = [*py, "nodes.viewer", *z, *viewer_argv(cfg.view, world_file, goals)]
     for name, extra in cfg.extra_node_args.items():
         cmds[name] = [*cmds[name], *extra]
     return cmds

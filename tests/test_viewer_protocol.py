@@ -155,3 +155,27 @@ def test_parameters_listed_and_set_through_validation(router, spawn, session):
                                            for _, p, _ in client.messages["/log"]), 10.0)
     finally:
         client.close()
+
+
+def test_papf_run_realtime_view_serves_every_channel(tmp_path):
+    """The acceptance case, shortened: `papf run --realtime --view PORT` while a client watches."""
+    import subprocess
+
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", "open", "--planner",
+                             "papf", "--realtime", "--view", str(port), "--timeout", "12",
+                             "--json", "--port", str(free_port())],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        client = FoxgloveClient(f"ws://127.0.0.1:{port}", timeout_s=60.0)
+        want = {c.topic for c in CHANNELS} - {"/log"}   # events come when they happen
+        assert client.wait_for(lambda: want <= set(client.topics()), 60.0)
+        client.subscribe(want)
+        client.wait_for(lambda: want <= set(client.messages), 20.0)
+        client.close()
+        assert want <= set(client.messages), sorted(want - set(client.messages))
+        out, err = proc.communicate(timeout=120)
+        assert json.loads(out)["outcome"] == "timeout", err[-2000:]
+    finally:
+        proc.kill()
+        proc.wait()

@@ -23,6 +23,7 @@ Exit code 2 on a bad setting (unknown world, port taken).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import logging
 import sys
@@ -145,8 +146,12 @@ class Viewer:
 
     def _send_goal(self, x: float, y: float) -> None:
         core = self.core
-        tol = core.goal.tolerance if core.goal else (core.world.tolerance if core.world else 0.1)
-        self.node.publish("goal", Goal(stamp_ns=core.last_ns, x=x, y=y, tolerance=tol))
+        if core.goal is not None:   # keeps the tolerance and the road of the run's goal
+            goal = dataclasses.replace(core.goal, stamp_ns=core.last_ns, x=x, y=y)
+        else:
+            goal = Goal(stamp_ns=core.last_ns, x=x, y=y,
+                        tolerance=core.world.tolerance if core.world else 0.1)
+        self.node.publish("goal", goal)
         self._note(LOG_INFO, f"goal set from the viewer: ({x:.2f}, {y:.2f})")
 
     def _note(self, level: int, message: str) -> None:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from nodes.viewer import convert as cv
-from nodes.viewer.scene import footprint_scene, mind_scene, world_scene
+from nodes.viewer.scene import footprint_scene, mind_scene, moving_scene, world_scene
 from schemas.messages import (
     BatteryState,
     Event,
@@ -47,8 +47,9 @@ CHANNELS: tuple[ChannelSpec, ...] = (
                 "world->base_link each pose (50 Hz), base_link->laser each scan"),
     ChannelSpec("/robot/pose", "foxglove.PoseInFrame", "sim/pose or odom", "each pose (50 Hz)"),
     ChannelSpec("/goal", "foxglove.PoseInFrame", "goal", "each goal, repeated with the world"),
-    ChannelSpec("/world", "foxglove.SceneUpdate", "world file; robot facts",
-                "every second (obstacles, start, goal, the robot's footprint)"),
+    ChannelSpec("/world", "foxglove.SceneUpdate", "world file; robot facts; scan (time)",
+                "every second (obstacles, road, start, goal, the robot's footprint); the "
+                "moving obstacles with each scan"),
     ChannelSpec("/planner/scene", "foxglove.SceneUpdate", "planner/state (+ pose)",
                 "each planner cycle (10 Hz)"),
     ChannelSpec("/log", "foxglove.Log", "events; the viewer's own notes", "as they happen"),
@@ -124,7 +125,10 @@ class ViewCore:
     # -- handlers -----------------------------------------------------------------------------
     def _scan(self, scan: Scan):
         t = scan.stamp_ns
-        return [("/tf", cv.laser_transforms(scan), t), ("/scan", cv.laser_scan(scan), t)]
+        out = [("/tf", cv.laser_transforms(scan), t), ("/scan", cv.laser_scan(scan), t)]
+        if self.world is not None and self.world.has_motion:
+            out.append(("/world", moving_scene(self.world, t), t))
+        return out
 
     def _odom(self, odom: Odometry):
         out = [("/odom", cv.plot_dict(odom), odom.stamp_ns)]

@@ -1,7 +1,10 @@
 """The 3-D scene as foxglove.SceneUpdate dicts (pure): the world, the robot, the planner's mind.
 
-- :func:`world_scene` — obstacles (boxes and walls as cubes, cylinders, spheres in 3-D
-  worlds), start and goal (a disc of the goal tolerance), in frame ``world``;
+- :func:`world_scene` — static obstacles (boxes and walls as cubes, cylinders, spheres in
+  3-D worlds), the road's lines, start and goal (a disc of the goal tolerance), in frame
+  ``world``;
+- :func:`moving_scene` — the moving obstacles where they are at a sim time (entity
+  ``moving``, re-sent with each scan);
 - :func:`footprint_scene` — the robot's chassis (``common.robot``) in frame ``base_link``,
   frame-locked so it follows the robot;
 - :func:`mind_scene` — one planner cycle (``planner/state``): predicted path, abandoned
@@ -16,9 +19,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from common.robot import BODY_HEIGHT_M, BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.viewer.convert import (
     BASE,
+    LINE_LIST,
     LINE_STRIP,
     WORLD,
     arrow,
@@ -47,7 +53,11 @@ MIND_COLOURS = {
     "force": (0.15, 0.15, 0.15, 1.0),
     "virtual_wall": (0.89, 0.47, 0.76, 1.0),
     "virtual_obstacle": (0.89, 0.47, 0.76, 0.9),
+    "moving": (0.8, 0.4, 0.0, 1.0),
+    "road": (0.95, 0.85, 0.2, 1.0),
 }
+ROAD_MARGIN_M = 5.0      # [m] road lines drawn this far beyond the world's extent along x
+DASH_M = 0.5             # [m] dash and gap of a broken road line
 QUARK_DIAMETER_M = 0.12
 TEMP_GOAL_DIAMETER_M = 0.16
 VIRTUAL_OBSTACLE_DIAMETER_M = 0.1
@@ -58,26 +68,63 @@ def c(name: str) -> dict:
     return colour(*MIND_COLOURS[name])
 
 
-def world_scene(world: World, stamp_ns: int = 0) -> dict:
-    """The world's obstacles, start and goal (entity ``world``, frame ``world``)."""
-    cubes, cyls, spheres, texts = [], [], [], []
-    for ob in world.obstacles:
+def _obstacle_prims(obstacles, rgba: dict) -> dict:
+    cubes, cyls, spheres = [], [], []
+    for ob in obstacles:
         if ob.shape == "box":
             cubes.append(cube(ob.center[0], ob.center[1], ob.height / 2, ob.yaw,
-                              (ob.size[0], ob.size[1], ob.height), c("obstacle")))
+                              (ob.size[0], ob.size[1], ob.height), rgba))
         elif ob.shape == "sphere" and len(ob.center) == 3:
-            spheres.append(sphere(*ob.center[:3], 2 * ob.radius, c("obstacle")))
+            spheres.append(sphere(*ob.center[:3], 2 * ob.radius, rgba))
         else:
             cyls.append(cylinder(ob.center[0], ob.center[1], ob.height / 2, ob.radius, ob.height,
-                                 c("obstacle")))
+                                 rgba))
+    return {"cubes": cubes, "cylinders": cyls, "spheres": spheres}
+
+
+def _x_extent(world: World) -> tuple[float, float]:
+    xs = [world.start[0], world.goal[0]] + [ob.center[0] for ob in world.obstacles]
+    for ob in world.obstacles:
+        if ob.motion is not None:
+            xs += [sample[1] for sample in ob.motion.track]
+    return min(xs) - ROAD_MARGIN_M, max(xs) + ROAD_MARGIN_M
+
+
+def road_lines(world: World) -> list[dict]:
+    """The road's painted lines: solid edges as strips, broken lines as dashes (LINE_LIST)."""
+    if world.road is None:
+        return []
+    x0, x1 = _x_extent(world)
+    out = []
+    for rl in world.road.lines():
+        if rl.kind == "solid":
+            out.append(line([(x0, rl.y), (x1, rl.y)], c("road"), 0.05, z=0.005))
+        else:
+            xs = np.arange(x0, x1, 2 * DASH_M)
+            pts = [p for x in xs for p in ((x, rl.y), (min(x + DASH_M, x1), rl.y))]
+            out.append(line(pts, c("road"), 0.04, z=0.005, kind=LINE_LIST))
+    return out
+
+
+def world_scene(world: World, stamp_ns: int = 0) -> dict:
+    """The world's static obstacles, road, start and goal (entity ``world``, frame ``world``)."""
+    prims = _obstacle_prims([ob for ob in world.obstacles if ob.motion is None], c("obstacle"))
     gx, gy = world.goal[0], world.goal[1]
     gz = world.goal[2] if world.dims == 3 else 0.0
-    cyls.append(cylinder(gx, gy, gz + 0.005, world.tolerance, 0.01, {**c("goal"), "a": 0.35}))
-    texts.append(text(gx, gy, gz + 0.35, "goal", c("goal")))
+    prims["cylinders"].append(cylinder(gx, gy, gz + 0.005, world.tolerance, 0.01,
+                                       {**c("goal"), "a": 0.35}))
+    texts = [text(gx, gy, gz + 0.35, "goal", c("goal"))]
     sx, sy = world.start[0], world.start[1]
     arrows = [arrow(sx, sy, 0.01, world.start[2] if world.dims == 2 else 0.0, 0.3, c("start"))]
-    return scene_update([entity(stamp_ns, WORLD, "world", cubes=cubes, cylinders=cyls,
-                                spheres=spheres, texts=texts, arrows=arrows)])
+    return scene_update([entity(stamp_ns, WORLD, "world", texts=texts, arrows=arrows,
+                                lines=road_lines(world), **prims)])
+
+
+def moving_scene(world: World, stamp_ns: int) -> dict:
+    """The moving obstacles where they are at ``stamp_ns`` (entity ``moving``)."""
+    moving = [ob.at(stamp_ns / 1e9) for ob in world.obstacles if ob.motion is not None]
+    return scene_update([entity(stamp_ns, WORLD, "moving", **_obstacle_prims(moving,
+                                                                               c("moving")))])
 
 
 def footprint_scene(stamp_ns: int = 0) -> dict:

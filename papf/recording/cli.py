@@ -16,6 +16,7 @@ from common.transport import StopRequested, add_zenoh_args, config_from_args
 from papf.recording.reader import Recording
 from papf.recording.recover import recover
 from papf.recording.replay import replay
+from papf.viewer_cli import add_view_flag, replay_with_view
 
 
 def register(subparsers) -> None:
@@ -38,6 +39,7 @@ def register(subparsers) -> None:
     p.add_argument("--keys", action="append", metavar="EXPR",
                    help="replay only keys matching this key expression, repeatable (default all)")
     add_zenoh_args(p)
+    add_view_flag(p)
     # --namespace from add_zenoh_args: here it remaps; unset = the recorded keys as they are.
     p.set_defaults(func=cmd_replay, namespace=None)
 
@@ -63,9 +65,14 @@ def cmd_record(args: argparse.Namespace) -> int:
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
+    if args.view is not None:
+        return replay_with_view(args, _replay)
+    return _replay(args, StopRequested())
+
+
+def _replay(args: argparse.Namespace, stop: StopRequested) -> int:
     import zenoh
 
-    stop = StopRequested()
     try:
         with zenoh.open(config_from_args(args)) as session:
             stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,
