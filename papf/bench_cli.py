@@ -18,6 +18,7 @@ BENCHES = {
     "sim": "sim-time / wall-time ratio of the lockstep driver + LiDAR loop",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
+    "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
 }
 
 

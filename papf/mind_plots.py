@@ -135,3 +135,47 @@ def plot_plan(world: World, result, out_png: str | Path, title: str) -> Path:
     finally:
         plt.close(fig)
     return out
+
+
+def mind_png(runs, files: dict, world: World | None, out_png: str | Path) -> Path:
+    """The report's ``mind.png``: for the first run of each planner, its path, footprints and
+    the mind at its most telling cycle (from the recording's ``planner/state``)."""
+    from papf.recording.track import load_track
+
+    firsts: dict[str, object] = {}
+    for r in runs:
+        firsts.setdefault(r.planner, r)
+    fig, axes = plt.subplots(1, max(len(firsts), 1), figsize=(5.0 * max(len(firsts), 1), 4.6),
+                             squeeze=False)
+    try:
+        for ax, (planner, r) in zip(axes[0], firsts.items(), strict=False):
+            track = load_track(files[r.file])
+            if world is not None and world.dims == 2:
+                draw_world(ax, world)
+            xy, t = track.xyyaw, track.t
+            ax.plot(xy[:, 0], xy[:, 1], color=colour_for(planner, 0), lw=1.4, zorder=3)
+            next_t = t[0] if len(t) else 0.0
+            for k in range(len(t)):
+                if t[k] >= next_t:
+                    draw_footprint(ax, *xy[k], filled=False)
+                    next_t = t[k] + FOOTPRINT_EVERY_S
+            i = snapshot_index(track.states)
+            label = f"{planner} seed {r.seed} ({r.outcome})"
+            if i is not None:
+                s = track.states[i]
+                draw_mind(ax, s)
+                k = max(int(np.searchsorted(t, s.stamp_ns / 1e9, side="right")) - 1, 0)
+                draw_footprint(ax, *xy[k], label=f"robot at {s.stamp_ns / 1e9:.1f} s")
+                label += f", mind at {s.stamp_ns / 1e9:.1f} s ({s.mode})"
+            elif len(t):   # nothing to show of the mind (APF): the robot where it ended
+                draw_footprint(ax, *xy[-1], label=f"robot at {t[-1]:.1f} s")
+            ax.set_title(label, fontsize=9)
+            ax.set_aspect("equal")
+            ax.legend(loc="best", fontsize=6)
+        out = Path(out_png)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.tight_layout()
+        fig.savefig(out, dpi=110)
+    finally:
+        plt.close(fig)
+    return out

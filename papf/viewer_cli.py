@@ -31,6 +31,9 @@ def register(subparsers) -> None:
                               "Foxglove channels on ws://HOST:PORT until Ctrl-C. Open it in "
                               "Foxglove with docs/foxglove-layout.json.")
     add_view_args(p)
+    p.add_argument("--layout", metavar="OUT.json",
+                   help="write the Foxglove layout of the view (3D, plots, log, parameters) "
+                        "to this file and exit (the repository has it: docs/foxglove-layout.json)")
     p.add_argument("--log-level", default="INFO")
     add_zenoh_args(p)
     p.set_defaults(func=cmd_view)
@@ -64,6 +67,14 @@ def cmd_view(args: argparse.Namespace) -> int:
     from common.transport import setup_logging
     from nodes.viewer.__main__ import serve
 
+    if args.layout:
+        from pathlib import Path
+
+        from nodes.viewer.layout import layout_json
+
+        Path(args.layout).write_text(layout_json())
+        print(f"wrote {args.layout}")
+        return 0
     return serve(args, setup_logging("viewer", args.log_level))
 
 

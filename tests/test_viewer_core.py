@@ -177,3 +177,17 @@ def test_goal_from_client_garbage():
 def test_param_sets():
     assert param_sets({"apf.v_max": 0.3, "papf.use_numba": False, "papf.max_quarks": 3}) == [
         "apf.v_max=0.3", "papf.use_numba=false", "papf.max_quarks=3"]
+
+
+def test_committed_layout_is_the_generated_one():
+    from pathlib import Path
+
+    from nodes.viewer.core import GOAL_TOPICS
+    from nodes.viewer.layout import GOAL_PUBLISH_TOPIC, layout_json
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "foxglove-layout.json").read_text()
+    assert text == layout_json(), "regenerate: papf view --layout docs/foxglove-layout.json"
+    assert GOAL_PUBLISH_TOPIC in GOAL_TOPICS
+    topics = {c.topic for c in CHANNELS}
+    for path in ("/cmd_vel.v", "/battery.charge_used_mAh", "/planner/status.distance_to_goal"):
+        assert path.rsplit(".", 1)[0] in topics and path in text

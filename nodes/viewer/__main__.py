@@ -30,6 +30,7 @@ import sys
 import time
 
 import foxglove
+import zenoh
 from foxglove.websocket import Capability, Parameter, ParameterType
 
 from common.errors import PapfError
@@ -173,28 +174,36 @@ class Viewer:
 
 def serve(args: argparse.Namespace, log: logging.Logger) -> int:
     world = load_world(args.world) if args.world else None
-    with open_node(NAME, args, log) as node:
-        listener = Listener(node, log)
-        context = foxglove.Context()
-        channels = FoxgloveChannels(context)
-        try:
-            server = foxglove.start_server(
-                name=f"papf-stack {args.namespace}", host=args.host, port=args.port,
-                capabilities=[Capability.ClientPublish, Capability.Parameters],
-                supported_encodings=["json"], server_listener=listener, context=context)
-        except Exception as exc:  # the SDK raises its own error type for a taken port
-            raise PapfError(f"cannot serve on {args.host}:{args.port}: {exc}") from None
-        try:
-            for topic in SUBSCRIBED:
-                node.subscribe(topic)
-            node.declare_publishers("goal")
-            node.ready()
-            log.info("Foxglove WebSocket on ws://%s:%d (goals: %s)", args.host, server.port,
-                     args.goals)
-            Viewer(node, ViewCore(world), channels, args.goals == "accept").run()
-        finally:
-            server.stop()
-            channels.close()
+    try:
+        with open_node(NAME, args, log) as node:
+            return _serve(node, args, world, log)
+    except zenoh.ZError as exc:
+        raise PapfError(f"cannot reach the Zenoh network ({exc}); is a router running? "
+                        "(papf run/launch start one; or python -m papf.router)") from None
+
+
+def _serve(node: Node, args: argparse.Namespace, world, log: logging.Logger) -> int:
+    listener = Listener(node, log)
+    context = foxglove.Context()
+    channels = FoxgloveChannels(context)
+    try:
+        server = foxglove.start_server(
+            name=f"papf-stack {args.namespace}", host=args.host, port=args.port,
+            capabilities=[Capability.ClientPublish, Capability.Parameters],
+            supported_encodings=["json"], server_listener=listener, context=context)
+    except Exception as exc:  # the SDK raises its own error type for a taken port
+        raise PapfError(f"cannot serve on {args.host}:{args.port}: {exc}") from None
+    try:
+        for topic in SUBSCRIBED:
+            node.subscribe(topic)
+        node.declare_publishers("goal")
+        node.ready()
+        log.info("Foxglove WebSocket on ws://%s:%d (goals: %s)", args.host, server.port,
+                 args.goals)
+        Viewer(node, ViewCore(world), channels, args.goals == "accept").run()
+    finally:
+        server.stop()
+        channels.close()
     return 0
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from common.errors import ConfigError, PapfError, RecordingError
+from papf.mind_plots import mind_png
 from papf.report import figures, tables
 from papf.report.metrics import OSCILLATION_W_RAD_S, RunMetrics, run_metrics
 from worlds import World, load_world
@@ -23,6 +24,7 @@ REPORT_CSV = "report.csv"
 TRAJECTORIES_PNG = "trajectories.png"
 CHARGE_PNG = "charge.png"
 MOTION_PNG = "motion.png"
+MIND_PNG = "mind.png"
 
 
 @dataclass
@@ -71,7 +73,8 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     """Read the recordings, write report.md, report.csv and the PNGs into ``out_dir``."""
     if energy_model not in (None, "paper", "motor"):
         raise ConfigError(f"energy model {energy_model!r} is not one of paper, motor")
-    runs = collect(find_recordings(inputs), energy_model, energy_params)
+    paths = find_recordings(inputs)
+    runs = collect(paths, energy_model, energy_params)
     out = Path(out_dir) if out_dir is not None else default_out(inputs)
     out.mkdir(parents=True, exist_ok=True)
     summaries = tables.summarise(runs)
@@ -79,7 +82,9 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     world = _world(runs)
     report.files += [figures.trajectories_png(runs, world, out / TRAJECTORIES_PNG),
                      figures.charge_png(runs, summaries, out / CHARGE_PNG),
-                     figures.motion_png(runs, out / MOTION_PNG)]
+                     figures.motion_png(runs, out / MOTION_PNG),
+                     mind_png(runs, {Path(p).name: Path(p) for p in paths}, world,
+                              out / MIND_PNG)]
     tables.write_csv(out / REPORT_CSV, runs, summaries)
     (out / REPORT_MD).write_text(markdown(report))
     report.files += [out / REPORT_CSV, out / REPORT_MD]
@@ -155,5 +160,8 @@ def markdown(report: Report) -> str:
         "## Motion (like the paper's Fig. 13)",
         "",
         f"![heading, v and ω over time]({MOTION_PNG})",
+        "",
+        f"![the planner's mind: prediction, abandoned predictions, top quarks, temporary goal, "
+        f"footprints]({MIND_PNG})",
         "",
     ])
