@@ -119,3 +119,17 @@ def test_planner_params_listed_set_and_refused():
         assert reply["error"] and changed == [] and reply["params"] == before
     reply, _ = answer("papf", planner, b"\xff")
     assert reply["error"]
+
+
+def test_launch_and_run_start_the_viewer_with_their_goal_policy(capsys):
+    from papf.runner import RunConfig, node_commands
+
+    assert papf_main(["launch", "sim", "--world", "open", "--view", "8799", "--dry-run"]) == 0
+    viewer = [ln for ln in capsys.readouterr().out.splitlines() if "nodes.viewer" in ln]
+    assert len(viewer) == 1 and "--goals accept" in viewer[0] and "--port 8799" in viewer[0]
+    lockstep = node_commands(RunConfig(world="open", view=8765), "open.toml", "tcp/x:1")
+    realtime = node_commands(RunConfig(world="open", view=8765, realtime=True), "open.toml",
+                             "tcp/x:1")
+    assert lockstep["viewer"][lockstep["viewer"].index("--goals") + 1] == "refuse"
+    assert realtime["viewer"][realtime["viewer"].index("--goals") + 1] == "accept"
+    assert "viewer" not in node_commands(RunConfig(world="open"), "open.toml", "tcp/x:1")

@@ -179,3 +179,34 @@ def test_papf_run_realtime_view_serves_every_channel(tmp_path):
     finally:
         proc.kill()
         proc.wait()
+
+
+def test_replay_view_serves_a_recording(router, tmp_path):
+    """`papf replay FILE --view PORT`: the recording's messages reach a Foxglove client."""
+    import signal
+    import subprocess
+
+    from nodes.recorder.writer import RunWriter
+
+    rec = tmp_path / "r.mcap"
+    with RunWriter(rec, {"world": "papf-test-4"}) as w:
+        for k in range(100):
+            w.write_message("rosbot/odom", Odometry(stamp_ns=k * 20_000_000, x=0.01 * k, y=0.0,
+                                                    yaw=0.0, v=0.5, w=0.0))
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "papf", "replay", str(rec), "--rate", "1",
+                             "--connect", router, "--view", str(port)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        client = FoxgloveClient(f"ws://127.0.0.1:{port}", timeout_s=60.0)
+        assert client.wait_for(lambda: "/odom" in client.topics(), 30.0)
+        client.subscribe({"/odom", "/robot/pose", "/world"})
+        assert client.wait_for(lambda: len(client.messages["/odom"]) >= 10, 30.0)
+        assert client.messages["/world"]
+        client.close()
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+        assert proc.returncode in (0, 130), err[-2000:]
+    finally:
+        proc.kill()
+        proc.wait()
