@@ -129,13 +129,13 @@ def main() -> int:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     try:
         procs.append(subprocess.Popen(
-            [*robot_pre, PY, "-m", "papf.robot_cli", "launch", "hil-robot", "--listen", endpoint,
+            [*robot_pre, PY, "-m", "papf", "launch", "hil-robot", "--listen", endpoint,
              "--namespace", NS], start_new_session=True, env=env, stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL))
         subprocess.run([*robot_pre, PY, "-c", f"from papf.supervisor import wait_port; "
                         f"assert wait_port({port}, 30, '{host}')"], check=True, env=env, timeout=60)
         procs.append(subprocess.Popen(
-            [*robot_pre, PY, "-m", "papf.emulator", "--connect", endpoint, "--namespace", NS,
+            [*robot_pre, PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint, "--namespace", NS,
              "--cmd-timeout", "0", "--trace", str(trace)], start_new_session=True, env=env,
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         cmd = [*laptop_pre, PY, str(Path(__file__).resolve()), "--probe", str(steps),

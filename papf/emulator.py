@@ -34,8 +34,10 @@ import time
 
 from common import ros2
 from common.errors import SchemaError
+from common.transport import open_node, setup_logging
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
+from worlds import load_world
 
 NAME = "rosbot_emulator"
 BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
@@ -83,15 +85,12 @@ def _lidar(args):
     if not args.world or args.no_scan:
         return None
     from nodes.lidar_sim.core import LidarParams, LidarSim  # pybullet: only when scanning
-    from worlds import load_world
 
     return LidarSim(load_world(args.world), LidarParams(beams=args.scan_beams), args.seed)
 
 
 def run(args: argparse.Namespace) -> int:
-    from common.transport import open_node, setup_logging
-    from worlds import load_world
-
+    """``papf rosbot-emulator`` (options: :mod:`papf.cli.emulator`) until SIGINT/SIGTERM."""
     log = setup_logging("emulator", args.log_level)
     topics = BridgeTopics(args.bridge_namespace)
     topics.check_separate(args.namespace)
@@ -154,16 +153,3 @@ def _scan_cdr(lidar, pose: Pose2D, wall_ns: int) -> bytes:
     return ros2.encode(ros2.laser_scan(wall_ns, scan.angle_min, scan.angle_increment,
                                        scan.range_min, scan.range_max, scan.ranges),
                        ros2.LASER_SCAN)
-
-
-def main(argv: list[str] | None = None) -> int:
-    from papf.robot_cli import add_emulator_arguments
-
-    parser = argparse.ArgumentParser(prog="papf rosbot-emulator",
-                                     description=__doc__.splitlines()[0])
-    add_emulator_arguments(parser)
-    return run(parser.parse_args(argv))
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

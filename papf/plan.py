@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +36,8 @@ from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.registry import make_planner
 from papf.monitor import MOVING_SPEED
+from papf.plan3d import plan_3d
+from papf.plan_result import PlanResult, write_path  # noqa: F401 - part of this module's API
 from schemas.messages import Odometry
 from worlds import World, load_world
 from worlds.bullet import build_world
@@ -46,40 +47,6 @@ SUBSTEP_S = 0.02          # [s] integration and collision-check step (driver odo
 CLEARANCE_CAP_M = 1.0     # [m] clearances above this are not resolved (reported as the cap)
 DEFAULT_MAX_TIME_S = 300.0  # [s] sim-time limit, as `papf run --timeout`
 TERMINAL = ("reached", "stagnated", "failed")
-
-
-@dataclass
-class PlanResult:
-    """One offline run. ``path`` rows are positions (x, y) or (x, y, z) [m] per control cycle."""
-
-    world: str
-    planner: str
-    seed: int
-    outcome: str                   # reached | stagnated | collision | timeout | failed
-    reason: str
-    path: np.ndarray               # (N, D) [m]
-    times: np.ndarray              # (N,) sim time of each row [s]
-    headings: np.ndarray           # (N,) yaw [rad] (2-D); empty in 3-D
-    duration_s: float              # first motion -> outcome [s] (as RunResult.duration_s)
-    sim_time_s: float              # sim time of the outcome [s]
-    min_clearance_m: float         # closest approach of the footprint / point to an obstacle [m]
-    collisions: int
-    states: list = field(default_factory=list)   # keep_states: PlannerState (2-D) or Plan (3-D) per cycle
-
-    @property
-    def length_m(self) -> float:
-        """Path length [m]."""
-        if self.path.shape[0] < 2:
-            return 0.0
-        return float(np.sum(np.linalg.norm(np.diff(self.path, axis=0), axis=1)))
-
-    def summary(self) -> dict:
-        """The `papf plan --json` object (no path)."""
-        return {"outcome": self.outcome, "planner": self.planner, "world": self.world,
-                "seed": self.seed, "duration_s": round(self.duration_s, 6),
-                "path_length_m": round(self.length_m, 6), "sim_time_s": round(self.sim_time_s, 6),
-                "collisions": self.collisions,
-                "min_clearance_m": round(self.min_clearance_m, 6), "reason": self.reason}
 
 
 def param_sets(params: Mapping[str, object] | Sequence[str] | None) -> list[str]:
@@ -109,7 +76,6 @@ def plan(world: World | str | Path, planner_name: str, params=None, seed: int = 
         raise ConfigError(f"max_time_s = {max_time_s!r} must be > 0")
     planner = make_planner(planner_name, params_file, param_sets(params))
     if world.dims == 3:
-        from papf.plan3d import plan_3d
         return plan_3d(world, planner, planner_name, seed, max_time_s, dt, keep_states)
     return _plan_2d(world, planner, planner_name, seed, max_time_s, dt, lidar, keep_states)
 
@@ -222,26 +188,3 @@ def _plan_2d(world, planner, name, seed, max_time_s, dt, lidar, keep_states) -> 
                       duration_s=max(0, t_end - start_ns) / NS, sim_time_s=t_end / NS,
                       min_clearance_m=float(min_clear), collisions=int(outcome == "collision"),
                       states=states)
-
-
-def write_path(result: PlanResult, out: str | Path) -> None:
-    """The path as CSV (``t,x,y[,z],yaw``) or JSON (summary + ``path``), by file suffix."""
-    import json
-
-    out = Path(out)
-    dims = result.path.shape[1]
-    cols = ["t", "x", "y", "z"][: dims + 1]
-    if out.suffix.lower() == ".json":
-        doc = {**result.summary(), "columns": cols,
-               "path": [[float(t), *map(float, row)] for t, row in zip(result.times, result.path, strict=True)]}
-        out.write_text(json.dumps(doc))
-        return
-    if out.suffix.lower() != ".csv":
-        raise ConfigError(f"path file {str(out)!r}: suffix must be .csv or .json")
-    lines = [",".join(cols + (["yaw"] if result.headings.size else []))]
-    for i, (t, row) in enumerate(zip(result.times, result.path, strict=True)):
-        vals = [f"{t:.3f}", *(f"{v:.5f}" for v in row)]
-        if result.headings.size:
-            vals.append(f"{result.headings[i]:.5f}")
-        lines.append(",".join(vals))
-    out.write_text("\n".join(lines) + "\n")

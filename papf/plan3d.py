@@ -28,6 +28,7 @@ import numpy as np
 from common.errors import ConfigError
 from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
+from papf.plan_result import PlanResult
 from worlds import World
 
 RAYS = 4000               # [-] rays of the 3-D range sensor (~3.2 deg apart; ours)
@@ -99,9 +100,7 @@ class ProgressWatch:
 
 def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: float,
             keep_states: bool):
-    """Closed loop of a point robot (see module doc); returns a :class:`papf.plan.PlanResult`."""
-    from papf.plan import PlanResult
-
+    """Closed loop of a point robot (see module doc)."""
     if name in PLANAR_ONLY:
         raise ConfigError(f"planner {name!r} reads the planar LiDAR scan and is 2-D only; "
                           "3-D worlds take apf, papf or wang")

@@ -1,6 +1,7 @@
 """`papf run`: start the whole stack as processes, drive to an outcome, stop everything.
 
-Sequence (docs/architecture.md): router -> nodes -> liveliness -> then
+The processes are the ``sim`` launch profile's (:mod:`papf.graph`; ``papf launch sim``
+starts the same list). Sequence (docs/architecture.md): router -> nodes -> liveliness -> then
 :class:`papf.run_sequence.RunSequence` (goal handshake -> run_started -> outcome ->
 figures at ``t_end`` -> run_ended) -> stop the nodes, the recorder, the router.
 """
@@ -8,24 +9,24 @@ figures at ``t_end`` -> run_ended) -> stop the nodes, the recorder, the router.
 from __future__ import annotations
 
 import logging
-import sys
 import time
 from dataclasses import dataclass, field
 
 import zenoh
 
 from common.transport import wait_alive, zenoh_config
+from papf.graph import LaunchOptions, Resolved, load_profile, resolve
 from papf.monitor import RunMonitor, RunResult
 from papf.progress import RunProgress
 from papf.run_sequence import RunSequence
 from papf.supervisor import Supervisor, free_port, port_in_use, wait_port
-from papf.viewer_cli import viewer_argv
 from schemas import Keys
-from worlds import World, load_world, world_path
+from worlds import World, load_world
 
 log = logging.getLogger("papf.run")
 
 DEFAULT_PORT = 7447
+PROFILE = "sim"   # papf run = this launch profile + the run sequence
 
 
 @dataclass
@@ -50,33 +51,22 @@ class RunConfig:
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
 
 
-def node_commands(cfg: RunConfig, world_file: str, endpoint: str) -> dict[str, list[str]]:
-    """argv of every node process of a sim run, in start order."""
-    py = [sys.executable, "-m"]
-    z = ["--connect", endpoint, "--namespace", cfg.namespace]
-    if cfg.zenoh_mode == "peer":  # peers also talk directly: one loopback hop, not two
-        z += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
-    rt = ["--realtime"] if cfg.realtime else []
-    cmds: dict[str, list[str]] = {}
-    if cfg.record:
-        cmds["recorder"] = [*py, "nodes.recorder", *z, "--out", cfg.record,
-                            "--meta", f"world={cfg.world}", "--meta", f"planner={cfg.planner}",
-                            "--meta", f"seed={cfg.seed}",
-                            "--meta", f"planner_args={' '.join(cfg.planner_args)}",
-                            "--meta", f"energy_model={cfg.energy_model}",
-                            "--meta", f"timeout_s={cfg.timeout_s:g}"]
-    cmds["energy_meter"] = [*py, "nodes.energy_meter", *z, "--model", cfg.energy_model]
-    cmds["planner"] = [*py, "nodes.planner", *z, "--planner", cfg.planner, *rt, *cfg.planner_args]
-    cmds["lidar_sim"] = [*py, "nodes.lidar_sim", *z, "--world", world_file, "--seed", str(cfg.seed)]
-    cmds["base_driver"] = [*py, "nodes.base_driver", *z, "--driver", "sim", "--world", world_file,
-                           "--seed", str(cfg.seed), "--lockstep-timeout",
-                           str(cfg.lockstep_timeout_s), *rt]
-    if cfg.view is not None:  # goals from the viewer: refused in lockstep (deterministic runs)
-        goals = "accept" if cfg.realtime else "refuse"
-        cmds["viewer"] = [*py, "nodes.viewer", *z, *viewer_argv(cfg.view, world_file, goals)]
-    for name, extra in cfg.extra_node_args.items():
-        cmds[name] = [*cmds[name], *extra]
-    return cmds
+def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
+    """The ``sim`` profile's options for this run (``papf launch sim`` takes the same)."""
+    values = {"world": cfg.world, "planner": cfg.planner, "seed": cfg.seed,
+              "energy_model": cfg.energy_model, "record": cfg.record,
+              "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
+              "realtime": "1" if cfg.realtime else None, "view": cfg.view}
+    return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,
+                         values={k: v for k, v in values.items() if v is not None},
+                         planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,
+                         zenoh_mode=cfg.zenoh_mode, extra_node_args=cfg.extra_node_args,
+                         startup_timeout_s=cfg.startup_timeout_s, verbose=cfg.verbose)
+
+
+def resolve_run(cfg: RunConfig, port: int | None = None) -> Resolved:
+    """The processes of this run: the ``sim`` profile resolved with its options."""
+    return resolve(load_profile(PROFILE), launch_options(cfg, port or cfg.port or DEFAULT_PORT))
 
 
 def _show_line(verbose: bool):
@@ -87,17 +77,17 @@ def _show_line(verbose: bool):
 def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = load_world(cfg.world)  # WorldError before anything starts
-    world_file = str(world_path(cfg.world))
     port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
     if cfg.port is None and port != DEFAULT_PORT:
         log.warning("port %d is in use; the embedded router listens on %d instead",
                     DEFAULT_PORT, port)
-    endpoint = f"tcp/127.0.0.1:{port}"
+    graph = resolve_run(cfg, port)
+    endpoint = graph.connect[0]
     wall0 = time.monotonic()
     monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision)
     keys = Keys(cfg.namespace)
     with Supervisor(show=_show_line(cfg.verbose), last=("recorder", "router")) as sup:
-        sup.start("router", [sys.executable, "-m", "papf.router", "--listen", endpoint])
+        sup.start("router", list(graph.processes[0].argv))
         if not wait_port(port, 15.0, abort=lambda: bool(sup.dead())):
             monitor.fail(f"the embedded router did not come up on {endpoint}: "
                          + " | ".join(sup.children[0].tail))
@@ -105,7 +95,7 @@ def run(cfg: RunConfig) -> RunResult:
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             seq = RunSequence(session, keys, sup, monitor)
             try:
-                _drive(cfg, world, world_file, endpoint, sup, session, keys, seq)
+                _drive(cfg, world, graph.nodes, sup, session, keys, seq)
             finally:
                 result = monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
                 seq.end(result)  # before the nodes stop: the recorder keeps the result
@@ -113,9 +103,8 @@ def run(cfg: RunConfig) -> RunResult:
     return result
 
 
-def _drive(cfg: RunConfig, world: World, world_file: str, endpoint: str, sup: Supervisor,
+def _drive(cfg: RunConfig, world: World, commands: dict[str, list[str]], sup: Supervisor,
            session: zenoh.Session, keys: Keys, seq: RunSequence) -> None:
-    commands = node_commands(cfg, world_file, endpoint)
     for name, argv in commands.items():
         sup.start(name, argv)
     missing = wait_alive(session, keys, commands, cfg.startup_timeout_s,

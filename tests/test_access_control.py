@@ -50,7 +50,7 @@ def secure_robot(tmp_path_factory):
         sup.start("router", [py, "-m", "papf.router", "--listen", tcp, "--listen", tls,
                              "--zenoh-config", str(bundle.router)])
         assert wait_port(tcp_port, 15.0), " | ".join(sup.children[0].tail)
-        sup.start("emulator", [py, "-m", "papf.emulator", *robot, "--bridge-namespace", BRIDGE,
+        sup.start("emulator", [py, "-m", "papf", "rosbot-emulator", *robot, "--bridge-namespace", BRIDGE,
                                "--cmd-timeout", "0", "--trace", str(trace)])
         sup.start("base_driver", [py, "-m", "nodes.base_driver", "--driver", "rosbot", *robot,
                                   "--bridge-namespace", BRIDGE])
@@ -119,7 +119,7 @@ def test_secure_hil_run_reaches_the_goal(secure_robot, tmp_path):
     world = tmp_path / "short.toml"
     world.write_text('name = "short"\n[goal]\nposition = [1.0, 0.0]\ntolerance = 0.15\n'
                      '[[obstacles]]\nkind = "cylinder"\ncenter = [0.5, 0.6]\nradius = 0.15\n')
-    out = subprocess.run([sys.executable, "-m", "papf.robot_cli", "launch", "hil-laptop",
+    out = subprocess.run([sys.executable, "-m", "papf", "launch", "hil-laptop",
                           "--zenoh-config", str(bundle.laptop), "--connect", tls,
                           "--namespace", NS, "--world", str(world), "--json", "--timeout", "30",
                           "--set", "v_max=0.5"], capture_output=True, text=True, timeout=120)

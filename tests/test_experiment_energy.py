@@ -10,10 +10,10 @@ import pytest
 from rich.console import Console
 
 from common.errors import ConfigError
-from papf.experiments.energy import EnergyExperiment, plan, run_experiment
+from papf.experiments.energy import EnergyExperiment, plan, print_summary, run_experiment
 from papf.monitor import RunResult
 from papf.report import run_metrics
-from papf.report_cli import print_summary
+from papf.runner import resolve_run
 from tests.test_report import SHORT_WORLD, write_synthetic
 
 
@@ -67,7 +67,8 @@ def test_experiment_records_every_run_and_reports(tmp_path):
         ("papf", 5, "papf-1.mcap"), ("papf", 6, "papf-2.mcap")]
     cfg = fake.configs[0]
     assert cfg.world == "energy" and cfg.progress is False and cfg.port
-    assert "timeout_s=300" in cfg.extra_node_args["recorder"]
+    recorder = resolve_run(cfg).nodes["recorder"]    # the sim profile states the timeout
+    assert "timeout_s=300" in recorder and "experiment=energy" in recorder
     assert all(c.port for c in fake.configs)          # an explicit free port each run
     for name in ("report.md", "report.csv", "trajectories.png", "charge.png", "motion.png"):
         assert (out / name).is_file()

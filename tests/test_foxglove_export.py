@@ -122,14 +122,17 @@ def test_planner_params_listed_set_and_refused():
 
 
 def test_launch_and_run_start_the_viewer_with_their_goal_policy(capsys):
-    from papf.runner import RunConfig, node_commands
+    from papf.runner import RunConfig, resolve_run
 
-    assert papf_main(["launch", "sim", "--world", "open", "--view", "8799", "--dry-run"]) == 0
-    viewer = [ln for ln in capsys.readouterr().out.splitlines() if "nodes.viewer" in ln]
-    assert len(viewer) == 1 and "--goals accept" in viewer[0] and "--port 8799" in viewer[0]
-    lockstep = node_commands(RunConfig(world="open", view=8765), "open.toml", "tcp/x:1")
-    realtime = node_commands(RunConfig(world="open", view=8765, realtime=True), "open.toml",
-                             "tcp/x:1")
-    assert lockstep["viewer"][lockstep["viewer"].index("--goals") + 1] == "refuse"
-    assert realtime["viewer"][realtime["viewer"].index("--goals") + 1] == "accept"
-    assert "viewer" not in node_commands(RunConfig(world="open"), "open.toml", "tcp/x:1")
+    def goals(argv):   # argparse: the last --goals wins
+        return [argv[i + 1] for i, a in enumerate(argv) if a == "--goals"][-1]
+
+    assert papf_main(["launch", "laptop", "--connect", "tcp/127.0.0.1:1", "--world", "open",
+                      "--view", "8799", "--dry-run"]) == 0
+    procs = json.loads(capsys.readouterr().out)["processes"]
+    viewer = [p["argv"] for p in procs if p["name"] == "viewer"]
+    assert len(viewer) == 1 and goals(viewer[0]) == "accept" and "8799" in viewer[0]
+    lockstep = resolve_run(RunConfig(world="open", view=8765)).nodes["viewer"]
+    realtime = resolve_run(RunConfig(world="open", view=8765, realtime=True)).nodes["viewer"]
+    assert goals(lockstep) == "refuse" and goals(realtime) == "accept"
+    assert "viewer" not in resolve_run(RunConfig(world="open")).nodes

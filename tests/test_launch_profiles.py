@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from common.errors import ConfigError
-from papf.launch import LaunchOptions, load_profile, local_endpoint, packaged_profiles, plan
+from papf.graph import LaunchOptions, load_profile, local_endpoint, packaged_profiles, resolve
 from papf.supervisor import free_port, wait_port
 
 PY = sys.executable
@@ -36,6 +36,11 @@ def world(tmp_path) -> str:
     path = tmp_path / "short.toml"
     path.write_text(WORLD)
     return str(path)
+
+
+def plan(prof, opt):
+    graph = resolve(prof, opt)
+    return graph.nodes, graph.connect
 
 
 # -- profiles as data ---------------------------------------------------------------------------
@@ -96,12 +101,31 @@ def test_local_endpoint():
     assert local_endpoint("tcp/10.231.0.1:7447") == "tcp/10.231.0.1:7447"
 
 
-def test_dry_run_prints_commands():
-    out = subprocess.run([PY, "-m", "papf.robot_cli", "launch", "hil-robot", "--dry-run",
-                          "--listen", "tcp/127.0.0.1:1"], capture_output=True, text=True,
-                         timeout=60, check=True).stdout.splitlines()
-    assert "papf.router --listen tcp/127.0.0.1:1" in out[0]
-    assert "nodes.base_driver --driver rosbot" in out[1]
+def test_dry_run_prints_the_process_list():
+    out = json.loads(subprocess.run([PY, "-m", "papf", "launch", "hil-robot", "--dry-run",
+                                     "--listen", "tcp/127.0.0.1:1"], capture_output=True,
+                                    text=True, timeout=60, check=True).stdout)
+    router, driver = out["processes"]
+    assert out["profile"] == "hil-robot" and router["host"] == driver["host"] == "robot"
+    assert router["argv"][1:] == ["-m", "papf.router", "--listen", "tcp/127.0.0.1:1"]
+    assert driver["argv"][1:5] == ["-m", "nodes.base_driver", "--driver", "rosbot"]
+
+
+def test_papf_run_and_launch_sim_dry_runs_print_the_same_processes(tmp_path):
+    args = ["--world", "energy", "--planner", "papf", "--seed", "3", "--set", "v_max=0.2",
+            "--record", str(tmp_path / "r.mcap"), "--energy-model", "paper"]
+    run = subprocess.run([PY, "-m", "papf", "run", *args, "--dry-run"], capture_output=True,
+                         text=True, timeout=60, check=True).stdout
+    launch = subprocess.run([PY, "-m", "papf", "launch", "sim", *args, "--dry-run"],
+                            capture_output=True, text=True, timeout=60, check=True).stdout
+    assert run == launch
+    procs = {p["name"]: p["argv"] for p in json.loads(run)["processes"]}
+    assert list(procs) == ["router", "recorder", "energy_meter", "planner", "lidar_sim",
+                           "base_driver"]
+    rec = procs["recorder"]
+    meta = dict(rec[i + 1].split("=", 1) for i, a in enumerate(rec) if a == "--meta")
+    assert meta == {"profile": "sim", "world": "energy", "planner": "papf", "seed": "3",
+                    "planner_args": "--set v_max=0.2", "energy_model": "paper", "timeout_s": "300"}
 
 
 # -- processes ----------------------------------------------------------------------------------
@@ -124,17 +148,17 @@ def split_run(robot_profile: str, laptop_profile: str, world: str, ns: str, emul
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     log = Path(world).with_suffix(f".{robot_profile}.log")
-    robot = subprocess.Popen([PY, "-m", "papf.robot_cli", "launch", robot_profile, "--listen",
+    robot = subprocess.Popen([PY, "-m", "papf", "launch", robot_profile, "--listen",
                               endpoint, "--namespace", ns, "--world", world],
                              start_new_session=True, stdout=subprocess.DEVNULL,
                              stderr=log.open("w"))
     emulator = None
     try:
         assert wait_port(port, 30.0), "the robot's router did not come up"
-        emulator = subprocess.Popen([PY, "-m", "papf.emulator", "--connect", endpoint,
+        emulator = subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
                                      "--namespace", ns, *emulator_args], start_new_session=True,
                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        laptop = subprocess.run([PY, "-m", "papf.robot_cli", "launch", laptop_profile,
+        laptop = subprocess.run([PY, "-m", "papf", "launch", laptop_profile,
                                  "--connect", endpoint, "--namespace", ns, "--world", world,
                                  "--timeout", "30", "--json", *FAST, *(laptop_extra or [])],
                                 capture_output=True, text=True, timeout=120)
@@ -178,7 +202,7 @@ def test_hil_profiles_reach_the_goal(world, tmp_path):
 
 @pytest.mark.e2e
 def test_sim_profile_reaches_the_goal(world):
-    out = subprocess.run([PY, "-m", "papf.robot_cli", "launch", "sim", "--listen",
+    out = subprocess.run([PY, "-m", "papf", "launch", "sim", "--listen",
                           f"tcp/127.0.0.1:{free_port()}", "--namespace", "t5sim", "--world", world,
                           "--json", *FAST], capture_output=True, text=True, timeout=120)
     result = json.loads(out.stdout.strip().splitlines()[-1])

@@ -112,17 +112,17 @@ def test_split_over_netns_survives_a_link_cut(netns, tmp_path):
         return procs[-1]
 
     try:
-        robot = start("robot", [PY, "-m", "papf.robot_cli", "launch", "robot", "--listen", ep,
+        robot = start("robot", [PY, "-m", "papf", "launch", "robot", "--listen", ep,
                                 "--namespace", ns, "--world", str(world)],
                       stdout=subprocess.DEVNULL, stderr=(tmp_path / "robot.log").open("w"))
         up = subprocess.run(netns.argv("robot", [PY, "-c", "import sys; from papf.supervisor "
                                                  f"import wait_port; sys.exit(not wait_port(7447, 30, '{ROBOT_IP}'))"]),
                             timeout=60)
         assert up.returncode == 0, "the robot's router did not come up"
-        start("robot", [PY, "-m", "papf.emulator", "--connect", ep, "--namespace", ns, "--world",
+        start("robot", [PY, "-m", "papf", "rosbot-emulator", "--connect", ep, "--namespace", ns, "--world",
                         str(world), "--cmd-timeout", "0", "--trace", str(trace)],
               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        laptop = start("laptop", [PY, "-m", "papf.robot_cli", "launch", "laptop", "--connect", ep,
+        laptop = start("laptop", [PY, "-m", "papf", "launch", "laptop", "--connect", ep,
                                   "--namespace", ns, "--world", str(world), "--record",
                                   str(record), "--timeout", "40", "--json", "--set", "v_max=0.3"],
                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

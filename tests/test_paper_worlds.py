@@ -1,11 +1,11 @@
 """The papers' test worlds load and are sane; the experiment tables and CLI wiring work."""
 
-import argparse
 import math
 
 import numpy as np
 import pytest
 
+from papf.cli import build_parser
 from papf.experiments.paper_tests import (
     ARAPF_WORLDS,
     PAPER,
@@ -18,7 +18,6 @@ from papf.experiments.paper_tests import (
 from papf.experiments.random_worlds import kind_of, summarize
 from papf.experiments.trials import Trial, markdown_table
 from papf.plan import FootprintChecker
-from papf.plan_cli import experiment_parser, register
 from papf.randworlds import is_solvable, signed_distance
 from worlds import load_world, packaged_worlds
 
@@ -118,17 +117,13 @@ def test_random_summary_rates():
 
 
 # -- CLI wiring -----------------------------------------------------------------------
-def test_experiment_parser_is_shared_and_idempotent():
-    parser = argparse.ArgumentParser()
-    sub = parser.add_subparsers(dest="command")
-    register(sub)
-    exp = experiment_parser(sub)
-    assert experiment_parser(sub) is exp
-    exp.add_parser("energy")                       # another module adds its experiment
+def test_plan_and_experiment_commands_parse():
+    parser = build_parser()
     args = parser.parse_args(["experiment", "random", "--n", "3", "--stack"])
     assert args.n == 3 and args.mode == "stack" and args.func.__name__ == "cmd_random"
     args = parser.parse_args(["experiment", "paper-tests", "--offline", "--planners", "apf"])
     assert args.offline and args.func.__name__ == "cmd_paper_tests"
     args = parser.parse_args(["plan", "--world", "open", "--planner", "papf", "--plot", "x.png"])
     assert args.plot == "x.png" and args.func.__name__ == "cmd_plan"
-    assert parser.parse_args(["experiment", "energy"]).experiment == "energy"
+    args = parser.parse_args(["experiment", "energy", "--runs", "2"])
+    assert args.experiment == "energy" and args.runs == 2 and args.func.__name__ == "cmd_energy"

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import shutil
 
@@ -226,11 +225,9 @@ def test_writer_rejects_bad_settings(tmp_path):
 
 
 def parser():
-    from papf.recording.cli import register
+    from papf.cli import build_parser
 
-    p = argparse.ArgumentParser(prog="papf")
-    register(p.add_subparsers(dest="command", required=True))
-    return p
+    return build_parser()
 
 
 def cli(*argv: str) -> int:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 from pathlib import Path
@@ -181,11 +180,10 @@ def test_report_files(tmp_path):
 
 
 def test_cli_report_and_experiment_options(tmp_path, capsys):
-    from papf.report_cli import register
+    from papf.cli import build_parser
 
     write_synthetic(tmp_path / "apf-1.mcap")
-    parser = argparse.ArgumentParser(prog="papf")
-    register(parser.add_subparsers(dest="command", required=True))
+    parser = build_parser()
     args = parser.parse_args(["report", str(tmp_path), "--energy-model", "motor", "--json"])
     assert args.func(args) == 0
     assert '"energy_model": "motor"' in capsys.readouterr().out
@@ -198,18 +196,6 @@ def test_cli_report_and_experiment_options(tmp_path, capsys):
         args.func(args)
     with pytest.raises(ConfigError, match="paper, motor"):
         build_report([tmp_path], energy_model="magic")
-
-
-def test_energy_joins_the_experiment_command_of_plan_cli_in_either_order():
-    plan_cli = pytest.importorskip("papf.plan_cli")
-    from papf import report_cli
-
-    for order in ((plan_cli, report_cli), (report_cli, plan_cli)):
-        parser = argparse.ArgumentParser(prog="papf")
-        sub = parser.add_subparsers(dest="command", required=True)
-        for module in order:
-            module.register(sub)
-        assert parser.parse_args(["experiment", "energy", "--runs", "2"]).runs == 2
 
 
 # -- a real run through the whole process stack -------------------------------------------------

@@ -188,7 +188,7 @@ def _collect(session, keys, topics, out):
 def test_driver_and_emulator_processes(router, spawn, session):
     keys, py = Keys("t5drv"), sys.executable
     z = ["--connect", router, "--namespace", keys.ns]
-    spawn("emulator", [py, "-m", "papf.emulator", *z, "--bridge-namespace", "bot",
+    spawn("emulator", [py, "-m", "papf", "rosbot-emulator", *z, "--bridge-namespace", "bot",
                        "--cmd-timeout", "0"])
     spawn("base_driver", [py, "-m", "nodes.base_driver", "--driver", "rosbot", *z,
                           "--bridge-namespace", "bot", "--world", "open"])

@@ -4,19 +4,7 @@
 on the lockstep protocol of docs/architecture.md; ``--driver rosbot`` hands over to
 the real-robot bridge driver (``nodes.base_driver.rosbot_node.main``).
 
-Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
-
-=================  ===========  =====  =================================================
-key                type         dir    what
-=================  ===========  =====  =================================================
-``<ns>/events``    Event        in     ``run_started``: a new run at t = 0; ``run_ended`` stops it
-``<ns>/cmd_vel``   Twist        in     velocity command; ``stamp_ns`` = the scan it answers
-``<ns>/sim/pose``  Odometry     out    ground-truth pose, every odometry instant
-``<ns>/odom``      Odometry     out    odometry (= ground truth in sim), same instants
-``<ns>/wheels``    WheelStates  out    wheel speeds and motor torques, same instants
-``<ns>/clock``     Clock        out    sim time, same instants
-``<ns>/events``    Event        out    ``collision`` (x, y), ``watchdog_stop``, ``node_fault``
-=================  ===========  =====  =================================================
+Ports: :mod:`nodes.base_driver.ports` (``--help`` prints them).
 
 Settings: ``--world`` (packaged name or .toml path), ``--seed`` (noise), ``--odom-hz``
 (50), ``--scan-hz`` (10, lockstep instants), ``--watchdog`` (0.5 s of sim time),
@@ -35,7 +23,9 @@ import time
 from typing import TYPE_CHECKING
 
 from common.errors import PapfError
+from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from nodes.base_driver.ports import PORTS, VARIANTS
 from schemas.messages import Event
 from worlds import load_world
 
@@ -158,7 +148,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.base_driver",
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1])
+                                     epilog=__doc__.split("\n\n", 1)[1] + "\n"
+                                     + describe(PORTS, VARIANTS))
     parser.add_argument("--driver", choices=("sim", "rosbot"), default="sim",
                         help="simulated ROSbot (default) or the real robot over the ROS 2 bridge")
     parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")

@@ -3,17 +3,7 @@
 Emulates the PAPF paper's charge measurement (IV-C) from the base driver's messages
 (DESIGN.md §7; the models and constants: docs/energy.md).
 
-Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
-
-=================  ==============  =====  ==================================================
-key                type            dir    what
-=================  ==============  =====  ==================================================
-``<ns>/odom``      Odometry        in     v, w (and stamps) at 50 Hz in sim
-``<ns>/wheels``    WheelStates     in     per-wheel speed [rad/s] and torque [N m]
-``<ns>/battery/measured``  BatteryVoltage  in  the robot's pack voltage (replaces the model's)
-``<ns>/battery``   BatteryState    out    one per paired stamp: V, I, P, mAh, J, SoC, model
-``<ns>/alive/energy_meter``  liveliness  out  declared once subscribed
-=================  ==============  =====  ==================================================
+Ports: :mod:`nodes.energy_meter.ports` (``--help`` prints them).
 
 Settings: ``--model`` (``motor`` default, or ``paper`` = eq. (6)); ``--set name=value``,
 repeatable, overrides a constant of the pack (``initial_soc``, ``capacity_mAh``,
@@ -28,7 +18,9 @@ import argparse
 import sys
 
 from common.errors import ConfigError, PapfError
+from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
+from nodes.energy_meter.ports import PORTS, VARIANTS
 
 from .core import EnergyMeter
 from .models import MODELS
@@ -79,7 +71,9 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nodes.energy_meter",
-                                     description=__doc__.splitlines()[0])
+                                     description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog=describe(PORTS, VARIANTS))
     parser.add_argument("--model", choices=sorted(MODELS), default="motor",
                         help="power model: motor (DC motors, default) or paper (eq. 6)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",

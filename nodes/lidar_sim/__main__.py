@@ -7,15 +7,7 @@ it publishes ``scan`` with that stamp. A pose stamp going backwards (a new run)
 restarts the schedule. ``--source ros2`` hands over to the real sensor's bridge
 (``nodes.lidar_sim.ros2_source.main``).
 
-Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
-
-=================  ========  ===  =====================================================
-key                type      dir  what
-=================  ========  ===  =====================================================
-``<ns>/sim/pose``  Odometry  in   ground-truth pose (``--pose-source sim``, default)
-``<ns>/odom``      Odometry  in   odometry pose (``--pose-source odom``)
-``<ns>/scan``      Scan      out  one scan per scan instant, stamped with the pose's stamp
-=================  ========  ===  =====================================================
+Ports: :mod:`nodes.lidar_sim.ports` (``--help`` prints them).
 
 Settings: ``--world``, ``--seed`` (noise), ``--beams`` (300), ``--scan-hz`` (10),
 ``--noise-sd`` (0.01 m), ``--noise-rel`` (0), ``--pose-source sim|odom``, plus the
@@ -28,7 +20,9 @@ import argparse
 import sys
 
 from common.errors import PapfError
+from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
+from nodes.lidar_sim.ports import PORTS, VARIANTS
 from worlds import load_world
 
 NAME = "lidar_sim"
@@ -89,7 +83,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1])
+                                     epilog=__doc__.split("\n\n", 1)[1] + "\n"
+                                     + describe(PORTS, VARIANTS))
     parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
                         help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")
     parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")

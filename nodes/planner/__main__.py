@@ -1,20 +1,6 @@
 """Planner node: ``python -m nodes.planner --planner apf|papf|arapf|wang [options]``.
 
-Ports (``<ns>`` = ``--namespace``, default ``rosbot``):
-
-=========================  ==============  =====  ==========================================
-key                        type            dir    when
-=========================  ==============  =====  ==========================================
-``<ns>/scan``              Scan            in     each scan -> one cycle
-``<ns>/odom``              Odometry        in     paired with the scan (see below)
-``<ns>/goal``              Goal            in     sets the goal; answered with status ``ready``
-``<ns>/cmd_vel``           Twist           out    one per scan, ``stamp_ns`` = scan stamp
-``<ns>/planner/state``     PlannerState    out    after each cmd_vel (debug geometry)
-``<ns>/planner/status``    PlannerStatus   out    after each state; ``ready`` on a goal
-``<ns>/planner/params``    query (JSON)    in     list / change settings (nodes.planner.params)
-``<ns>/events``            Event           out    ``info`` when a setting changed at run time
-``<ns>/alive/planner``     liveliness      out    once subscribed and warmed up
-=========================  ==============  =====  ==========================================
+Ports: :mod:`nodes.planner.ports` (``--help`` prints them).
 
 Settings: ``--planner`` (algorithm), ``--params FILE.toml`` and ``--set name=value``
 (see docs/planners.md for every parameter), ``--realtime`` (pair scans with the latest
@@ -32,9 +18,11 @@ import sys
 import time
 
 from common.errors import ConfigError
+from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
+from nodes.planner.ports import PORTS, VARIANTS
 from nodes.planner.registry import PLANNERS, make_planner
 from schemas.messages import Event
 
@@ -43,7 +31,8 @@ NODE_NAME = "planner"
 
 def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog=describe(PORTS, VARIANTS))
     ap.add_argument("--planner", default="apf", choices=sorted(PLANNERS), help="algorithm")
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",

@@ -2,10 +2,7 @@
 
     python -m nodes.recorder --out run.mcap [--keys 'rosbot/**'] [--meta world=energy ...]
 
-Ports
-    subscribes  ``--keys`` (default ``<ns>/**``): any payload, recorded raw, bad ones too
-    publishes   nothing
-    liveliness  ``<ns>/alive/recorder``
+Ports: :mod:`nodes.recorder.ports` (``--help`` prints them); liveliness ``<ns>/alive/recorder``.
 
 Samples are queued by Zenoh itself (a FIFO channel handler: no Python runs on the
 receive thread) and drained in batches by the main thread into
@@ -22,7 +19,9 @@ from pathlib import Path
 import zenoh
 
 from common.errors import ConfigError, PapfError
+from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from nodes.recorder.ports import PORTS, VARIANTS
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
 
 NAME = "recorder"
@@ -125,7 +124,10 @@ def main(args: argparse.Namespace) -> int:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m nodes.recorder",
+                                     description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog=describe(PORTS, VARIANTS))
     add_recorder_args(parser)
     add_zenoh_args(parser)
     raise SystemExit(main(parser.parse_args()))

@@ -3,19 +3,11 @@
     python -m nodes.viewer [--host 127.0.0.1] [--port 8765] [--world W] [--goals accept|refuse]
 
 Open ``ws://HOST:PORT`` in Foxglove (Open connection -> Foxglove WebSocket) and load
-``docs/foxglove-layout.json``. Ports (:data:`PORTS`; ``<ns>`` = ``--namespace``):
-
-=========================  ==============  =====  ==========================================
-key                        type            dir    what
-=========================  ==============  =====  ==========================================
-``<ns>/<topic>``           see TOPICS      in     every topic of ``core.SUBSCRIBED``
-``<ns>/goal``              Goal            out    a pose/point published from the 3D panel
-                                                  (``--goals accept``; refused with a log
-                                                  line otherwise)
-``<ns>/planner/params``    query (JSON)    out    the Parameters panel: list and set
-``<ns>/alive/viewer``      liveliness      out    once the WebSocket server listens
-``ws://HOST:PORT``         Foxglove WS     out    the channels of ``core.CHANNELS``
-=========================  ==============  =====  ==========================================
+``docs/foxglove-layout.json``. Ports: :mod:`nodes.viewer.ports` (``--help`` prints them);
+besides them it queries ``<ns>/planner/params`` (the Parameters panel) and serves the
+channels of ``core.CHANNELS`` on ``ws://HOST:PORT``. A pose/point published from the 3D
+panel is published on ``<ns>/goal`` with ``--goals accept``, refused with a log line with
+``--goals refuse``.
 
 Exit code 2 on a bad setting (unknown world, port taken).
 """
@@ -34,16 +26,16 @@ import zenoh
 from foxglove.websocket import Capability, Parameter, ParameterType
 
 from common.errors import PapfError
+from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.viewer.convert import LOG_INFO, LOG_WARNING
 from nodes.viewer.core import GOAL_TOPICS, SUBSCRIBED, ViewCore, goal_from_client, param_sets
+from nodes.viewer.ports import PORTS, VARIANTS
 from nodes.viewer.sink import FoxgloveChannels
 from schemas.messages import Goal
 from worlds import load_world
 
 NAME = "viewer"
-PORTS = {"subscribes": SUBSCRIBED, "publishes": ("goal",), "queries": ("planner/params",),
-         "serves": "foxglove-websocket"}
 STATIC_EVERY_S = 1.0     # [s wall] world and goal re-sent for clients that join late
 PARAMS_TIMEOUT_S = 2.0   # [s] for the planner to answer a parameter query
 CLIENT = "__client__"    # inbox topic of what a Foxglove client published
@@ -104,7 +96,8 @@ def _parameter(name: str, value) -> Parameter:
 
 def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog="python -m nodes.viewer", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog=describe(PORTS, VARIANTS))
     add_view_args(ap)
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)

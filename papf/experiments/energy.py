@@ -108,9 +108,7 @@ def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
     return RunConfig(world=exp.world, planner=spec.planner, seed=spec.seed,
                      timeout_s=exp.timeout_s, record=str(spec.path), port=port,
                      energy_model=exp.energy_model, progress=False,
-                     # the recording then states the timeout: `papf report` can tell one
-                     extra_node_args={"recorder": ["--meta", f"timeout_s={exp.timeout_s:g}",
-                                                   "--meta", "experiment=energy"]})
+                     extra_node_args={"recorder": ["--meta", "experiment=energy"]})
 
 
 class LiveFigures:
@@ -295,23 +293,32 @@ def _mismatches(results: Sequence[tuple[RunSpec, RunResult]], report: Report) ->
     return bad
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m papf.experiments.energy --out DIR`` (same options as the subcommand)."""
-    import argparse
-    import sys
+def print_summary(res, console=None) -> None:
+    """The experiment's table (mean ± sd), PAPF vs APF next to the paper, and the wall time."""
+    from rich.console import Console  # rich: only to print
+    from rich.table import Table
 
-    from common.errors import PapfError
-    from papf.report_cli import add_energy_args, cmd_energy
+    from papf.report.report import REPORT_MD  # matplotlib: only once reported
+    from papf.report.tables import PAPER, change_pct
 
-    parser = argparse.ArgumentParser(prog="python -m papf.experiments.energy",
-                                     description=__doc__.splitlines()[0])
-    add_energy_args(parser)
-    try:
-        return cmd_energy(parser.parse_args(argv))
-    except PapfError as exc:
-        print(f"papf experiment energy: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    console = console or Console()
+    t = Table(title="energy experiment (runs that reached the goal: mean ± sd)")
+    for col in ("planner", "reached", "charge [mAh]", "energy [J]", "duration [s]", "path [m]"):
+        t.add_column(col, justify="right")
+    for s in res.report.summaries:
+        st = s.stats
+        t.add_row(s.planner, f"{s.reached}/{s.runs}", st["charge_mAh"].text(".2f"),
+                  st["energy_J"].text(".1f"), st["duration_s"].text(".2f"),
+                  st["path_length_m"].text(".3f"))
+    console.print(t)
+    apf, papf = res.report.summary("apf"), res.report.summary("papf")
+    if apf and papf:
+        for attr, label in (("charge_mAh", "charge"), ("duration_s", "duration"),
+                            ("path_length_m", "path length")):
+            console.print(f"PAPF vs APF {label}: {change_pct(apf.stats[attr], papf.stats[attr]):+.1f} %"
+                          f"   paper: {PAPER[attr]}", highlight=False)
+    for m in res.mismatches:
+        console.print(f"[red]report differs from the live run:[/] {m}")
+    console.print(f"report: {res.report.out_dir / REPORT_MD}")
+    console.print(f"wall time: {res.wall_s:.1f} s for {len(res.results)} runs and the report",
+                  highlight=False)

@@ -1,23 +1,17 @@
-"""The `papf` command (DESIGN.md §10). `papf <command> --help` for each command."""
+"""``papf run``: the whole simulated stack once, to an outcome (:mod:`papf.runner`)."""
 
 from __future__ import annotations
 
-import argparse
 import json
-import logging
-import signal
-import sys
 
-from common.errors import PapfError
-from papf.viewer_cli import add_view_flag
-
-log = logging.getLogger("papf")
+from papf.cli.view import add_view_flag
 
 
-def _add_run(sub) -> None:
+def register(sub) -> None:
     p = sub.add_parser("run", help="run the whole simulated stack once, to an outcome",
-                       description="Start router, lidar_sim, base_driver (sim), planner and "
-                                   "energy_meter as processes; drive to the world's goal; print a "
+                       description="Start the processes of the `sim` launch profile (router, "
+                                   "lidar_sim, base_driver (sim), planner, energy_meter, and the "
+                                   "recorder with --record); drive to the world's goal; print a "
                                    "summary. Exit code: 0 reached, 3 stagnated, 4 collision, "
                                    "5 timeout, 6 failed, 2 usage error.")
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
@@ -39,34 +33,45 @@ def _add_run(sub) -> None:
     p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
     add_view_flag(p)
-    p.set_defaults(func=_cmd_run)
+    p.set_defaults(func=cmd_run)
 
 
-def _cmd_run(args) -> int:
-    from papf.runner import RunConfig, run
+def run_config(args):
+    """The :class:`papf.runner.RunConfig` of parsed ``papf run`` options."""
+    from papf.runner import RunConfig  # zenoh: only when a run is made
 
     planner_args = [x for kv in args.set for x in ("--set", kv)]
     if args.params:
         planner_args += ["--params", args.params]
-    cfg = RunConfig(world=args.world, planner=args.planner, seed=args.seed,
-                    timeout_s=args.timeout, realtime=args.realtime, record=args.record,
-                    port=args.port, namespace=args.namespace, planner_args=planner_args,
-                    energy_model=args.energy_model,
-                    stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
-                    zenoh_mode=args.zenoh_mode, view=args.view,
-                    progress=None if not args.json else False)
-    result = run(cfg)
+    return RunConfig(world=args.world, planner=args.planner, seed=args.seed,
+                     timeout_s=args.timeout, realtime=args.realtime, record=args.record,
+                     port=args.port, namespace=args.namespace, planner_args=planner_args,
+                     energy_model=args.energy_model,
+                     stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
+                     zenoh_mode=args.zenoh_mode, view=args.view,
+                     progress=None if not args.json else False)
+
+
+def cmd_run(args) -> int:
+    from papf.runner import resolve_run, run
+
+    if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447)
+        print(resolve_run(run_config(args)).to_json())
+        return 0
+    result = run(run_config(args))
     if args.json:
         print(json.dumps(result.to_json()))
     else:
-        _print_summary(result)
+        print_summary(result)
     return result.exit_code
 
 
-def _print_summary(result) -> None:
-    from rich.console import Console
+def print_summary(result) -> None:
+    from rich.console import Console  # rich: only to print a table
     from rich.table import Table
 
     colour = "green" if result.outcome == "reached" else "red"
@@ -83,55 +88,3 @@ def _print_summary(result) -> None:
     for k, v in rows:
         t.add_row(k, v)
     Console().print(t)
-
-
-def _add_worlds(sub) -> None:
-    p = sub.add_parser("worlds", help="list the packaged worlds")
-    p.set_defaults(func=_cmd_worlds)
-
-
-def _cmd_worlds(args) -> int:
-    from worlds import load_world, packaged_worlds
-
-    for name in packaged_worlds():
-        print(f"{name:24} {load_world(name).description.splitlines()[0][:90]}")
-    return 0
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="papf", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    _add_run(sub)
-    _add_worlds(sub)
-    for register in _optional_commands():
-        register(sub)
-    return parser
-
-
-def _optional_commands():
-    """Subcommands that live with their feature's package."""
-    from papf.commands import registrars
-
-    return registrars()
-
-
-def _sigterm_as_interrupt(*_) -> None:
-    raise KeyboardInterrupt  # same clean stop as Ctrl-C: every child process is stopped
-
-
-def main(argv: list[str] | None = None) -> int:
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
-    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
-    args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except PapfError as exc:
-        print(f"papf {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"papf {args.command}: interrupted; every process was stopped", file=sys.stderr)
-        return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,54 @@
+"""A node's ports as data: what it subscribes to and what it publishes.
+
+Each node declares its ports in ``nodes/<node>/ports.py`` as tuples
+``(direction, key, message type)``:
+
+- direction ``"in"`` (the node needs it), ``"in?"`` (optional: used when something
+  publishes it) or ``"out"``;
+- key: the suffix under the robot namespace (``"scan"`` is ``<ns>/scan``); ``"**"`` is every
+  key (the recorder); a ``bridge:`` prefix names a key of the zenoh-bridge-ros2dds
+  namespace — the real robot's ROS 2 topics, published and consumed outside this stack;
+- message type: the schema class name (``"Scan"``, see :data:`schemas.keys.TOPICS`) or, on
+  bridge keys, the ROS 2 type (CDR).
+
+A node whose ports depend on an option declares ``VARIANTS``: ``{(option, value): ports}``.
+``python -m nodes.<node> --help`` prints them (:func:`describe`), and the launch profiles
+are checked against them (tests/test_node_graph.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+Port = tuple[str, str, str]
+DIRECTIONS = ("in", "in?", "out")
+BRIDGE = "bridge:"
+
+
+def select(ports: Sequence[Port], variants: Mapping[tuple[str, str], Sequence[Port]],
+           argv: Sequence[str]) -> tuple[Port, ...]:
+    """The ports of a node started with ``argv`` (the first variant whose option it sets)."""
+    argv = list(argv)
+    pairs = set(zip(argv, argv[1:], strict=False)) | {tuple(a.split("=", 1)) for a in argv
+                                                        if a.startswith("--") and "=" in a}
+    for option, chosen in variants.items():
+        if option in pairs:
+            return tuple(chosen)
+    return tuple(ports)
+
+
+def describe(ports: Sequence[Port], variants: Mapping[tuple[str, str], Sequence[Port]] = {},
+             ) -> str:
+    """Text table of the ports (and of each variant) for a ``--help`` epilog."""
+    blocks = [_table("ports (<ns> = --namespace, <bridge> = the ROS 2 bridge's):", ports)]
+    for (option, value), chosen in variants.items():
+        blocks.append(_table(f"ports with {option} {value}:", chosen))
+    return "\n\n".join(blocks)
+
+
+def _table(title: str, ports: Sequence[Port]) -> str:
+    lines = [title]
+    for direction, key, msg_type in ports:
+        shown = f"<bridge>/{key[len(BRIDGE):]}" if key.startswith(BRIDGE) else f"<ns>/{key}"
+        lines.append(f"  {direction:<4} {shown:<34} {msg_type}")
+    return "\n".join(lines)

@@ -1,0 +1,25 @@
+"""Ports of the base driver (see :mod:`common.ports`); ``--driver rosbot`` has its own."""
+
+SIM = (
+    ("in", "events", "Event"),           # run_started: a new run at t = 0; run_ended stops it
+    ("in", "cmd_vel", "Twist"),          # stamp_ns = the scan it answers (lockstep)
+    ("out", "sim/pose", "Odometry"),     # ground truth, every odometry instant
+    ("out", "odom", "Odometry"),         # odometry (= ground truth in sim)
+    ("out", "wheels", "WheelStates"),    # wheel speeds and motor torques
+    ("out", "clock", "Clock"),           # sim time
+    ("out", "events", "Event"),          # collision, watchdog_stop, node_fault
+)
+ROSBOT = (
+    ("in", "cmd_vel", "Twist"),
+    ("in", "events", "Event"),           # run_started starts the run clock, run_ended stops it
+    ("in", "bridge:odometry/filtered", "nav_msgs/Odometry"),   # the robot's EKF
+    ("in", "bridge:battery", "sensor_msgs/BatteryState"),      # pack voltage
+    ("out", "bridge:cmd_vel", "geometry_msgs/Twist"),          # the gated command
+    ("out", "odom", "Odometry"),
+    ("out", "wheels", "WheelStates"),    # derived from odometry
+    ("out", "clock", "Clock"),           # wall time since run_started
+    ("out", "battery/measured", "BatteryVoltage"),
+    ("out", "events", "Event"),          # watchdog_stop, node_fault
+)
+PORTS = SIM
+VARIANTS = {("--driver", "rosbot"): ROSBOT}

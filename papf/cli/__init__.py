@@ -1,0 +1,68 @@
+"""The ``papf`` command. ``papf <command> --help`` for each command.
+
+One module per subcommand (or family of subcommands), each exposing
+``register(subparsers)``; :data:`COMMANDS` lists them in ``--help`` order. The handlers
+import what they run when they run (the stack, pybullet, matplotlib, rosbags), so
+building the parser — ``papf --help``, and ``papf run`` before its first process — loads
+none of it. Nothing imports ``papf.cli``: it is the top of the house, and those imports
+cannot hide a cycle (``tests/test_layers.py`` checks).
+
+Exit codes: 0 done / reached, 2 usage or configuration error (one line, no traceback),
+3 stagnated, 4 collision, 5 timeout, 6 failed, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+
+from common.errors import PapfError
+from papf.cli import (
+    animate,
+    bench,
+    certs,
+    emulator,
+    experiment,
+    export,
+    info,
+    launch,
+    plan,
+    record,
+    recover,
+    replay,
+    report,
+    run,
+    view,
+    worlds,
+)
+
+COMMANDS = (run, worlds, launch, plan, experiment, report, record, replay, recover, info,
+            view, export, animate, bench, emulator, certs)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="papf", description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for module in COMMANDS:
+        module.register(sub)
+    return parser
+
+
+def _sigterm_as_interrupt(*_) -> None:
+    raise KeyboardInterrupt  # same clean stop as Ctrl-C: every child process is stopped
+
+
+def main(argv: list[str] | None = None) -> int:
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except PapfError as exc:
+        print(f"papf {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"papf {args.command}: interrupted; every process was stopped", file=sys.stderr)
+        return 130

@@ -1,0 +1,32 @@
+"""``papf make-certs DIR``: a test CA, certificates and the Zenoh configs of the secure split."""
+
+from __future__ import annotations
+
+import sys
+
+
+def register(sub) -> None:
+    p = sub.add_parser("make-certs", help="test CA, certificates and secure Zenoh configs",
+                       description="Write a test CA, robot/laptop certificates (openssl), a "
+                                   "password dictionary and the Zenoh configs of the secure "
+                                   "split (TLS + user/password + access control) into DIR.")
+    p.add_argument("dir", help="output directory (created)")
+    p.add_argument("--robot-host", action="append", default=[], required=True, metavar="HOST",
+                   help="IP or DNS name the laptop uses for the robot (repeatable; first = "
+                        "the laptop's connect endpoint)")
+    p.add_argument("--namespace", default="rosbot", help="our key namespace (rosbot)")
+    p.add_argument("--bridge-namespace", default="", help="zenoh-bridge-ros2dds namespace")
+    p.set_defaults(func=cmd_make_certs)
+
+
+def cmd_make_certs(args) -> int:
+    from nodes.base_driver.rosbot import BridgeTopics  # rosbags: only when writing configs
+    from papf.security import write_bundle
+
+    b = write_bundle(args.dir, args.robot_host, args.namespace, BridgeTopics(args.bridge_namespace))
+    print(f"wrote {b.dir}: ca.pem, robot.pem/.key, laptop.pem/.key, credentials.txt, "
+          "router.json5, robot.json5, laptop.json5, observer.json5\n"
+          f"robot:  papf launch robot --router-config {b.router} --zenoh-config {b.robot} "
+          "--listen tcp/127.0.0.1:7447 --listen tls/0.0.0.0:7448\n"
+          f"laptop: papf launch laptop --zenoh-config {b.laptop} --world W", file=sys.stderr)
+    return 0

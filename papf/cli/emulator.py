@@ -1,0 +1,33 @@
+"""``papf rosbot-emulator``: the ROSbot as seen through zenoh-bridge-ros2dds (:mod:`papf.emulator`)."""
+
+from __future__ import annotations
+
+from common.transport import add_zenoh_args
+
+
+def register(sub) -> None:
+    p = sub.add_parser("rosbot-emulator", help="emulate the ROSbot behind zenoh-bridge-ros2dds",
+                       description="Subscribe CDR cmd_vel, drive a unicycle with the ROSbot's "
+                                   "limits, publish CDR odometry/filtered, battery (and scan "
+                                   "with --world), as the real robot does through the bridge.")
+    p.add_argument("--bridge-namespace", default="", metavar="NS",
+                   help="bridge namespace of the emulated topics (default: none)")
+    p.add_argument("--world", help="world the robot stands in: scan it (start pose too)")
+    p.add_argument("--no-scan", action="store_true", help="no LaserScan even with --world")
+    p.add_argument("--scan-beams", type=int, default=720, help="LaserScan readings (720)")
+    p.add_argument("--seed", type=int, default=0, help="scan noise seed (0)")
+    p.add_argument("--rate", type=float, default=50.0, help="odometry rate [Hz] (50)")
+    p.add_argument("--cmd-timeout", type=float, default=0.5, metavar="S",
+                   help="controller cmd_vel_timeout [s] (0.5; 0 = never)")
+    p.add_argument("--battery-voltage", type=float, default=12.0, metavar="V",
+                   help="pack voltage reported on battery (12.0)")
+    p.add_argument("--trace", metavar="FILE", help="append a JSON line per command received")
+    p.add_argument("--log-level", default="INFO")
+    add_zenoh_args(p)
+    p.set_defaults(func=cmd_emulator)
+
+
+def cmd_emulator(args) -> int:
+    from papf.emulator import run  # rosbags (the CDR codec): only when emulating
+
+    return run(args)

@@ -1,0 +1,130 @@
+"""``papf experiment energy | paper-tests | random``: many runs, a table, plots.
+
+``energy`` is the PAPF paper's energy experiment (IV-C) through the process stack,
+recorded (:mod:`papf.experiments.energy`); ``paper-tests`` every paper world with every
+planner (:mod:`papf.experiments.paper_tests`); ``random`` success and collision rates on
+seeded random worlds (:mod:`papf.experiments.random_worlds`). Exit code 0 done, 2 usage,
+6 an energy run failed or its report disagrees with the live figures.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from common.errors import ConfigError
+from nodes.planner.registry import PLANNERS
+from papf.experiments.energy import TIMEOUT_S, WORLD
+from papf.experiments.paper_tests import PAPER_WORLDS
+
+
+def register(sub) -> None:
+    p = sub.add_parser("experiment", help="run an experiment (many runs, a table, plots)",
+                       description="Experiments: many runs of planners on worlds, "
+                                   "tabulated. `papf experiment NAME --help` for each.")
+    exp = p.add_subparsers(dest="experiment", required=True, metavar="EXPERIMENT")
+    _add_energy(exp)
+    _add_paper_tests(exp)
+    _add_random(exp)
+
+
+def _add_energy(exp) -> None:
+    p = exp.add_parser(
+        "energy", help="the PAPF paper's energy experiment (IV-C): planners x runs, recorded",
+        description="World 'energy'; every planner x --runs, run k with seed S+k, each recorded "
+                    "to OUT/<planner>-<k>.mcap through the whole process stack; then the "
+                    "report in OUT.")
+    p.add_argument("--runs", type=int, default=3, help="runs per planner (default 3)")
+    p.add_argument("--planners", default="apf,papf", help="comma-separated (default apf,papf)")
+    p.add_argument("--out", default="energy-experiment", metavar="DIR",
+                   help="directory for the recordings and the report (default energy-experiment)")
+    p.add_argument("--seed", type=int, default=0, help="base seed S: run k uses S+k (default 0)")
+    p.add_argument("--world", default=WORLD, help=f"world (default {WORLD})")
+    p.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="S",
+                   help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
+    p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
+                   help="the live meter's model (default motor)")
+    p.set_defaults(func=cmd_energy)
+
+
+def _add_common(p, default_out: str) -> None:
+    p.add_argument("--planners", default="apf,papf,arapf,wang", help="comma-separated")
+    p.add_argument("--out", default=default_out, metavar="DIR", help="output directory")
+    p.add_argument("--seed", type=int, default=0, help="noise (and world-set) seed (default 0)")
+    p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="planner setting for every planner, repeatable (e.g. a shared APF one)")
+
+
+def _add_paper_tests(exp) -> None:
+    p = exp.add_parser("paper-tests", help="every paper world with every planner: a Table-2 table",
+                       description="Run PAPF Tests I-VI, AR-APF Tests I-III and Wang's 2-D worlds "
+                                   "with each planner (through the process stack unless --offline); "
+                                   "write paper-tests.md/.csv and one PNG per world into --out.")
+    _add_common(p, "paper-tests")
+    p.add_argument("--worlds", help="comma-separated subset of the paper worlds")
+    p.add_argument("--offline", action="store_true", help="offline planner runs (no processes)")
+    p.set_defaults(func=cmd_paper_tests)
+
+
+def _add_random(exp) -> None:
+    p = exp.add_parser("random", help="success and collision rates on seeded random worlds",
+                       description="Generate N solvable random worlds (obstacle fields, dead ends, "
+                                   "narrow gaps), run every planner on each, report rates per "
+                                   "planner into --out (random.md, random.csv, worlds/).")
+    p.add_argument("--n", type=int, default=50, help="solvable worlds (default 50)")
+    _add_common(p, "random-worlds")
+    p.add_argument("--plots", action="store_true", help="one PNG per world with every path")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--offline", dest="mode", action="store_const", const="offline",
+                      help="offline planner runs (default; fast)")
+    mode.add_argument("--stack", dest="mode", action="store_const", const="stack",
+                      help="every run through the whole process stack (slow)")
+    p.set_defaults(func=cmd_random, mode="offline")
+
+
+def planner_list(text: str) -> list[str]:
+    """``"apf,papf"`` -> ``["apf", "papf"]``; ConfigError names the unknown ones."""
+    names = [p.strip() for p in text.split(",") if p.strip()]
+    bad = [p for p in names if p not in PLANNERS]
+    if bad or not names:
+        raise ConfigError(f"--planners {text!r}: unknown {bad}; valid: {sorted(PLANNERS)}")
+    return names
+
+
+def cmd_energy(args) -> int:
+    from papf.experiments.energy import EnergyExperiment, print_summary, run_experiment
+
+    planners = tuple(p.strip() for p in args.planners.split(",") if p.strip())
+    exp = EnergyExperiment(out=Path(args.out), runs=args.runs, planners=planners, seed=args.seed,
+                           world=args.world, timeout_s=args.timeout,
+                           energy_model=args.energy_model)  # validated by run_experiment
+    result = run_experiment(exp)
+    print_summary(result)
+    return result.exit_code
+
+
+def cmd_paper_tests(args) -> int:
+    from papf.experiments.paper_tests import run_paper_tests  # pybullet, matplotlib: when run
+
+    worlds = PAPER_WORLDS
+    if args.worlds:
+        worlds = tuple(w.strip() for w in args.worlds.split(",") if w.strip())
+        bad = [w for w in worlds if w not in PAPER_WORLDS]
+        if bad:
+            raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
+    run_paper_tests(args.out, planner_list(args.planners), args.seed,
+                    "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set)
+    print((Path(args.out) / "paper-tests.md").read_text())
+    print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
+    return 0
+
+
+def cmd_random(args) -> int:
+    from papf.experiments.random_worlds import run_random  # pybullet, matplotlib: when run
+
+    run_random(args.out, args.n, args.seed, planner_list(args.planners), args.mode, args.timeout,
+               args.plots, sets=args.set)
+    print((Path(args.out) / "random.md").read_text())
+    print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
+    return 0

@@ -1,0 +1,63 @@
+"""``papf launch PROFILE``: this host's share of the stack, as a launch profile says
+(:mod:`papf.launch`; profiles in ``papf/profiles/``, format in docs/robot.md)."""
+
+from __future__ import annotations
+
+import json
+
+from papf.cli.view import add_view_flag
+
+
+def register(sub) -> None:
+    p = sub.add_parser("launch", help="start this host's part of the stack from a profile",
+                       description="Profiles: sim, robot, laptop, hil-robot, hil-laptop (or a "
+                                   ".toml path). Exit code as `papf run` for profiles that drive "
+                                   "a run; 0 after Ctrl-C for the others.")
+    p.add_argument("profile", help="packaged profile name or .toml path")
+    p.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                   help="where this host's nodes connect, e.g. tcp/192.168.1.10:7447")
+    p.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
+                   help="the router's endpoints (profiles with a router)")
+    p.add_argument("--namespace", default="rosbot", help="robot key namespace (rosbot)")
+    p.add_argument("--bridge-namespace", help="zenoh-bridge-ros2dds namespace (default none)")
+    p.add_argument("--zenoh-config", metavar="FILE", help="Zenoh config of the nodes (secure split)")
+    p.add_argument("--router-config", metavar="FILE", help="Zenoh config of the router")
+    p.add_argument("--world", help="world (runs; robot side: its start pose)")
+    p.add_argument("--planner", help="apf | papf | arapf | wang")
+    p.add_argument("--seed", type=int)
+    p.add_argument("--record", metavar="F.mcap", help="record every message here")
+    p.add_argument("--energy-model", choices=("motor", "paper"))
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="planner parameter, repeatable")
+    p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="run-time limit (300)")
+    p.add_argument("--stall-timeout", type=float, default=20.0, metavar="S",
+                   help="fail a run after S wall seconds without the driver's clock (20)")
+    p.add_argument("--startup-timeout", type=float, default=60.0, metavar="S")
+    p.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+    p.add_argument("--dry-run", action="store_true", help="print the resolved process list as JSON, start nothing")
+    p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    add_view_flag(p)
+    p.set_defaults(func=cmd_launch)
+
+
+def cmd_launch(args) -> int:
+    from papf.graph import LaunchOptions
+    from papf.launch import launch  # zenoh: only when launching
+
+    values = {"world": args.world, "planner": args.planner, "seed": args.seed,
+              "record": args.record, "energy_model": args.energy_model,
+              "bridge_namespace": args.bridge_namespace, "view": args.view}
+    opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
+                        args.router_config, {k: v for k, v in values.items() if v is not None},
+                        [x for kv in args.set for x in ("--set", kv)], args.timeout,
+                        startup_timeout_s=args.startup_timeout, stall_s=args.stall_timeout,
+                        verbose=args.verbose, dry_run=args.dry_run)
+    result = launch(opt)
+    if result is None:
+        return 0
+    if args.json:
+        print(json.dumps(result.to_json()), flush=True)
+    else:
+        print(f"papf launch {args.profile}: {result.outcome} after {result.sim_time_s:.2f} s "
+              f"({result.path_length_m:.2f} m, {result.charge_mAh:.2f} mAh) {result.reason}")
+    return 130 if result.reason == "interrupted" else result.exit_code

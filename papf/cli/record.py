@@ -1,0 +1,23 @@
+"""``papf record F.mcap``: every message of a namespace into an MCAP, until Ctrl-C.
+
+The options are the recorder node's own (:func:`nodes.recorder.__main__.add_recorder_args`).
+"""
+
+from __future__ import annotations
+
+from common.transport import add_zenoh_args
+from nodes.recorder.__main__ import add_recorder_args
+from nodes.recorder.__main__ import main as recorder_main
+
+
+def register(sub) -> None:
+    p = sub.add_parser("record", help="record every message of a namespace into an MCAP",
+                       description="Record until Ctrl-C (the file is then complete).")
+    p.add_argument("out", metavar="F.mcap", help="recording to write")
+    add_recorder_args(p, out_flag=False)
+    add_zenoh_args(p)
+    p.set_defaults(func=cmd_record)
+
+
+def cmd_record(args) -> int:
+    return recorder_main(args)

@@ -1,0 +1,40 @@
+"""``papf recover BROKEN.mcap [FIXED.mcap]``: salvage a truncated recording (:mod:`papf.recording.recover`)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from common.errors import PapfError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("recover", help="salvage a truncated recording",
+                       description="Copy every complete message of a cut-short MCAP "
+                                   "into a new, valid file.")
+    p.add_argument("broken", metavar="BROKEN.mcap")
+    p.add_argument("fixed", metavar="FIXED.mcap", nargs="?",
+                   help="output (default: BROKEN.recovered.mcap)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.set_defaults(func=cmd_recover)
+
+
+def cmd_recover(args) -> int:
+    from papf.recording.recover import recover  # mcap: only when recovering
+
+    broken = Path(args.broken)
+    fixed = Path(args.fixed) if args.fixed else broken.with_suffix(".recovered.mcap")
+    try:
+        stats = recover(broken, fixed)
+    except PapfError as exc:
+        print(f"papf recover: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps({"output": str(fixed), "messages": stats.messages,
+                          "log_span_s": stats.log_span_s, "receive_span_s": stats.receive_span_s,
+                          "channels": stats.channels, "complete": stats.complete,
+                          "skipped_chunks": stats.skipped_chunks, "stopped_at": stats.stopped_at}))
+    else:
+        print(f"{fixed}: {stats.summary()}")
+    return 0

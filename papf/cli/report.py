@@ -1,0 +1,39 @@
+"""``papf report DIR|FILES...``: the energy report of recorded runs (:mod:`papf.report`).
+
+Exit code 0 done, 2 bad input or an unreadable recording (a PapfError, printed by
+:func:`papf.cli.main`).
+"""
+
+from __future__ import annotations
+
+import json
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "report", help="energy report of recorded runs (report.md, report.csv, PNGs)",
+        description="Read MCAP recordings only; write report.md, report.csv, trajectories.png, "
+                    "charge.png and motion.png. Charge and energy are re-metered from the "
+                    "recorded odometry and wheel states.")
+    p.add_argument("inputs", nargs="+", metavar="DIR|FILE",
+                   help="directories (every *.mcap inside) and/or .mcap files")
+    p.add_argument("--energy-model", choices=("paper", "motor"),
+                   help="re-meter with this model (default: the model the live meter ran)")
+    p.add_argument("--out", metavar="DIR",
+                   help="output directory (default: the one DIR given, else the first file's)")
+    p.add_argument("--json", action="store_true", help="print per-run figures as JSON lines")
+    p.set_defaults(func=cmd_report)
+
+
+def cmd_report(args) -> int:
+    from papf.report.report import build_report  # matplotlib: only when reporting
+    from papf.report.tables import summary_markdown
+
+    report = build_report(args.inputs, args.out, args.energy_model)
+    if args.json:
+        for m in report.runs:
+            print(json.dumps(m.row()))
+        return 0
+    print(summary_markdown(report.summaries))
+    print(f"wrote {', '.join(str(f) for f in report.files)}")
+    return 0
