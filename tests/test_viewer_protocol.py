@@ -202,7 +202,7 @@ def test_replay_view_serves_a_recording(router, tmp_path):
         assert client.wait_for(lambda: "/odom" in client.topics(), 30.0)
         client.subscribe({"/odom", "/robot/pose", "/world"})
         assert client.wait_for(lambda: len(client.messages["/odom"]) >= 10, 30.0)
-        assert client.messages["/world"]
+        assert client.wait_for(lambda: bool(client.messages["/world"]), 10.0)   # sent every second
         client.close()
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=30)
