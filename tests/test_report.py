@@ -152,7 +152,8 @@ def test_report_files(tmp_path):
             write_synthetic(runs / f"{planner}-{k}.mcap", planner, seed=k, speed=speed + 0.01 * k)
     report = build_report([runs], tmp_path / "out")
     out = tmp_path / "out"
-    names = {"report.md", "report.csv", "trajectories.png", "charge.png", "motion.png"}
+    names = {"report.md", "report.csv", "trajectories.png", "charge.png", "motion.png",
+             "mind.png"}
     assert {p.name for p in report.files} == names
     for png in ("trajectories.png", "charge.png", "motion.png"):
         assert (out / png).read_bytes()[:8] == PNG_MAGIC
