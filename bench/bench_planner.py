@@ -25,17 +25,17 @@ import time
 import numpy as np
 
 from nodes.planner.registry import make_planner
-from nodes.planner.toysim import ToyWorld, box_segments, cast_scan
+from papf.toysim import box_segments, cast_scan, toy_world
 from schemas.messages import Goal, Odometry
 
-RING = ToyWorld(segments=tuple(
+RING = toy_world(segments=tuple(
     (0.8 * math.cos(a0), 0.8 * math.sin(a0), 0.8 * math.cos(a1), 0.8 * math.sin(a1))
     for a0, a1 in zip(np.linspace(0.05, 2 * math.pi - 0.05, 41)[:-1],
                       np.linspace(0.05, 2 * math.pi - 0.05, 41)[1:], strict=True)))
-ENERGY = ToyWorld(circles=((5.0, -0.2, 0.2),),
+ENERGY = toy_world(circles=((5.0, -0.2, 0.2),),
                   segments=box_segments(2.5, 0.1, 0.4, 0.4) + box_segments(7.5, 0.15, 0.05, 0.7))
 SCENES = {  # world, start x range [m], goal
-    "open": (ToyWorld(), (0.0, 2.0), (10.0, 0.0)),
+    "open": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
     "energy": (ENERGY, (0.0, 2.0), (10.0, 0.0)),
     "trap": (RING, (-0.05, 0.05), (3.0, 0.0)),
 }

@@ -1,4 +1,4 @@
-"""ROS 2 messages without ROS: build, encode and decode them as CDR (DESIGN.md §5).
+"""ROS 2 messages without ROS: build, encode and decode them as CDR (docs/architecture.md "The robot").
 
 ``zenoh-bridge-ros2dds`` carries each ROS 2 topic as a Zenoh key whose payload is the
 message in CDR with its 4-byte encapsulation header (``00 01 00 00`` = CDR, little

@@ -1,4 +1,4 @@
-"""Zenoh plumbing shared by every node process (DESIGN.md §2).
+"""Zenoh plumbing shared by every node process (docs/architecture.md "Transport").
 
 - :func:`add_zenoh_args` / :func:`config_from_args`: ``--mode/--connect/--listen/
   --namespace/--zenoh-config`` -> ``zenoh.Config`` (multicast scouting off unless asked).

@@ -1,6 +1,6 @@
 """`papf rosbot-emulator`: the ROSbot as seen through ``zenoh-bridge-ros2dds``, without a robot.
 
-What a driver sees of the real robot (DESIGN.md §5), on the bridge keys
+What a driver sees of the real robot (docs/architecture.md "The robot"), on the bridge keys
 ``[<bridge-ns>/]<topic>``, all CDR with the encapsulation header:
 
 =======================  ===========================  ===  ==================================
@@ -35,13 +35,13 @@ import time
 from common import ros2
 from common.errors import SchemaError
 from common.transport import open_node, setup_logging
-from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.limits import CommandGate, RosbotLimits, unicycle
 from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
 from worlds import load_world
 
 NAME = "rosbot_emulator"
 BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
-SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (DESIGN.md §5)
+SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (docs/architecture.md "The robot")
 NO_TIMEOUT_NS = 10**18              # "never": --cmd-timeout 0
 
 
@@ -63,13 +63,7 @@ class EmulatedRosbot:
     def step(self, t_ns: int, dt_s: float) -> None:
         """Apply the gated command over ``dt_s`` (exact arc of constant v, w)."""
         self.v, self.w, _ = self.gate.output(t_ns, dt_s)
-        x, y, yaw = self.pose
-        if abs(self.w) < 1e-9:
-            x, y = x + self.v * dt_s * math.cos(yaw), y + self.v * dt_s * math.sin(yaw)
-        else:
-            r, yaw1 = self.v / self.w, yaw + self.w * dt_s
-            x, y = x + r * (math.sin(yaw1) - math.sin(yaw)), y - r * (math.cos(yaw1) - math.cos(yaw))
-            yaw = yaw1
+        x, y, yaw = unicycle(*self.pose, self.v, self.w, dt_s)
         self.pose = Pose2D(x, y, math.atan2(math.sin(yaw), math.cos(yaw)))
 
     @property

@@ -28,6 +28,7 @@ class PlanResult:
     min_clearance_m: float         # closest approach of the footprint / point to an obstacle [m]
     collisions: int
     states: list = field(default_factory=list)   # keep_states: PlannerState (2-D) or Plan (3-D) per cycle
+    road: dict = field(default_factory=dict)     # road worlds: left_road, lane_changes, min/max speed
 
     @property
     def length_m(self) -> float:
@@ -42,7 +43,8 @@ class PlanResult:
                 "seed": self.seed, "duration_s": round(self.duration_s, 6),
                 "path_length_m": round(self.length_m, 6), "sim_time_s": round(self.sim_time_s, 6),
                 "collisions": self.collisions,
-                "min_clearance_m": round(self.min_clearance_m, 6), "reason": self.reason}
+                "min_clearance_m": round(self.min_clearance_m, 6), **self.road,
+                "reason": self.reason}
 
 
 def write_path(result: PlanResult, out: str | Path) -> None:

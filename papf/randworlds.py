@@ -28,6 +28,7 @@ import numpy as np
 
 from common.errors import ConfigError
 from worlds import World, parse_world
+from worlds.geometry import signed_distance
 
 KINDS = ("field", "dead_end", "gap")
 ROBOT_RADIUS_M = math.hypot(0.200, 0.235) / 2   # [m] 0.154: the chassis box's circumscribed disc
@@ -40,24 +41,7 @@ U_WIDTH_M = (0.6, 1.6)     # [m] dead-end inner widths
 U_DEPTH_M = (0.4, 1.5)     # [m] dead-end depths
 
 
-# -- geometry ---------------------------------------------------------------------
-def signed_distance(world: World, pts: np.ndarray) -> np.ndarray:
-    """Distance from each (x, y) point to the nearest obstacle footprint [m] (< 0 inside)."""
-    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-    best = np.full(pts.shape[0], np.inf)
-    for ob in world.obstacles:
-        rel = pts - np.asarray(ob.center[:2])
-        if ob.shape == "box":
-            c, s = math.cos(ob.yaw), math.sin(ob.yaw)
-            q = np.abs(np.column_stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]]))
-            q = q - np.array(ob.size) / 2
-            d = np.hypot(*np.maximum(q, 0.0).T) + np.minimum(q.max(axis=1), 0.0)
-        else:
-            d = np.hypot(rel[:, 0], rel[:, 1]) - ob.radius
-        best = np.minimum(best, d)
-    return best
-
-
+# -- solvability ---------------------------------------------------------------------
 def occupancy(world: World, grid_m: float = GRID_M, inflate_m: float = ROBOT_RADIUS_M,
               margin_m: float = 0.5):
     """(blocked bool grid [iy, ix], origin (x0, y0) [m]) over the world's extent + margin."""
@@ -220,7 +204,7 @@ def generate_solvable(n: int, seed: int = 0, kinds=KINDS) -> tuple[list[World], 
 
 
 def world_to_toml(world: World) -> str:
-    """The world in the TOML format of DESIGN.md §9 (walls written as yawed boxes)."""
+    """The world in the TOML format of docs/worlds.md (walls written as yawed boxes)."""
     def v(x):
         return "[" + ", ".join(repr(float(a)) for a in x) + "]"
 

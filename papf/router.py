@@ -1,4 +1,4 @@
-"""The embedded Zenoh router (DESIGN.md §2): ``python -m papf.router``.
+"""The embedded Zenoh router (docs/architecture.md "Transport"): ``python -m papf.router``.
 
 Runs a Zenoh session in ``router`` mode listening on ``tcp/127.0.0.1:7447`` (by
 default) until SIGINT/SIGTERM, so no external ``zenohd`` is needed.

@@ -27,6 +27,7 @@ log = logging.getLogger("papf.run")
 GOAL_HANDSHAKE_S = 15.0  # [s wall] for the planner to acknowledge the goal
 STALL_S = 20.0           # [s wall] no sim-clock progress for this long = the stack is stuck
 FIGURES_S = 10.0         # [s wall] for battery/pose samples to reach t_end
+RECORDER_ACK_S = 15.0    # [s wall] for the recorder to close its file after run_ended
 
 
 class RunSequence:
@@ -130,11 +131,29 @@ class RunSequence:
             log.warning("figures at t_end=%.2f s incomplete (battery/pose samples missing)",
                         (self.monitor.t_end_ns or 0) / NS)
 
-    def end(self, result: RunResult) -> None:
-        """``run_ended`` with the result as JSON; then stop listening."""
-        for sub in self._subs:
-            sub.undeclare()
-        self._subs.clear()
+    def end(self, result: RunResult) -> bool:
+        """``run_ended`` with the result as JSON; then, if a recorder runs, wait (at most
+        :data:`RECORDER_ACK_S`) for its ``recording_closed``: its file is then complete.
+        Stop listening. False if a recorder runs and did not acknowledge."""
         self.session.put(self.keys.events, Event(
             stamp_ns=self.monitor.t_end_ns or max(self.monitor.clock_ns, 0), kind="run_ended",
             source="launcher", detail=json.dumps(result.to_json())).to_bytes())
+        closed = self._wait_for_recorder()
+        for sub in self._subs:
+            sub.undeclare()
+        self._subs.clear()
+        return closed
+
+    def _wait_for_recorder(self) -> bool:
+        recorder = [c for c in self.sup.children if c.name == "recorder"]
+        if not recorder:
+            return True
+        deadline = time.monotonic() + RECORDER_ACK_S
+        while time.monotonic() < deadline and recorder[0].returncode is None:
+            if any(t == "events" and m.kind == "recording_closed" and m.source == "recorder"
+                   for t, m in self.drain(0.05)):
+                return True
+        log.warning("the recorder did not confirm its file closed within %g s%s", RECORDER_ACK_S,
+                    f" (it exited with code {recorder[0].returncode})"
+                    if recorder[0].returncode is not None else "")
+        return False

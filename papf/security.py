@@ -1,4 +1,4 @@
-"""The secure split: Zenoh TLS, user/password and access control (DESIGN.md §2, docs/robot.md).
+"""The secure split: Zenoh TLS, user/password and access control (docs/architecture.md "Transport", docs/robot.md).
 
 ``papf make-certs DIR --robot-host 192.168.1.10`` writes a test bundle:
 

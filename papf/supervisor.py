@@ -83,18 +83,17 @@ class Supervisor:
         c = dead[0]
         return f"{c.name} exited with code {c.returncode}: " + " | ".join(list(c.tail)[-6:])
 
-    def stop(self, grace_s: float = 3.0, last: tuple[str, ...] = (), settle_s: float = 0.3) -> None:
+    def stop(self, grace_s: float = 3.0, last: tuple[str, ...] = ()) -> None:
         """Stop every child: SIGTERM, then SIGKILL after ``grace_s``.
 
         Children named in ``last`` are stopped afterwards, one stage each in that order,
-        ``settle_s`` after the previous stage exited — e.g. ``("recorder", "router")`` so a
-        recorder gets every message already published before the router goes.
+        each once the previous stage has exited — e.g. ``("recorder", "router")``: a recorder
+        that has not closed its file yet (no ``run_ended``: an interrupted run) still gets
+        every message the router forwards before the router goes.
         """
         stages = [[c for c in self.children if c.name not in last]]
         stages += [[c for c in self.children if c.name == name] for name in last]
-        for i, stage in enumerate(stages):
-            if i and stage:
-                time.sleep(settle_s)
+        for stage in stages:
             _stop_stage(stage, grace_s)
         for child in self.children:  # a group may outlive its leader
             _signal_group(child.proc, signal.SIGKILL)

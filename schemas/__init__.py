@@ -1,4 +1,4 @@
-"""Message definitions shared by every node (DESIGN.md §3). Import from here."""
+"""Message definitions shared by every node (docs/architecture.md "Messages"). Import from here."""
 
 from common.errors import SchemaError
 from schemas.base import Message

@@ -1,7 +1,7 @@
 """Message base: frozen dataclasses <-> msgpack, validation and JSON Schema.
 
 A message class declares its fields with type annotations; the annotation
-decides the wire form and the checks (DESIGN.md §3):
+decides the wire form and the checks (docs/architecture.md "Messages"):
 
 ==============================  =====================================  ======================
 annotation                      wire form (msgpack)                    check

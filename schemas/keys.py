@@ -1,4 +1,4 @@
-"""Zenoh key expressions of one robot namespace, and the message type on each (DESIGN.md §2)."""
+"""Zenoh key expressions of one robot namespace, and the message type on each (docs/architecture.md "Transport")."""
 
 from __future__ import annotations
 

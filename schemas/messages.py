@@ -1,4 +1,4 @@
-"""Every message of the stack, defined once (DESIGN.md §3).
+"""Every message of the stack, defined once (docs/architecture.md "Messages").
 
 Conventions: time is integer nanoseconds of *sim time* in sim runs (``stamp_ns``);
 lengths in metres, angles in radians, speeds in m/s and rad/s. Poses are in the
@@ -129,7 +129,11 @@ class PlannerState(Message):
     top_quarks: Points = field((), unit="m")
     virtual_walls: Paths = field((), unit="m", doc="polylines of virtual wall points")
     virtual_obstacles: Points = field((), unit="m")
-    obstacle_count: int = field(0, doc="obstacle points used this cycle")
+    obstacle_count: int = field(0, doc="obstacle points (IAPF: tracks) used this cycle")
+    local_minimum_count: int = field(0, doc="IAPF eq. 24: predicted points near the solid line")
+    lane_goal_y: float = field(float("nan"), unit="m", nonfinite=True,
+                               doc="IAPF temporary lane goal y; nan when none")
+    v_target: float = field(0.0, unit="m/s", doc="speed the planner aims at (IAPF eq. 26)")
     compute_ns: int = field(0, unit="ns", doc="wall time the cycle took (not deterministic)")
 
 
@@ -154,7 +158,7 @@ class Clock(Message):
 
 
 EVENT_KINDS = ("run_started", "run_ended", "goal_reached", "collision", "timeout",
-               "stagnated", "node_fault", "watchdog_stop", "info")
+               "stagnated", "node_fault", "watchdog_stop", "info", "recording_closed")
 
 
 @message("Event", 1)

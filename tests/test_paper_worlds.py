@@ -18,8 +18,9 @@ from papf.experiments.paper_tests import (
 from papf.experiments.random_worlds import kind_of, summarize
 from papf.experiments.trials import Trial, markdown_table
 from papf.plan import FootprintChecker
-from papf.randworlds import is_solvable, signed_distance
+from papf.randworlds import is_solvable
 from worlds import load_world, packaged_worlds
+from worlds.geometry import signed_distance
 
 WANG_3D = [w for w in packaged_worlds() if w.startswith("wang-3d-")]
 

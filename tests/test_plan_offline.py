@@ -20,10 +20,10 @@ from papf.randworlds import (
     generate,
     generate_solvable,
     is_solvable,
-    signed_distance,
     world_to_toml,
 )
 from worlds import load_world, parse_world
+from worlds.geometry import signed_distance
 
 try:
     import tomllib

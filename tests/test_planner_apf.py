@@ -18,7 +18,7 @@ from nodes.planner.apf import (
 )
 from nodes.planner.core import Planner, scan_view
 from nodes.planner.registry import APFStrategy, load_params, make_planner
-from nodes.planner.toysim import ToyWorld, simulate
+from papf.toysim import simulate, toy_world
 from schemas.messages import Goal, Odometry, Scan
 
 P = APFParams()
@@ -168,7 +168,7 @@ def test_params_file_and_set_overrides(tmp_path):
 
 # -- closed loop -------------------------------------------------------------------
 def test_point_robot_reaches_goal_past_a_circle():
-    world = ToyWorld(circles=((2.0, 0.6, 0.3),))
+    world = toy_world(circles=((2.0, 0.6, 0.3),))
     r = simulate(make_planner("apf"), world, start=(0.0, 0.0, 0.0), goal=(4.0, 0.0),
                  max_time_s=120)
     assert r.status == "reached"
@@ -177,6 +177,6 @@ def test_point_robot_reaches_goal_past_a_circle():
 
 
 def test_point_robot_open_field_is_deterministic():
-    a = simulate(make_planner("apf"), ToyWorld(), goal=(2.0, 1.0), max_time_s=60)
-    b = simulate(make_planner("apf"), ToyWorld(), goal=(2.0, 1.0), max_time_s=60)
+    a = simulate(make_planner("apf"), toy_world(), goal=(2.0, 1.0), max_time_s=60)
+    b = simulate(make_planner("apf"), toy_world(), goal=(2.0, 1.0), max_time_s=60)
     assert a.status == "reached" and np.array_equal(a.path, b.path)

@@ -22,8 +22,8 @@ from nodes.planner.arapf import (
 )
 from nodes.planner.core import scan_view
 from nodes.planner.registry import make_planner
-from nodes.planner.toysim import ToyWorld, box_segments, cast_scan, simulate
 from papf.plan import plan
+from papf.toysim import box_segments, cast_scan, simulate, toy_world
 from schemas.messages import Odometry
 
 AP = ARAPFParams()
@@ -33,7 +33,7 @@ K_VIRTUAL = 10 * 5 / 300            # k_RW = k_RD = 10 k_RO, k_RO = 5 / L, L = 3
 
 
 def view_of(*segments, x=0.0, y=0.0, yaw=0.0):
-    s = cast_scan(ToyWorld(segments=segments), x, y, yaw)
+    s = cast_scan(toy_world(segments=segments), x, y, yaw)
     return scan_view(s, Odometry(stamp_ns=0, x=x, y=y, yaw=yaw, v=0.0, w=0.0))
 
 
@@ -188,7 +188,7 @@ def test_bad_passage_width_is_a_config_error():
 
 # -- closed loop (toy world: ideal unicycle, exact scans) ------------------------------
 def test_without_a_local_minimum_arapf_is_apf_with_its_k_ro():
-    world = ToyWorld(segments=box_segments(3.0, 0.5, 0.4, 0.4))   # box 0.3 m beside the line
+    world = toy_world(segments=box_segments(3.0, 0.5, 0.4, 0.4))   # box 0.3 m beside the line
     ar = simulate(make_planner("arapf"), world, goal=(6.0, 0.0), max_time_s=120, keep_states=True)
     apf = simulate(make_planner("apf", sets=["k_vo_l=5"]), world, goal=(6.0, 0.0), max_time_s=120)
     assert ar.status == apf.status == "reached"
@@ -201,7 +201,7 @@ U_TRAP = ((2.8, -0.6, 2.8, 0.6), (2.0, -0.6, 2.8, -0.6), (2.0, 0.6, 2.8, 0.6))
 
 @pytest.mark.parametrize("segments", [U_TRAP, ((2.0, -0.6, 2.0, 0.6),)], ids=["u_trap", "wall"])
 def test_closed_loop_bypasses_a_dead_end_and_abandons_ar(segments):
-    world = ToyWorld(segments=segments)
+    world = toy_world(segments=segments)
     r = simulate(make_planner("arapf"), world, goal=(5.0, 0.0), max_time_s=150, keep_states=True)
     assert r.status == "reached" and r.min_clearance > 0.3
     modes = [s.mode for s in r.states]

@@ -10,7 +10,7 @@ from nodes.planner.core import scan_view
 from nodes.planner.kernels import HAVE_NUMBA, rollout, tail_stagnation
 from nodes.planner.papf import PAPFParams, PAPFStrategy, predict, quark_force, temporary_goal
 from nodes.planner.registry import make_planner
-from nodes.planner.toysim import ToyWorld, box_segments, cast_scan, simulate
+from papf.toysim import box_segments, cast_scan, simulate, toy_world
 from schemas.messages import Goal, Odometry
 
 APF = APFParams()
@@ -152,7 +152,7 @@ def test_temporary_goal_ties_go_to_the_farthest_point_along_the_path():
 
 
 def test_motion_force_is_eq7_with_the_temporary_goal():
-    s = cast_scan(ToyWorld(segments=box_segments(1.5, 0.1, 0.4, 0.4)), 0.0, 0.0, 0.0)
+    s = cast_scan(toy_world(segments=box_segments(1.5, 0.1, 0.4, 0.4)), 0.0, 0.0, 0.0)
     view = scan_view(s, Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     strat = PAPFStrategy()
     plan = strat.plan(np.zeros(2), 0.0, np.array([6.0, 0.0]), view, APF)
@@ -163,7 +163,7 @@ def test_motion_force_is_eq7_with_the_temporary_goal():
 
 
 def test_unresolved_cycle_drives_by_eq7_with_the_global_goal():
-    view = scan_view(cast_scan(ToyWorld(circles=()), 0.0, 0.0, 0.0),
+    view = scan_view(cast_scan(toy_world(circles=()), 0.0, 0.0, 0.0),
                      Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     view = type(view)(view.origin, view.angles, view.ranges, RING, view.valid)
     strat, goal = PAPFStrategy(), np.array([3.0, 0.0])
@@ -176,7 +176,7 @@ def test_unresolved_cycle_drives_by_eq7_with_the_global_goal():
 
 def test_quarks_persist_and_reset_on_new_goal():
     strat = PAPFStrategy()
-    view = scan_view(cast_scan(ToyWorld(segments=((1.0, -1.0, 1.0, 1.0),)), 0.0, 0.0, 0.0),
+    view = scan_view(cast_scan(toy_world(segments=((1.0, -1.0, 1.0, 1.0),)), 0.0, 0.0, 0.0),
                      Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     first = strat.plan(np.zeros(2), 0.0, np.array([8.0, 0.0]), view, APF)
     assert len(first.top_quarks) >= 1 and strat.quarks is not None
@@ -206,7 +206,7 @@ def test_numba_and_numpy_kernels_are_bit_identical():
 
 
 def test_planner_state_carries_the_prediction_every_cycle():
-    world = ToyWorld(segments=box_segments(2.0, 0.0, 0.4, 0.4))
+    world = toy_world(segments=box_segments(2.0, 0.0, 0.4, 0.4))
     r = simulate(make_planner("papf"), world, goal=(5.0, 0.0), max_time_s=120, keep_states=True)
     driving = [s for s in r.states[:-1]]
     assert all(len(s.predicted_path) >= 2 and len(s.temporary_goal) == 2 for s in driving)
@@ -215,7 +215,7 @@ def test_planner_state_carries_the_prediction_every_cycle():
 
 
 def test_head_on_box_papf_reaches_where_apf_stagnates():
-    world = ToyWorld(segments=box_segments(2.0, 0.0, 0.4, 0.4))
+    world = toy_world(segments=box_segments(2.0, 0.0, 0.4, 0.4))
     papf = simulate(make_planner("papf"), world, goal=(5.0, 0.0), max_time_s=150)
     apf = simulate(make_planner("apf"), world, goal=(5.0, 0.0), max_time_s=150)
     assert papf.status == "reached" and papf.min_clearance > 0.15
@@ -223,7 +223,7 @@ def test_head_on_box_papf_reaches_where_apf_stagnates():
 
 
 def test_papf_is_deterministic():
-    world = ToyWorld(segments=box_segments(2.0, 0.1, 0.4, 0.4))
+    world = toy_world(segments=box_segments(2.0, 0.1, 0.4, 0.4))
     a = simulate(make_planner("papf"), world, goal=(4.0, 0.0), max_time_s=80)
     b = simulate(make_planner("papf"), world, goal=(4.0, 0.0), max_time_s=80)
     assert np.array_equal(a.path, b.path)

@@ -10,7 +10,6 @@ from common.errors import ConfigError
 from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
 from nodes.planner.registry import load_params, make_planner
-from nodes.planner.toysim import ToyWorld, simulate
 from nodes.planner.wang import (
     WangParams,
     WangStrategy,
@@ -21,6 +20,7 @@ from nodes.planner.wang import (
     lambda_obs,
     wang_force,
 )
+from papf.toysim import simulate, toy_world
 
 WP = WangParams()          # k_att 10, k_rep 5/300, rho_0 0.5 m, rho_1 1 m, R_0 0, offset 0.05 m
 S45 = math.sin(math.pi / 4)
@@ -119,14 +119,14 @@ def test_bad_settings_are_refused(setting):
 
 
 def test_goal_next_to_obstacles_is_reached_2d():
-    world = ToyWorld(circles=((3.35, 0.0, 0.15), (3.0, 0.35, 0.15)))   # surfaces 0.2 m from the goal
+    world = toy_world(circles=((3.35, 0.0, 0.15), (3.0, 0.35, 0.15)))   # surfaces 0.2 m from the goal
     r = simulate(make_planner("wang"), world, goal=(3.0, 0.0), max_time_s=120)
     assert r.status == "reached" and r.min_clearance > 0.1
 
 
 def test_goal_behind_an_obstacle_on_the_line_2d():
     """Wang Fig. 7-8 in the toy world: goal 0.2 m behind a cylinder standing on the line."""
-    world = ToyWorld(circles=((3.0, 0.0, 0.25),))
+    world = toy_world(circles=((3.0, 0.0, 0.25),))
     wang = simulate(make_planner("wang"), world, goal=(3.45, 0.0), max_time_s=150)
     assert wang.status == "reached" and wang.min_clearance > 0.15
     # the classic APF and Wang without the control point stop at the saddle in front of it

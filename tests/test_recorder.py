@@ -268,3 +268,42 @@ def test_recorder_meta_arguments():
         "world": "energy", "expr": "a=b", "empty": ""}
     with pytest.raises(ConfigError, match="key=value"):
         parse_meta(["novalue"])
+
+
+@pytest.mark.e2e
+def test_recorder_closes_its_file_at_run_ended_and_says_so(tmp_path):
+    import sys
+    import time
+
+    import zenoh
+
+    from common.transport import zenoh_config
+    from papf.supervisor import Supervisor, free_port, wait_port
+    from schemas import Event
+
+    port, out = free_port(), tmp_path / "run.mcap"
+    ep = f"tcp/127.0.0.1:{port}"
+    closed = []
+    with Supervisor(show=lambda *_: False) as sup:
+        sup.start("router", [sys.executable, "-m", "papf.router", "--listen", ep])
+        assert wait_port(port, 15.0)
+        rec = sup.start("recorder", [sys.executable, "-m", "nodes.recorder", "--out", str(out),
+                                     "--close-on-run-ended", "--connect", ep, "--namespace", "tack"])
+        with zenoh.open(zenoh_config("client", [ep])) as s:
+            s.declare_subscriber("tack/events", lambda smp: closed.append(
+                Event.from_bytes(smp.payload.to_bytes())))
+            deadline = time.monotonic() + 30
+            while not any("ready" in line for line in rec.tail) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            for k in range(200):
+                s.put("tack/odom", sample(Odometry, 1_000_000 * (k + 1)).to_bytes())
+            s.put("tack/events", Event(stamp_ns=300_000_000, kind="run_ended",
+                                       source="launcher").to_bytes())
+            while not any(e.kind == "recording_closed" for e in closed) and \
+                    time.monotonic() < deadline:
+                time.sleep(0.05)
+            assert [e.detail for e in closed if e.kind == "recording_closed"] == [str(out)]
+            assert rec.returncode is None          # still alive: the launcher stops it
+            with open_recording(out) as r:         # complete already, before any stop
+                counts = r.counts()
+    assert counts == {"tack/odom": 200, "tack/events": 1}

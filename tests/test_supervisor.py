@@ -36,7 +36,7 @@ def test_staged_stop_stops_named_children_last():
     kids = {name: sup.start(name, SLEEPER) for name in ("a", "recorder", "router")}
     for c in kids.values():
         wait_lines(c, 1)
-    sup.stop(last=("recorder", "router"), settle_s=0.2)
+    sup.stop(last=("recorder", "router"))
     for c in kids.values():
         wait_lines(c, 2)
     t = {n: float(c.tail[-1].split()[1]) for n, c in kids.items()}

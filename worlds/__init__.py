@@ -1,4 +1,4 @@
-"""World files (DESIGN.md §9, **fixed** TOML format): parse, validate, find by name.
+"""World files (docs/worlds.md, **fixed** TOML format): parse, validate, find by name.
 
 ``load_world("energy")`` finds a packaged world by name; any path to a ``.toml``
 file works too. Every problem raises :class:`WorldError` naming the file, the
@@ -20,8 +20,9 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (DESIGN.md §9)
+DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (docs/worlds.md)
 KINDS = ("box", "cylinder", "wall", "sphere")
+VEHICLES = ("rosbot", "car")  # [robot].vehicle: the ROSbot stack, or the IAPF paper's car model
 CENTER_MATCH = 1e-6  # [m] a moving obstacle's center, if given, must be its track at t = 0
 
 
@@ -81,6 +82,7 @@ class World:
     obstacles: tuple[Obstacle, ...] = field(default_factory=tuple)
     source: str = ""                             # file it came from
     road: Road | None = None                     # the optional ``[road]``
+    vehicle: str = "rosbot"                      # ``[robot].vehicle``: rosbot | car (IAPF cases)
 
     @property
     def dims(self) -> int:
@@ -135,6 +137,9 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
     name = ctx.str(data, "name", default=Path(source).stem)
     robot = ctx.table(data, "robot", default={})
     start = ctx.vec(robot, "start", (2, 3), "robot.start", default=[0.0, 0.0, 0.0])
+    vehicle = ctx.str(robot, "vehicle", "robot.vehicle", default="rosbot")
+    if vehicle not in VEHICLES:
+        ctx.fail("robot.vehicle", f"{vehicle!r} is not one of {', '.join(VEHICLES)}")
     if len(start) == 2:
         start = (*start, 0.0)
     goal_t = ctx.table(data, "goal")
@@ -151,7 +156,8 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         ctx.fail("[road]", "a road needs a 2-D world (goal.position with 2 numbers)")
     return World(name=name, description=ctx.str(data, "description", default=""),
                  start=tuple(start), goal=tuple(goal), tolerance=tolerance,
-                 obstacles=tuple(obstacles), source=source, road=road)
+                 obstacles=tuple(obstacles), source=source, road=road,
+                 vehicle=vehicle)
 
 
 def _road(ctx: _Ctx, t) -> Road:

@@ -1,4 +1,4 @@
-"""A :class:`worlds.World` as static pybullet bodies (DESIGN.md §9).
+"""A :class:`worlds.World` as static pybullet bodies (docs/worlds.md).
 
 Shared by the simulated base driver (collisions) and the simulated LiDAR (ray
 casting), so both see exactly the same geometry. Every obstacle is a static body

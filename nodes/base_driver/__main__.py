@@ -20,89 +20,36 @@ import argparse
 import queue
 import sys
 import time
-from typing import TYPE_CHECKING
 
 from common.errors import PapfError
 from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from nodes.base_driver.loop import DriverLoop
 from nodes.base_driver.ports import PORTS, VARIANTS
-from schemas.messages import Event
 from worlds import load_world
 
-if TYPE_CHECKING:
-    from nodes.base_driver.core import DriverCore
-
 NAME = "base_driver"
-SOURCE = NAME                      # Event.source (same as nodes.base_driver.core.SOURCE)
 PUBLISHES = ("sim/pose", "odom", "wheels", "clock", "events")
 
 
-class SimDriver:
-    """The lockstep / realtime loop around a :class:`DriverCore` (transport only)."""
-
-    def __init__(self, node: Node, core: DriverCore, realtime: bool, lockstep_timeout_s: float):
-        self.node, self.core, self.log = node, core, node.log
-        self.realtime = realtime
-        self.timeout_s = lockstep_timeout_s
-        self.free_running = realtime       # True: pace to the wall clock, do not wait
-        self.wall0 = time.monotonic()      # wall time of sim t = 0 while free running
-        self.ended = False
-        self.matched = False               # a command answering the scan of this instant came
-        self.last_scan_ns = -1             # latest scan instant published [ns]
-
-    def handle(self, topic: str, msg) -> None:
-        if topic == "cmd_vel":
-            self.matched |= self.core.command(msg)
-            if self.free_running and not self.realtime and msg.stamp_ns == self.last_scan_ns:
-                self.log.info("cmd_vel answers scan %d ns again: back to lockstep", msg.stamp_ns)
-                self.free_running = False
-        elif topic == "events" and msg.kind == "run_ended":
-            self.ended = True
-
-    def pump(self, deadline: float, until_matched: bool) -> bool:
-        """Handle inbox messages until ``deadline`` (monotonic s; a past deadline drains what
-        is queued) or, with ``until_matched``, until a command answers this instant's scan."""
-        inbox = self.node.inbox
-        while not (self.node.stop or self.ended):
-            if until_matched and self.matched:
-                return True
-            remaining = deadline - time.monotonic()
+def drive(node: Node, loop: DriverLoop) -> None:
+    """Wire a :class:`DriverLoop` to the bus until the run ends or the node is stopped."""
+    inbox = node.inbox
+    while not node.stop:
+        out, until = loop.step(time.monotonic())
+        for topic, msg in out:
+            node.publish(topic, msg)
+        if until is None:
+            return
+        while not (node.stop or loop.ready):   # feed inputs until `until` (past: what is queued)
+            remaining = until - time.monotonic()
             try:
                 item = inbox.get(timeout=min(remaining, 0.1)) if remaining > 0 else inbox.get_nowait()
             except queue.Empty:
                 if remaining > 0:
                     continue
                 break
-            self.handle(*item)
-        return until_matched and self.matched
-
-    def run(self) -> None:
-        core, node = self.core, self.node
-        while not (node.stop or self.ended):
-            t = core.t_ns
-            if self.free_running:
-                self.pump(self.wall0 + t / 1e9, until_matched=False)
-            self.matched = False
-            for topic, msg in core.outputs():
-                node.publish(topic, msg)
-            if core.is_scan_instant():
-                self.last_scan_ns = t
-            if core.is_scan_instant() and not self.free_running:
-                if not self.pump(time.monotonic() + self.timeout_s, until_matched=True):
-                    if node.stop or self.ended:
-                        break
-                    self._fault(t)
-            else:
-                self.pump(0.0, until_matched=False)
-            core.advance()
-
-    def _fault(self, t: int) -> None:
-        detail = (f"no cmd_vel with stamp_ns={t} within {self.timeout_s:g} s (wall); "
-                  "free running in real time until a command answers the latest scan")
-        self.log.warning("lockstep: %s", detail)
-        self.node.publish("events", Event(stamp_ns=t, kind="node_fault", source=SOURCE, detail=detail))
-        self.free_running = True
-        self.wall0 = time.monotonic() - t / 1e9
+            loop.on_message(*item)
 
 
 def wait_for_start(node: Node) -> bool:
@@ -132,7 +79,8 @@ def main_sim(args: argparse.Namespace) -> int:
             with DriverCore(world, args.seed, config) as core:
                 log.info("run started: world %s, seed %d, %s", world.name, args.seed,
                          "realtime" if args.realtime else "lockstep")
-                SimDriver(node, core, args.realtime, args.lockstep_timeout).run()
+                drive(node, DriverLoop(core, args.realtime, args.lockstep_timeout,
+                                       time.monotonic(), log))
                 log.info("run stopped at sim t = %.3f s; collisions: %d", core.t_ns / 1e9,
                          core.collision_count)
     return 0

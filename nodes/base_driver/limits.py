@@ -1,7 +1,7 @@
 """ROSbot velocity-command safety, shared by the simulated and the real-robot driver.
 
 Pure Python (no pybullet, no zenoh). :class:`CommandGate` does what the ROS 2
-``diff_drive_controller`` of the ROSbot does with ``/cmd_vel`` (DESIGN.md §5,
+``diff_drive_controller`` of the ROSbot does with ``/cmd_vel`` (docs/architecture.md "The robot",
 docs/architecture.md "Safety"):
 
 1. non-finite ``v`` or ``w`` -> the whole command is treated as a stop (0, 0);
@@ -28,10 +28,10 @@ from common.errors import ConfigError
 
 @dataclass(frozen=True)
 class RosbotLimits:
-    """Command limits of the ROSbot 2.0 PRO (DESIGN.md §5).
+    """Command limits of the ROSbot 2.0 PRO (docs/architecture.md "The robot").
 
     Source: husarion/rosbot_ros ``rosbot_controller/config/.../diff_drive_controller.yaml``
-    as summarised in DESIGN.md §5: linear max 0.9 m/s (the yaml has 1.0; the design
+    as summarised in docs/architecture.md "The robot": linear max 0.9 m/s (the yaml has 1.0; the design
     keeps a margin under the 1.25 m/s top speed), 1.0 m/s^2; angular 3.0 rad/s,
     4.0 rad/s^2; ``cmd_vel_timeout`` 0.5 s.
     """
@@ -104,3 +104,16 @@ class CommandGate:
         w = w0 + _clamp(w_t - w0, lim.alpha_max * dt_s)
         self._out = (v, w)
         return GateOutput(v, w, stopped)
+
+
+def unicycle(x: float, y: float, yaw: float, v: float, w: float, dt: float):
+    """Exact integration of a unicycle with constant (v, w) over ``dt``: the arc it drives.
+
+    The kinematics of every non-physics model of the ROSbot (the offline planner loop,
+    the ROSbot emulator); yaw is not wrapped.
+    """
+    if abs(w) < 1e-9:
+        return x + v * dt * math.cos(yaw), y + v * dt * math.sin(yaw), yaw
+    yaw2 = yaw + w * dt
+    return (x + v / w * (math.sin(yaw2) - math.sin(yaw)),
+            y - v / w * (math.cos(yaw2) - math.cos(yaw)), yaw2)

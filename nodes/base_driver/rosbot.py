@@ -1,6 +1,6 @@
 """The real ROSbot as seen through ``zenoh-bridge-ros2dds``: our messages <-> its CDR (pure).
 
-No transport here (the process is :mod:`nodes.base_driver.rosbot_node`). DESIGN.md §5:
+No transport here (the process is :mod:`nodes.base_driver.rosbot_node`). docs/architecture.md "The robot":
 the robot takes ``geometry_msgs/Twist`` on ``cmd_vel`` (linear.x, angular.z), publishes
 ``nav_msgs/Odometry`` on ``odometry/filtered`` (EKF of wheels + IMU) and
 ``sensor_msgs/BatteryState`` on ``battery`` (voltage only). The bridge maps topic ``/t``
@@ -36,7 +36,7 @@ class BridgeTopics:
     """Bridge keys of the robot's ROS 2 topics: ``[<namespace>/]<topic>``.
 
     The bridge namespace is a setting of its own, distinct from our key namespace:
-    :meth:`check_separate` refuses any overlap with our msgpack keys (DESIGN.md §5).
+    :meth:`check_separate` refuses any overlap with our msgpack keys (docs/architecture.md "The robot").
     """
 
     namespace: str = ""

@@ -1,7 +1,7 @@
 """Real-ROSbot base driver: ``python -m nodes.base_driver --driver rosbot [--bridge-namespace NS]``.
 
 The same node contract as the simulated driver (liveliness ``<ns>/alive/base_driver``),
-talking to the robot through ``zenoh-bridge-ros2dds`` (DESIGN.md §5). Always real time.
+talking to the robot through ``zenoh-bridge-ros2dds`` (docs/architecture.md "The robot"). Always real time.
 
 Ports (``<ns>`` = ``--namespace``; ``<b>/`` = ``--bridge-namespace`` + ``/``, empty by default):
 

@@ -1,6 +1,6 @@
 """Simulated ROSbot 2.0 PRO base: pybullet rigid-body physics, no transport (pure core).
 
-The robot (DESIGN.md §5; geometry and masses from husarion/rosbot_ros
+The robot (docs/architecture.md "The robot"; geometry and masses from husarion/rosbot_ros
 ``rosbot_description``): a chassis box of 0.200 x 0.235 x 0.100 m (the footprint,
 so it covers the wheels; obstacle contacts are found on it) and four wheels of
 r = 0.0425 m, 0.036 m wide, 0.074 kg each, at x = +-wheelbase/2 = +-0.053 m,
@@ -113,6 +113,16 @@ class Contact:
     y: float
 
 
+def jittered_start(start, rng: np.random.Generator, prm: SimParams | None = None,
+                   ) -> tuple[float, float, float]:
+    """``start`` (x, y, yaw) plus the hand-placement jitter: three normal draws from ``rng``
+    scaled by ``start_xy_sd`` / ``start_yaw_sd``. The sim draws them first from
+    ``default_rng(seed)``, so the offline tools get the same start for the same seed."""
+    prm = prm or SimParams()
+    jitter = rng.normal(0.0, 1.0, 3) * (prm.start_xy_sd, prm.start_xy_sd, prm.start_yaw_sd)
+    return tuple(float(c) for c in np.add(start, jitter))  # type: ignore[return-value]
+
+
 class SimBase:
     """One simulated ROSbot in a pybullet DIRECT client holding ``world``'s obstacles."""
 
@@ -122,7 +132,7 @@ class SimBase:
         self.params = prm = params or SimParams()
         self.world = world
         rng = np.random.default_rng(seed)
-        jitter = rng.normal(0.0, 1.0, 3) * (prm.start_xy_sd, prm.start_xy_sd, prm.start_yaw_sd)
+        start = jittered_start(world.start, rng, prm)       # the first draws of the run's rng
         mu = prm.friction * np.clip(1 + prm.friction_sd * rng.normal(0.0, 1.0, 4), 0.5, 1.5)
         r_eff = prm.wheel_radius * (1 + prm.radius_sd * rng.normal(0.0, 1.0, 4))
         self._mu = [float(m) for m in mu]                             # [-] per wheel
@@ -135,7 +145,7 @@ class SimBase:
         self.t_ns = 0
         self.cid = p.connect(p.DIRECT)
         try:
-            self._setup(world, tuple(float(c) for c in np.add(world.start, jitter)))
+            self._setup(world, start)
         except Exception:
             p.disconnect(self.cid)
             raise

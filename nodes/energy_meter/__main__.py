@@ -1,7 +1,7 @@
 """Energy meter node: ``python -m nodes.energy_meter [--model motor|paper] [--set name=value]``.
 
 Emulates the PAPF paper's charge measurement (IV-C) from the base driver's messages
-(DESIGN.md §7; the models and constants: docs/energy.md).
+(docs/energy.md; the models and constants: docs/energy.md).
 
 Ports: :mod:`nodes.energy_meter.ports` (``--help`` prints them).
 

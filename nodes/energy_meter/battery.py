@@ -1,4 +1,4 @@
-"""The ROSbot 2.0 PRO battery: a 3S pack of 18650 Li-ion cells (DESIGN.md §5, §7).
+"""The ROSbot 2.0 PRO battery: a 3S pack of 18650 Li-ion cells (docs/architecture.md "The robot"; docs/energy.md).
 
 Pure maths, no transport. The pack is modelled as an open-circuit voltage source
 that follows the state of charge, in series with an internal resistance::

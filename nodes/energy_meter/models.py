@@ -1,6 +1,6 @@
 """Electrical power drawn by the ROSbot 2.0 PRO, from the messages the base driver publishes.
 
-Two models (DESIGN.md §7; every constant below has a unit and a source or a stated
+Two models (docs/energy.md; every constant below has a unit and a source or a stated
 ASSUMPTION; docs/energy.md discusses them):
 
 - :class:`PaperModel` — PAPF paper, section II-A, eq. (6) (after Liu & Sun, AIM 2012)::
@@ -42,7 +42,7 @@ from schemas import Odometry, WheelStates
 
 from .battery import EnergyError
 
-# -- robot (Husarion ROSbot 2.0 PRO specs, DESIGN.md §5) ------------------------------------
+# -- robot (Husarion ROSbot 2.0 PRO specs, docs/architecture.md "The robot") ------------------------------------
 # mass, body, yaw inertia, wheel radius, top speed: common/robot.py
 GRAVITY_M_S2 = 9.81             # [m/s^2]
 

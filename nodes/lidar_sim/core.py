@@ -1,6 +1,6 @@
 """Simulated RPLIDAR A3 on the ROSbot: pybullet ray casting, no transport (pure core).
 
-A 360 deg planar scan (DESIGN.md §5): ``beams`` rays (300 by default, the L of the
+A 360 deg planar scan (docs/architecture.md "The robot"): ``beams`` rays (300 by default, the L of the
 PAPF paper's Table 1) at ``angle_min + i * angle_increment`` with ``angle_min = -pi``,
 ``angle_increment = 2 pi / beams``, counter-clockwise in the sensor frame, like the
 ``sensor_msgs/LaserScan`` that ``rplidar_ros`` publishes. Ranges 0.2-25 m

@@ -1,7 +1,7 @@
 """The real RPLIDAR as our ``Scan``: ``python -m nodes.lidar_sim --source ros2 [--bridge-namespace NS]``.
 
 Reads ``sensor_msgs/LaserScan`` CDR from the bridge key ``[<bridge-ns>/]scan`` (the ROSbot's
-``rplidar_ros``/``sllidar_ros2`` through ``zenoh-bridge-ros2dds``, DESIGN.md §5) and publishes
+``rplidar_ros``/``sllidar_ros2`` through ``zenoh-bridge-ros2dds``, docs/architecture.md "The robot") and publishes
 ``<ns>/scan``: the same 360° geometry as the simulated LiDAR (``--beams`` rays from -π,
 2π/L apart; L = 300 by default, the paper's Table 1), so planners cannot tell the two apart.
 Liveliness: ``<ns>/alive/lidar_sim``.

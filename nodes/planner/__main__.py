@@ -1,4 +1,4 @@
-"""Planner node: ``python -m nodes.planner --planner apf|papf|arapf|wang [options]``.
+"""Planner node: ``python -m nodes.planner --planner apf|papf|arapf|wang|iapf [options]``.
 
 Ports: :mod:`nodes.planner.ports` (``--help`` prints them).
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
+from nodes.planner.iapf_fields import Lanes
 from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
@@ -68,6 +69,11 @@ class Plan:
     virtual_obstacles: np.ndarray | tuple = ()
     stagnated: str = ""     # non-empty: the strategy declares stagnation, with this reason
     searching: bool = False  # the strategy found something new this cycle (e.g. placed a top quark)
+    heading: float | None = None  # [rad] the strategy's own heading reference (IAPF eq. 21)
+    v_ref: float | None = None    # [m/s] the strategy's own speed (IAPF eq. 26) instead of eq. 5
+    local_count: int = 0          # IAPF eq. 24
+    lane_goal_y: float = math.nan  # [m] IAPF temporary lane goal
+    obstacles_used: int = 0       # obstacles (tracks) that shaped the field this cycle
 
 
 class Strategy(Protocol):
@@ -105,12 +111,26 @@ class Planner:
         self._win_ns = 0                # scan time the current window began [ns]
         self._anchor = None             # robot position where the current window began [m]
         self._apf_for_l: dict[int, APFParams] = {}
+        self.objects: tuple = ()        # latest obstacle tracks (strategies that use them)
+        self.road = None                # the road of the run, once announced
+
+    # -- inputs beyond scan and odometry -------------------------------------
+    def set_objects(self, tracks) -> None:
+        """The latest obstacle tracks (:class:`nodes.planner.iapf_fields.Track`)."""
+        self.objects = tuple(tracks)
+
+    def set_road(self, road: Lanes | None) -> None:
+        """The road of the run, or None (normally it comes with the goal, :meth:`set_goal`)."""
+        self.road = road
 
     # -- goal ---------------------------------------------------------------
     def set_goal(self, goal: Goal) -> PlannerStatus:
         """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
         same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
             goal.x, goal.y, goal.tolerance)
+        # the goal handshake carries the run's road (none: road_lanes = 0)
+        self.road = (Lanes(goal.road_y_min, goal.road_lane_width, goal.road_lanes)
+                     if goal.road_lanes > 0 and goal.road_lane_width > 0 else None)
         if not same:
             self.goal = goal
             self.state, self.reason = "ready", ""
@@ -141,13 +161,19 @@ class Planner:
             return self._stop(t, "reached", f"within {self.goal.tolerance} m of the goal", dist, t0)
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom)
+        observe = getattr(self.strategy, "observe", None)
+        if observe is not None:
+            observe(self.objects, self.road, t / NS_PER_S, odom.v)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
         why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
         if why:
             return self._stop(t, "stagnated", why, dist, t0, plan, view)
-        theta_ref = heading_ref(plan.force)
+        theta_ref = heading_ref(plan.force) if plan.heading is None else plan.heading
         err = wrap_angle(theta_ref - odom.yaw)
-        v = speed_ref(float(np.linalg.norm(plan.force)), err, apf)
+        if plan.v_ref is None:
+            v = speed_ref(float(np.linalg.norm(plan.force)), err, apf)
+        else:  # the planned velocity's component along the robot's heading (ours)
+            v = max(0.0, plan.v_ref * math.cos(err))
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
         state = self._state(t, plan, view, theta_ref, v, w, t0)
@@ -203,5 +229,8 @@ class Planner:
             top_quarks=_points(plan.top_quarks),
             virtual_walls=tuple(_points(p) for p in plan.virtual_walls),
             virtual_obstacles=_points(plan.virtual_obstacles),
-            obstacle_count=0 if view is None else int(view.points.shape[0]),
+            obstacle_count=(plan.obstacles_used if plan.v_ref is not None else
+                            0 if view is None else int(view.points.shape[0])),
+            local_minimum_count=int(plan.local_count), lane_goal_y=float(plan.lane_goal_y),
+            v_target=float(plan.v_ref) if plan.v_ref is not None else float(v),
             compute_ns=time.perf_counter_ns() - t0)

@@ -19,6 +19,7 @@ from common.errors import ConfigError
 from nodes.planner.apf import APFParams, apf_force
 from nodes.planner.arapf import ARAPFStrategy
 from nodes.planner.core import Plan, Planner, ScanView
+from nodes.planner.iapf_strategy import IAPFStrategy
 from nodes.planner.papf import PAPFStrategy
 from nodes.planner.wang import WangStrategy
 
@@ -53,6 +54,7 @@ PLANNERS: dict[str, type] = {
     "papf": PAPFStrategy,
     "arapf": ARAPFStrategy,
     "wang": WangStrategy,
+    "iapf": IAPFStrategy,
 }
 
 

@@ -1,4 +1,4 @@
-"""Recorder node: every sample under a key expression into a crash-safe MCAP (DESIGN.md §8).
+"""Recorder node: every sample under a key expression into a crash-safe MCAP (docs/recording.md).
 
     python -m nodes.recorder --out run.mcap [--keys 'rosbot/**'] [--meta world=energy ...]
 
@@ -8,6 +8,9 @@ Samples are queued by Zenoh itself (a FIFO channel handler: no Python runs on th
 receive thread) and drained in batches by the main thread into
 :class:`papf.recording.RunWriter`, which flushes at least every ``--flush-interval``
 seconds. SIGINT/SIGTERM: drain the queue, write the summary and footer, exit 0.
+With ``--close-on-run-ended`` (the launch profiles that drive a run): the launcher's
+``run_ended`` closes the file the same way, and a ``recording_closed`` event (detail: the
+file) tells the launcher it may stop the processes — no fixed wait, no lost tail.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.recorder.ports import PORTS, VARIANTS
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
+from schemas.messages import Event
 
 NAME = "recorder"
 QUEUE_CAPACITY = 1_000_000  # [samples] Zenoh-side buffer: 20 s at 50 kHz before back-pressure
@@ -32,12 +36,26 @@ FINAL_DRAIN_S = 2.0         # [s] at most spent draining the queue after a stop 
 STATUS_EVERY_S = 10.0       # [s] wall time between progress log lines
 
 
-def drain(subscriber, writer: RunWriter, max_samples: int) -> int:
+class RunEndWatch:
+    """Notices the launcher's ``run_ended`` among the recorded samples of ``events_key``."""
+
+    def __init__(self, events_key: str):
+        self.key, self.seen = events_key, False
+
+    def check(self, payload: bytes) -> None:
+        try:
+            self.seen |= Event.from_bytes(payload).kind == "run_ended"
+        except PapfError:  # a bad event is recorded all the same; it ends nothing
+            pass
+
+
+def drain(subscriber, writer: RunWriter, max_samples: int, watch: RunEndWatch | None = None) -> int:
     """Write up to ``max_samples`` queued samples; returns how many were taken.
 
     The hot loop of the recorder: locals only, one ``try_recv`` per sample.
     """
     recv, write, now, put = subscriber.try_recv, writer.write, time.time_ns, zenoh.SampleKind.PUT
+    end_key = watch.key if watch is not None else None
     n = 0
     while n < max_samples:
         sample = recv()
@@ -45,23 +63,28 @@ def drain(subscriber, writer: RunWriter, max_samples: int) -> int:
             break
         n += 1
         if sample.kind == put:  # a DELETE has no payload to record
-            write(str(sample.key_expr), sample.payload.to_bytes(), now())
+            key, payload = str(sample.key_expr), sample.payload.to_bytes()
+            write(key, payload, now())
+            if key == end_key:
+                watch.check(payload)  # type: ignore[union-attr]
     return n
 
 
 def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str],
            compression: str = "zstd", flush_interval_s: float = FLUSH_INTERVAL_S,
-           queue_capacity: int = QUEUE_CAPACITY) -> WriterStats:
-    """Record until ``node.stop``; returns the writer's counts. The file is complete on return."""
+           queue_capacity: int = QUEUE_CAPACITY, close_on_run_ended: bool = False) -> WriterStats:
+    """Record until ``node.stop`` (or, with ``close_on_run_ended``, until the launcher's
+    ``run_ended``); returns the writer's counts. The file is complete on return."""
+    watch = RunEndWatch(node.keys.events) if close_on_run_ended else None
     meta = {"namespace": node.keys.ns, "keys": keys_expr, **metadata}
     with RunWriter(out, meta, compression=compression, flush_interval_s=flush_interval_s) as writer:
         sub = node.session.declare_subscriber(keys_expr, zenoh.handlers.FifoChannel(queue_capacity))
         try:
             node.ready()
             node.log.info("recording %s into %s", keys_expr, out)
-            _loop(node, sub, writer)
+            _loop(node, sub, writer, watch)
             deadline = time.monotonic() + FINAL_DRAIN_S
-            while drain(sub, writer, BATCH) and time.monotonic() < deadline:
+            while drain(sub, writer, BATCH, watch) and time.monotonic() < deadline:
                 pass
         finally:
             sub.undeclare()
@@ -70,11 +93,11 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
     return writer.stats
 
 
-def _loop(node: Node, sub, writer: RunWriter) -> None:
+def _loop(node: Node, sub, writer: RunWriter, watch: RunEndWatch | None) -> None:
     next_status = time.monotonic() + STATUS_EVERY_S
     last_count = 0
-    while not node.stop:
-        if drain(sub, writer, BATCH) == 0:
+    while not node.stop and not (watch and watch.seen):
+        if drain(sub, writer, BATCH, watch) == 0:
             writer.maybe_flush()
             node.stop.event.wait(IDLE_WAIT_S)
         if time.monotonic() >= next_status:
@@ -98,6 +121,9 @@ def add_recorder_args(parser: argparse.ArgumentParser, out_flag: bool = True) ->
     """Recorder options (shared with ``papf record``)."""
     if out_flag:
         parser.add_argument("--out", required=True, metavar="F.mcap", help="recording to write")
+        parser.add_argument("--close-on-run-ended", action="store_true",
+                            help="close the file at the launcher's run_ended, then publish a "
+                                 "recording_closed event (the launcher waits for it)")
     parser.add_argument("--keys", metavar="EXPR",
                         help="key expression to record (default: <namespace>/**)")
     parser.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
@@ -115,8 +141,15 @@ def main(args: argparse.Namespace) -> int:
     try:
         meta = parse_meta(args.meta)
         with open_node(NAME, args, log) as node:
+            close = getattr(args, "close_on_run_ended", False)
+            if close:
+                node.declare_publishers("events")   # up front: the one put must not be late
             record(node, args.out, args.keys or f"{args.namespace}/**", meta,
-                   args.compression, args.flush_interval)
+                   args.compression, args.flush_interval, close_on_run_ended=close)
+            if close and not node.stop:   # the file is closed: say so, then wait to be stopped
+                node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=NAME,
+                                             detail=str(args.out)))
+                node.stop.event.wait()
     except PapfError as exc:
         log.error("%s", exc)
         return 2

@@ -1,4 +1,4 @@
-"""Write a run to MCAP, crash-safe (DESIGN.md §8). Pure: no Zenoh here.
+"""Write a run to MCAP, crash-safe (docs/recording.md). Pure: no Zenoh here.
 
 Layout of a recording (see docs/recording.md):
 

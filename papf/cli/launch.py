@@ -23,7 +23,7 @@ def register(sub) -> None:
     p.add_argument("--zenoh-config", metavar="FILE", help="Zenoh config of the nodes (secure split)")
     p.add_argument("--router-config", metavar="FILE", help="Zenoh config of the router")
     p.add_argument("--world", help="world (runs; robot side: its start pose)")
-    p.add_argument("--planner", help="apf | papf | arapf | wang")
+    p.add_argument("--planner", help="apf | papf | arapf | wang | iapf")
     p.add_argument("--seed", type=int)
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--energy-model", choices=("motor", "paper"))

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from papf.cli.options import add_planner_settings, add_world_and_planner
+
 
 def register(sub) -> None:
     p = sub.add_parser("plan", help="run a planner on a world offline (no processes)",
@@ -11,15 +13,14 @@ def register(sub) -> None:
                        "stack: 2-D worlds with the simulated LiDAR and a unicycle with the "
                        "ROSbot limits, 3-D worlds (spheres) with a point robot. Exit code: "
                        "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
-    p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    add_world_and_planner(p, "apf | papf | arapf | wang | iapf (default apf); on car-scale "
+                             "worlds (iapf-case-*): iapf, iapf-np (no prediction), apf (the "
+                             "paper's baseline)")
     p.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
     p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
-    p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
+    add_planner_settings(p)
     p.add_argument("--plot", metavar="OUT.png",
                    help="write a PNG: world, path, footprints, and the planner's prediction, "
                         "abandoned predictions, top quarks and temporary goal at its most "
@@ -35,13 +36,19 @@ def cmd_plan(args) -> int:
     from worlds import load_world
 
     world = load_world(args.world)
-    result = plan(world, args.planner, params=args.set, seed=args.seed, max_time_s=args.timeout,
-                  dt=args.dt, params_file=args.params, keep_states=bool(args.plot))
+    if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
+        from papf.plan_road import plan_car
+
+        result = plan_car(world, args.planner, args.set, args.params, max_time_s=args.timeout)
+    else:
+        result = plan(world, args.planner, params=args.set, seed=args.seed,
+                      max_time_s=args.timeout, dt=args.dt, params_file=args.params,
+                      keep_states=bool(args.plot))
     if args.out:
         write_path(result, args.out)
     if args.plot:  # matplotlib: only with --plot
         title = f"{world.name}: {args.planner} (offline, seed {args.seed})"
-        if world.dims == 2:  # with the planner's mind and the robot's footprint
+        if world.dims == 2 and world.vehicle != "car":  # with the mind and the ROSbot's footprint
             from papf.mind_plots import plot_plan
 
             plot_plan(world, result, args.plot, title)

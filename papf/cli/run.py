@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+from papf.cli.options import add_planner_settings, add_world_and_planner
 from papf.cli.view import add_view_flag
 
 
@@ -14,8 +15,7 @@ def register(sub) -> None:
                                    "recorder with --record); drive to the world's goal; print a "
                                    "summary. Exit code: 0 reached, 3 stagnated, 4 collision, "
                                    "5 timeout, 6 failed, 2 usage error.")
-    p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help="apf | papf | arapf | wang (default apf)")
+    add_world_and_planner(p)
     p.add_argument("--seed", type=int, default=0, help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S",
@@ -28,9 +28,7 @@ def register(sub) -> None:
                    help="nodes' Zenoh mode: client (all through the router, default) or peer "
                         "(direct loopback links too; a few %% faster)")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="planner parameter override, repeatable (e.g. --set v_max=0.3)")
-    p.add_argument("--params", metavar="FILE.toml", help="planner parameters from a TOML file")
+    add_planner_settings(p)
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
     p.add_argument("--dry-run", action="store_true",

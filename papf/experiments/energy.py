@@ -37,7 +37,6 @@ if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `
 WORLD = "energy"
 TIMEOUT_S = 300.0        # [s sim] per run; the sim's APF needs ~160 s for the 10 m course
 POLL_S = 0.1             # [s wall] progress refresh period
-RECORD_ATTEMPTS = 3      # runs of one seed until its recording holds the whole run
 
 
 @dataclass(frozen=True)
@@ -227,7 +226,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
         with Progress(*columns, console=console, transient=True) as progress:
             task = progress.add_task("runs", total=len(specs), live="")
             for spec in specs:
-                result = _recorded_run(exp, spec, progress, task, world.goal[:2], run_fn, console)
+                result = _one_run(exp, spec, progress, task, world.goal[:2], run_fn)
                 results.append((spec, result))
                 progress.advance(task)
                 console.print(_result_line(spec, result), highlight=False)
@@ -253,31 +252,6 @@ def _result_line(spec: RunSpec, r: RunResult) -> str:
             f"{r.duration_s:7.2f} s  {r.path_length_m:6.2f} m  {r.charge_mAh:7.3f} mAh  "
             f"{r.energy_J:7.1f} J  wall {r.wall_time_s:4.1f} s"
             + (f"  {r.reason}" if r.outcome != "reached" else ""))
-
-
-def _recorded_run(exp, spec, progress, task, goal, run_fn, console) -> RunResult:
-    """One run whose recording holds it whole: re-run (same seed) while the file falls short.
-
-    A run is bit-for-bit reproducible for its seed (docs/architecture.md), so running it
-    again gives the same run; it is needed when the recorder was stopped before the last
-    messages reached it (the file then ends before the outcome; see
-    docs/experiments-energy.md). Runs that failed (a node died) are not repeated.
-    """
-    from papf.report.metrics import differences_from_live, run_metrics
-
-    for attempt in range(1, RECORD_ATTEMPTS + 1):
-        result = _one_run(exp, spec, progress, task, goal, run_fn)
-        if result.outcome == "failed":
-            return result
-        problems = differences_from_live(spec.name, result,
-                                         run_metrics(spec.path, with_series=False))
-        if not problems:
-            return result
-        console.print(f"[yellow]note:[/] {spec.name}: the recording does not hold the whole run "
-                      f"({problems[0]}); " + ("running it again (same seed)"
-                                              if attempt < RECORD_ATTEMPTS else "giving up"),
-                      highlight=False)
-    return result
 
 
 def _mismatches(results: Sequence[tuple[RunSpec, RunResult]], report: Report) -> list[str]:

@@ -23,6 +23,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from common.errors import ConfigError
+from papf.experiments.trials import (
+    markdown_table,
+    progress_bar,
+    quiet_runner_logs,
+    run_offline,
+    run_stack,
+    write_csv,
+)
+from worlds import load_world, world_path
+
 PAPF_WORLDS = tuple(f"papf-test-{i}" for i in range(1, 7))
 ARAPF_WORLDS = tuple(f"arapf-test-{i}" for i in range(1, 4))
 WANG_WORLDS = ("wang-local-minimum", "wang-unreachable-goal")
@@ -121,17 +132,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
     """
-    from common.errors import ConfigError
-    from papf.experiments.trials import (
-        markdown_table,
-        progress_bar,
-        quiet_runner_logs,
-        run_offline,
-        run_stack,
-        write_csv,
-    )
-    from papf.plots import plot_paths
-    from worlds import load_world, world_path
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")

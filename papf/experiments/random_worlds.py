@@ -19,6 +19,17 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from common.errors import ConfigError
+from papf.experiments.trials import (
+    markdown_table,
+    progress_bar,
+    quiet_runner_logs,
+    run_offline,
+    run_stack,
+    write_csv,
+)
+from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
+
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
 WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
 DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
@@ -36,7 +47,6 @@ def _rate(trials) -> float:
 def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
     """Per planner: worlds, rate of each outcome [%], success rate per kind and, given the
     worlds' bottleneck widths, on the worlds whose bottleneck is >= / < WIDE_M [%]."""
-    from papf.randworlds import KINDS
 
     bottleneck = bottleneck or {}
     rows = []
@@ -57,8 +67,6 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
 
 def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected: int) -> str:
-    from papf.experiments.trials import markdown_table
-    from papf.randworlds import KINDS
 
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
               *[f"reached: {k} [%]" for k in KINDS],
@@ -79,16 +87,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
     """
-    from common.errors import ConfigError
-    from papf.experiments.trials import (
-        progress_bar,
-        quiet_runner_logs,
-        run_offline,
-        run_stack,
-        write_csv,
-    )
-    from papf.plots import plot_paths
-    from papf.randworlds import bottleneck_width, generate_solvable, world_to_toml
+    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")

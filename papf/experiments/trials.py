@@ -20,6 +20,8 @@ import numpy as np
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from common.errors import RecordingError
+from papf.supervisor import free_port
 from worlds import World, load_world
 
 MODES = ("offline", "stack")
@@ -59,7 +61,7 @@ def _r(x: float, nd: int = 3):
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
                 params=None) -> Trial:
     """One offline run (:func:`papf.plan.plan`)."""
-    from papf.plan import plan
+    from papf.plan import plan  # pybullet: only for offline runs
 
     t0 = time.monotonic()
     r = plan(world, planner, params=params, seed=seed, max_time_s=timeout_s)
@@ -71,8 +73,7 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
               record: str | Path | None = None, planner_args: Sequence[str] = ()) -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
-    from papf.runner import RunConfig, run
-    from papf.supervisor import free_port
+    from papf.runner import RunConfig, run  # zenoh: only for stack runs
 
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
@@ -89,8 +90,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
     """(N, 2) ground-truth positions [m] from a recording's ``<ns>/sim/pose`` channel."""
-    from common.errors import RecordingError
-    from papf.recording.reader import iter_messages
+    from papf.recording.reader import iter_messages  # mcap: only with a recording
 
     pts = []
     try:

@@ -1,4 +1,4 @@
-"""Run recordings (DESIGN.md §8): write, read, recover and replay MCAP files.
+"""Run recordings (docs/recording.md): write, read, recover and replay MCAP files.
 
 - :class:`~nodes.recorder.writer.RunWriter` — crash-safe MCAP writer (one channel per key);
 - :func:`~papf.recording.reader.open_recording` / :func:`~papf.recording.reader.iter_messages`;

@@ -1,4 +1,4 @@
-"""Read a recording made by :mod:`nodes.recorder.writer` (DESIGN.md §8).
+"""Read a recording made by :mod:`nodes.recorder.writer` (docs/recording.md).
 
 ``with open_recording("run.mcap") as rec:`` then ``rec.run_metadata`` and
 ``for key, msg, log_time_ns in rec.messages(): ...`` — ``msg`` is the decoded

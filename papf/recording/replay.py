@@ -1,4 +1,4 @@
-"""Republish a recording with its timing: ``papf replay run.mcap --rate 2`` (DESIGN.md §8).
+"""Republish a recording with its timing: ``papf replay run.mcap --rate 2`` (docs/recording.md).
 
 Payloads are put back on their recorded keys (or the same topics under another
 namespace) byte for byte, in log-time order. Message ``i`` goes out

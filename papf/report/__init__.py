@@ -1,4 +1,4 @@
-"""The energy report of recorded runs (DESIGN.md §8; docs/experiments-energy.md).
+"""The energy report of recorded runs (docs/recording.md; docs/experiments-energy.md).
 
 - :func:`~papf.report.metrics.run_metrics` — one run's figures from its MCAP file alone;
 - :class:`~papf.report.remeter.Remeter` / :func:`~papf.report.remeter.remeter_file` —

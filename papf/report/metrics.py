@@ -1,4 +1,4 @@
-"""Per-run figures of a recorded run, from its MCAP file alone (DESIGN.md §8, docs/experiments-energy.md).
+"""Per-run figures of a recorded run, from its MCAP file alone (docs/recording.md, docs/experiments-energy.md).
 
 Outcome, ``t_end``, duration, path length and the live battery at ``t_end`` are decided
 by feeding the recording to :class:`papf.monitor.RunMonitor` — the very object

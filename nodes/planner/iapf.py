@@ -1,0 +1,252 @@
+"""IAPF: Jin et al., "An Efficient Trajectory Planning Approach for Autonomous Ground Vehicles
+Using Improved Artificial Potential Field", Symmetry 16 (2024) 106 — the planning core.
+
+The host is a particle with a speed (Sec. 3): each step of ``step_s`` it
+
+1. drops the obstacles farther than the safety distance (eq. 9);
+2. predicts ``f_step`` low-resolution steps ahead (Algorithm 1, Step 1), counts the
+   predicted points beyond the middle between the lane centre and the nearest solid line
+   (eq. 24) and, above ``c_f``, sets a temporary lane goal in the neighbouring lane for
+   ``t_c`` seconds (Steps 3-6);
+3. sums the fields' negative gradients (eq. 13: road eqs. 4-5/18, attraction eqs. 6-8/19,
+   obstacles eqs. 10-11/15-16/20) into F;
+4. updates the speed from the obstacles' X force (eqs. 25-26) and
+5. moves along the force direction (eqs. 21-22).
+
+:class:`IAPFCore` is that step, free of transport and of the stack's planner interface;
+:mod:`nodes.planner.iapf_strategy` adapts it to :class:`~nodes.planner.core.Planner`.
+Parameters: :class:`IAPFParams` (Table 1 where the paper gives a value, ours otherwise;
+docs/planners.md argues each). ``traditional=True`` is the paper's baseline: eq. 12 field,
+constant speed, no prediction.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from nodes.planner.iapf_fields import (
+    Lanes,
+    attraction_gradient,
+    gap,
+    obstacle_gradient,
+    road_gradient,
+    safety_distance,
+    traditional_gradient,
+)
+
+
+@dataclass(frozen=True)
+class IAPFParams:
+    """IAPF parameters at car scale. Table 1 values unless marked (ours)."""
+
+    k1: float = 3.397            # road boundary amplitude (Table 1)
+    k2: float = 5.809            # lane centre amplitude (Table 1)
+    b1: float = 20.0             # cruise pull along +x (Table 1)
+    b2: float = 0.15             # goal pull along +x (Table 1)
+    b3: float = 1.52             # lane-goal amplitude (Table 1)
+    a_x: float = -0.01           # [1/m^2] size coefficient along the heading (ours; Table 1: -0.15)
+    a_y: float = -0.2            # [1/m^2] obstacle size coefficient across (Table 1)
+    eta1: float = 0.63           # eq. 25 force weight (Table 1)
+    eta2: float = 0.25           # eq. 25 return-to-cruise weight (Table 1)
+    step_s: float = 0.02         # [s] t, planning step (Table 1)
+    horizon_s: float = 5.0       # [s] T, trajectory horizon of one plan (Table 1)
+    s_m: float = 5.0             # [m] safety margin of eq. 9 (Table 1)
+    a_b: float = 6.0             # [m/s^2] maximum braking (Table 1)
+    f_step: int = 20             # future steps of the prediction (Table 1)
+    c_f: int = 5                 # local-minimum sensitivity (Table 1)
+    t_c: float = 0.8             # [s] temporary goal lifetime (ours; Table 1: 0.4)
+    v_cruise: float = 10.0       # [m/s] V_c, 36 km/h (Sec. 4.1)
+    obstacle_gain: float = 100.0  # amplitude of eq. 11 (ours; 1 in the paper's formula)
+    mass: float = 1.0            # [kg] m of eq. 25 (ours: not in Table 1)
+    a_max: float = 3.0           # [m/s^2] acceleration limit (ours)
+    v_max_factor: float = 1.2    # v <= factor * V_c (ours: "accelerate when passing")
+    predict_step_s: float = 0.15  # [s] step of the low-resolution prediction (ours)
+    goal_half_period_lanes: float = 2.0  # D_g / d_w of eqs. 8, 19 (ours; 1 = eq. 8 as printed)
+    b3_temp: float = 25.0        # lane-goal amplitude while a temporary goal is active (ours)
+    heading_max_deg: float = 30.0  # [deg] |phi_E| limit about +x (ours; 90 = none)
+    yaw_rate_max_deg: float = 90.0  # [deg/s] heading change limit (ours; 0 = none, as eq. 21)
+    host_length: float = 4.5     # [m] host footprint along its heading (ours: a car)
+    host_width: float = 1.8      # [m] (ours)
+    literal_rotation: bool = False  # eq. 10 as printed (turns the field by -phi)
+    prediction: bool = True      # Algorithm 1 on (off: "IAPF without prediction", Table 2)
+    traditional: bool = False    # the traditional APF baseline (eq. 12, constant speed)
+    k_trad: float = 3000.0       # eq. 12 k of the baseline (ours)
+    lane_width_ref: float = 4.0  # [m] the lane width d_w these values are for (Table 1)
+    cruise_speed: float = 0.3    # [m/s] V_c of the planner node on the run's road (ours, ROSbot)
+
+
+# Table 1 read literally (``--preset paper``): every value of ours that replaces a Table 1
+# value goes back, every addition of ours is switched off.
+PAPER_PRESET = {"a_x": -0.15, "t_c": 0.4, "obstacle_gain": 1.0, "predict_step_s": 0.02,
+                "goal_half_period_lanes": 1.0, "b3_temp": 1.52, "heading_max_deg": 90.0,
+                "yaw_rate_max_deg": 0.0, "literal_rotation": True}
+
+_LENGTH_TIMES = {"s_m": (1, 0), "host_length": (1, 0), "host_width": (1, 0),
+                 "lane_width_ref": (1, 0), "k_trad": (1, 0),
+                 "step_s": (0, 1), "horizon_s": (0, 1), "t_c": (0, 1), "predict_step_s": (0, 1),
+                 "yaw_rate_max_deg": (0, -1), "v_cruise": (1, -1), "a_b": (1, -2),
+                 "a_max": (1, -2), "k1": (-4, 0), "k2": (-2, 0), "b1": (-1, 0), "b2": (-1, 0),
+                 "b3": (-1, 0), "b3_temp": (-1, 0), "a_x": (-2, 0), "a_y": (-2, 0),
+                 "eta1": (2, -2), "eta2": (-2, 1)}
+
+
+def scaled(p: IAPFParams, length: float, time: float) -> IAPFParams:
+    """The same planner on a world ``length`` times as large and ``time`` times as slow.
+
+    A similarity transform (ours; docs/planners.md "ROSbot scale"): potentials stay, every
+    length is multiplied by ``length`` and every time by ``time``, so speeds scale by
+    ``length / time`` and accelerations by ``length / time^2``. Each coefficient follows
+    from its equation's units — e.g. ``k1 delta^4`` -> ``k1 / length^4``, ``b1 X`` ->
+    ``b1 / length``, eq. 25 ``eta1 F_ox / m`` (F ~ 1/length) -> ``eta1 length^2 / time^2``,
+    ``eta2 (V_c - v)^3`` -> ``eta2 time / length^2``. A trajectory of the scaled planner is
+    the original one scaled, point by point.
+    """
+    changes = {name: getattr(p, name) * length ** ln * time ** tn
+               for name, (ln, tn) in _LENGTH_TIMES.items()}
+    return dataclasses.replace(p, **changes)
+
+
+@dataclass
+class HostState:
+    """The planned vehicle state of eq. 2: position [m], speed [m/s], heading [rad]."""
+
+    x: float
+    y: float
+    v: float
+    yaw: float = 0.0
+
+
+@dataclass
+class StepInfo:
+    """What one step decided (for planner/state, plots and tests)."""
+
+    force: tuple[float, float] = (0.0, 0.0)
+    f_ox: float = 0.0
+    accel: float = 0.0
+    predicted: list = field(default_factory=list)   # [(x, y)] of the prediction
+    local_count: int = 0                            # eq. 24
+    temp_goal_y: float | None = None                # active temporary lane goal [m]
+    active: int = 0                                 # obstacles within D_S
+
+
+def local_count(points, y_now: float, lanes: Lanes) -> int:
+    """Eq. 24: sum of sign(y_k - (y_nb + y_lc) / 2) over the predicted points.
+
+    Oriented towards the nearest solid line y_nb (ours): +1 for a point between that
+    middle line and the boundary, -1 for one on the lane-centre side; as printed, the
+    count of a vehicle trapped against the right (lower) solid line would be negative.
+    """
+    y_lc = lanes.centre(lanes.lane_of(y_now))
+    y_nb = lanes.nearest_boundary(y_now)
+    mid = 0.5 * (y_nb + y_lc)
+    toward = 1.0 if y_nb > y_lc else -1.0
+    total = 0
+    for _, y in points:
+        s = (y - mid) * toward
+        total += (s > 0.0) - (s < 0.0)
+    return total
+
+
+def temporary_goal(y_now: float, lanes: Lanes) -> float:
+    """Algorithm 1, Step 4: the centre of the lane next to the current one, away from y_nb.
+
+    Printed ``Y_goal = y_lc - d_w sign(y - y_b)`` points off the road (towards the
+    boundary); we take ``y_lc + d_w sign(y - y_b)``, clamped to the road's lanes.
+    """
+    lane = lanes.lane_of(y_now)
+    away = 1 if y_now >= lanes.nearest_boundary(y_now) else -1
+    return lanes.centre(min(max(lane + away, 0), lanes.count - 1))
+
+
+class IAPFCore:
+    """One IAPF planner (or the traditional baseline) with its temporary-goal memory."""
+
+    def __init__(self, params: IAPFParams | None = None):
+        self.p = params or IAPFParams()
+        self.temp_goal_y: float | None = None
+        self.t_goal = -math.inf
+
+    def reset(self) -> None:
+        self.temp_goal_y, self.t_goal = None, -math.inf
+
+    # -- forces -------------------------------------------------------------------------
+    def force(self, x: float, y: float, v: float, tracks, lanes: Lanes | None,
+              y_goal: float | None, b3: float, shift: float = 0.0) -> tuple[float, float, float, int]:
+        """``(F_X, F_Y, F_oX, active)``: eq. 13's resultant and the obstacles' X part, with the
+        obstacles moved on at constant velocity for ``shift`` [s] (the fields depend on the
+        host's position relative to each obstacle only, so the host is moved back instead)."""
+        p = self.p
+        half = p.goal_half_period_lanes * (lanes.width if lanes else 1.0)
+        _, gx, gy = attraction_gradient(x, y, p.b1, p.b2, b3, y_goal, half)
+        if lanes is not None:
+            gy += road_gradient(y, lanes, p.k1, p.k2)[1]
+        ox = oy = 0.0
+        active = 0
+        for ob in tracks:
+            hx, hy = x - ob.vx * shift, y - ob.vy * shift
+            if p.traditional:
+                _, ux, uy = traditional_gradient(hx, hy, ob, p.k_trad)
+            else:
+                if gap(hx, hy, p.host_length, ob) >= safety_distance(v, ob.speed, p.a_b, p.s_m):
+                    continue
+                _, ux, uy = obstacle_gradient(hx, hy, ob, p.obstacle_gain, p.a_x, p.a_y,
+                                              p.literal_rotation)
+            active += 1
+            ox -= ux
+            oy -= uy
+        return -gx + ox, -gy + oy, ox, active
+
+    def advance(self, s: HostState, tracks, lanes: Lanes | None, y_goal: float | None, b3: float,
+                dt: float, shift: float = 0.0) -> tuple[HostState, tuple]:
+        """One move of ``dt``: velocity update (eqs. 25-26), heading and position (21-22)."""
+        p = self.p
+        fx, fy, fox, active = self.force(s.x, s.y, s.v, tracks, lanes, y_goal, b3, shift)
+        accel = 0.0
+        v = s.v
+        if not p.traditional:
+            dv = p.v_cruise - v
+            accel = (p.eta1 * fox + p.eta2 * dv * dv * dv) / p.mass
+            accel = min(max(accel, -p.a_b), p.a_max)
+            v = min(max(v + accel * dt, 0.0), p.v_max_factor * p.v_cruise)
+        lim = math.radians(p.heading_max_deg)
+        yaw = min(max(math.atan2(fy, fx), -lim), lim)
+        if p.yaw_rate_max_deg > 0.0:
+            turn = math.radians(p.yaw_rate_max_deg) * dt
+            yaw = min(max(yaw, s.yaw - turn), s.yaw + turn)
+        return (HostState(s.x + math.cos(yaw) * v * dt, s.y + math.sin(yaw) * v * dt, v, yaw),
+                (fx, fy, fox, accel, active))
+
+    # -- Algorithm 1 --------------------------------------------------------------------
+    def predict(self, s: HostState, tracks, lanes: Lanes, y_goal: float | None) -> list:
+        """Step 1: ``f_step`` points ``predict_step_s`` apart, obstacles at constant velocity,
+        the field without the temporary goal (the future the vehicle would drive into)."""
+        p = self.p
+        pts = []
+        for k in range(p.f_step):
+            s, _ = self.advance(s, tracks, lanes, y_goal, p.b3, p.predict_step_s,
+                                k * p.predict_step_s)
+            pts.append((s.x, s.y))
+        return pts
+
+    def step(self, s: HostState, tracks, lanes: Lanes | None, t: float,
+             y_goal: float | None = None, dt: float | None = None) -> tuple[HostState, StepInfo]:
+        """One planning step at time ``t`` [s] of ``dt`` (default ``step_s``)."""
+        p = self.p
+        dt = p.step_s if dt is None else dt
+        info = StepInfo()
+        if self.temp_goal_y is not None and t >= self.t_goal + p.t_c:      # Step 6
+            self.temp_goal_y = None
+        if p.prediction and not p.traditional and lanes is not None:
+            info.predicted = self.predict(s, tracks, lanes, y_goal)
+            info.local_count = local_count(info.predicted, s.y, lanes)      # Step 2
+            if info.local_count > p.c_f:                                    # Step 3
+                self.temp_goal_y, self.t_goal = temporary_goal(s.y, lanes), t  # Step 4
+        goal_y, b3 = y_goal, p.b3
+        if self.temp_goal_y is not None:                                    # Step 5
+            goal_y, b3 = self.temp_goal_y, p.b3_temp
+        new, (fx, fy, fox, accel, active) = self.advance(s, tracks, lanes, goal_y, b3, dt)
+        info.force, info.f_ox, info.accel, info.active = (fx, fy), fox, accel, active
+        info.temp_goal_y = self.temp_goal_y
+        return new, info

@@ -1,0 +1,194 @@
+"""IAPF potential fields and their gradients (Jin et al., Symmetry 2024, Sec. 2.2 and 3.1).
+
+Pure scalar maths (``math``, no numpy: a cycle evaluates a handful of obstacles, where
+Python floats beat array overhead). Every function returns the *gradient* ``dU/dX, dU/dY``
+(the force is its negative, eq. 13) and, for tests and plots, the potential itself.
+Our reading of each ambiguous equation is stated where it is implemented and argued in
+docs/planners.md ("IAPF").
+
+- :class:`Lanes`: the road the planner was told (y of the right solid line, lane width
+  d_w, lane count), never read from a world file.
+- :func:`road_gradient` — eqs. 4, 5, 18: quartic boundary field outside the outer lane
+  centres (k1), quadratic lane-centre field between them (k2).
+- :func:`attraction_gradient` — eqs. 6-8, 19: cruise pull b1 along +x, goal pull b2 and the
+  lane-goal cosine b3 (half period ``D_g``).
+- :func:`safety_distance` — eq. 9.
+- :func:`obstacle_gradient` — eqs. 10, 11, 15, 16, 20: the rotated Gaussian field of one
+  obstacle; :func:`traditional_gradient` — eq. 12, the traditional APF's 1/d field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+
+class Lanes(NamedTuple):
+    """A straight one-way road along +x: ``y_min`` [m] right solid line, ``width`` [m] d_w."""
+
+    y_min: float
+    width: float
+    count: int
+
+    @property
+    def y_max(self) -> float:
+        """[m] left solid line."""
+        return self.y_min + self.count * self.width
+
+    def lane_of(self, y: float) -> int:
+        """Index of the lane holding ``y`` (clamped to 0 … count-1)."""
+        return min(max(int(math.floor((y - self.y_min) / self.width)), 0), self.count - 1)
+
+    def centre(self, lane: int) -> float:
+        """[m] y of a lane's centre line."""
+        return self.y_min + (lane + 0.5) * self.width
+
+    def nearest_boundary(self, y: float) -> float:
+        """[m] y of the solid line nearer to ``y`` (Algorithm 1's y_nb)."""
+        return self.y_min if y - self.y_min <= self.y_max - y else self.y_max
+
+
+@dataclass(frozen=True)
+class Track:
+    """One obstacle as the planner sees it: pose, velocity and footprint (world frame)."""
+
+    x: float            # [m]
+    y: float            # [m]
+    yaw: float          # [rad] heading phi of eq. 10
+    vx: float = 0.0     # [m/s]
+    vy: float = 0.0     # [m/s]
+    length: float = 0.0  # [m] along the heading
+    width: float = 0.0   # [m]
+    id: int = 0
+
+    @property
+    def speed(self) -> float:
+        """[m/s] v_o of eq. 9."""
+        return math.hypot(self.vx, self.vy)
+
+    def moved(self, dt: float) -> Track:
+        """Where a constant-velocity obstacle is ``dt`` [s] later (Algorithm 1, Step 1)."""
+        return Track(self.x + self.vx * dt, self.y + self.vy * dt, self.yaw, self.vx, self.vy,
+                     self.length, self.width, self.id)
+
+
+# -- road (eqs. 4, 5, 18) ------------------------------------------------------------
+
+def road_gradient(y: float, lanes: Lanes, k1: float, k2: float) -> tuple[float, float]:
+    """``(U_road, dU_road/dY)`` at ``y`` (eq. 4: U_road = U_bound + U_center).
+
+    Our reading of eq. 5 with Y the distance from the broken line (the two-lane road's
+    centre), generalised to any lane count. With ``delta`` = y minus the centre of the
+    lane holding y:
+
+    - towards a solid line from the outer lanes' centres (U_bound): ``k1 delta^4``,
+      gradient ``4 k1 delta^3`` (eq. 18's quartic branches, measured from the lane centre);
+    - towards a broken line (U_center): ``k2 delta^2``, gradient ``2 k2 delta`` (eq. 18's
+      middle branches with the sign that makes every lane centre a minimum); the ridge on
+      a broken line is ``k2 d_w^2 / 4`` high.
+
+    Beyond a solid line the quartic continues (eq. 5 holds it constant there, which would
+    leave a vehicle that left the road without a way back).
+    """
+    lane = lanes.lane_of(y)
+    delta = y - lanes.centre(lane)
+    outer = (lane == 0 and delta < 0.0) or (lane == lanes.count - 1 and delta > 0.0)
+    if outer:
+        d3 = delta * delta * delta
+        return k1 * d3 * delta, 4.0 * k1 * d3
+    return k2 * delta * delta, 2.0 * k2 * delta
+
+
+# -- attraction (eqs. 6-8, 19) ----------------------------------------------------------
+
+def attraction_gradient(x: float, y: float, b1: float, b2: float, b3: float,
+                        y_goal: float | None, half_period: float) -> tuple[float, float, float]:
+    """``(U_att, dU/dX, dU/dY)`` of eq. 6: U_att = U_normal + U_goal.
+
+    eq. 7 ``U_normal = -b1 X`` and eq. 8 ``U_goal = -b2 X - (D_g / pi) b3 cos(pi (Y - Y_goal) / D_g)``
+    (the paper prints ``+b1 X`` and ``+b2 X``, which would push the vehicle backwards;
+    Fig. 3b draws the field decreasing along X). ``D_g`` = ``half_period``: the paper's
+    eq. 8 has ``d_w``, eq. 19 a ``D_g`` it never defines; its gradient is
+    ``b3 sin(pi (Y - Y_goal) / D_g)`` (eq. 19's extra ``pi / d_w`` factor and its
+    ``Y - Y_0 + D_g`` denominator do not follow from eq. 8; we use the derivative of eq. 8).
+    ``y_goal=None``: no lane goal, only the pulls along X.
+    """
+    u = -(b1 + b2) * x
+    gy = 0.0
+    if y_goal is not None and b3 != 0.0:
+        arg = math.pi * (y - y_goal) / half_period
+        u -= half_period / math.pi * b3 * math.cos(arg)
+        gy = b3 * math.sin(arg)
+    return u, -(b1 + b2), gy
+
+
+# -- obstacles (eqs. 9-12, 15, 16, 20) ------------------------------------------------
+
+def safety_distance(v_host: float, v_obs: float, a_brake: float, margin: float) -> float:
+    """Eq. 9: ``D_S = (v_c^2 - v_o^2) / (2 a_b) + S_m`` [m].
+
+    A faster obstacle (``v_o > v_c``) gives a negative braking term; we keep S_m as the
+    least range (ours: the paper's formula would drop an obstacle closing from behind
+    once it is faster than the host).
+    """
+    return max(0.0, (v_host * v_host - v_obs * v_obs) / (2.0 * a_brake)) + margin
+
+
+def gap(x: float, y: float, host_length: float, ob: Track) -> float:
+    """[m] distance compared with D_S: centre distance less both half-lengths, >= 0 (ours)."""
+    return max(0.0, math.hypot(x - ob.x, y - ob.y) - 0.5 * (host_length + ob.length))
+
+
+def obstacle_gradient(x: float, y: float, ob: Track, gain: float, a_x: float, a_y: float,
+                      literal_rotation: bool = False) -> tuple[float, float, float]:
+    """``(U_obs, dU/dX, dU/dY)`` of one obstacle (eqs. 10, 11, 15, 16, 20).
+
+    Eq. 11: ``U = gain * cos(arctan(dy / dx)) * exp(A_x R_x^2 + A_y R_y^2)`` with
+    ``dx = x - x_o``, ``dy = y - y_o`` and ``cos(arctan(dy/dx)) = |dx| / d`` (``gain`` is ours:
+    the printed field has amplitude 1; Fig. 4 says heavier vehicles have a higher peak).
+
+    Rotation (eq. 10): the printed ``R_X = dx cos(phi) - dy sin(phi)``,
+    ``R_Y = dx sin(phi) + dy cos(phi)`` turns the ellipse by ``-phi``, and the cosine factor
+    stays in world axes. The text says the whole field "will rotate at the same angle as
+    the vehicle heading angle" (Fig. 5), so by default we use obstacle-frame coordinates
+    ``R_X = dx cos(phi) + dy sin(phi)``, ``R_Y = -dx sin(phi) + dy cos(phi)`` and the
+    cosine of the bearing in that frame, ``|R_X| / d``. ``literal_rotation=True``: eqs. 10-11
+    as printed.
+
+    Gradient: eqs. 15-16 are the exact derivative of the printed field; eq. 20's second
+    term has the wrong sign (``d/dY |dx| / d = -|dx| dy / d^3``). We use the exact
+    derivative (tests compare it with finite differences).
+    """
+    dx, dy = x - ob.x, y - ob.y
+    c, s = math.cos(ob.yaw), math.sin(ob.yaw)
+    if not literal_rotation:
+        s = -s
+    rx = dx * c - dy * s
+    ry = dx * s + dy * c
+    e = gain * math.exp(a_x * rx * rx + a_y * ry * ry)
+    d2 = dx * dx + dy * dy
+    if d2 < 1e-18:
+        return e, 0.0, 0.0
+    d = math.sqrt(d2)
+    # the cosine factor's axis: world x (printed) or the heading (ours), and its partials
+    ax, px, py = (dx, 1.0, 0.0) if literal_rotation else (rx, c, -s)
+    g = abs(ax) / d                                    # G_cos
+    grx = 2.0 * a_x * rx * c + 2.0 * a_y * ry * s      # G_Rx (eq. 16)
+    gry = -2.0 * a_x * rx * s + 2.0 * a_y * ry * c     # G_Ry (eq. 16)
+    sg = (ax > 0.0) - (ax < 0.0)
+    d3 = d2 * d
+    dgx = sg * px / d - abs(ax) * dx / d3
+    dgy = sg * py / d - abs(ax) * dy / d3
+    return g * e, e * (g * grx + dgx), e * (g * gry + dgy)
+
+
+def traditional_gradient(x: float, y: float, ob: Track, k: float) -> tuple[float, float, float]:
+    """``(U, dU/dX, dU/dY)`` of eq. 12, the traditional APF: ``U = k / (2 d)``."""
+    dx, dy = x - ob.x, y - ob.y
+    d2 = dx * dx + dy * dy
+    if d2 < 1e-18:
+        return math.inf, 0.0, 0.0
+    d = math.sqrt(d2)
+    f = -0.5 * k / (d2 * d)
+    return 0.5 * k / d, f * dx, f * dy

@@ -1,0 +1,85 @@
+"""IAPF as a strategy of the planner node (``--planner iapf``): the core of
+:mod:`nodes.planner.iapf` on obstacle tracks and the road the run announced.
+
+Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the latest obstacle tracks
+(``<ns>/objects``: ground truth or the LiDAR tracker) and the road (:class:`Lanes`) —
+the planner never reads a world file. The scan itself is not used: IAPF's fields are
+built from tracked vehicles (Sec. 2.2.3), and the road is lines on the floor.
+
+Scale: :class:`IAPFParams` are the paper's car-scale values (lanes of ``lane_width_ref``
+= 4 m). On the run's road every length is scaled by ``d_w / lane_width_ref`` and time so
+that the cruise speed is ``cruise_speed`` (:func:`nodes.planner.iapf.scaled`); the
+planning step is the control period. Output: the planned heading phi_E (eq. 21) and the
+updated speed v_c (eq. 26), which the planner's heading controller then tracks.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from nodes.planner.apf import APFParams
+from nodes.planner.core import Plan, ScanView
+from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
+from nodes.planner.iapf_fields import Lanes, Track
+
+LANE_GOAL_AHEAD = 1.0  # [s] the temporary lane goal is drawn this far ahead at the cruise speed
+
+
+class IAPFStrategy:
+    """Jin 2024 IAPF on the shared planner core."""
+
+    name = "iapf"
+    Params = IAPFParams
+    PAPER_PRESET = PAPER_PRESET
+
+    def __init__(self, params: IAPFParams | None = None):
+        self.params = params or IAPFParams()
+        self.tracks: tuple[Track, ...] = ()
+        self.lanes: Lanes | None = None
+        self.t_s = 0.0
+        self.v_odom = 0.0
+        self._core: IAPFCore | None = None
+        self._core_for: Lanes | None = None
+        self.v: float | None = None
+
+    def reset(self) -> None:
+        if self._core is not None:
+            self._core.reset()
+        self.v = None
+
+    def observe(self, tracks, lanes: Lanes | None, t_s: float, v_odom: float) -> None:
+        """The latest obstacle tracks, the road (None: not known yet), sim time [s], speed."""
+        self.tracks = tuple(tracks)
+        self.lanes = lanes
+        self.t_s, self.v_odom = t_s, v_odom
+
+    def core_for(self, lanes: Lanes) -> IAPFCore:
+        """The core with parameters scaled to this road (kept while the road is the same)."""
+        if self._core is None or self._core_for != lanes:
+            p = self.params
+            s = lanes.width / p.lane_width_ref
+            tau = s * p.v_cruise / p.cruise_speed
+            self._core, self._core_for = IAPFCore(scaled(p, s, tau)), lanes
+        return self._core
+
+    def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
+             apf: APFParams) -> Plan:
+        if self.lanes is None:
+            return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw)
+        core = self.core_for(self.lanes)
+        if self.v is None:
+            self.v = max(0.0, self.v_odom)
+        state = HostState(float(pos[0]), float(pos[1]), self.v, yaw)
+        y_goal = self.lanes.centre(self.lanes.lane_of(float(goal[1])))
+        new, info = core.step(state, self.tracks, self.lanes, self.t_s, y_goal)
+        self.v = new.v
+        temp = ()
+        if info.temp_goal_y is not None:
+            temp = (state.x + LANE_GOAL_AHEAD * core.p.v_cruise, info.temp_goal_y)
+        return Plan(force=np.array(info.force), mode="lane-goal" if temp else "drive",
+                    temporary_goal=temp, predicted_path=np.array(info.predicted).reshape(-1, 2),
+                    heading=new.yaw, v_ref=new.v, local_count=info.local_count,
+                    lane_goal_y=math.nan if info.temp_goal_y is None else info.temp_goal_y,
+                    obstacles_used=info.active)
