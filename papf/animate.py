@@ -11,6 +11,7 @@ installed (``matplotlib.animation.FFMpegWriter``) — else a ConfigError says so
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import matplotlib
@@ -22,7 +23,13 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from common.errors import ConfigError  # noqa: E402
-from papf.mind_plots import draw_footprint, draw_mind, rgba  # noqa: E402
+from papf.mind_plots import (  # noqa: E402
+    draw_footprint,
+    draw_mind,
+    draw_moving,
+    draw_road,
+    rgba,
+)
 from papf.plots import draw_world  # noqa: E402
 from papf.recording.track import RunTrack, load_track  # noqa: E402
 
@@ -51,8 +58,10 @@ class Animator:
 
     def _static(self) -> None:
         tr, ax = self.track, self.ax
-        if tr.world is not None and tr.world.dims == 2:
-            draw_world(ax, tr.world)
+        if tr.world is not None and tr.world.dims == 2:   # moving obstacles: in draw()
+            draw_world(ax, replace(tr.world, obstacles=tuple(
+                ob for ob in tr.world.obstacles if ob.motion is None)))
+            draw_road(ax, tr.world)
         xy = tr.xyyaw[:, :2]
         ax.plot(xy[:, 0], xy[:, 1], color="0.8", lw=0.8, zorder=2)   # the whole path, faint
         lo, hi = xy.min(axis=0) - 0.6, xy.max(axis=0) + 0.6
@@ -92,10 +101,13 @@ class Animator:
             if s.stamp_ns / 1e9 <= t + 1e-9:
                 out += draw_mind(ax, s, labels=False)
         out += draw_footprint(ax, *tr.xyyaw[k])
+        if tr.world is not None and tr.world.dims == 2:
+            out += draw_moving(ax, tr.world, t)
         v, q = _value(tr.v_t, tr.v, t), _value(tr.q_t, tr.q, t)
         out += [self.ax_v.axvline(t, color="k", lw=0.8), self.ax_q.axvline(t, color="k", lw=0.8)]
+        charge = f"{q:5.2f} mAh" if q == q else "n/a"   # nan: no battery recorded
         out.append(self.fig.suptitle(f"{tr.title}    t = {t:6.1f} s    v = {v:4.2f} m/s    "
-                                     f"charge = {q:5.2f} mAh", fontsize=11))
+                                     f"charge = {charge}", fontsize=11))
         self.dynamic = out
         return out
 

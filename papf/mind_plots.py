@@ -23,7 +23,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.patches import Polygon  # noqa: E402
+from matplotlib.patches import Circle, Polygon  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from nodes.viewer.scene import MIND_COLOURS  # noqa: E402
@@ -57,6 +57,33 @@ def draw_footprint(ax, x: float, y: float, yaw: float, filled: bool = True, labe
                    [y, y + 0.6 * BODY_LENGTH_M * math.sin(yaw)], color=rgba("robot", 1.0),
                    lw=1.0 if filled else 0.5, zorder=6)
     return [patch, *nose]
+
+
+def draw_road(ax, world: World) -> list:
+    """The road's painted lines across the axes' x range: solid edges, dashed lane lines."""
+    if world.road is None:
+        return []
+    out = []
+    for rl in world.road.lines():
+        out.append(ax.axhline(rl.y, color=rgba("road"), lw=1.5, zorder=1,
+                              ls="-" if rl.kind == "solid" else (0, (6, 6))))
+    return out
+
+
+def draw_moving(ax, world: World, t_s: float) -> list:
+    """The moving obstacles where they are at sim time ``t_s`` [s]."""
+    out = []
+    for ob in world.obstacles:
+        if ob.motion is None:
+            continue
+        here = ob.at(t_s)
+        if here.shape == "box":
+            patch = Polygon(here.corners(), closed=True, color=rgba("moving"), lw=0, zorder=4)
+        else:
+            patch = Circle(here.center[:2], here.radius, color=rgba("moving"), lw=0, zorder=4)
+        ax.add_patch(patch)
+        out.append(patch)
+    return out
 
 
 def draw_mind(ax, state: PlannerState, labels: bool = True) -> list:

@@ -136,3 +136,50 @@ def test_launch_and_run_start_the_viewer_with_their_goal_policy(capsys):
     realtime = resolve_run(RunConfig(world="open", view=8765, realtime=True)).nodes["viewer"]
     assert goals(lockstep) == "refuse" and goals(realtime) == "accept"
     assert "viewer" not in resolve_run(RunConfig(world="open")).nodes
+
+
+TRAFFIC_TOML = """
+name = "traffic"
+[goal]
+position = [6.0, 0.0]
+[road]
+y_min = -0.3
+lane_width = 0.6
+lanes = 2
+[[obstacles]]
+kind = "box"
+size = [0.5, 0.3]
+[obstacles.motion]
+track = [[0.0, 3.0, 0.0], [20.0, 5.0, 0.0]]
+"""
+
+
+def test_traffic_world_export_and_animation(tmp_path):
+    """Moving obstacles where they are (export: entity ``moving`` per scan; GIF: drawn)."""
+    from PIL import Image
+
+    world = tmp_path / "traffic.toml"
+    world.write_text(TRAFFIC_TOML)
+    rec = tmp_path / "t.mcap"
+    with RunWriter(rec, {"world": str(world), "planner": "iapf"}) as w:
+        for k in range(101):
+            t = k * 20_000_000
+            w.write_message("rosbot/sim/pose", Odometry(stamp_ns=t, x=0.01 * k, y=0.0, yaw=0.0,
+                                                        v=0.5, w=0.0))
+            if k % 5 == 0:
+                w.write_message("rosbot/scan", Scan(
+                    stamp_ns=t, angle_min=0.0, angle_increment=0.1, range_min=0.2,
+                    range_max=25.0, ranges=np.ones(3, dtype=np.float32)))
+    out = tmp_path / "t-fox.mcap"
+    assert papf_main(["export", "foxglove", str(rec), str(out)]) == 0
+    xs = []
+    with open(out, "rb") as f:
+        for _s, _channel, message in make_reader(f).iter_messages(topics=["/world"]):
+            for ent in json.loads(message.data)["entities"]:
+                if ent["id"] == "moving":
+                    xs.append(ent["cubes"][0]["pose"]["position"]["x"])
+    assert len(xs) == 21 and xs[0] == pytest.approx(3.0) and xs[-1] == pytest.approx(3.2)
+    gif = tmp_path / "t.gif"
+    assert papf_main(["animate", str(rec), str(gif), "--speed", "1", "--fps", "2"]) == 0
+    with Image.open(gif) as im:
+        assert im.n_frames == 5

@@ -63,8 +63,8 @@ def load_track(path: str | Path, world: str | None = None) -> RunTrack:
         raise ConfigError(f"{path}: no sim/pose or odom messages to animate")
     odom = poses["odom"] or src
     return RunTrack(
-        world=w, title=f"{meta.get('planner', '?')} on {meta.get('world', '?')} "
-                       f"(seed {meta.get('seed', '?')})",
+        world=w, title=f"{meta.get('planner', '?')} on {w.name if w else meta.get('world', '?')}"
+                       + (f" (seed {meta['seed']})" if "seed" in meta else ""),
         t=np.array([m.stamp_ns for m in src]) / 1e9,
         xyyaw=np.array([(m.x, m.y, m.yaw) for m in src]),
         v_t=np.array([m.stamp_ns for m in odom]) / 1e9, v=np.array([m.v for m in odom]),
