@@ -11,7 +11,9 @@ Each node declares its ports in ``nodes/<node>/ports.py`` as tuples
 - message type: the schema class name (``"Scan"``, see :data:`schemas.keys.TOPICS`) or, on
   bridge keys, the ROS 2 type (CDR).
 
-A node whose ports depend on an option declares ``VARIANTS``: ``{(option, value): ports}``.
+A node whose ports depend on an option declares ``VARIANTS``: ``{(option, value): ports}``
+(they replace ``PORTS``), and ``EXTRAS``: ``{option: ports}`` for flags that add ports to
+whichever set applies (e.g. ``--truth-objects`` adds the ``objects`` output).
 ``python -m nodes.<node> --help`` prints them (:func:`describe`), and the launch profiles
 are checked against them (tests/test_node_graph.py).
 """
@@ -26,23 +28,27 @@ BRIDGE = "bridge:"
 
 
 def select(ports: Sequence[Port], variants: Mapping[tuple[str, str], Sequence[Port]],
-           argv: Sequence[str]) -> tuple[Port, ...]:
-    """The ports of a node started with ``argv`` (the first variant whose option it sets)."""
+           argv: Sequence[str], extras: Mapping[str, Sequence[Port]] = {}) -> tuple[Port, ...]:
+    """The ports of a node started with ``argv``: the first variant whose option it sets
+    (else ``ports``), plus the extras of the flags it sets."""
     argv = list(argv)
     pairs = set(zip(argv, argv[1:], strict=False)) | {tuple(a.split("=", 1)) for a in argv
                                                         if a.startswith("--") and "=" in a}
+    added = tuple(p for flag, more in extras.items() if flag in argv for p in more)
     for option, chosen in variants.items():
         if option in pairs:
-            return tuple(chosen)
-    return tuple(ports)
+            return tuple(chosen) + added
+    return tuple(ports) + added
 
 
 def describe(ports: Sequence[Port], variants: Mapping[tuple[str, str], Sequence[Port]] = {},
-             ) -> str:
-    """Text table of the ports (and of each variant) for a ``--help`` epilog."""
+             extras: Mapping[str, Sequence[Port]] = {}) -> str:
+    """Text table of the ports (and of each variant and extra) for a ``--help`` epilog."""
     blocks = [_table("ports (<ns> = --namespace, <bridge> = the ROS 2 bridge's):", ports)]
     for (option, value), chosen in variants.items():
         blocks.append(_table(f"ports with {option} {value}:", chosen))
+    for flag, more in extras.items():
+        blocks.append(_table(f"ports added by {flag}:", more))
     return "\n\n".join(blocks)
 
 

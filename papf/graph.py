@@ -29,8 +29,18 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
-             "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "view")
+             "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
+             "view")
 ROUTER_MODULE = "papf.router"
+OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
+OBJECT_PLANNERS = ("iapf",)              # planners that use tracks: their default is truth
+
+
+def objects_for(planner: str | None, objects: str | None) -> str:
+    """``--objects`` as given, else ``truth`` for a planner that uses tracks, else ``none``."""
+    if objects is not None:
+        return objects
+    return "truth" if planner in OBJECT_PLANNERS else "none"
 # What the launcher of a run subscribes to and publishes (papf.run_sequence), besides the
 # profile's pose topic: it is a process of the graph too.
 LAUNCHER_PORTS: tuple[Port, ...] = (
@@ -45,8 +55,9 @@ class NodeSpec:
     name: str                               # liveliness name (``<ns>/alive/<name>``)
     module: str                             # ``python -m <module>``
     args: tuple[str, ...] = ()              # may use {variables}
-    needs: str | None = None                # start only when this variable is set
-    if_set: dict = field(default_factory=dict)   # variable -> extra args when it is set
+    needs: str | None = None                # start only when this variable is set ("var=value":
+                                            # only when it has that value)
+    if_set: dict = field(default_factory=dict)   # variable (or "var=value") -> extra args
 
 
 @dataclass(frozen=True)
@@ -187,11 +198,11 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
         procs.append(Process("router", prof.host, tuple(argv + (
             ["--zenoh-config", opt.router_config] if opt.router_config else []))))
     for spec in prof.nodes:
-        if spec.needs and spec.needs not in values:
+        if spec.needs and not _holds(spec.needs, values):
             continue
         args = list(spec.args)
-        for var, extra in spec.if_set.items():
-            if var in values:
+        for cond, extra in spec.if_set.items():
+            if _holds(cond, values):
                 args += list(extra)
         if spec.name == "planner":
             args += opt.planner_args
@@ -199,6 +210,12 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
                 *opt.extra_node_args.get(spec.name, ())]
         procs.append(Process(spec.name, prof.host, tuple(argv)))
     return Resolved(prof, procs, connect, listen)
+
+
+def _holds(cond: str, values: dict) -> bool:
+    """``"var"``: the variable is set; ``"var=value"``: it is set to that value."""
+    var, sep, value = cond.partition("=")
+    return var in values and (not sep or values[var] == value)
 
 
 def _fill(args: list[str], values: dict, prof: Profile, spec: NodeSpec) -> list[str]:
@@ -216,4 +233,4 @@ def _fill(args: list[str], values: dict, prof: Profile, spec: NodeSpec) -> list[
 def node_ports(module: str, argv: list[str] | tuple[str, ...]) -> tuple[Port, ...]:
     """The declared ports (``<module>.ports``) of a node started with ``argv``."""
     ports = importlib.import_module(f"{module}.ports")
-    return select(ports.PORTS, ports.VARIANTS, argv)
+    return select(ports.PORTS, ports.VARIANTS, argv, getattr(ports, "EXTRAS", {}))

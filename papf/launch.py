@@ -8,6 +8,8 @@ liveliness tokens; SIGINT/SIGTERM stop everything cleanly.
 
 from __future__ import annotations
 
+import dataclasses
+import re
 import sys
 import time
 
@@ -15,10 +17,11 @@ import zenoh
 
 from common.errors import ConfigError
 from common.transport import StopRequested, wait_alive, zenoh_config
-from papf.graph import LaunchOptions, Profile, load_profile, resolve
+from papf.graph import LaunchOptions, Profile, load_profile, local_endpoint, resolve
 from papf.monitor import RunMonitor, RunResult
+from papf.progress import RunProgress
 from papf.run_sequence import STALL_S, RunSequence
-from papf.supervisor import Supervisor, wait_port
+from papf.supervisor import Supervisor, free_port, port_in_use, wait_port
 from schemas import Keys
 from worlds import load_world
 
@@ -32,6 +35,8 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     prof = load_profile(opt.profile)
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
         raise ConfigError(f"profile {prof.name} drives a run: give --world W")
+    if prof.router and not opt.dry_run:
+        opt = free_listen(prof, opt)
     graph = resolve(prof, opt)
     if opt.dry_run:
         print(graph.to_json())
@@ -70,6 +75,39 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
             return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
 
 
+def _taken(endpoint: str) -> int | None:
+    """The port of a ``tcp/HOST:PORT`` endpoint if something already listens there, else None."""
+    m = re.match(r"^tcp/(.+):(\d+)$", local_endpoint(endpoint))
+    if m is None or int(m.group(2)) == 0:
+        return None
+    port = int(m.group(2))
+    return port if port_in_use(port, m.group(1).strip("[]")) else None
+
+
+def free_listen(prof: Profile, opt: LaunchOptions) -> LaunchOptions:
+    """The profile's router endpoints with taken TCP ports replaced by free ones (as ``papf
+    run`` does); a taken port given with ``--listen`` is the user's choice: ConfigError."""
+    if opt.listen:
+        for ep in opt.listen:
+            if _taken(ep) is not None:
+                raise ConfigError(f"--listen {ep}: the port is taken (another router or papf "
+                                  "launch?); stop that, or give another port (without --listen "
+                                  "papf launch picks a free one)")
+        return opt
+    listen = []
+    for ep in prof.listen:
+        port = _taken(ep)
+        if port is not None:
+            new = re.sub(r":\d+$", f":{free_port()}", ep)
+            print(f"papf launch {prof.name}: port {port} is taken (another router?); the router "
+                  f"listens on {new} instead" + ("" if prof.run else
+                  f" — the other host connects with --connect {new.replace('0.0.0.0', '<this-host>')}"),
+                  file=sys.stderr, flush=True)
+            ep = new
+        listen.append(ep)
+    return dataclasses.replace(opt, listen=listen) if listen != list(prof.listen) else opt
+
+
 def _failed(reason: str, opt: LaunchOptions, prof: Profile) -> RunResult:
     print(f"papf launch {prof.name}: {reason}", file=sys.stderr)
     monitor = RunMonitor(opt.timeout_s)
@@ -92,10 +130,12 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
     monitor = RunMonitor(opt.timeout_s)
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
                       stall_s=opt.stall_s or STALL_S)
+    planner = str(opt.values.get("planner") or prof.defaults.get("planner", "apf"))
     try:
         if seq.handshake(world):
             seq.start(f"profile={prof.name} world={world.name}")
-            seq.until_outcome()
+            with RunProgress(None, opt.timeout_s, world.name, planner) as progress:
+                seq.until_outcome(progress, world.goal[:2])
     finally:
         result = _result(monitor, opt, prof, time.monotonic() - wall0)
         seq.end(result)

@@ -1,47 +1,108 @@
-"""A one-line live status of a run on stderr (rich), or a log line every 10 s sim time."""
+"""Progress of long work on stderr: a live line on a terminal, else one line per 10 %.
+
+- :class:`DecileProgress` — any job with a fraction done (replay: messages; a goal: the
+  share of the start distance covered). Piped (a file, CI, ``| tee``), it prints a line
+  each time the job passes another 10 %, plus one every ``HEARTBEAT_S`` of wall time
+  without one (so a stuck job still says it is alive).
+- :class:`RunProgress` — a run of the stack: the share of the straight-line distance
+  from the start to the goal covered (the closest the robot has been), sim time, charge
+  and the planner's state.
+"""
 
 from __future__ import annotations
 
-import logging
 import math
 import sys
+import time
+from collections.abc import Callable
 
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-log = logging.getLogger("papf.run")
+HEARTBEAT_S = 30.0   # [s wall] longest silence of the piped mode
+
+
+def _err(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+class DecileProgress:
+    """``with DecileProgress("replay") as p: p.fraction(done / total, "detail")``.
+
+    ``enabled``: None = a live bar when stderr is a terminal, else decile lines;
+    True = the live bar; False = nothing. ``out`` receives the piped lines.
+    """
+
+    def __init__(self, label: str, enabled: bool | None = None,
+                 out: Callable[[str], None] | None = None, clock: Callable[[], float] = time.monotonic):
+        self.label, self.out, self.clock = label, out or _err, clock
+        self.live = sys.stderr.isatty() if enabled is None else enabled
+        self.quiet = enabled is False
+        self._decile = -1
+        self._start_distance: float | None = None
+        self._best = 0.0
+        self._last_line = clock()
+        self._bar = Progress(TextColumn(f"[bold]{label}[/]"), BarColumn(),
+                             TextColumn("{task.percentage:>3.0f} %  {task.fields[text]}"),
+                             TimeElapsedColumn(), console=Console(stderr=True),
+                             transient=True) if self.live and not self.quiet else None
+        self._task = None
+
+    def __enter__(self) -> DecileProgress:
+        if self._bar is not None:
+            self._bar.start()
+            self._task = self._bar.add_task(self.label, total=1.0, text="")
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+    def fraction(self, done: float, text: str = "") -> None:
+        """Report ``done`` in [0, 1] (it may go down; lines follow the best so far)."""
+        if self.quiet:
+            return
+        done = min(max(done, 0.0), 1.0) if math.isfinite(done) else 0.0
+        self._best = max(self._best, done)
+        if self._bar is not None:
+            self._bar.update(self._task, completed=done, text=text)
+            return
+        decile = int(self._best * 10 + 1e-9)
+        now = self.clock()
+        if decile > self._decile or now - self._last_line >= HEARTBEAT_S:
+            self._decile = max(decile, self._decile)
+            self._last_line = now
+            self.out(f"{self.label}: {100 * self._best:3.0f} %" + (f"  {text}" if text else ""))
+
+    def distance(self, remaining_m: float, text: str = "") -> None:
+        """Report the remaining distance [m]: done = 1 - remaining / the first one reported."""
+        if math.isnan(remaining_m):
+            return
+        if self._start_distance is None:
+            self._start_distance = max(remaining_m, 1e-9)
+        self.fraction(1.0 - remaining_m / self._start_distance, text)
 
 
 class RunProgress:
-    """``with RunProgress(...) as p: p.update(sim_s, dist_m, mAh, state)``."""
+    """``with RunProgress(...) as p: p.update(sim_s, dist_m, mAh, state)`` (see module doc)."""
 
-    def __init__(self, enabled: bool | None, timeout_s: float, world: str, planner: str):
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+    def __init__(self, enabled: bool | None, timeout_s: float, world: str, planner: str,
+                 out: Callable[[str], None] | None = None):
         self.timeout_s = timeout_s
-        self._next_log_s = 10.0
-        self._progress = Progress(
-            TextColumn(f"[bold]{planner}[/] on {world}"), BarColumn(),
-            TextColumn("{task.fields[status]}"), TimeElapsedColumn(),
-            console=Console(stderr=True), transient=True,
-        ) if self.enabled else None
-        self._task = None
+        self._p = DecileProgress(f"{planner} on {world}", enabled, out)
 
     def __enter__(self) -> RunProgress:
-        if self._progress:
-            self._progress.start()
-            self._task = self._progress.add_task("run", total=self.timeout_s, status="starting")
+        self._p.__enter__()
         return self
 
     def update(self, sim_s: float, dist_m: float, charge_mAh: float, state: str) -> None:
         sim_s = max(sim_s, 0.0)
         text = (f"sim {sim_s:6.1f} s  to goal {dist_m:5.2f} m  {charge_mAh:6.2f} mAh  {state}"
                 if not math.isnan(dist_m) else f"sim {sim_s:6.1f} s  {state}")
-        if self._progress is not None:
-            self._progress.update(self._task, completed=min(sim_s, self.timeout_s), status=text)
-        elif sim_s >= self._next_log_s:
-            self._next_log_s += 10.0
-            log.info(text)
+        if math.isnan(dist_m):
+            self._p.fraction(0.0, text)
+        else:
+            self._p.distance(dist_m, text)
 
     def __exit__(self, *exc) -> None:
-        if self._progress:
-            self._progress.stop()
+        self._p.__exit__(*exc)

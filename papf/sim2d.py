@@ -18,8 +18,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-import pybullet as p
 
+from common.quiet import import_quietly
 from common.units import NS_PER_S as NS
 from nodes.base_driver.limits import CommandGate, unicycle
 from nodes.base_driver.sim import SimParams, jittered_start
@@ -29,6 +29,8 @@ from schemas.messages import Odometry, Scan
 from worlds import World
 from worlds.bullet import build_world
 from worlds.messages import goal_message
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 SUBSTEP_S = 0.02          # [s] integration and collision-check step (driver odometry period)
 CLEARANCE_CAP_M = 1.0     # [m] clearances above this are not resolved (reported as the cap)

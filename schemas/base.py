@@ -15,6 +15,7 @@ annotation                      wire form (msgpack)                    check
 ``Paths`` (tuple of Points)     array of array of [x, y]               finite pairs
 ``Strs`` (tuple of str)         array of str
 ``np.ndarray``                  bytes, little-endian float32           length multiple of 4
+``tuple[M, ...]`` (M a Message) array of M's maps (with ``_type``)     each one as M checks
 ==============================  =====================================  ======================
 
 Field metadata (``meta(unit=..., doc=..., choices=..., nonfinite=..., length=...)``)
@@ -26,7 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, ClassVar, get_type_hints
+from typing import Any, ClassVar, get_args, get_origin, get_type_hints
 
 import msgpack
 import numpy as np
@@ -57,6 +58,10 @@ def field(default: Any = dataclasses.MISSING, **kwargs: Any) -> Any:
 
 
 def _kind(annotation: Any) -> str:
+    args = get_args(annotation)
+    if get_origin(annotation) is tuple and len(args) == 2 and args[1] is Ellipsis \
+            and isinstance(args[0], type) and issubclass(args[0], Message):
+        return "items"
     table = {int: "int", float: "float", str: "str", bool: "bool", Floats: "floats",
              Points: "points", Paths: "paths", Strs: "strs", np.ndarray: "f32array"}
     try:
@@ -77,7 +82,11 @@ class Message:
         out: dict[str, Any] = {}
         for name, kind, _ in self._FIELDS:
             value = getattr(self, name)
-            out[name] = value.astype(float).tolist() if kind == "f32array" else value
+            if kind == "f32array":
+                value = value.astype(float).tolist()
+            elif kind == "items":
+                value = [m.to_dict() for m in value]
+            out[name] = value
         return out
 
     def to_wire(self) -> dict:
@@ -91,6 +100,8 @@ class Message:
                 value = [list(p) for p in value]
             elif kind == "paths":
                 value = [[list(p) for p in path] for path in value]
+            elif kind == "items":
+                value = [m.to_wire() for m in value]
             out[name] = value
         return out
 
@@ -188,13 +199,18 @@ def message(name: str, version: int):
         cls = dataclasses.dataclass(frozen=True, eq=False)(cls)
         hints = get_type_hints(cls)
         cls._FIELDS = tuple(
-            (f.name, _kind(hints[f.name]), f.metadata or meta())
-            for f in dataclasses.fields(cls)
+            (f.name, kind, _item_meta(f.metadata or meta(), hints[f.name], kind))
+            for f in dataclasses.fields(cls) for kind in (_kind(hints[f.name]),)
         )
         cls.TYPE = f"papf/{name}/v{version}"
         return cls
 
     return wrap
+
+
+def _item_meta(md: Any, annotation: Any, kind: str) -> dict:
+    """Field metadata, with the item class of a ``tuple[Message, ...]`` field under ``item``."""
+    return {**md, "item": get_args(annotation)[0]} if kind == "items" else dict(md)
 
 
 def _normalise(self) -> None:
@@ -205,7 +221,7 @@ def _normalise(self) -> None:
             value = np.asarray(value, dtype=np.float32)
         elif kind == "floats":
             value = tuple(float(v) for v in value)
-        elif kind == "strs":
+        elif kind in ("strs", "items"):
             value = tuple(value)
         elif kind == "points":
             value = tuple((float(p[0]), float(p[1])) for p in value)
@@ -278,6 +294,14 @@ def _points(where: str, value: Any, md: dict) -> Points:
     return tuple(out)
 
 
+def _items(where: str, value: Any, md: dict) -> tuple:
+    item = md["item"]
+    try:
+        return tuple(item.from_wire(v) for v in value)
+    except SchemaError as exc:
+        raise SchemaError(f"{where}: {exc}") from None
+
+
 def _float(where: str, value: Any, md: dict) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SchemaError(f"{where}: expected a number, got {value!r}")
@@ -287,9 +311,10 @@ def _float(where: str, value: Any, md: dict) -> float:
     return value
 
 
-_SEQUENCE_KINDS = ("floats", "strs", "points", "paths")
+_SEQUENCE_KINDS = ("floats", "strs", "points", "paths", "items")
 _CHECKERS = {"int": _int, "float": _float, "str": _str, "bool": _bool, "f32array": _f32array,
-             "floats": _floats, "strs": _strs, "points": _points, "paths": _paths}
+             "floats": _floats, "strs": _strs, "points": _points, "paths": _paths,
+             "items": _items}
 
 
 def _len(value: Any) -> str:
@@ -300,6 +325,9 @@ def _len(value: Any) -> str:
 
 
 def _json_type(kind: str, md: dict) -> dict:
+    if kind == "items":
+        item = {k: v for k, v in md["item"].json_schema().items() if k != "$schema"}
+        return {"type": "array", "items": item}
     number = {"type": "number"}
     pair = {"type": "array", "items": number, "minItems": 2, "maxItems": 2}
     out: dict[str, Any] = {

@@ -10,6 +10,7 @@ from schemas.messages import (
     Clock,
     Event,
     Goal,
+    Objects,
     Odometry,
     PlannerState,
     PlannerStatus,
@@ -32,6 +33,7 @@ TOPICS = {
     "clock": Clock,
     "sim/pose": Odometry,
     "events": Event,
+    "objects": Objects,     # obstacle tracks: sim ground truth or the tracker node
 }
 
 
@@ -69,3 +71,4 @@ class Keys:
     clock = property(lambda self: self.key("clock"))
     sim_pose = property(lambda self: self.key("sim/pose"))
     events = property(lambda self: self.key("events"))
+    objects = property(lambda self: self.key("objects"))

@@ -173,12 +173,38 @@ class Event(Message):
     y: float = field(float("nan"), unit="m", nonfinite=True)
 
 
+@message("ObjectTrack", 1)
+class ObjectTrack(Message):
+    """One obstacle seen around the robot (an element of :class:`Objects`), world frame."""
+
+    id: int = field(doc="track id, stable while the object is tracked")
+    x: float = field(unit="m", doc="centre")
+    y: float = field(unit="m")
+    yaw: float = field(0.0, unit="rad", doc="heading (direction of travel)")
+    vx: float = field(0.0, unit="m/s")
+    vy: float = field(0.0, unit="m/s")
+    length: float = field(0.0, unit="m", doc="extent along the heading")
+    width: float = field(0.0, unit="m", doc="extent across the heading")
+
+
+OBJECT_SOURCES = ("truth", "tracker")
+
+
+@message("Objects", 1)
+class Objects(Message):
+    """The obstacles around the robot at one instant: from the sim's ground truth or a tracker."""
+
+    stamp_ns: int = field(unit="ns", doc="the scan instant they belong to")
+    source: str = field(choices=OBJECT_SOURCES)
+    tracks: tuple[ObjectTrack, ...] = field(())
+
+
 ALL_MESSAGES: tuple[type[Message], ...] = (
     Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
-    PlannerStatus, Clock, Event,
+    PlannerStatus, Clock, Event, Objects,
 )
 BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
 
 __all__ = [m.__name__ for m in ALL_MESSAGES] + [
-    "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "PLANNER_STATES", "WHEEL_NAMES", "Points",
+    "ObjectTrack", "OBJECT_SOURCES", "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "PLANNER_STATES", "WHEEL_NAMES", "Points",
 ]

@@ -21,6 +21,8 @@ from schemas.messages import (
     BatteryState,
     Event,
     Goal,
+    Objects,
+    ObjectTrack,
     Odometry,
     PlannerState,
     PlannerStatus,
@@ -52,6 +54,8 @@ def recording(tmp_path_factory):
                     stamp_ns=t, angle_min=-math.pi, angle_increment=2 * math.pi / 300,
                     range_min=0.2, range_max=25.0, ranges=ranges))
                 w.write_message("rosbot/cmd_vel", Twist(stamp_ns=t, v=0.1, w=0.0))
+                w.write_message("rosbot/objects", Objects(stamp_ns=t, source="truth", tracks=(
+                    ObjectTrack(id=1, x=2.0 - x, y=0.0, vx=-0.1, length=0.4, width=0.3),)))
                 w.write_message("rosbot/planner/state", PlannerState(
                     stamp_ns=t, algorithm="papf", force=(1.0, 0.0),
                     predicted_path=((x, 0.0), (x + 1, 0.5)), top_quarks=((0.5, 0.9),),
@@ -80,7 +84,7 @@ def test_export_reads_back_and_validates(recording, tmp_path):
             assert declared == schema_json(schema.name)
             jsonschema.validate(json.loads(message.data), declared)
             counts[channel.topic] = counts.get(channel.topic, 0) + 1
-    assert set(counts) == set(want) - set()   # every channel is there
+    assert set(counts) == set(want)   # every channel is there
     assert counts["/scan"] == 30 and counts["/robot/pose"] == 150 and counts["/battery"] == 150
     assert counts["/world"] >= 2 * 3            # world + footprint, every second of log time
 

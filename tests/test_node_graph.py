@@ -27,10 +27,10 @@ from schemas.keys import TOPICS
 VALUES = {"world": "energy", "record": "/tmp/x.mcap", "bridge_namespace": "b"}
 
 
-def processes(name: str) -> dict[str, tuple]:
+def processes(name: str, **values) -> dict[str, tuple]:
     """``"<profile>:<node>"`` -> declared ports of every process the profile starts."""
     prof = load_profile(name)
-    graph = resolve(prof, LaunchOptions(name, connect=["tcp/h:1"], values=VALUES))
+    graph = resolve(prof, LaunchOptions(name, connect=["tcp/h:1"], values={**VALUES, **values}))
     specs = {s.name: s.module for s in prof.nodes}
     out = {f"{name}:{p.name}": node_ports(specs[p.name], p.argv)
            for p in graph.processes if p.name != "router"}
@@ -54,6 +54,19 @@ def test_every_input_has_a_publisher(name):
     assert not missing, f"profile {name}: inputs nobody publishes: {missing}"
 
 
+@pytest.mark.parametrize("name, objects", [("sim", "truth"), ("sim", "tracker"),
+                                           ("hil-laptop", "truth"), ("hil-laptop", "tracker"),
+                                           ("laptop", "tracker")])
+def test_obstacle_tracks_have_a_publisher(name, objects):
+    prof = load_profile(name)
+    mine = processes(name, objects=objects)
+    everyone = {**mine, **(processes(prof.partner) if prof.partner else {})}
+    assert ("in", "objects", "Objects") in mine[f"{name}:planner"]
+    assert not unpublished(mine, everyone)
+    publisher = "tracker" if objects == "tracker" else "lidar_sim"
+    assert ("out", "objects", "Objects") in mine[f"{name}:{publisher}"]
+
+
 @pytest.mark.parametrize("name", packaged_profiles())
 def test_partners_and_remote_nodes_agree(name):
     prof = load_profile(name)
@@ -74,12 +87,12 @@ def test_the_check_fails_on_a_missing_publisher():
 
 
 @pytest.mark.parametrize("module", ["nodes.base_driver", "nodes.lidar_sim", "nodes.planner",
-                                    "nodes.energy_meter", "nodes.recorder"])
+                                    "nodes.energy_meter", "nodes.recorder", "nodes.tracker"])
 def test_ports_are_well_formed_and_printed_by_help(module):
     import importlib
 
     decl = importlib.import_module(f"{module}.ports")
-    for ports in (decl.PORTS, *decl.VARIANTS.values()):
+    for ports in (decl.PORTS, *decl.VARIANTS.values(), *getattr(decl, "EXTRAS", {}).values()):
         for direction, key, msg_type in ports:
             assert direction in DIRECTIONS
             if not (key.startswith(BRIDGE) or key == "**"):

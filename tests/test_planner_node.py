@@ -8,10 +8,20 @@ import numpy as np
 import pytest
 
 from common.transport import wait_alive
+from nodes.planner.iapf_fields import Lanes
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner
 from schemas import Keys
-from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from schemas.messages import (
+    Goal,
+    Objects,
+    ObjectTrack,
+    Odometry,
+    PlannerState,
+    PlannerStatus,
+    Scan,
+    Twist,
+)
 
 MS = 1_000_000
 
@@ -54,6 +64,52 @@ def test_lockstep_missing_odom_falls_back_after_pair_timeout():
     lp.on_message("scan", scan(900 * MS), 0.4)
     out = lp.poll(0.7)                                                # newest odom is 820 ms old
     assert (out[0][1].v, out[0][1].w) == (0.0, 0.0) and "stale" in out[2][1].reason
+
+
+class Seen:
+    """Records what the planner shows a strategy through ``observe``: (road, track x, t [ns])."""
+
+    def __init__(self, planner):
+        self.calls = []
+        planner.strategy.observe = lambda objects, road, t, v: self.calls.append(
+            (road, tuple(o.x for o in objects), round(t * 1e9)))
+
+
+def objects(t):
+    """Tracks of instant t: one object at x = 1 + t [s] (so each instant's is recognisable)."""
+    return Objects(stamp_ns=t, source="truth", tracks=(ObjectTrack(id=1, x=1.0 + t / 1e9, y=0.0),))
+
+
+def test_lockstep_with_objects_waits_for_the_scans_own_tracks():
+    lp = PlannerLoop(make_planner("apf"), objects=True)
+    seen = Seen(lp.planner)
+    lp.on_message("goal", Goal(stamp_ns=7, x=3.0, y=0.0, road_lanes=2, road_y_min=-0.3,
+                               road_lane_width=0.6), 0.0)
+    assert lp.on_message("objects", objects(0), 0.0) == []
+    assert lp.on_message("scan", scan(100 * MS), 0.0) == []
+    assert lp.on_message("odom", odom(100 * MS), 0.0) == []          # objects(100 ms) missing
+    out = lp.on_message("objects", objects(100 * MS), 0.0)
+    assert out[0][1].stamp_ns == 100 * MS
+    assert seen.calls == [(Lanes(-0.3, 0.6, 2), (1.1,), 100 * MS)]
+
+
+def test_lockstep_objects_fall_back_to_the_newest_older_after_pair_timeout():
+    lp = loop(objects=True, pair_timeout_s=0.25)
+    seen = Seen(lp.planner)
+    lp.on_message("objects", objects(0), 0.0)
+    lp.on_message("odom", odom(100 * MS), 0.0)
+    assert lp.on_message("scan", scan(100 * MS), 0.0) == []
+    assert lp.poll(0.3)[0][1].stamp_ns == 100 * MS
+    assert seen.calls == [(None, (1.0,), 100 * MS)]                    # objects(0); no road
+
+
+def test_without_objects_the_loop_ignores_them():
+    lp = loop()
+    seen = Seen(lp.planner)
+    lp.on_message("objects", objects(100 * MS), 0.0)
+    lp.on_message("odom", odom(100 * MS), 0.0)
+    assert lp.on_message("scan", scan(100 * MS), 0.0)[0][1].stamp_ns == 100 * MS
+    assert seen.calls == [(None, (), 100 * MS)]
 
 
 def test_realtime_uses_latest_odom_and_stops_when_stale():

@@ -41,6 +41,8 @@ def sample(msg_type, stamp_ns: int = 1_000_000):
             kwargs[name] = md["choices"][0] if md.get("choices") else "x"
         elif kind == "f32array":
             kwargs[name] = np.arange(8, dtype=np.float32)
+        elif kind == "items":
+            kwargs[name] = (sample(md["item"], stamp_ns),)
         elif kind == "floats" and md.get("length"):
             kwargs[name] = tuple(float(i) for i in range(md["length"]))
         else:

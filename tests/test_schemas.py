@@ -28,6 +28,9 @@ def samples() -> list[Message]:
         s.PlannerStatus(stamp_ns=7, state="driving", reason="", distance_to_goal=3.0),
         s.Clock(stamp_ns=8),
         s.Event(stamp_ns=9, kind="collision", source="base_driver", x=1.0, y=2.0),
+        s.Objects(stamp_ns=10, source="tracker", tracks=(
+            s.ObjectTrack(id=3, x=1.0, y=0.5, yaw=0.1, vx=0.3, vy=0.0, length=0.5, width=0.3),
+            s.ObjectTrack(id=7, x=-2.0, y=0.0))),
     ]
 
 
@@ -106,3 +109,15 @@ def test_keys_and_namespace():
     for bad in ("", "/x", "x/", "a/*"):
         with pytest.raises(ValueError):
             s.Keys(bad)
+
+
+def test_objects_nest_tracks_and_name_a_bad_one():
+    msg = s.Objects(stamp_ns=1, source="truth", tracks=[s.ObjectTrack(id=1, x=1.0, y=2.0, vx=0.5)])
+    assert msg.tracks == (s.ObjectTrack(id=1, x=1.0, y=2.0, vx=0.5),)
+    assert msg.to_dict()["tracks"][0]["vx"] == 0.5
+    wire = msg.to_wire()
+    wire["tracks"][0]["x"] = "far"
+    with pytest.raises(s.SchemaError, match=r"papf/Objects/v1.tracks: papf/ObjectTrack/v1.x"):
+        s.Objects.from_wire(wire)
+    schema = s.Objects.json_schema()["properties"]["tracks"]
+    assert schema["items"]["title"] == "papf/ObjectTrack/v1"

@@ -191,3 +191,16 @@ def test_committed_layout_is_the_generated_one():
     topics = {c.topic for c in CHANNELS}
     for path in ("/cmd_vel.v", "/battery.charge_used_mAh", "/planner/status.distance_to_goal"):
         assert path.rsplit(".", 1)[0] in topics and path in text
+
+
+def test_objects_scene():
+    from schemas.messages import Objects, ObjectTrack
+
+    msg = Objects(stamp_ns=5, source="tracker", tracks=(
+        ObjectTrack(id=3, x=1.0, y=2.0, yaw=0.5, vx=0.5, vy=0.0, length=0.5, width=0.3),
+        ObjectTrack(id=4, x=0.0, y=0.0)))
+    out = ViewCore().on_message("objects", msg)
+    assert [t for t, _, _ in out] == ["/objects"]
+    ent = valid("/objects", out[0][1])["entities"][0]
+    assert len(ent["cubes"]) == 2 and len(ent["arrows"]) == 1
+    assert ent["cubes"][0]["size"]["x"] == 0.5 and ent["texts"][0]["text"] == "tracker 3"

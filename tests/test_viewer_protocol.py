@@ -25,6 +25,8 @@ from schemas.messages import (
     BatteryState,
     Event,
     Goal,
+    Objects,
+    ObjectTrack,
     Odometry,
     PlannerState,
     PlannerStatus,
@@ -63,6 +65,8 @@ def _stack_messages(t_ns: int):
         ("battery", BatteryState(stamp_ns=t_ns, voltage=12.1, current=0.8, power=9.7,
                                  charge_used_mAh=0.2, energy_J=1.5)),
         ("events", Event(stamp_ns=t_ns, kind="info", source="test", detail="hello")),
+        ("objects", Objects(stamp_ns=t_ns, source="truth", tracks=(
+            ObjectTrack(id=1, x=3.0, y=0.0, vx=0.5, length=0.5, width=0.3),))),
     ]
 
 
@@ -168,7 +172,8 @@ def test_papf_run_realtime_view_serves_every_channel(tmp_path):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         client = FoxgloveClient(f"ws://127.0.0.1:{port}", timeout_s=60.0)
-        want = {c.topic for c in CHANNELS} - {"/log"}   # events come when they happen
+        # events come when they happen; obstacle tracks only with --objects truth|tracker
+        want = {c.topic for c in CHANNELS} - {"/log", "/objects"}
         assert client.wait_for(lambda: want <= set(client.topics()), 60.0)
         client.subscribe(want)
         client.wait_for(lambda: want <= set(client.messages), 20.0)

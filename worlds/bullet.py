@@ -9,14 +9,21 @@ casting), so both see exactly the same geometry. Every obstacle is a static body
 - ``cylinder``: ``radius``, ``height`` tall, vertical axis;
 - ``sphere``: ``radius`` at ``center`` = (x, y, z) (3-D worlds; z defaults to the radius).
 
+Moving obstacles (``[obstacles.motion]``) are kinematic: static bodies that
+:class:`MovingBodies` teleports to their track pose (``resetBasePositionAndOrientation``)
+at each sim time the caller asks for — the driver before every physics step, the LiDAR
+before every scan — so both see the same obstacle at the same sim time, and contact
+with one is found like contact with any other body, also when it drives into the robot.
+
 Only pybullet is imported here; the caller owns the client (``p.connect(p.DIRECT)``).
 """
 
 from __future__ import annotations
 
-import pybullet as p
-
+from common.quiet import import_quietly
 from worlds import Obstacle, World
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 GROUND_FRICTION = 1.0  # [-] lateral friction of the floor; the product with the wheel's is used
 
@@ -52,6 +59,29 @@ def build_world(client_id: int, world: World) -> list[int]:
                                      basePosition=pos, baseOrientation=quat,
                                      physicsClientId=client_id))
     return ids
+
+
+class MovingBodies:
+    """The moving obstacles of a built world, placed on demand at a sim time."""
+
+    def __init__(self, client_id: int, world: World, bodies: list[int]):
+        self.client_id = client_id
+        self._moving = [(body, ob) for body, ob in zip(bodies, world.obstacles, strict=True)
+                        if ob.moving]
+        self.t_ns: int | None = None
+
+    def __bool__(self) -> bool:
+        return bool(self._moving)
+
+    def place(self, t_ns: int) -> None:
+        """Put every moving obstacle where its track is at sim time ``t_ns`` [ns]."""
+        if t_ns == self.t_ns:
+            return
+        self.t_ns = t_ns
+        t = t_ns * 1e-9
+        for body, ob in self._moving:
+            pos, quat = _pose(ob.at(t))
+            p.resetBasePositionAndOrientation(body, pos, quat, physicsClientId=self.client_id)
 
 
 def add_ground(client_id: int, friction: float = GROUND_FRICTION) -> int:

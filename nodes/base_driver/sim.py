@@ -43,13 +43,15 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import pybullet as p
 
 from common import robot
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
 from worlds import World
-from worlds.bullet import add_ground, build_world
+from worlds.bullet import MovingBodies, add_ground, build_world
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 GRAVITY = 9.81                 # [m/s^2]
 STEP_NS = 4_000_000            # [ns] physics step, 250 Hz (docs/architecture.md "Time")
@@ -158,6 +160,7 @@ class SimBase:
         p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=cid)
         self.ground = add_ground(cid)
         self.obstacles = build_world(cid, world)
+        self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
         self._obstacle_index = {body: i for i, body in enumerate(self.obstacles)}
         self.robot = self._build_robot(start)
         for _ in range(SETTLE_STEPS):
@@ -208,7 +211,13 @@ class SimBase:
         return left, right
 
     def step(self) -> None:
-        """Advance the physics by one step (4 ms) with the current wheel targets."""
+        """Advance the physics by one step (4 ms) with the current wheel targets.
+
+        Moving obstacles are placed at the step's end time first, so after the step the
+        whole scene (robot, obstacles, contacts) belongs to sim time ``t_ns``.
+        """
+        if self.moving:
+            self.moving.place(self.t_ns + self.params.step_ns)
         self._physics_step()
         self.t_ns += self.params.step_ns
 

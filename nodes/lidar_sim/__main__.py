@@ -9,9 +9,14 @@ restarts the schedule. ``--source ros2`` hands over to the real sensor's bridge
 
 Ports: :mod:`nodes.lidar_sim.ports` (``--help`` prints them).
 
+Moving obstacles are placed at each scan's sim time. With ``--truth-objects`` the node
+also publishes the ground truth (pose, velocity, size of every obstacle within the
+LiDAR's range) as ``Objects`` with the scan's stamp, just before the scan: the sim's
+answer to ``--objects truth`` (also in HIL, for the virtual obstacles).
+
 Settings: ``--world``, ``--seed`` (noise), ``--beams`` (300), ``--scan-hz`` (10),
-``--noise-sd`` (0.01 m), ``--noise-rel`` (0), ``--pose-source sim|odom``, plus the
-Zenoh options. Liveliness token: ``<ns>/alive/lidar_sim``.
+``--noise-sd`` (0.01 m), ``--noise-rel`` (0), ``--pose-source sim|odom``,
+``--truth-objects``, plus the Zenoh options. Liveliness token: ``<ns>/alive/lidar_sim``.
 """
 
 from __future__ import annotations
@@ -22,8 +27,9 @@ import sys
 from common.errors import PapfError
 from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
-from nodes.lidar_sim.ports import PORTS, VARIANTS
+from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
 from worlds import load_world
+from worlds.messages import truth_objects
 
 NAME = "lidar_sim"
 
@@ -61,12 +67,15 @@ def main_sim(args: argparse.Namespace) -> int:
                 node.inbox.put((pose_topic, pose))
 
         node.subscribe(pose_topic, handler=keep_due)
-        node.declare_publishers("scan")
+        node.declare_publishers("scan", *(("objects",) if args.truth_objects else ()))
         node.ready()
         count = 0
         for topic, pose in node.messages():
             if topic is None:
                 continue
+            if args.truth_objects:
+                node.publish("objects", truth_objects(world, pose.stamp_ns, (pose.x, pose.y),
+                                                      params.range_max))
             node.publish("scan", lidar.scan(pose.x, pose.y, pose.yaw, pose.stamp_ns))
             count += 1
         log.info("published %d scans", count)
@@ -84,7 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=__doc__.split("\n\n", 1)[1] + "\n"
-                                     + describe(PORTS, VARIANTS))
+                                     + describe(PORTS, VARIANTS, EXTRAS))
     parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
                         help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")
     parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")
@@ -97,6 +106,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="range noise sigma, part proportional to the range (default 0)")
     parser.add_argument("--pose-source", choices=("sim", "odom"), default="sim",
                         help="pose to scan from: ground truth sim/pose (default) or odom")
+    parser.add_argument("--truth-objects", action="store_true",
+                        help="also publish the obstacles' ground truth on <ns>/objects (sim)")
     parser.add_argument("--log-level", default="INFO")
     add_zenoh_args(parser)
     return parser

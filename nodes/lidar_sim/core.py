@@ -6,7 +6,7 @@ PAPF paper's Table 1) at ``angle_min + i * angle_increment`` with ``angle_min = 
 ``sensor_msgs/LaserScan`` that ``rplidar_ros`` publishes. Ranges 0.2-25 m
 (RPLIDAR A3 datasheet). Rays are cast with ``rayTestBatch`` in the sensor's own
 pybullet DIRECT client that holds only the world's obstacles (no robot, so no
-self-hits), at :data:`SENSOR_HEIGHT` above the floor (below the default 0.5 m
+self-hits; moving obstacles placed at the scan's sim time), at :data:`SENSOR_HEIGHT` above the floor (below the default 0.5 m
 obstacle height).
 
 Invalid readings: no return within ``range_max`` -> ``inf``; a return closer than
@@ -26,13 +26,15 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
 from common import robot
 from common.errors import ConfigError
+from common.quiet import import_quietly
 from schemas.messages import Scan
 from worlds import World
-from worlds.bullet import build_world
+from worlds.bullet import MovingBodies, build_world
+
+p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
@@ -90,6 +92,7 @@ class LidarSim:
         self.cid = p.connect(p.DIRECT)
         try:
             self.bodies = build_world(self.cid, world)
+            self.moving = MovingBodies(self.cid, world, self.bodies)
         except Exception:
             p.disconnect(self.cid)
             raise
@@ -113,8 +116,13 @@ class LidarSim:
         return fraction * prm.range_max
 
     def scan(self, pose_x: float, pose_y: float, pose_yaw: float, stamp_ns: int) -> Scan:
-        """The noisy scan taken at robot pose (x [m], y [m], yaw [rad]) at sim time ``stamp_ns``."""
+        """The noisy scan taken at robot pose (x [m], y [m], yaw [rad]) at sim time ``stamp_ns``.
+
+        Moving obstacles are placed where they are at ``stamp_ns`` first.
+        """
         prm = self.params
+        if self.moving:
+            self.moving.place(stamp_ns)
         ranges = self.true_ranges(pose_x, pose_y, pose_yaw)
         hit = np.isfinite(ranges)
         if prm.noise_sd > 0 or prm.noise_rel > 0:

@@ -14,3 +14,4 @@ ROS2 = (
     ("out", "scan", "Scan"),
 )
 VARIANTS = {("--source", "ros2"): ROS2, ("--pose-source", "odom"): ODOM}
+EXTRAS = {"--truth-objects": (("out", "objects", "Objects"),)}   # the sim's ground truth

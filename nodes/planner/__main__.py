@@ -6,7 +6,8 @@ Settings: ``--planner`` (algorithm), ``--params FILE.toml`` and ``--set name=val
 (see docs/planners.md for every parameter), ``--realtime`` (pair scans with the latest
 odometry instead of the same stamp), ``--stale-timeout S`` (zero command when odometry
 or scans are older than that), ``--pair-timeout S`` (lockstep: wall time a scan waits for
-its odometry), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
+its odometry), ``--objects`` (take obstacle tracks from ``<ns>/objects``, sim ground
+truth or the tracker node, and wait for the scan's own in lockstep), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
 Exit code 2 on a bad setting.
 """
 
@@ -22,7 +23,7 @@ from common.ports import describe
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
-from nodes.planner.ports import PORTS, VARIANTS
+from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import PLANNERS, make_planner
 from schemas.messages import Event
 
@@ -32,7 +33,7 @@ NODE_NAME = "planner"
 def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
-                                 epilog=describe(PORTS, VARIANTS))
+                                 epilog=describe(PORTS, VARIANTS, EXTRAS))
     ap.add_argument("--planner", default="apf", choices=sorted(PLANNERS), help="algorithm")
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -43,6 +44,8 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="inputs older than this -> zero command [s] (default 0.5)")
     ap.add_argument("--pair-timeout", type=float, default=0.25, metavar="S",
                     help="lockstep: wall time a scan waits for its odometry [s] (default 0.25)")
+    ap.add_argument("--objects", action="store_true",
+                    help="subscribe to <ns>/objects and pair each scan with its obstacle tracks")
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)
     return ap.parse_args(argv)
@@ -56,9 +59,10 @@ def run(args: argparse.Namespace) -> int:
         log.error("%s", exc)
         return 2
     warm_up(planner)
-    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log)
+    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
+                       objects=args.objects)
     with open_node(NODE_NAME, args, log) as node:
-        for topic in ("scan", "odom", "goal"):
+        for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
         node.declare_publishers("cmd_vel", "planner/state", "planner/status", "events")
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order

@@ -7,6 +7,13 @@ is a small *strategy* (:class:`Strategy`) that turns the situation into a force 
 debug geometry the papers drew in RViz; strategies are looked up by name in
 :mod:`nodes.planner.registry`.
 
+What the run tells the planner beyond scan and odometry: the **road** comes with the
+goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
+never reads a world file) and the **obstacle tracks** of the cycle come as an optional
+``Objects`` message paired with the scan (:meth:`Planner.step`), kept as
+:attr:`Planner.objects`. A strategy that wants them defines ``observe(objects, road, t, v)``;
+it is called before each ``plan``.
+
 Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 """
 
@@ -22,8 +29,8 @@ import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from nodes.planner.iapf_fields import Lanes
-from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from nodes.planner.iapf_fields import Lanes, Track
+from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
 @dataclass(frozen=True)
@@ -146,8 +153,16 @@ class Planner:
         self.strategy.params = algo
 
     # -- one cycle ----------------------------------------------------------
-    def step(self, scan: Scan, odom: Odometry) -> tuple[Twist, PlannerState, PlannerStatus]:
-        """One control cycle for ``scan`` (the command carries the scan's stamp)."""
+    def step(self, scan: Scan, odom: Odometry, objects: Objects | None = None
+             ) -> tuple[Twist, PlannerState, PlannerStatus]:
+        """One control cycle for ``scan`` (the command carries the scan's stamp).
+
+        ``objects``: the obstacle tracks paired with this scan, if the run provides them
+        (None: keep the last ones).
+        """
+        if objects is not None:
+            self.set_objects(Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id)
+                             for o in objects.tracks)
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:

@@ -3,11 +3,13 @@
 :class:`PlannerLoop` takes the node's inbox items and returns what to publish, as
 ``[(topic, message), ...]`` — the protocol of docs/architecture.md:
 
-- **lockstep** (default): ``scan(t)`` is paired with ``odom(t)`` (same stamp). Whichever
-  arrives second triggers the cycle. A scan whose odometry has not arrived after
-  ``pair_timeout_s`` of wall time is answered with the newest older odometry if it is
-  fresh (``<= stale_timeout_s`` of sim time older), else with a zero command.
-- **realtime**: each scan is paired with the latest odometry; odometry older than
+- **lockstep** (default): ``scan(t)`` is paired with ``odom(t)`` (same stamp), and with
+  ``objects(t)`` when the loop takes obstacle tracks (``objects=True``). Whichever
+  arrives last triggers the cycle. A scan whose partners have not arrived after
+  ``pair_timeout_s`` of wall time is answered with the newest older odometry (objects)
+  if it is fresh (``<= stale_timeout_s`` of sim time older), else with a zero command
+  (objects: none).
+- **realtime**: each scan is paired with the latest odometry (and objects); odometry older than
   ``stale_timeout_s`` (vs the scan stamp) -> zero command. No scan for ``stale_timeout_s``
   of wall time -> a zero command every ``STALE_REPEAT_S``.
 - A goal -> :meth:`Planner.set_goal` and a ``ready`` status with the goal's stamp.
@@ -20,20 +22,22 @@ from __future__ import annotations
 from collections import OrderedDict
 
 from nodes.planner.core import NS_PER_S, Planner
-from schemas.messages import Goal, Odometry, PlannerState, PlannerStatus, Scan, Twist
+from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 ODOM_BUFFER = 64          # odometry messages kept for pairing (1.28 s at 50 Hz)
+OBJECTS_BUFFER = 16       # object lists kept for pairing (1.6 s at 10 Hz)
 STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are stale (realtime)
 
 
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
-                 pair_timeout_s: float = 0.25, log=None):
-        self.planner, self.realtime = planner, realtime
+                 pair_timeout_s: float = 0.25, log=None, objects: bool = False):
+        self.planner, self.realtime, self.use_objects = planner, realtime, objects
         self.stale_ns = int(stale_timeout_s * NS_PER_S)
         self.stale_s, self.pair_timeout_s = stale_timeout_s, pair_timeout_s
         self.log = log
         self.odoms: OrderedDict[int, Odometry] = OrderedDict()
+        self.objects: OrderedDict[int, Objects] = OrderedDict()
         self.pending: list[tuple[Scan, float]] = []     # scans waiting for odom(t), arrival wall time
         self.last_scan_wall: float | None = None
         self.last_zero_wall = -1e18
@@ -46,66 +50,62 @@ class PlannerLoop:
         if topic == "goal" and isinstance(msg, Goal):
             return [("planner/status", self.planner.set_goal(msg))]
         if topic == "odom" and isinstance(msg, Odometry):
-            self._store_odom(msg)
-            if not self.realtime:
-                return self._release(lambda s: s.stamp_ns == msg.stamp_ns, now)
-            return []
+            _store(self.odoms, msg, ODOM_BUFFER)
+            return [] if self.realtime else self._release(now)
+        if topic == "objects" and isinstance(msg, Objects) and self.use_objects:
+            _store(self.objects, msg, OBJECTS_BUFFER)
+            return [] if self.realtime else self._release(now)
         if topic == "scan" and isinstance(msg, Scan):
             self.last_scan_wall = now
             if self.realtime:
-                return self._answer(msg, self._latest_odom())
-            odom = self.odoms.get(msg.stamp_ns)
-            if odom is not None:
-                return self._answer(msg, odom)
+                return self._answer(msg, _latest(self.odoms), _latest(self.objects))
             self.pending.append((msg, now))
+            return self._release(now)
         return []
 
     def poll(self, now: float) -> list:
         """Time-driven work: overdue pairings (lockstep), stale scans (realtime)."""
-        out = self._release(lambda s: False, now)
+        out = self._release(now)
         if self.realtime and self.planner.goal is not None:
             since = None if self.last_scan_wall is None else now - self.last_scan_wall
             if (since is None or since > self.stale_s) and now - self.last_zero_wall >= STALE_REPEAT_S:
                 self.last_zero_wall = now
-                odom = self._latest_odom()
+                odom = _latest(self.odoms)
                 stamp = odom.stamp_ns if odom is not None else self.last_stamp
                 out.append(("cmd_vel", Twist(stamp_ns=stamp, v=0.0, w=0.0)))
         return out
 
     # -- helpers ----------------------------------------------------------------
-    def _store_odom(self, odom: Odometry) -> None:
-        self.odoms[odom.stamp_ns] = odom
-        self.odoms.move_to_end(odom.stamp_ns)
-        while len(self.odoms) > ODOM_BUFFER:
-            self.odoms.popitem(last=False)
+    def _complete(self, t: int) -> bool:
+        return t in self.odoms and (not self.use_objects or t in self.objects)
 
-    def _latest_odom(self) -> Odometry | None:
-        return max(self.odoms.values(), key=lambda o: o.stamp_ns) if self.odoms else None
-
-    def _release(self, matches, now: float) -> list:
-        """Answer pending scans that now have their odometry or waited too long."""
+    def _release(self, now: float) -> list:
+        """Answer pending scans that now have all their partners or waited too long."""
         out, keep = [], []
         for scan, arrived in sorted(self.pending, key=lambda p: p[0].stamp_ns):
-            if matches(scan):
-                out += self._answer(scan, self.odoms[scan.stamp_ns])
+            t = scan.stamp_ns
+            if self._complete(t):
+                out += self._answer(scan, self.odoms[t], self.objects.get(t))
             elif now - arrived > self.pair_timeout_s:
-                older = [o for o in self.odoms.values() if o.stamp_ns <= scan.stamp_ns]
-                odom = max(older, key=lambda o: o.stamp_ns) if older else None
+                odom, objects = _newest_upto(self.odoms, t), _newest_upto(self.objects, t)
                 if self.log:
-                    self.log.warning("no odom with stamp %d after %.2f s; using %s", scan.stamp_ns,
-                                     now - arrived, "none" if odom is None else odom.stamp_ns)
-                out += self._answer(scan, odom)
+                    self.log.warning("no odom/objects with stamp %d after %.2f s; using %s / %s",
+                                     t, now - arrived, "none" if odom is None else odom.stamp_ns,
+                                     "none" if objects is None else objects.stamp_ns)
+                out += self._answer(scan, odom, objects)
             else:
                 keep.append((scan, arrived))
         self.pending = keep
         return out
 
-    def _answer(self, scan: Scan, odom: Odometry | None) -> list:
+    def _answer(self, scan: Scan, odom: Odometry | None, objects: Objects | None = None) -> list:
         self.cycles += 1
         self.last_stamp = scan.stamp_ns
         if odom is None or scan.stamp_ns - odom.stamp_ns > self.stale_ns:
             return self._stale(scan, odom)
-        cmd, state, status = self.planner.step(scan, odom)
+        if objects is not None and scan.stamp_ns - objects.stamp_ns > self.stale_ns:
+            objects = None
+        cmd, state, status = self.planner.step(scan, odom, objects)
         return [("cmd_vel", cmd), ("planner/state", state), ("planner/status", status)]
 
     def _stale(self, scan: Scan, odom: Odometry | None) -> list:
@@ -119,3 +119,19 @@ class PlannerLoop:
                                                mode="stale")),
                 ("planner/status", PlannerStatus(stamp_ns=t, state=state,
                                                  reason=f"stale odometry ({age}): stopped"))]
+
+
+def _store(buffer: OrderedDict, msg, limit: int) -> None:
+    buffer[msg.stamp_ns] = msg
+    buffer.move_to_end(msg.stamp_ns)
+    while len(buffer) > limit:
+        buffer.popitem(last=False)
+
+
+def _latest(buffer: OrderedDict):
+    return max(buffer.values(), key=lambda m: m.stamp_ns) if buffer else None
+
+
+def _newest_upto(buffer: OrderedDict, t: int):
+    older = [m for m in buffer.values() if m.stamp_ns <= t]
+    return max(older, key=lambda m: m.stamp_ns) if older else None

@@ -17,11 +17,18 @@ from dataclasses import dataclass
 from importlib import resources
 
 from nodes.viewer import convert as cv
-from nodes.viewer.scene import footprint_scene, mind_scene, moving_scene, world_scene
+from nodes.viewer.scene import (
+    footprint_scene,
+    mind_scene,
+    moving_scene,
+    objects_scene,
+    world_scene,
+)
 from schemas.messages import (
     BatteryState,
     Event,
     Goal,
+    Objects,
     Odometry,
     PlannerState,
     PlannerStatus,
@@ -52,6 +59,8 @@ CHANNELS: tuple[ChannelSpec, ...] = (
                 "moving obstacles with each scan"),
     ChannelSpec("/planner/scene", "foxglove.SceneUpdate", "planner/state (+ pose)",
                 "each planner cycle (10 Hz)"),
+    ChannelSpec("/objects", "foxglove.SceneUpdate", "objects",
+                "each set of obstacle tracks (10 Hz, with --objects truth|tracker)"),
     ChannelSpec("/log", "foxglove.Log", "events; the viewer's own notes", "as they happen"),
     ChannelSpec("/battery", "papf.BatteryState", "battery", "each sample (50 Hz)"),
     ChannelSpec("/cmd_vel", "papf.Twist", "cmd_vel", "each command (10 Hz)"),
@@ -61,7 +70,7 @@ CHANNELS: tuple[ChannelSpec, ...] = (
 PLOT_TYPES = {"papf.BatteryState": BatteryState, "papf.Twist": Twist,
               "papf.PlannerStatus": PlannerStatus, "papf.Odometry": Odometry}
 SUBSCRIBED = ("scan", "odom", "sim/pose", "goal", "planner/state", "planner/status", "cmd_vel",
-              "battery", "events")
+              "battery", "events", "objects")
 GOAL_TOPICS = ("/goal_pose", "/move_base_simple/goal", "/clicked_point", "/goal")
 
 
@@ -92,7 +101,7 @@ class ViewCore:
                           "goal": self._goal, "planner/state": self._state,
                           "planner/status": self._plot("/planner/status"),
                           "cmd_vel": self._plot("/cmd_vel"), "battery": self._plot("/battery"),
-                          "events": self._event}
+                          "events": self._event, "objects": self._objects}
 
     def on_message(self, topic: str, msg) -> list[tuple[str, dict, int]]:
         """Foxglove messages for one stack message (unknown topics: none)."""
@@ -152,6 +161,9 @@ class ViewCore:
 
     def _state(self, state: PlannerState):
         return [("/planner/scene", mind_scene(state, self.robot_xy), state.stamp_ns)]
+
+    def _objects(self, msg: Objects):
+        return [("/objects", objects_scene(msg), msg.stamp_ns)]
 
     def _event(self, ev: Event):
         return [("/log", cv.event_log(ev), ev.stamp_ns)]

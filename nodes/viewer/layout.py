@@ -34,6 +34,7 @@ def layout() -> fl.Layout:
                                                            flat_color="#e6194b"),
             "/world": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
             "/planner/scene": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
+            "/objects": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
             "/goal": fl.BaseRendererPoseTopicSettings(visible=True),
             "/robot/pose": fl.BaseRendererPoseTopicSettings(visible=False),
         }))

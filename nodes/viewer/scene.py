@@ -7,6 +7,7 @@
   ``moving``, re-sent with each scan);
 - :func:`footprint_scene` — the robot's chassis (``common.robot``) in frame ``base_link``,
   frame-locked so it follows the robot;
+- :func:`objects_scene` — the obstacle tracks of ``objects`` (truth or tracker);
 - :func:`mind_scene` — one planner cycle (``planner/state``): predicted path, abandoned
   predictions, top quarks, temporary goal, the force vector at the robot, AR-APF's virtual
   walls and obstacles, and the mode as a label (what the PAPF paper drew in RViz).
@@ -37,7 +38,7 @@ from nodes.viewer.convert import (
     sphere,
     text,
 )
-from schemas.messages import PlannerState
+from schemas.messages import Objects, PlannerState
 from worlds import World
 
 # (r, g, b, a) 0..1; the matplotlib pictures use the same.
@@ -54,6 +55,7 @@ MIND_COLOURS = {
     "virtual_wall": (0.89, 0.47, 0.76, 1.0),
     "virtual_obstacle": (0.89, 0.47, 0.76, 0.9),
     "moving": (0.8, 0.4, 0.0, 1.0),
+    "track": (0.0, 0.6, 0.6, 0.7),
     "road": (0.95, 0.85, 0.2, 1.0),
 }
 ROAD_MARGIN_M = 5.0      # [m] road lines drawn this far beyond the world's extent along x
@@ -125,6 +127,26 @@ def moving_scene(world: World, stamp_ns: int) -> dict:
     moving = [ob.at(stamp_ns / 1e9) for ob in world.obstacles if ob.motion is not None]
     return scene_update([entity(stamp_ns, WORLD, "moving", **_obstacle_prims(moving,
                                                                                c("moving")))])
+
+
+OBJECT_HEIGHT_M = 0.3   # [m] drawn height of a track's box (tracks are 2-D)
+
+
+def objects_scene(msg: Objects) -> dict:
+    """Obstacle tracks (``objects``: ground truth or the tracker) as boxes of their length and
+    width, a velocity arrow (1 s of travel) and the track id (entity ``objects``)."""
+    cubes, arrows, texts = [], [], []
+    for tr in msg.tracks:
+        size = (max(tr.length, 0.05), max(tr.width, 0.05), OBJECT_HEIGHT_M)
+        cubes.append(cube(tr.x, tr.y, OBJECT_HEIGHT_M / 2, tr.yaw, size, c("track")))
+        speed = math.hypot(tr.vx, tr.vy)
+        if speed > 1e-3:
+            arrows.append(arrow(tr.x, tr.y, OBJECT_HEIGHT_M + 0.05, math.atan2(tr.vy, tr.vx),
+                                max(speed, 0.15), {**c("track"), "a": 1.0}))
+        texts.append(text(tr.x, tr.y, OBJECT_HEIGHT_M + 0.25, f"{msg.source} {tr.id}",
+                          {**c("track"), "a": 1.0}, 0.1))
+    return scene_update([entity(msg.stamp_ns, WORLD, "objects", cubes=cubes, arrows=arrows,
+                                texts=texts)])
 
 
 def footprint_scene(stamp_ns: int = 0) -> dict:

@@ -26,6 +26,7 @@ from papf.cli import (
     emulator,
     experiment,
     export,
+    goal,
     info,
     launch,
     plan,
@@ -34,12 +35,14 @@ from papf.cli import (
     replay,
     report,
     run,
+    teleop,
+    topic,
     view,
     worlds,
 )
 
-COMMANDS = (run, worlds, launch, plan, experiment, report, record, replay, recover, info,
-            view, export, animate, bench, emulator, certs)
+COMMANDS = (run, worlds, launch, topic, goal, teleop, plan, experiment, report, record, replay,
+            recover, info, view, export, animate, bench, emulator, certs)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -25,6 +25,9 @@ def register(sub) -> None:
     p.add_argument("--world", help="world (runs; robot side: its start pose)")
     p.add_argument("--planner", help="apf | papf | arapf | wang | iapf")
     p.add_argument("--seed", type=int)
+    p.add_argument("--objects", choices=("none", "truth", "tracker"),
+                   help="obstacle tracks for the planner: sim ground truth (sim, HIL), the "
+                        "tracker node, or none (default: truth for iapf where a sim runs, else none)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--energy-model", choices=("motor", "paper"))
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -41,12 +44,14 @@ def register(sub) -> None:
 
 
 def cmd_launch(args) -> int:
-    from papf.graph import LaunchOptions
+    from papf.graph import LaunchOptions, objects_for
     from papf.launch import launch  # zenoh: only when launching
 
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,
-              "bridge_namespace": args.bridge_namespace, "view": args.view}
+              "bridge_namespace": args.bridge_namespace, "view": args.view,
+              "objects": args.objects if args.objects or not args.planner
+              else objects_for(args.planner, None)}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,

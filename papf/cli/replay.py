@@ -35,12 +35,13 @@ def cmd_replay(args) -> int:
 def _replay(args, stop: StopRequested) -> int:
     import zenoh  # the session: only when replaying
 
+    from papf.progress import DecileProgress
     from papf.recording.replay import replay
 
     try:
-        with zenoh.open(config_from_args(args)) as session:
+        with zenoh.open(config_from_args(args)) as session, DecileProgress("replay") as bar:
             stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,
-                           progress=_progress_printer(), stop=lambda: bool(stop))
+                           progress=_progress_printer(bar), stop=lambda: bool(stop))
     except PapfError as exc:
         print(f"papf replay: {exc}", file=sys.stderr)
         return 2
@@ -49,14 +50,10 @@ def _replay(args, stop: StopRequested) -> int:
     return 130 if stop else 0
 
 
-def _progress_printer():
-    """``progress(done, total)`` that rewrites one status line on a terminal, else stays quiet."""
-    if not sys.stderr.isatty():
-        return None
-
+def _progress_printer(bar):
+    """``progress(done, total)`` feeding a :class:`papf.progress.DecileProgress`: a live bar
+    on a terminal, else one line per 10 % of the messages."""
     def show(done: int, total: int) -> None:
-        print(f"\rreplay {done}/{total} messages", end="", file=sys.stderr, flush=True)
-        if done >= total:
-            print(file=sys.stderr)
+        bar.fraction(done / total if total else 1.0, f"{done}/{total} messages")
 
     return show

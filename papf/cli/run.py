@@ -31,6 +31,9 @@ def register(sub) -> None:
     add_planner_settings(p)
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
+    p.add_argument("--objects", choices=("none", "truth", "tracker"),
+                   help="obstacle tracks for the planner: the sim's ground truth, the tracker "
+                        "node on the scans, or none (default: truth for iapf, else none)")
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
@@ -50,7 +53,7 @@ def run_config(args):
                      port=args.port, namespace=args.namespace, planner_args=planner_args,
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
-                     zenoh_mode=args.zenoh_mode, view=args.view,
+                     zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      progress=None if not args.json else False)
 
 

@@ -30,6 +30,7 @@ from papf.experiments.trials import (
     quiet_runner_logs,
     run_offline,
     run_stack,
+    trial_line,
     write_csv,
 )
 from worlds import load_world, world_path
@@ -154,6 +155,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
                                       planner_args=[a for kv in sets for a in ("--set", kv)])
                 trials.append(trial)
                 bar.advance(task)
+                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
             paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}
             plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
     write_csv([t.row() for t in trials], out / "paper-tests.csv")

@@ -26,6 +26,7 @@ from papf.experiments.trials import (
     quiet_runner_logs,
     run_offline,
     run_stack,
+    trial_line,
     write_csv,
 )
 from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
@@ -115,6 +116,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
                                       planner_args=[a for kv in sets for a in ("--set", kv)])
                 mine.append(trial)
                 bar.advance(task)
+                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
             trials += mine
             if plots:
                 plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},

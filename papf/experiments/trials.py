@@ -135,6 +135,14 @@ def progress_bar(enabled: bool | None = None) -> Progress:
                     disable=not (console.is_terminal if enabled is None else enabled))
 
 
+def trial_line(t: Trial) -> str:
+    """One line per finished trial (printed in a terminal and when piped alike)."""
+    extra = f"  {t.charge_mAh:7.2f} mAh" if math.isfinite(t.charge_mAh) else ""
+    return (f"{t.world:>16} {t.planner:<6} seed {t.seed:<3} {t.outcome:<9} "
+            f"{t.duration_s:7.2f} s  {t.path_length_m:6.2f} m{extra}  wall {t.wall_time_s:5.1f} s"
+            + (f"  {t.reason}" if t.outcome != "reached" and t.reason else ""))
+
+
 def quiet_runner_logs() -> None:
     """The launcher logs a line per 10 s of sim time when it has no progress bar: mute those."""
     logging.getLogger("papf.run").setLevel(logging.WARNING)

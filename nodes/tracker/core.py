@@ -1,0 +1,330 @@
+"""Obstacle tracker: LiDAR scan + pose -> tracked objects (pure core; no zenoh).
+
+One cycle (:meth:`Tracker.update`) per scan, everything in the world frame:
+
+1. **Points**: valid beams within ``max_range`` of the sensor, to world coordinates
+   with the robot pose and the sensor offset.
+2. **Clusters**: breakpoint segmentation in scan order, the standard for 2-D LiDARs:
+   two successive returns belong to one object when they are closer than
+   ``max(cluster_radius, D_max)``, ``D_max = r sin(dphi) / sin(lambda - dphi) + 3 sigma_r``
+   (the adaptive breakpoint detector of Borges & Aldon, J. Intell. Robot. Syst. 39,
+   2004: ``dphi`` the angle between the two beams, ``lambda`` = ``breakpoint_angle``,
+   sigma_r = ``range_sd``; far returns are sparse, so the allowance grows with the range);
+   returns with more than ``max_beam_gap`` beams between them that saw nothing, or
+   more than ``lambda`` apart in angle, never join (the rays between passed through free
+   space). The first and last segment join across the scan's seam.
+   Clusters with fewer than ``min_points`` points are noise; clusters longer than
+   ``max_extent`` are walls or other structure, not objects (the planner still sees them
+   in the scan). Why not a library clustering (scipy ``cKDTree`` + ``connected_components``,
+   scikit-learn DBSCAN): on a scan the neighbours are already ordered, and the sparse-graph
+   set-up took most of the cycle in our first version (nodes/tracker/README.md).
+   A cluster's measurement is the centre of its bounding box in its principal axes
+   (the visible part of the object: a car seen from behind is measured at its rear).
+3. **Association**: predicted tracks vs clusters by centre distance, globally optimal
+   (``scipy.optimize.linear_sum_assignment``, the Hungarian method), pairs farther than
+   ``gate`` rejected.
+4. **Filter**: a constant-velocity Kalman filter per track (state x, y, vx, vy;
+   white-noise acceleration of ``accel_sd``; position measurements of ``meas_sd``),
+   vectorised over all tracks with numpy. Unmatched clusters start tracks (velocity 0,
+   ``init_speed_sd``); a track is published after ``confirm_hits`` hits and dropped
+   after ``max_misses`` scans without one.
+
+Heading: the direction of the filtered velocity when faster than ``moving_speed``, else
+the last one (a new track: the cluster's principal axis). Size: the largest extent seen
+along / across the heading (a rigid object only shows more of itself over time).
+
+Deterministic: the output depends only on the inputs, in order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from common.errors import ConfigError
+from common.units import NS_PER_S
+from schemas.messages import Objects, ObjectTrack, Odometry, Scan
+
+GATED_COST = 1e6   # assignment cost of a pair beyond the gate (rejected afterwards)
+
+
+@dataclass(frozen=True)
+class TrackerParams:
+    """Clustering, association and filter settings (units in comments)."""
+
+    max_range: float = 6.0         # [m] points farther from the sensor are ignored
+    cluster_radius: float = 0.15   # [m] successive returns closer than this are one object
+    breakpoint_angle: float = math.radians(30.0)   # [rad] lambda of the adaptive breakpoint
+    range_sd: float = 0.01         # [m] range noise of the LiDAR (the sim's default)
+    max_beam_gap: int = 2          # [-] beams without a return that still join two returns
+    min_points: int = 3            # [-] smaller clusters are noise
+    max_extent: float = 2.0        # [m] longer clusters are structure (walls), not objects
+    gate: float = 0.5              # [m] max distance of a cluster to a predicted track
+    accel_sd: float = 1.0          # [m/s^2] white-noise acceleration of the CV model
+    meas_sd: float = 0.05          # [m] position measurement noise of a cluster centre
+    init_speed_sd: float = 1.0     # [m/s] velocity uncertainty of a new track
+    confirm_hits: int = 3          # [-] hits before a track is published
+    max_misses: int = 5            # [-] scans without a hit before a track is dropped
+    moving_speed: float = 0.05     # [m/s] slower tracks keep their heading
+
+    def __post_init__(self) -> None:
+        for name in ("max_range", "cluster_radius", "breakpoint_angle", "range_sd", "max_extent", "gate", "accel_sd", "meas_sd",
+                     "init_speed_sd", "moving_speed"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ConfigError(f"tracker {name} = {value!r} must be a finite number > 0")
+        for name in ("min_points", "confirm_hits", "max_misses", "max_beam_gap"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ConfigError(f"tracker {name} = {value!r} must be an integer >= 1")
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """One cluster's measurement: centre [m], principal-axis angle [rad], extents [m]."""
+
+    x: float
+    y: float
+    axis: float
+    length: float   # along ``axis``
+    width: float    # across it
+
+
+@dataclass(frozen=True)
+class ScanPoints:
+    """The valid returns of one scan: world-frame points, their ranges and beam indices."""
+
+    xy: np.ndarray        # (K, 2) [m]
+    ranges: np.ndarray    # (K,) [m]
+    beams: np.ndarray     # (K,) beam index, increasing
+    beam_count: int       # beams per revolution
+    increment: float      # [rad] angle between successive beams
+
+
+def scan_points(scan: Scan, odom: Odometry, max_range: float) -> ScanPoints:
+    """The valid beams within ``max_range`` [m] of the sensor, in world coordinates."""
+    ranges = np.asarray(scan.ranges, dtype=float)
+    # comparisons with nan are False (no warning): nan and inf drop out here
+    ok = (ranges >= scan.range_min) & (ranges <= min(scan.range_max, max_range))
+    c, s = math.cos(odom.yaw), math.sin(odom.yaw)
+    ox = odom.x + c * scan.sensor_x - s * scan.sensor_y
+    oy = odom.y + s * scan.sensor_x + c * scan.sensor_y
+    beams = np.flatnonzero(ok)
+    a = odom.yaw + scan.sensor_yaw + scan.angle_min + scan.angle_increment * beams
+    r = ranges[beams]
+    xy = np.empty((len(beams), 2))
+    xy[:, 0] = ox + r * np.cos(a)
+    xy[:, 1] = oy + r * np.sin(a)
+    return ScanPoints(xy, r, beams, len(ranges), abs(scan.angle_increment))
+
+
+def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
+    """(order, starts): the points rotated so that no segment crosses the array's end, and
+    the index in ``order`` where each segment starts (see module doc, step 2)."""
+    n = len(sp.beams)
+    nxt = np.arange(1, n + 1)
+    nxt[-1] = 0                                           # the seam: last point -> first
+    gap = (sp.beams[nxt] - sp.beams) % sp.beam_count      # beams between successive returns
+    gap[gap == 0] = sp.beam_count                         # a single return
+    dphi = gap * sp.increment
+    lam = p.breakpoint_angle
+    joinable = (dphi < lam) & (gap <= p.max_beam_gap + 1)
+    limit = np.zeros(n)
+    adaptive = sp.ranges[joinable] * np.sin(dphi[joinable]) / np.sin(lam - dphi[joinable])
+    limit[joinable] = np.maximum(p.cluster_radius, adaptive + 3 * p.range_sd)
+    d = sp.xy[nxt] - sp.xy
+    cut = np.flatnonzero(d[:, 0] ** 2 + d[:, 1] ** 2 > limit ** 2)   # a break after point i
+    if len(cut) == 0:
+        return np.arange(n), np.zeros(1, dtype=int)
+    first = (cut[-1] + 1) % n                             # start after the last break
+    order = (np.arange(n) + first) % n
+    return order, np.sort((cut + 1 - first) % n)
+
+
+def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
+    """Index arrays (into ``sp.xy``) of the scan-order segments (see module doc, step 2)."""
+    if len(sp.beams) == 0:
+        return []
+    order, starts = _breaks(sp, p)
+    return np.split(order, starts[1:])
+
+
+def cluster_points(sp: ScanPoints, p: TrackerParams) -> list[Cluster]:
+    """Object-sized clusters of a scan (see module doc, step 2), in scan order.
+
+    Each cluster is measured by :func:`_measure`'s box, for all segments at once.
+    """
+    n = len(sp.beams)
+    if n < p.min_points:
+        return []
+    order, starts = _breaks(sp, p)
+    counts = np.diff(starts, append=n)
+    big = counts >= p.min_points
+    if not big.any():
+        return []
+    xy = sp.xy[order]
+    boxes = _measure(xy, starts, counts)
+    return [Cluster(*box) for box, keep in zip(boxes.tolist(), big.tolist(), strict=True)
+            if keep and box[3] <= p.max_extent]
+
+
+def _measure(xy: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Per segment (``xy[starts[i]:starts[i] + counts[i]]``): the bounding box of its points
+    in their principal axes (the eigenvectors of the covariance) as rows
+    ``(x, y, axis, length, width)`` — centre [m], major-axis angle [rad], extents [m]."""
+    mean = np.add.reduceat(xy, starts) / counts[:, None]
+    d = xy - np.repeat(mean, counts, axis=0)
+    sxx = np.add.reduceat(d[:, 0] * d[:, 0], starts)
+    syy = np.add.reduceat(d[:, 1] * d[:, 1], starts)
+    sxy = np.add.reduceat(d[:, 0] * d[:, 1], starts)
+    axis = 0.5 * np.arctan2(2 * sxy, sxx - syy)
+    c, s = np.cos(axis), np.sin(axis)
+    cp, sp_ = np.repeat(c, counts), np.repeat(s, counts)
+    u = d[:, 0] * cp + d[:, 1] * sp_
+    v = d[:, 1] * cp - d[:, 0] * sp_
+    umax, umin = np.maximum.reduceat(u, starts), np.minimum.reduceat(u, starts)
+    vmax, vmin = np.maximum.reduceat(v, starts), np.minimum.reduceat(v, starts)
+    cu, cv = (umax + umin) / 2, (vmax + vmin) / 2
+    return np.column_stack([mean[:, 0] + c * cu - s * cv, mean[:, 1] + s * cu + c * cv, axis,
+                            umax - umin, vmax - vmin])
+
+
+@dataclass
+class _Tracks:
+    """All live tracks as arrays (row i = track i)."""
+
+    ids: list[int] = field(default_factory=list)
+    x: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))        # x, y, vx, vy
+    P: np.ndarray = field(default_factory=lambda: np.zeros((0, 4, 4)))     # covariances
+    hits: list[int] = field(default_factory=list)
+    misses: list[int] = field(default_factory=list)
+    yaw: list[float] = field(default_factory=list)
+    size: list[tuple[float, float]] = field(default_factory=list)          # length, width
+
+    def keep(self, mask: np.ndarray) -> None:
+        self.x, self.P = self.x[mask], self.P[mask]
+        for name in ("ids", "hits", "misses", "yaw", "size"):
+            setattr(self, name, [v for v, k in zip(getattr(self, name), mask, strict=True) if k])
+
+
+class Tracker:
+    """Multi-object tracker over successive scans (see module doc)."""
+
+    def __init__(self, params: TrackerParams | None = None):
+        self.params = params or TrackerParams()
+        self.tracks = _Tracks()
+        self.t_ns: int | None = None
+        self._next_id = 1
+        self._model: tuple | None = None     # (dt, F, F^T, Q) of the last prediction
+
+    def update(self, scan: Scan, odom: Odometry) -> Objects:
+        """One cycle on ``scan`` taken at pose ``odom``; the confirmed tracks, scan-stamped."""
+        p = self.params
+        t = scan.stamp_ns
+        if self.t_ns is not None and t < self.t_ns:        # time went back: a new run
+            self.tracks, self._next_id = _Tracks(), 1
+        dt = 0.0 if self.t_ns is None else (t - self.t_ns) / NS_PER_S
+        self.t_ns = t
+        clusters = cluster_points(scan_points(scan, odom, p.max_range), p)
+        self._predict(dt)
+        rows, cols = self._associate(clusters)
+        self._correct(rows, [clusters[j] for j in cols])
+        self._age(rows)
+        for j in sorted(set(range(len(clusters))) - set(cols)):
+            self._start(clusters[j])
+        return self.objects(t)
+
+    def objects(self, stamp_ns: int) -> Objects:
+        """The confirmed tracks as an ``Objects`` message."""
+        tr, p = self.tracks, self.params
+        out = [ObjectTrack(id=tr.ids[i], x=float(tr.x[i, 0]), y=float(tr.x[i, 1]), yaw=tr.yaw[i],
+                           vx=float(tr.x[i, 2]), vy=float(tr.x[i, 3]), length=tr.size[i][0],
+                           width=tr.size[i][1])
+               for i in range(len(tr.ids)) if tr.hits[i] >= p.confirm_hits]
+        return Objects(stamp_ns=stamp_ns, source="tracker", tracks=tuple(out))
+
+    # -- steps ---------------------------------------------------------------
+    def _predict(self, dt: float) -> None:
+        """x <- F x, P <- F P F^T + Q (constant velocity, white-noise acceleration)."""
+        if dt <= 0 or not len(self.tracks.ids):
+            return
+        if self._model is None or self._model[0] != dt:   # lockstep: the same dt every scan
+            F = np.eye(4)
+            F[0, 2] = F[1, 3] = dt
+            q = self.params.accel_sd ** 2
+            a, b, c = dt ** 4 / 4 * q, dt ** 3 / 2 * q, dt ** 2 * q
+            Q = np.array([[a, 0, b, 0], [0, a, 0, b], [b, 0, c, 0], [0, b, 0, c]])
+            self._model = (dt, F, F.T.copy(), Q)
+        _, F, FT, Q = self._model
+        self.tracks.x = self.tracks.x @ FT
+        self.tracks.P = F @ self.tracks.P @ FT + Q
+
+    def _associate(self, clusters: list[Cluster]) -> tuple[list[int], list[int]]:
+        """(track rows, cluster indices) of the gated optimal assignment."""
+        tr = self.tracks
+        if not clusters or not tr.ids:
+            return [], []
+        z = np.array([(c.x, c.y) for c in clusters])
+        diff = tr.x[:, None, :2] - z[None, :, :]
+        cost = np.sqrt(diff[..., 0] ** 2 + diff[..., 1] ** 2)
+        gated = np.where(cost <= self.params.gate, cost, GATED_COST)
+        rows, cols = linear_sum_assignment(gated)
+        ok = cost[rows, cols] <= self.params.gate
+        return rows[ok].tolist(), cols[ok].tolist()
+
+    def _correct(self, rows: list[int], clusters: list[Cluster]) -> None:
+        """Kalman update of the matched tracks with their clusters' centres (H = [I 0])."""
+        if not rows:
+            return
+        tr, p = self.tracks, self.params
+        x, P = tr.x[rows], tr.P[rows]
+        z = np.array([(c.x, c.y) for c in clusters])
+        r2 = p.meas_sd ** 2
+        a, b, d = P[:, 0, 0] + r2, P[:, 0, 1], P[:, 1, 1] + r2           # S = [[a, b], [b, d]]
+        det = a * d - b * b
+        s_inv = np.empty((len(rows), 2, 2))                                # closed-form 2x2
+        s_inv[:, 0, 0], s_inv[:, 1, 1] = d / det, a / det
+        s_inv[:, 0, 1] = s_inv[:, 1, 0] = -b / det
+        K = P[:, :, :2] @ s_inv                                            # (M, 4, 2)
+        tr.x[rows] = x + (K @ (z - x[:, :2])[:, :, None])[:, :, 0]
+        tr.P[rows] = P - K @ P[:, :2, :]
+        for i, c in zip(rows, clusters, strict=True):
+            tr.hits[i] += 1
+            tr.misses[i] = 0
+            vx, vy = tr.x[i, 2], tr.x[i, 3]
+            if math.hypot(vx, vy) > p.moving_speed:
+                tr.yaw[i] = math.atan2(vy, vx)
+            tr.size[i] = _grow(tr.size[i], c, tr.yaw[i])
+
+    def _age(self, matched: list[int]) -> None:
+        tr = self.tracks
+        hit = set(matched)
+        for i in range(len(tr.ids)):
+            if i not in hit:
+                tr.misses[i] += 1
+        if any(m >= self.params.max_misses for m in tr.misses):
+            tr.keep(np.array([m < self.params.max_misses for m in tr.misses]))
+
+    def _start(self, c: Cluster) -> None:
+        tr, p = self.tracks, self.params
+        P0 = np.diag([p.meas_sd ** 2, p.meas_sd ** 2, p.init_speed_sd ** 2, p.init_speed_sd ** 2])
+        tr.ids.append(self._next_id)
+        self._next_id += 1
+        tr.x = np.vstack([tr.x, [c.x, c.y, 0.0, 0.0]])
+        tr.P = np.concatenate([tr.P, P0[None]])
+        tr.hits.append(1)
+        tr.misses.append(0)
+        tr.yaw.append(c.axis)
+        tr.size.append((c.length, c.width))
+
+
+def _grow(size: tuple[float, float], c: Cluster, yaw: float) -> tuple[float, float]:
+    """Largest extents seen along / across ``yaw`` (a cluster's box projected onto it)."""
+    d = c.axis - yaw
+    ca, sa = abs(math.cos(d)), abs(math.sin(d))
+    along = ca * c.length + sa * c.width
+    across = sa * c.length + ca * c.width
+    return max(size[0], along), max(size[1], across)

@@ -1,0 +1,127 @@
+"""``papf goal X Y``: send the planner a goal, optionally start the run, follow it to an outcome.
+
+The same handshake as the launcher's (docs/architecture.md, "Start and end of a run"):
+publish ``<ns>/goal`` every 0.5 s until the planner answers ``planner/status`` ``ready``;
+with ``start_run`` then publish ``events`` ``run_started`` (what a sim driver started alone
+waits for). Then, unless told not to wait, follow ``planner/status`` until ``reached``
+(exit 0), ``stagnated`` (3) or ``failed`` (6); a ``collision`` event gives 4 and
+``timeout_s`` without an outcome 5. In a session started by ``papf launch`` the launcher
+keeps deciding the run's outcome; this command only steers the planner.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import zenoh
+
+from papf.monitor import EXIT_CODES
+from papf.progress import DecileProgress
+from schemas import Event, Goal, Keys, PlannerStatus
+
+HANDSHAKE_S = 15.0     # [s wall] for a planner to acknowledge the goal
+REPEAT_S = 0.5         # [s wall] goal repeated this often until acknowledged
+FINAL = {"reached": "reached", "stagnated": "stagnated", "failed": "failed"}
+
+
+@dataclass
+class GoalResult:
+    outcome: str          # acknowledged | reached | stagnated | failed | collision | timeout |
+    reason: str           # no_planner | interrupted
+    distance_m: float     # last distance to the goal the planner reported [m] (nan: none)
+
+    @property
+    def exit_code(self) -> int:
+        if self.outcome == "acknowledged":
+            return 0
+        if self.outcome == "interrupted":
+            return 130
+        return EXIT_CODES.get(self.outcome, 6)
+
+
+class _Watch:
+    def __init__(self, session: zenoh.Session, keys: Keys):
+        self.q: queue.Queue = queue.Queue()
+        self.subs = [session.declare_subscriber(keys.planner_status, self._cb(PlannerStatus)),
+                     session.declare_subscriber(keys.events, self._cb(Event))]
+
+    def _cb(self, msg_type):
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                self.q.put(msg_type.from_bytes(sample.payload.to_bytes()))
+            except Exception:  # a bad payload is not this command's business
+                pass
+        return on_sample
+
+    def next(self, timeout_s: float):
+        try:
+            return self.q.get(timeout=max(timeout_s, 0.0))
+        except queue.Empty:
+            return None
+
+    def close(self) -> None:
+        for s in self.subs:
+            s.undeclare()
+
+
+def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance: float = 0.1, *,
+              start_run: bool = False, wait: bool = True, timeout_s: float = 0.0,
+              out: Callable[[str], None] = print, progress: bool | None = None,
+              stop: Callable[[], bool] = lambda: False) -> GoalResult:
+    """See the module doc. ``timeout_s`` 0: wait for an outcome as long as it takes."""
+    watch = _Watch(session, keys)
+    try:
+        goal = Goal(stamp_ns=0, x=float(x), y=float(y), tolerance=float(tolerance))
+        if not _handshake(session, keys, goal, watch, stop):
+            return GoalResult("interrupted" if stop() else "no_planner",
+                              "interrupted" if stop() else
+                              f"no planner answered on {keys.planner_status} within "
+                              f"{HANDSHAKE_S:g} s (is one running? papf launch …, "
+                              "python -m nodes.planner)", math.nan)
+        out(f"goal ({x:g}, {y:g}) ±{tolerance:g} m acknowledged by the planner")
+        if start_run:
+            session.put(keys.events, Event(stamp_ns=0, kind="run_started", source="papf-goal",
+                                           detail=f"goal=({x:g},{y:g})").to_bytes())
+            out(f"run_started published on {keys.events}")
+        if not wait:
+            return GoalResult("acknowledged", "", math.nan)
+        return _follow(watch, timeout_s, out, progress, stop)
+    finally:
+        watch.close()
+
+
+def _handshake(session, keys: Keys, goal: Goal, watch: _Watch, stop) -> bool:
+    deadline = time.monotonic() + HANDSHAKE_S
+    while time.monotonic() < deadline and not stop():
+        session.put(keys.goal, goal.to_bytes())
+        t_next = time.monotonic() + REPEAT_S
+        while (left := t_next - time.monotonic()) > 0:
+            msg = watch.next(min(left, 0.05))
+            if isinstance(msg, PlannerStatus) and msg.state == "ready":
+                return True
+    return False
+
+
+def _follow(watch: _Watch, timeout_s: float, out, progress: bool | None, stop) -> GoalResult:
+    deadline = time.monotonic() + timeout_s if timeout_s > 0 else math.inf
+    dist = math.nan
+    with DecileProgress("to the goal", enabled=progress) as bar:
+        while not stop():
+            if time.monotonic() > deadline:
+                return GoalResult("timeout", f"no outcome within {timeout_s:g} s", dist)
+            msg = watch.next(0.1)
+            if isinstance(msg, Event) and msg.kind == "collision":
+                return GoalResult("collision", msg.detail or "collision", dist)
+            if not isinstance(msg, PlannerStatus):
+                continue
+            if not math.isnan(msg.distance_to_goal):
+                dist = msg.distance_to_goal
+                bar.distance(dist, f"{msg.state}, {dist:.2f} m to go")
+            if msg.state in FINAL:
+                out(f"{msg.state}: {msg.reason}" if msg.reason else msg.state)
+                return GoalResult(msg.state, msg.reason, dist)
+    return GoalResult("interrupted", "interrupted", dist)

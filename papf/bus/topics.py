@@ -1,0 +1,189 @@
+"""``papf topic list | echo | hz`` over a Zenoh session (what ``ros2 topic`` does for DDS).
+
+Zenoh has no topic registry, so ``list`` listens: it subscribes to every key (``**``) for
+``duration_s`` and reports what arrived — key, type, encoding and rate — plus the
+stack's own topics of the namespace that stayed silent, and the nodes whose liveliness
+tokens exist. ``echo`` and ``hz`` subscribe to one key expression. Decoding:
+:mod:`papf.bus.decode`. Key names (:func:`resolve_key`): ``scan`` is our topic
+``<ns>/scan``, ``/scan`` is the bridge's ROS 2 ``scan``, anything else is used verbatim.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import queue
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import zenoh
+
+from common.transport import alive_nodes
+from papf.bus.decode import Decoded, as_text, decode, json_safe, stamp_of
+from papf.bus.stats import HzStats
+from schemas import Keys
+from schemas.keys import TOPICS
+
+Out = Callable[[str], None]
+Stop = Callable[[], bool]
+
+
+def resolve_key(name: str, keys: Keys) -> str:
+    """``scan`` -> ``rosbot/scan`` (a stack topic); ``/scan`` -> ``scan``; else as given."""
+    if name in TOPICS:
+        return keys.key(name)
+    return name[1:] if name.startswith("/") else name
+
+
+class Inbox:
+    """Samples of a key expression queued as (key, payload, arrival monotonic s)."""
+
+    def __init__(self, session: zenoh.Session, expr: str):
+        self.q: queue.Queue = queue.Queue()
+        self.sub = session.declare_subscriber(expr, self._on_sample)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        if sample.kind == zenoh.SampleKind.PUT:
+            self.q.put((str(sample.key_expr), sample.payload.to_bytes(), time.monotonic()))
+
+    def get(self, timeout_s: float):
+        try:
+            return self.q.get(timeout=max(timeout_s, 0.0))
+        except queue.Empty:
+            return None
+
+    def close(self) -> None:
+        self.sub.undeclare()
+
+
+# -- list ---------------------------------------------------------------------------------------
+@dataclass
+class TopicRow:
+    key: str
+    type_name: str = ""
+    encoding: str = ""
+    stats: HzStats = field(default_factory=HzStats)
+
+    @property
+    def count(self) -> int:
+        return self.stats.count
+
+
+def listen(session: zenoh.Session, expr: str, duration_s: float, stop: Stop = lambda: False,
+           ros_type: str | None = None) -> dict[str, TopicRow]:
+    """Every key that carried a message within ``duration_s``, with its type and rate."""
+    rows: dict[str, TopicRow] = {}
+    inbox = Inbox(session, expr)
+    deadline = time.monotonic() + duration_s
+    try:
+        while not stop() and (left := deadline - time.monotonic()) > 0:
+            item = inbox.get(min(left, 0.1))
+            if item is None:
+                continue
+            key, data, arrival = item
+            d = decode(key, data, ros_type)
+            row = rows.setdefault(key, TopicRow(key))
+            row.type_name = row.type_name or d.type_name
+            row.encoding = row.encoding or d.encoding
+            row.stats.add(arrival, d.stamp_ns)
+    finally:
+        inbox.close()
+    return rows
+
+
+def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
+               stop: Stop = lambda: False, as_json: bool = False) -> int:
+    """Print what the bus carries (see the module doc); returns how many keys were heard."""
+    rows = listen(session, "**", duration_s, stop)
+    for suffix, msg_type in TOPICS.items():   # the stack's topics that stayed silent
+        rows.setdefault(keys.key(suffix), TopicRow(keys.key(suffix), msg_type.TYPE, "msgpack"))
+    nodes = sorted(alive_nodes(session, keys))
+    heard = sum(1 for r in rows.values() if r.count)
+    if as_json:
+        for r in sorted(rows.values(), key=lambda r: r.key):
+            rate = r.stats.rate()
+            out(json.dumps(json_safe({"key": r.key, "type": r.type_name, "encoding": r.encoding,
+                                      "messages": r.count, "hz": rate.hz,
+                                      "stamp_hz": rate.stamp_hz})))
+        out(json.dumps({"alive": nodes}))
+        return heard
+    width = max(len(r.key) for r in rows.values())
+    out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
+        f"(heard for {duration_s:g} s)")
+    for r in sorted(rows.values(), key=lambda r: (r.count == 0, r.key)):
+        hz = r.stats.rate().hz
+        rate = "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
+        out(f"{r.key:<{width}}  {r.type_name or '?':<28} {r.encoding:<8} {rate:>10}  {r.count}")
+    out(f"alive ({keys.alive()}): {', '.join(nodes) if nodes else 'none'}")
+    return heard
+
+
+# -- echo ---------------------------------------------------------------------------------------
+def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout_s: float = 0.0,
+         ros_type: str | None = None, max_items: int | None = 8, as_json: bool = False,
+         stop: Stop = lambda: False) -> int:
+    """Print each message on ``expr`` until ``count`` (0: forever) or stop; returns how many.
+
+    ``timeout_s`` > 0: give up when the first message has not come within that long.
+    """
+    inbox = Inbox(session, expr)
+    shown = 0
+    deadline = time.monotonic() + timeout_s if timeout_s > 0 else math.inf
+    try:
+        while not stop() and (count <= 0 or shown < count):
+            item = inbox.get(0.1)
+            if item is None:
+                if shown == 0 and time.monotonic() > deadline:
+                    break
+                continue
+            key, data, _ = item
+            out(format_sample(key, decode(key, data, ros_type), max_items, as_json))
+            shown += 1
+    finally:
+        inbox.close()
+    return shown
+
+
+def format_sample(key: str, d: Decoded, max_items: int | None, as_json: bool) -> str:
+    if as_json:
+        return json.dumps(json_safe({"key": key, "type": d.type_name, "encoding": d.encoding,
+                                     "message": d.value, **({"error": d.error} if d.error else {})}))
+    head = f"# {key}  [{d.type_name or '?'}, {d.encoding}]"
+    if d.error:
+        head += f"  INVALID: {d.error}"
+    return f"{head}\n{as_text(d.value, max_items)}\n---"
+
+
+# -- hz -----------------------------------------------------------------------------------------
+def hz(session: zenoh.Session, expr: str, out: Out, *, window: int = 1000,
+       period_s: float = 1.0, duration_s: float = 0.0, stop: Stop = lambda: False,
+       ros_type: str | None = None) -> dict[str, HzStats]:
+    """Print each key's rate every ``period_s`` until ``duration_s`` (0: forever) or stop."""
+    stats: dict[str, HzStats] = {}
+    inbox = Inbox(session, expr)
+    t0 = time.monotonic()
+    next_print = t0 + period_s
+    try:
+        while not stop():
+            now = time.monotonic()
+            if duration_s > 0 and now - t0 >= duration_s:
+                break
+            if now >= next_print:
+                next_print += period_s
+                _print_rates(stats, expr, out)
+            item = inbox.get(min(next_print - now, 0.1))
+            if item is not None:
+                key, data, arrival = item
+                stats.setdefault(key, HzStats(window)).add(arrival, stamp_of(key, data, ros_type))
+    finally:
+        inbox.close()
+    _print_rates(stats, expr, out)
+    return stats
+
+
+def _print_rates(stats: dict[str, HzStats], expr: str, out: Out) -> None:
+    if not stats:
+        out(f"{expr}: no messages yet")
+    for key in sorted(stats):
+        out(stats[key].rate().line(key))

@@ -1,0 +1,121 @@
+"""``papf topic list|echo|hz``: what the bus carries, what it says, how often (like ``ros2 topic``).
+
+Takes the Zenoh options every node takes (``--connect``, ``--mode``, ``--namespace``,
+``--zenoh-config`` …), so it reaches whatever the nodes reach: the embedded router of
+``papf run``/``papf launch`` by default, a robot with ``--connect tcp/<robot>:7447``, a
+secure split with ``--zenoh-config``. The work is :mod:`papf.bus.topics`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from common.transport import StopRequested, add_zenoh_args, config_from_args
+from schemas import Keys
+
+TOPIC_EPILOG = """\
+KEY: a stack topic without the namespace (scan, odom, planner/state) gets it
+(rosbot/scan); a leading / names the bridge's ROS 2 topic (/scan, /odometry/filtered);
+anything else is a Zenoh key expression used as given (rosbot/**, lab/r1/odom).
+Our messages are decoded by their msgpack type, the bridge's CDR by the key
+(cmd_vel, odometry/filtered, battery, scan, imu/data, joint_states, tf) or --ros-type."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("topic", help="list, echo and measure the bus's topics (like ros2 topic)",
+                       description="Poke the bus: what is published, what it says, how often.")
+    tsub = p.add_subparsers(dest="topic_command", required=True, metavar="list|echo|hz")
+    q = tsub.add_parser("list", help="keys heard, with type, encoding and rate; nodes alive",
+                        description="Listen to every key for --duration seconds and list what "
+                                    "arrived (plus the stack's silent topics and live nodes).")
+    q.add_argument("--duration", type=float, default=2.0, metavar="S",
+                   help="how long to listen [s] (default 2)")
+    q.add_argument("--json", action="store_true", help="one JSON object per key")
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_list)
+    q = tsub.add_parser("echo", help="print the messages on a key", epilog=TOPIC_EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Print each message on KEY, decoded (until Ctrl-C or --count).")
+    q.add_argument("key", metavar="KEY")
+    q.add_argument("--count", "-n", type=int, default=0, help="stop after N messages")
+    q.add_argument("--once", action="store_true", help="the same as --count 1")
+    q.add_argument("--timeout", type=float, default=0.0, metavar="S",
+                   help="exit 5 if no message came within S seconds (default: wait forever)")
+    q.add_argument("--full", action="store_true", help="print whole arrays (default: first 8)")
+    q.add_argument("--json", action="store_true", help="one JSON object per message")
+    q.add_argument("--ros-type", metavar="TYPE", help="decode CDR as this ROS 2 type "
+                   "(e.g. sensor_msgs/msg/LaserScan) instead of guessing from the key")
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_echo)
+    q = tsub.add_parser("hz", help="print the rate of a key in Hz", epilog=TOPIC_EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Print the rate of the messages on KEY every second: by "
+                                    "arrival (wall clock) and by the messages' own stamps "
+                                    "(sim time in a lockstep simulation).")
+    q.add_argument("key", metavar="KEY")
+    q.add_argument("--window", type=int, default=1000, help="messages in the statistics (1000)")
+    q.add_argument("--duration", type=float, default=0.0, metavar="S",
+                   help="stop after S seconds (default: until Ctrl-C)")
+    q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of CDR payloads (stamps)")
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_hz)
+
+
+def _session(args):
+    import zenoh
+
+    return zenoh.open(config_from_args(args))
+
+
+def _out(line: str) -> None:
+    try:
+        print(line, flush=True)
+    except BrokenPipeError:   # `papf topic echo … | head`: the reader is done, so are we
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise SystemExit(0) from None
+
+
+def cmd_topic_list(args) -> int:
+    from papf.bus.topics import topic_list
+
+    stop = StopRequested()
+    with _session(args) as s:
+        topic_list(s, Keys(args.namespace), args.duration, _out, lambda: bool(stop), args.json)
+    return 130 if stop else 0
+
+
+def cmd_topic_echo(args) -> int:
+    from papf.bus.topics import echo, resolve_key
+
+    stop = StopRequested()
+    key = resolve_key(args.key, Keys(args.namespace))
+    count = 1 if args.once else args.count
+    with _session(args) as s:
+        n = echo(s, key, _out, count=count, timeout_s=args.timeout, ros_type=args.ros_type,
+                 max_items=None if args.full else 8, as_json=args.json, stop=lambda: bool(stop))
+    if stop:
+        return 130 if n == 0 else 0
+    if n == 0:
+        print(f"papf topic echo: no message on {key} within {args.timeout:g} s "
+              "(papf topic list shows what is published)", file=sys.stderr)
+        return 5
+    return 0
+
+
+def cmd_topic_hz(args) -> int:
+    from papf.bus.topics import hz, resolve_key
+
+    if args.window < 2:
+        print("papf topic hz: --window must be at least 2 messages", file=sys.stderr)
+        return 2
+    stop = StopRequested()
+    key = resolve_key(args.key, Keys(args.namespace))
+    with _session(args) as s:
+        hz(s, key, _out, window=args.window, duration_s=args.duration, ros_type=args.ros_type,
+           stop=lambda: bool(stop))
+    return 0
+
+
