@@ -2,7 +2,10 @@
 
 Prints one JSON object per (planner, scene) with the time of ``Planner.step`` (scan
 conversion + algorithm + messages) in microseconds: wall time p50, p99, max, and the
-thread's CPU time p50, p99 (less disturbed when other processes share the cores). Scenes:
+thread's CPU time p50, p99 (less disturbed when other processes share the cores); and
+``cmd_*``: the same up to the command (:meth:`Planner.command`: what the node publishes
+first — the debug ``PlannerState`` is built after). Every registered planner is timed
+on every scene. Scenes:
 
 - ``open``: no returns (inf everywhere);
 - ``energy``: the energy world's three obstacles seen from along the approach;
@@ -24,7 +27,7 @@ import time
 
 import numpy as np
 
-from nodes.planner.registry import make_planner
+from nodes.planner.registry import PLANNERS, make_planner
 from papf.toysim import box_segments, cast_scan, toy_world
 from schemas.messages import Goal, Odometry
 
@@ -39,11 +42,9 @@ SCENES = {  # world, start x range [m], goal
     "energy": (ENERGY, (0.0, 2.0), (10.0, 0.0)),
     "trap": (RING, (-0.05, 0.05), (3.0, 0.0)),
 }
-CASES = [  # (label, planner, --set overrides)
-    ("apf", "apf", []), ("papf", "papf", []),
+CASES = [(name, name, []) for name in sorted(PLANNERS)] + [  # (label, planner, --set overrides)
     ("papf_worst_numba", "papf", ["persist_quarks=false"]),
     ("papf_worst_numpy", "papf", ["persist_quarks=false", "use_numba=false"]),
-    ("arapf", "arapf", []), ("wang", "wang", []),
 ]
 
 
@@ -55,21 +56,28 @@ def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
     odoms = [Odometry(stamp_ns=k, x=x, y=0.0, yaw=0.0, v=0.0, w=0.0) for k, x in enumerate(xs)]
     planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1]))
     planner.step(scans[0], odoms[0])                     # warm-up (JIT compile)
-    times, cpu, quarks = [], [], 0
+    times, cpu, cmd_times, cmd_cpu, quarks = [], [], [], [], 0
     for scan, odom in zip(scans, odoms, strict=True):
         planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1]))
         planner.state = "driving"                          # keep timing the algorithm
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-        _, state, _ = planner.step(scan, odom)
+        _, finish = planner.command(scan, odom)
+        t1, c1 = time.perf_counter_ns(), time.thread_time_ns()
+        state, _ = finish()
         times.append(time.perf_counter_ns() - t0)
         cpu.append(time.thread_time_ns() - c0)
+        cmd_times.append(t1 - t0)
+        cmd_cpu.append(c1 - c0)
         quarks = max(quarks, len(state.top_quarks))
-    us, cpu_us = np.array(times) / 1e3, np.array(cpu) / 1e3
-    return {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
-            "beams": int(scans[0].ranges.size), "max_top_quarks": quarks,
-            "p50_us": _r(np.percentile(us, 50)), "p99_us": _r(np.percentile(us, 99)),
-            "max_us": _r(us.max()), "cpu_p50_us": _r(np.percentile(cpu_us, 50)),
-            "cpu_p99_us": _r(np.percentile(cpu_us, 99))}
+    out = {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
+           "beams": int(scans[0].ranges.size), "max_top_quarks": quarks}
+    for prefix, wall, thread in (("", times, cpu), ("cmd_", cmd_times, cmd_cpu)):
+        us, cpu_us = np.array(wall) / 1e3, np.array(thread) / 1e3
+        out.update({f"{prefix}p50_us": _r(np.percentile(us, 50)),
+                    f"{prefix}p99_us": _r(np.percentile(us, 99)), f"{prefix}max_us": _r(us.max()),
+                    f"{prefix}cpu_p50_us": _r(np.percentile(cpu_us, 50)),
+                    f"{prefix}cpu_p99_us": _r(np.percentile(cpu_us, 99))})
+    return out
 
 
 def _r(x) -> float:

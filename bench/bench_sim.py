@@ -1,16 +1,24 @@
-"""Speed of the simulated lockstep loop: sim time / wall time, printed as JSON.
+"""Speed of the simulation: sim time / wall time, printed as JSON lines.
 
-Starts a router on a free port, ``nodes.base_driver`` (sim) and ``nodes.lidar_sim``
-as processes, and answers every scan here with a constant Twist of the same stamp
-(a trivial planner), then times ``--sim-s`` seconds of sim time after ``run_started``.
+Full stack (default): ``papf run --world W --planner P --seed S`` for each ``--planners``
+(router, driver, LiDAR, planner, energy meter, the launcher itself; start-up and
+shut-down included, like the ``wall_time_s`` of ``papf run``), with the CPU seconds of
+every process (its Python threads and Zenoh's) sampled from /proc — where a cycle's time
+goes. ``--repeat N`` runs each N times; every run is printed.
 
-    .venv/bin/python bench/bench_sim.py [--sim-s 30] [--world energy] [--beams 300]
+``--loop``: the lockstep loop alone — ``nodes.base_driver`` (sim) and ``nodes.lidar_sim``
+as processes, every scan answered here with a constant Twist of the same stamp (a
+trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
+
+    papf bench sim [--planners apf,papf] [--world energy] [--seed 1] [--repeat 1]
+    papf bench sim --loop [--sim-s 30] [--world energy] [--beams 300]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import sys
 import threading
@@ -78,13 +86,41 @@ def bench(sim_s: float, world: str, beams: int) -> dict:
             "scans_answered": scans[0], "finished": finished, "cpus": os.cpu_count()}
 
 
+def bench_stack(world: str, planner: str, seed: int, zenoh_mode: str) -> dict:
+    from bench.proc_cpu import TreeCPU
+    from papf.runner import RunConfig, run
+
+    with TreeCPU() as cpu:
+        res = run(RunConfig(world=world, planner=planner, seed=seed, progress=False,
+                            zenoh_mode=zenoh_mode))
+    procs = cpu.per_process()
+    return {"bench": "sim_stack", "world": world, "planner": planner, "seed": seed,
+            "zenoh_mode": zenoh_mode, "outcome": res.outcome, "sim_s": res.sim_time_s,
+            "wall_s": round(res.wall_time_s, 3),
+            "sim_over_wall": round(res.sim_time_s / max(res.wall_time_s, 1e-9), 2),
+            "cpu_s": round(sum(p["cpu_s"] for p in procs.values()), 2), "processes": procs,
+            "cpus": os.cpu_count()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sim-s", type=float, default=30.0, help="sim seconds to run (30)")
+    parser.add_argument("--loop", action="store_true", help="the driver + LiDAR loop alone")
+    parser.add_argument("--sim-s", type=float, default=30.0, help="--loop: sim seconds to run (30)")
     parser.add_argument("--world", default="energy")
-    parser.add_argument("--beams", type=int, default=300)
+    parser.add_argument("--beams", type=int, default=300, help="--loop: LiDAR beams (300)")
+    parser.add_argument("--planners", default="apf,papf", help="full stack: planners (apf,papf)")
+    parser.add_argument("--seed", type=int, default=1, help="full stack: seed (1)")
+    parser.add_argument("--repeat", type=int, default=1, help="full stack: runs per planner (1)")
+    parser.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
+                        help="full stack: the nodes' Zenoh mode (as papf run --zenoh-mode)")
     a = parser.parse_args()
-    print(json.dumps(bench(a.sim_s, a.world, a.beams)))
+    if a.loop:
+        print(json.dumps(bench(a.sim_s, a.world, a.beams)))
+        return
+    logging.getLogger("papf.run").setLevel(logging.WARNING)
+    for planner in a.planners.split(","):
+        for _ in range(a.repeat):
+            print(json.dumps(bench_stack(a.world, planner, a.seed, a.zenoh_mode)), flush=True)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,8 @@ confirmed tracks are compared with the world's ground truth at that instant:
 
 Timing is the wall time of ``Tracker.update`` (clustering + association + filter + the
 message): p50, p99, max, and the thread's CPU time p50/p99 (less disturbed when other
-processes share the cores). Prints one JSON object per world. Speed is reported, never
+processes share the cores); ``--no-numba`` times the numpy clustering instead of the
+compiled one. Prints one JSON object per world. Speed is reported, never
 asserted (tests/ do not time anything).
 """
 
@@ -33,7 +34,8 @@ import time
 import numpy as np
 
 from nodes.lidar_sim.core import LidarParams, LidarSim
-from nodes.tracker.core import Tracker
+from nodes.tracker.core import Tracker, TrackerParams
+from nodes.tracker.kernels import HAVE_NUMBA
 from schemas.messages import Odometry
 from worlds import load_world, packaged_worlds
 from worlds.messages import truth_objects
@@ -44,10 +46,11 @@ EDGE_OFFSET = 0.25       # [m] the scripted robot's path, outside the right road
 NEAR = 4.0               # [m] true obstacles this close count for coverage
 
 
-def run_world(name: str, seconds: float, match: float, seed: int) -> dict:
+def run_world(name: str, seconds: float, match: float, seed: int, numba: bool = True) -> dict:
     world = load_world(name)
     y = (world.road.y_min if world.road else 0.0) - EDGE_OFFSET
-    tracker = Tracker()
+    tracker = Tracker(TrackerParams(use_numba=numba))
+    tracker.warm_up()                                     # numba compile: not a cycle
     times, cpu, pos, vel = [], [], [], []
     near_total = near_hit = tracks_total = tracks_false = 0
     with LidarSim(world, LidarParams(), seed) as lidar:
@@ -78,7 +81,8 @@ def run_world(name: str, seconds: float, match: float, seed: int) -> dict:
                     near_total += 1
                     near_hit += i in matched
     us, cpu_us = np.array(times) / 1e3, np.array(cpu) / 1e3
-    return {"world": name, "cycles": len(times), "beams": LidarParams().beams,
+    return {"world": name, "numba": numba and HAVE_NUMBA, "cycles": len(times),
+            "beams": LidarParams().beams,
             "p50_us": _r(np.percentile(us, 50)), "p99_us": _r(np.percentile(us, 99)),
             "max_us": _r(us.max()), "cpu_p50_us": _r(np.percentile(cpu_us, 50)),
             "cpu_p99_us": _r(np.percentile(cpu_us, 99)),
@@ -104,13 +108,15 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=30.0, help="sim time per world (30)")
     ap.add_argument("--match", type=float, default=1.0, help="track-to-truth match radius [m]")
     ap.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (0)")
+    ap.add_argument("--no-numba", action="store_true", help="numpy clustering, not the numba pass")
     args = ap.parse_args()
     names = args.world or [w for w in packaged_worlds() if w.startswith("road-")]
     print(json.dumps({"machine": platform.processor() or platform.machine(),
                       "python": platform.python_version()}))
     for name in names:
         print(json.dumps({"bench": "tracker", **run_world(name, args.seconds, args.match,
-                                                          args.seed)}), flush=True)
+                                                          args.seed, not args.no_numba)}),
+              flush=True)
 
 
 if __name__ == "__main__":

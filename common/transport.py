@@ -100,19 +100,21 @@ class Node:
     """A node's Zenoh session with typed, fault-tolerant pub/sub.
 
     Received messages are decoded in Zenoh's callback thread and queued as
-    ``(topic, message)``; :meth:`messages` hands them to the node's main thread.
+    ``(topic, message)`` in a C-level ``SimpleQueue`` (one lock-free put per message, and the
+    main thread sleeps until data comes); :meth:`messages` hands them to the main thread.
     A payload that fails to decode is logged (rate-limited), counted in
     :attr:`bad_messages` and dropped: a bad peer never crashes a node.
     """
 
     def __init__(self, name: str, session: zenoh.Session, keys: Keys, log: logging.Logger):
         self.name, self.session, self.keys, self.log = name, session, keys, log
-        self.inbox: queue.Queue = queue.Queue()
+        self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.bad_messages: Counter[str] = Counter()
         self.stop = StopRequested()
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
         self._token = None
+        self._last: tuple[Message | None, bytes] = (None, b"")   # last message put, encoded
 
     # -- publishing -------------------------------------------------------
     def publish(self, topic: str, msg: Message) -> None:
@@ -123,7 +125,9 @@ class Node:
         pub = self._publishers.get(topic)
         if pub is None:
             pub = self._declare(topic)
-        pub.put(msg.to_bytes())
+        if msg is not self._last[0]:  # the same message on two keys (sim/pose, odom): encode once
+            self._last = (msg, msg.to_bytes())
+        pub.put(self._last[1])
 
     def declare_publishers(self, *topics: str) -> None:
         """Declare publishers up front (before :meth:`ready`) so first puts are not late."""
@@ -215,11 +219,27 @@ def alive_nodes(session: zenoh.Session, keys: Keys) -> set[str]:
 
 def wait_alive(session: zenoh.Session, keys: Keys, names: Iterable[str], timeout_s: float,
                poll_s: float = 0.05, abort=lambda: False) -> set[str]:
-    """Wait until every named node is alive; return the missing ones on timeout/abort."""
-    wanted = set(names)
+    """Wait until every named node is alive; return the missing ones on timeout/abort.
+
+    Woken by a liveliness subscriber (tokens already declared come as its history), so a
+    node counts the moment its token arrives; ``abort`` is checked every ``poll_s``.
+    """
+    wanted, alive = set(names), set()
+    prefix = keys.alive("")
+    changed = threading.Condition()
+
+    def on_token(sample: zenoh.Sample) -> None:
+        with changed:
+            name = str(sample.key_expr)[len(prefix):]
+            (alive.add if sample.kind == zenoh.SampleKind.PUT else alive.discard)(name)
+            changed.notify_all()
+
+    sub = session.liveliness().declare_subscriber(keys.alive("*"), on_token, history=True)
     deadline = time.monotonic() + timeout_s
-    while True:
-        missing = wanted - alive_nodes(session, keys)
-        if not missing or time.monotonic() > deadline or abort():
-            return missing
-        time.sleep(poll_s)
+    try:
+        with changed:
+            while wanted - alive and time.monotonic() <= deadline and not abort():
+                changed.wait(poll_s)
+            return wanted - alive
+    finally:
+        sub.undeclare()

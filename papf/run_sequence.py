@@ -27,6 +27,7 @@ log = logging.getLogger("papf.run")
 GOAL_HANDSHAKE_S = 15.0  # [s wall] for the planner to acknowledge the goal
 STALL_S = 20.0           # [s wall] no sim-clock progress for this long = the stack is stuck
 FIGURES_S = 10.0         # [s wall] for battery/pose samples to reach t_end
+CHECK_S = 0.05           # [s wall] period of the watch (node deaths, stall, progress, stop)
 RECORDER_ACK_S = 15.0    # [s wall] for the recorder to close its file after run_ended
 
 
@@ -91,9 +92,13 @@ class RunSequence:
         """Watch until the monitor has an outcome; a dead node, a stall or a stop is one too."""
         m = self.monitor
         last_clock, last_change = m.clock_ns, time.monotonic()
+        next_check = last_change
         while not m.done:
             self.drain(0.05)
             now = time.monotonic()
+            if now < next_check:  # the watch below at most every CHECK_S, not per message
+                continue
+            next_check = now + CHECK_S
             if m.clock_ns != last_clock:
                 last_clock, last_change = m.clock_ns, now
             if progress is not None and goal_xy is not None:

@@ -1,7 +1,8 @@
 """`papf run`: start the whole stack as processes, drive to an outcome, stop everything.
 
 The processes are the ``sim`` launch profile's (:mod:`papf.graph`; ``papf launch sim``
-starts the same list). Sequence (docs/architecture.md): router -> nodes -> liveliness -> then
+starts the same list), but the router is the launcher's own Zenoh session (no router
+process). Sequence (docs/architecture.md): router -> nodes -> liveliness -> then
 :class:`papf.run_sequence.RunSequence` (goal handshake -> run_started -> outcome ->
 figures at ``t_end`` -> run_ended) -> stop the nodes, the recorder, the router.
 """
@@ -19,7 +20,7 @@ from papf.graph import LaunchOptions, Resolved, load_profile, objects_for, resol
 from papf.monitor import RunMonitor, RunResult
 from papf.progress import RunProgress
 from papf.run_sequence import RunSequence
-from papf.supervisor import Supervisor, free_port, port_in_use, wait_port
+from papf.supervisor import Supervisor, free_port, port_in_use
 from schemas import Keys
 from worlds import World, load_world
 
@@ -47,7 +48,7 @@ class RunConfig:
     startup_timeout_s: float = 60.0    # [s wall] for every node to become alive
     lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
-    zenoh_mode: str = "client"         # nodes' Zenoh mode: client (via the router) or peer
+    zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     objects: str | None = None         # none | truth | tracker; None: per planner (objects_for)
 
@@ -88,19 +89,21 @@ def run(cfg: RunConfig) -> RunResult:
     wall0 = time.monotonic()
     monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision)
     keys = Keys(cfg.namespace)
-    with Supervisor(show=_show_line(cfg.verbose), last=("recorder", "router")) as sup:
-        sup.start("router", list(graph.processes[0].argv))
-        if not wait_port(port, 15.0, abort=lambda: bool(sup.dead())):
-            monitor.fail(f"the embedded router did not come up on {endpoint}: "
-                         + " | ".join(sup.children[0].tail))
-            return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
-        with zenoh.open(zenoh_config("client", [endpoint])) as session:
-            seq = RunSequence(session, keys, sup, monitor)
-            try:
-                _drive(cfg, world, graph.nodes, sup, session, keys, seq)
-            finally:
-                result = monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
-                seq.end(result)  # before the nodes stop: the recorder keeps the result
+    # The launcher's own session is the embedded router (a Python process, as the profile
+    # says, but this one): no router process to start and wait for, and the launcher's
+    # subscriptions are served without a hop. The nodes are stopped before it closes.
+    try:
+        router = zenoh.open(zenoh_config("router", listen=[f"tcp/127.0.0.1:{port}"]))
+    except Exception as exc:  # zenoh raises ZError (e.g. the port was taken meanwhile)
+        monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
+        return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+    with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",)) as sup:
+        seq = RunSequence(session, keys, sup, monitor)
+        try:
+            _drive(cfg, world, graph.nodes, sup, session, keys, seq)
+        finally:
+            result = monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+            seq.end(result)  # before the nodes stop: the recorder keeps the result
     result.wall_time_s = time.monotonic() - wall0
     return result
 

@@ -1,5 +1,6 @@
 """PAPF (Szczepanski 2022, Sec. III): prediction, top quarks, temporary goal, motion, kernels."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -237,3 +238,40 @@ def test_same_goal_twice_keeps_quarks_new_goal_resets():
     assert pl.strategy.quarks is not None
     pl.set_goal(Goal(stamp_ns=2, x=7.0, y=0.0))
     assert pl.strategy.quarks is None
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_whole_prediction_kernel_matches_the_numpy_loop_bit_for_bit():
+    """The one-call numba prediction (rollouts, tail check, quark bookkeeping) and the
+    numpy fallback agree bit for bit, in 2-D and 3-D, with and without quarks already placed."""
+    rng = np.random.default_rng(11)
+    cases = [(np.zeros(2), np.array([3.0, 0.0]), RING, None),
+             (np.zeros(2), np.array([8.0, 0.0]), WALL, np.array([[0.4, 0.1], [0.2, -0.3]]))]
+    for dims in (2, 3):
+        for _ in range(12):
+            ang = rng.uniform(0, 2 * math.pi, 200)
+            pts = np.column_stack([np.cos(ang), np.sin(ang)] + [rng.uniform(-0.1, 0.1, 200)] * (dims - 2))
+            cases.append((rng.uniform(-0.05, 0.05, dims), rng.uniform(2, 4, dims) * np.eye(dims)[0],
+                          rng.uniform(0.5, 0.9) * pts, rng.uniform(-0.5, 0.5, (int(rng.integers(0, 12)), dims))))
+    for m in (10, 3, 0):
+        for pull in (1.0, 0.0):
+            fast_pp = PAPFParams(max_quarks=m, pull_range_fraction=pull)
+            slow_pp = PAPFParams(max_quarks=m, pull_range_fraction=pull, use_numba=False)
+            for pos, goal, obstacles, quarks in cases:
+                a = predict(pos, goal, obstacles, APF, fast_pp, quarks)
+                b = predict(pos, goal, obstacles, APF, slow_pp, quarks)
+                assert (a.resolved, a.reached_goal) == (b.resolved, b.reached_goal)
+                assert np.array_equal(a.path, b.path) and np.array_equal(a.quarks, b.quarks)
+                assert len(a.abandoned) == len(b.abandoned)
+                assert all(np.array_equal(x, y) for x, y in zip(a.abandoned, b.abandoned, strict=True))
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_papf_planner_messages_identical_with_and_without_numba():
+    """Whole cycles (scan view, prediction, eq. 8, motion law, messages) in both modes."""
+    world = toy_world(segments=box_segments(2.0, 0.0, 0.4, 0.4))
+    runs = [simulate(make_planner("papf", sets=sets), world, goal=(5.0, 0.0), max_time_s=40,
+                     keep_states=True) for sets in ([], ["use_numba=false"])]
+    fast, slow = ([dataclasses.replace(s, compute_ns=0).to_bytes() for s in r.states] for r in runs)
+    assert fast == slow and np.array_equal(runs[0].path, runs[1].path)
+    assert any(s.top_quarks for s in runs[0].states)

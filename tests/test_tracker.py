@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
+from nodes.tracker import kernels
 from nodes.tracker.__main__ import params_from
 from nodes.tracker.core import Tracker, TrackerParams, cluster_points, scan_points, segments
 from nodes.tracker.loop import TrackerLoop
@@ -161,8 +162,31 @@ def test_loop_pairs_scan_with_the_pose_of_its_stamp():
     assert lp.unpaired == 1
 
 
+@pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed")
+def test_numba_and_numpy_clustering_agree():
+    rng = np.random.default_rng(4)
+    scans = [face_scan(2.0, 0.6), face_scan(1.0, half=3.0), make_scan(empty())]
+    r = empty()
+    r[[0, 1, 2, B - 2, B - 1]] = 1.0                       # across the seam
+    r[beam(40):beam(47) + 1] = 3.0 + rng.normal(0, 0.01, 8)
+    scans.append(make_scan(r))
+    r = np.where(rng.random(B) < 0.5, rng.uniform(0.5, 5.0, B), np.inf)   # clutter
+    scans.append(make_scan(r))
+    for scan in scans:
+        sp = scan_points(scan, ORIGIN, 6.0)
+        fast = cluster_points(sp, TrackerParams(use_numba=True))
+        slow = cluster_points(sp, TrackerParams(use_numba=False))
+        assert len(fast) == len(slow)
+        for a, b in zip(fast, slow, strict=True):
+            assert (a.x, a.y, a.length, a.width) == pytest.approx((b.x, b.y, b.length, b.width),
+                                                                  abs=1e-9)
+
+
 def test_settings_are_checked():
     assert params_from(["gate=0.7", "min_points=4"]) == TrackerParams(gate=0.7, min_points=4)
+    assert params_from(["use_numba=false"]).use_numba is False
+    with pytest.raises(ConfigError, match="not a bool"):
+        params_from(["use_numba=maybe"])
     with pytest.raises(ConfigError, match="gate"):
         params_from(["gate=-1"])
     with pytest.raises(ConfigError, match="one of max_range"):

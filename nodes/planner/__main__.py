@@ -59,9 +59,10 @@ def run(args: argparse.Namespace) -> int:
         log.error("%s", exc)
         return 2
     warm_up(planner)
-    loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
-                       objects=args.objects)
     with open_node(NODE_NAME, args, log) as node:
+        loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
+                           objects=args.objects,
+                           send_command=lambda cmd: node.publish("cmd_vel", cmd))
         for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
         node.declare_publishers("cmd_vel", "planner/state", "planner/status", "events")

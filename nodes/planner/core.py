@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -160,6 +161,17 @@ class Planner:
         ``objects``: the obstacle tracks paired with this scan, if the run provides them
         (None: keep the last ones).
         """
+        cmd, finish = self.command(scan, odom, objects)
+        return (cmd, *finish())
+
+    def command(self, scan: Scan, odom: Odometry, objects: Objects | None = None
+                ) -> tuple[Twist, Callable[[], tuple]]:
+        """The cycle's command now; ``finish()`` -> ``(PlannerState, PlannerStatus)`` after.
+
+        The node publishes the command before it builds the debug message (tens of
+        microseconds with PAPF's abandoned paths): the command's latency is the
+        algorithm's alone. ``compute_ns`` is the time to the command.
+        """
         if objects is not None:
             self.set_objects(Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id)
                              for o in objects.tracks)
@@ -191,9 +203,10 @@ class Planner:
             v = max(0.0, plan.v_ref * math.cos(err))
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
-        state = self._state(t, plan, view, theta_ref, v, w, t0)
-        return (Twist(stamp_ns=t, v=v, w=w), state,
-                PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
+        compute_ns = time.perf_counter_ns() - t0
+        return Twist(stamp_ns=t, v=v, w=w), lambda: (
+            self._state(t, plan, view, theta_ref, v, w, compute_ns),
+            PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
 
     # -- helpers ------------------------------------------------------------
     def _params_for(self, beams: int) -> APFParams:
@@ -228,11 +241,12 @@ class Planner:
             self.state, self.reason = state, reason
         plan = plan or Plan(force=np.zeros(2), mode="stop")
         plan.mode = "stop" if state != "idle" else "idle"
-        ps = self._state(t, plan, view, 0.0, 0.0, 0.0, t0)
-        return (Twist(stamp_ns=t, v=0.0, w=0.0), ps,
-                PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
+        compute_ns = time.perf_counter_ns() - t0
+        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda: (
+            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns),
+            PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
 
-    def _state(self, t, plan: Plan, view, theta_ref, v, w, t0) -> PlannerState:
+    def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
         force = np.asarray(plan.force, dtype=float)
         return PlannerState(
             stamp_ns=t, algorithm=self.strategy.name, mode=plan.mode,
@@ -248,4 +262,4 @@ class Planner:
                             0 if view is None else int(view.points.shape[0])),
             local_minimum_count=int(plan.local_count), lane_goal_y=float(plan.lane_goal_y),
             v_target=float(plan.v_ref) if plan.v_ref is not None else float(v),
-            compute_ns=time.perf_counter_ns() - t0)
+            compute_ns=compute_ns)

@@ -37,7 +37,7 @@ def _carrot(pos, goal, goal_range, out):
     return out
 
 
-_carrot_jit = numba.njit(cache=True)(_carrot) if HAVE_NUMBA else None
+_carrot_jit = numba.njit(cache=True, error_model="numpy")(_carrot) if HAVE_NUMBA else None
 
 
 def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range):
@@ -73,13 +73,39 @@ def rollout_numpy(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, 
     return path, False
 
 
+# Obstacle candidates: a predicted point moves at most Delta per step, so only the points
+# within d_o + B * Delta of a block's first point can be within d_o of any of the block's B
+# points. The kernel selects such candidates every CANDIDATE_BLOCK steps from all points and
+# every CANDIDATE_SUBBLOCK steps from those. The skipped points would fail the d_o test
+# anyway: the sums, and so the results, are unchanged; only the time shrinks.
+CANDIDATE_BLOCK = 8
+CANDIDATE_SUBBLOCK = 2
+
+
 if HAVE_NUMBA:
-    @numba.njit(cache=True)
+    # error_model="numpy": a division by zero gives inf instead of raising, so no check per
+    # division (every division here is guarded; the results are the same).
+    _jit = numba.njit(cache=True, error_model="numpy")
+
+    @_jit
     def _coulomb_acc(pos, pts, d_max, gain, f):  # pragma: no cover - compiled
         dims = pos.shape[0]
-        s = np.zeros(dims)
         d_max2 = d_max * d_max
         eps2 = EPS_M * EPS_M
+        if dims == 2:  # scalars, no scratch arrays: the same operations in the same order
+            sx, sy, px, py = 0.0, 0.0, pos[0], pos[1]
+            for k in range(pts.shape[0]):
+                rx, ry = pts[k, 0] - px, pts[k, 1] - py
+                d2 = rx * rx
+                d2 = d2 + ry * ry
+                if d2 > eps2 and d2 <= d_max2:
+                    inv = 1.0 / (d2 * math.sqrt(d2))
+                    sx += rx * inv
+                    sy += ry * inv
+            f[0] = f[0] - gain * sx
+            f[1] = f[1] - gain * sy
+            return
+        s = np.zeros(dims)
         r = np.empty(dims)
         for k in range(pts.shape[0]):
             for j in range(dims):
@@ -94,20 +120,52 @@ if HAVE_NUMBA:
         for j in range(dims):
             f[j] = f[j] - gain * s[j]
 
-    @numba.njit(cache=True)
-    def _rollout_numba(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step,
-                       n_steps, stop_radius, goal_range):  # pragma: no cover - compiled
+    @_jit
+    def _near(pos, pts, radius, near):  # pragma: no cover - compiled
+        """Copy the points within ``radius`` of ``pos`` (in order) into ``near``; their count."""
+        n = 0
+        r2 = radius * radius
+        dims = pos.shape[0]
+        if dims == 2:
+            px, py = pos[0], pos[1]
+            for k in range(pts.shape[0]):
+                x, y = pts[k, 0], pts[k, 1]
+                if (x - px) * (x - px) + (y - py) * (y - py) <= r2:
+                    near[n, 0], near[n, 1] = x, y
+                    n += 1
+            return n
+        for k in range(pts.shape[0]):
+            d2 = 0.0
+            for j in range(dims):
+                d2 += (pts[k, j] - pos[j]) * (pts[k, j] - pos[j])
+            if d2 <= r2:
+                for j in range(dims):
+                    near[n, j] = pts[k, j]
+                n += 1
+        return n
+
+    @_jit
+    def _rollout_into(path, near, goal2, f, start, goal, g_goal, obstacles, g_obs, d_o, quarks,
+                      g_q, d_q, step, n_steps, stop_radius, goal_range):  # pragma: no cover
+        """Algorithm 1 into ``path`` (n_steps + 1, D); returns (points written, reached).
+
+        ``near`` (2, K, D), ``goal2`` (1, D), ``f`` (D,): scratch buffers.
+        """
         dims = start.shape[0]
-        path = np.empty((n_steps + 1, dims))
         path[0] = start
-        goal2 = np.empty((1, dims))
-        f = np.empty(dims)
+        reach = d_o + CANDIDATE_BLOCK * step + 1e-6
+        reach_sub = d_o + CANDIDATE_SUBBLOCK * step + 1e-6
+        n_block = n_near = 0
         for i in range(1, n_steps + 1):
             prev = path[i - 1]
+            if (i - 1) % CANDIDATE_BLOCK == 0:
+                n_block = _near(prev, obstacles, reach, near[0])
+            if (i - 1) % CANDIDATE_SUBBLOCK == 0:
+                n_near = _near(prev, near[0, :n_block], reach_sub, near[1])
             f[:] = 0.0
             _carrot_jit(prev, goal, goal_range, goal2[0])
             _coulomb_acc(prev, goal2, np.inf, g_goal, f)
-            _coulomb_acc(prev, obstacles, d_o, g_obs, f)
+            _coulomb_acc(prev, near[1, :n_near], d_o, g_obs, f)
             if quarks.shape[0]:
                 _coulomb_acc(prev, quarks, d_q, g_q, f)
             n2 = 0.0
@@ -121,8 +179,18 @@ if HAVE_NUMBA:
                 dj = path[i, j] - goal[j]
                 d2 += dj * dj
             if d2 <= stop_radius * stop_radius:
-                return path[: i + 1], True
-        return path, False
+                return i + 1, True
+        return n_steps + 1, False
+
+    @_jit
+    def _rollout_numba(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step,
+                       n_steps, stop_radius, goal_range):  # pragma: no cover - compiled
+        dims = start.shape[0]
+        path = np.empty((n_steps + 1, dims))
+        n, reached = _rollout_into(path, np.empty((2, *obstacles.shape)), np.empty((1, dims)),
+                                   np.empty(dims), start, goal, g_goal, obstacles, g_obs, d_o, quarks,
+                                   g_q, d_q, step, n_steps, stop_radius, goal_range)
+        return path[:n], reached
 
 
 def _tail_python(path, first, radius):
@@ -146,7 +214,7 @@ def _tail_python(path, first, radius):
     return True, mean
 
 
-_tail_numba = numba.njit(cache=True)(_tail_python) if HAVE_NUMBA else None
+_tail_numba = numba.njit(cache=True, error_model="numpy")(_tail_python) if HAVE_NUMBA else None
 
 
 def tail_stagnation(path: np.ndarray, first: int, radius: float,
@@ -177,3 +245,112 @@ def rollout(start, goal, g_goal: float, obstacles, g_obs: float, d_o: float, qua
     if use_numba and HAVE_NUMBA:
         return _rollout_numba(*args)
     return rollout_numpy(*args)
+
+
+def _predict_python(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max,
+                    n_stag, stag_radius, max_quarks, goal_range):
+    """Numpy reference of :func:`predict_paths` (same arguments and result)."""
+    quarks = quarks[max(0, quarks.shape[0] - max_quarks):]
+    abandoned = []
+    while True:
+        path, reached = rollout_numpy(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q,
+                                      step, i_max + n_stag, step, goal_range)
+        if reached:
+            return path, quarks, abandoned, True, True
+        stuck, mean = _tail_python(path, i_max + 1, stag_radius)
+        if not stuck:
+            return path[: i_max + 1], quarks, abandoned, True, False
+        if len(abandoned) >= max_quarks or max_quarks <= 0:
+            return path[: i_max + 1], quarks, abandoned, False, False
+        abandoned.append(path[: i_max + 1])
+        quarks = np.vstack([quarks[max(0, quarks.shape[0] - max_quarks + 1):], mean])
+
+
+if HAVE_NUMBA:
+    @_jit
+    def _predict_numba(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max,
+                       n_stag, stag_radius, max_quarks, goal_range):  # pragma: no cover - compiled
+        """:func:`_predict_python` with every rollout written into one buffer.
+
+        Returns (paths, n_paths, last length, quark buffer, first quark, end quark, resolved, reached):
+        ``paths[:n_paths - 1]`` are the abandoned ones (their first i_max + 1 points).
+        """
+        dims = start.shape[0]
+        n_steps = i_max + n_stag
+        m = max(max_quarks, 0)
+        paths = np.empty((m + 1, n_steps + 1, dims))
+        qbuf = np.empty((quarks.shape[0] + m + 1, dims))
+        qbuf[: quarks.shape[0]] = quarks
+        lo, hi = max(0, quarks.shape[0] - max_quarks), quarks.shape[0]
+        near, goal2, f = np.empty((2, *obstacles.shape)), np.empty((1, dims)), np.empty(dims)
+        k = 0
+        while True:
+            n, reached = _rollout_into(paths[k], near, goal2, f, start, goal, g_goal, obstacles, g_obs, d_o,
+                                       qbuf[lo:hi], g_q, d_q, step, n_steps, step, goal_range)
+            if reached:
+                return paths, k + 1, n, qbuf, lo, hi, True, True
+            stuck, mean = _tail_numba(paths[k], i_max + 1, stag_radius)
+            if not stuck:
+                return paths, k + 1, i_max + 1, qbuf, lo, hi, True, False
+            if k >= max_quarks or max_quarks <= 0:
+                return paths, k + 1, i_max + 1, qbuf, lo, hi, False, False
+            k += 1
+            lo += max(0, hi - lo - max_quarks + 1)
+            qbuf[hi] = mean
+            hi += 1
+
+
+def predict_paths(start, goal, g_goal: float, obstacles, g_obs: float, d_o: float, quarks,
+                  g_q: float, d_q: float, step: float, i_max: int, n_stag: int,
+                  stag_radius: float, max_quarks: int, goal_range: float = math.inf,
+                  use_numba: bool = True) -> tuple[np.ndarray, np.ndarray, list, bool, bool]:
+    """PAPF Algorithm 1 with the top-quark loop of Sec. III-B, in one call (one kernel call).
+
+    Roll out ``i_max + n_stag`` steps (:func:`rollout`, stopping within ``step`` of the goal);
+    if the last ``n_stag`` points lie within ``stag_radius`` of their mean
+    (:func:`tail_stagnation`) the prediction stagnated: a top quark goes at that mean (the
+    oldest giving way beyond ``max_quarks``), the path is abandoned and the rollout repeats,
+    at most ``max_quarks`` times. Returns ``(path, quarks, abandoned, resolved, reached)``:
+    the last path (its first ``i_max + 1`` points unless it reached the goal), the quarks in
+    use (oldest first), the abandoned paths, False if still stagnating after ``max_quarks``
+    repetitions, True if the path reached the goal.
+    """
+    dims = len(start)
+    args = (np.ascontiguousarray(start, dtype=float), np.ascontiguousarray(goal, dtype=float),
+            float(g_goal), np.ascontiguousarray(obstacles, dtype=float).reshape(-1, dims),
+            float(g_obs), float(d_o), np.ascontiguousarray(quarks, dtype=float).reshape(-1, dims),
+            float(g_q), float(d_q), float(step), int(i_max), int(n_stag), float(stag_radius),
+            int(max_quarks), float(goal_range))
+    if not (use_numba and HAVE_NUMBA):
+        return _predict_python(*args)
+    paths, n_paths, length, qbuf, lo, hi, resolved, reached = _predict_numba(*args)
+    abandoned = [paths[k, : int(i_max) + 1] for k in range(n_paths - 1)]
+    return paths[n_paths - 1, :length], qbuf[lo:hi], abandoned, bool(resolved), bool(reached)
+
+
+if HAVE_NUMBA:
+    @_jit
+    def _field_numba(pos, goal, g_goal, obstacles, g_obs, d_o):  # pragma: no cover - compiled
+        f = np.zeros(pos.shape[0])
+        goal2 = np.empty((1, pos.shape[0]))
+        goal2[0] = goal
+        _coulomb_acc(pos, goal2, np.inf, g_goal, f)
+        _coulomb_acc(pos, obstacles, d_o, g_obs, f)
+        return f
+
+
+def field_force(pos, goal, g_goal: float, obstacles, g_obs: float, d_o: float,
+                use_numba: bool = True) -> np.ndarray:
+    """Eq. 2 at ``pos``: ``-g_goal S(goal) - g_obs S(obstacles within d_o)`` (S = coulomb_sum).
+
+    Bit for bit :func:`nodes.planner.apf.apf_force` without extra repulsors (gains
+    ``k_VG q_V q_G`` and ``k_VO q_V q_O``), one compiled call instead of numpy's dozen.
+    """
+    pos = np.ascontiguousarray(pos, dtype=float)
+    goal = np.ascontiguousarray(goal, dtype=float)
+    obstacles = np.ascontiguousarray(obstacles, dtype=float).reshape(-1, pos.shape[0])
+    if use_numba and HAVE_NUMBA:
+        return _field_numba(pos, goal, float(g_goal), obstacles, float(g_obs), float(d_o))
+    f = np.zeros_like(pos)
+    f = f - g_goal * coulomb_sum(pos, goal[None, :])
+    return f - g_obs * coulomb_sum(pos, obstacles, d_o)

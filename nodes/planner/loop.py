@@ -14,12 +14,14 @@
   of wall time -> a zero command every ``STALE_REPEAT_S``.
 - A goal -> :meth:`Planner.set_goal` and a ``ready`` status with the goal's stamp.
 - Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
-  and ``planner/status``.
+  and ``planner/status``. With ``send_command`` the command goes out through it as soon as
+  it exists (before the debug state is built; the returned list then holds the rest).
 """
 
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Callable
 
 from nodes.planner.core import NS_PER_S, Planner
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
@@ -31,8 +33,10 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
-                 pair_timeout_s: float = 0.25, log=None, objects: bool = False):
+                 pair_timeout_s: float = 0.25, log=None, objects: bool = False,
+                 send_command: Callable[[Twist], None] | None = None):
         self.planner, self.realtime, self.use_objects = planner, realtime, objects
+        self.send_command = send_command
         self.stale_ns = int(stale_timeout_s * NS_PER_S)
         self.stale_s, self.pair_timeout_s = stale_timeout_s, pair_timeout_s
         self.log = log
@@ -105,8 +109,13 @@ class PlannerLoop:
             return self._stale(scan, odom)
         if objects is not None and scan.stamp_ns - objects.stamp_ns > self.stale_ns:
             objects = None
-        cmd, state, status = self.planner.step(scan, odom, objects)
-        return [("cmd_vel", cmd), ("planner/state", state), ("planner/status", status)]
+        cmd, finish = self.planner.command(scan, odom, objects)
+        out = [("cmd_vel", cmd)]
+        if self.send_command is not None:  # out now: the driver waits for it in lockstep
+            self.send_command(cmd)
+            out = []
+        state, status = finish()
+        return [*out, ("planner/state", state), ("planner/status", status)]
 
     def _stale(self, scan: Scan, odom: Odometry | None) -> list:
         self.stale_cycles += 1

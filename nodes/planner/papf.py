@@ -34,9 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.planner.apf import EPS_M, APFParams, apf_force
+from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
-from nodes.planner.kernels import rollout, tail_stagnation
+from nodes.planner.kernels import field_force, predict_paths
 
 
 @dataclass(frozen=True)
@@ -91,34 +91,25 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
     """Algorithm 1 with the top-quark loop of Sec. III-B (``quarks``: already placed ones).
 
     At most ``M`` repetitions (new quarks) per call and at most ``M`` quarks in use: a new
-    quark beyond ``M`` replaces the oldest one.
+    quark beyond ``M`` replaces the oldest one. The whole loop is one kernel call
+    (:func:`nodes.planner.kernels.predict_paths`).
     """
     g_goal = apf.k_vg * apf.q_v * apf.q_g
     g_obs = apf.k_vo * apf.q_v * apf.q_o
     g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
     dims = len(pos)
     quarks = np.zeros((0, dims)) if quarks is None else np.asarray(quarks, float).reshape(-1, dims)
-    quarks = quarks[max(0, quarks.shape[0] - pp.max_quarks):]
-    # Points beyond (steps * Delta + d_o) can never be within d_o of a predicted point:
-    # dropping them changes no result (their terms are skipped anyway), only the time.
-    reach = (pp.i_max + pp.n_stag) * pp.step_m + apf.d_o + 1e-6
-    rel = obstacles - pos
-    obstacles = obstacles[np.sum(rel * rel, axis=1) <= reach * reach]
-    abandoned = []
-    while True:
-        path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
-                                pp.step_m, pp.i_max + pp.n_stag, pp.step_m, pp.use_numba,
-                                pp.pull_range)
-        if reached:
-            return Prediction(path, quarks, abandoned, True, True)
-        main = path[: pp.i_max + 1]
-        stuck, mean = tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
-        if not stuck:
-            return Prediction(main, quarks, abandoned, True, False)
-        if len(abandoned) >= pp.max_quarks or pp.max_quarks <= 0:
-            return Prediction(main, quarks, abandoned, False, False)
-        abandoned.append(main)
-        quarks = np.vstack([quarks[max(0, quarks.shape[0] - pp.max_quarks + 1):], mean])
+    if not pp.use_numba:
+        # Points beyond (steps * Delta + d_o) can never be within d_o of a predicted point:
+        # dropping them changes no result (their terms are skipped anyway), only the time.
+        # (The numba kernel does the same, finer, every few steps.)
+        reach = (pp.i_max + pp.n_stag) * pp.step_m + apf.d_o + 1e-6
+        rel = obstacles - pos
+        obstacles = obstacles[np.sum(rel * rel, axis=1) <= reach * reach]
+    path, quarks, abandoned, resolved, reached = predict_paths(
+        pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q, pp.step_m, pp.i_max,
+        pp.n_stag, pp.stag_radius, pp.max_quarks, pp.pull_range, pp.use_numba)
+    return Prediction(path, quarks, abandoned, resolved, reached)
 
 
 def temporary_goal(pos, direction, path: np.ndarray, tie_tol: float) -> np.ndarray:
@@ -173,8 +164,10 @@ class PAPFStrategy:
         self.quarks = None
 
     def warm_up(self, apf: APFParams) -> None:
-        """Compile the kernel (numba) before the node declares itself ready."""
+        """Compile the kernels (numba) before the node declares itself ready."""
         predict(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf, self.params)
+        field_force(np.zeros(2), np.array([1.0, 0.0]), 1.0, np.array([[0.5, 0.1]]), 1.0, 0.5,
+                    self.params.use_numba)
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
@@ -183,14 +176,16 @@ class PAPFStrategy:
         kept = self.quarks if pp.persist_quarks else None
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
-        if pred.resolved:
-            f_apf = apf_force(pos, goal, obstacles, apf)          # eq. 2: the direction line
+        g_goal, g_obs = apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o
+        if pred.resolved:                                         # eq. 2: the direction line
+            f_apf = field_force(pos, goal, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
             direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
             target = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
             mode = "bypass" if pred.quarks.shape[0] else "drive"
         else:   # no stagnation-free path after M repetitions: eq. 7 with the global goal
             target, mode = goal, "unresolved"
-        force = apf_force(pos, target, obstacles, apf) + quark_force(pos, pred.quarks, apf, pp)
+        force = (field_force(pos, target, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
+                 + quark_force(pos, pred.quarks, apf, pp))
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
                     top_quarks=pred.quarks, searching=bool(pred.abandoned))

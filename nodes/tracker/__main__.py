@@ -40,7 +40,12 @@ def params_from(items: list[str]) -> TrackerParams:
                               f"{', '.join(fields)}")
         kind = type(fields[name].default)
         try:
-            values[name] = kind(text)
+            if kind is bool:
+                if text.lower() not in ("true", "false", "1", "0"):
+                    raise ValueError(text)
+                values[name] = text.lower() in ("true", "1")
+            else:
+                values[name] = kind(text)
         except ValueError:
             raise ConfigError(f"--set {item!r}: {text!r} is not a {kind.__name__}") from None
     return TrackerParams(**values)
@@ -48,7 +53,9 @@ def params_from(items: list[str]) -> TrackerParams:
 
 def run(args: argparse.Namespace, params: TrackerParams) -> int:
     log = setup_logging(NODE_NAME, args.log_level)
-    loop = TrackerLoop(Tracker(params), args.realtime, args.pair_timeout)
+    tracker = Tracker(params)
+    tracker.warm_up()                      # JIT-compile before ready, not in the first cycle
+    loop = TrackerLoop(tracker, args.realtime, args.pair_timeout)
     with open_node(NODE_NAME, args, log) as node:
         for _, topic, _ in (p for p in PORTS if p[0] == "in"):
             node.subscribe(topic)

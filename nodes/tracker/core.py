@@ -46,6 +46,7 @@ from scipy.optimize import linear_sum_assignment
 
 from common.errors import ConfigError
 from common.units import NS_PER_S
+from nodes.tracker import kernels
 from schemas.messages import Objects, ObjectTrack, Odometry, Scan
 
 GATED_COST = 1e6   # assignment cost of a pair beyond the gate (rejected afterwards)
@@ -69,6 +70,7 @@ class TrackerParams:
     confirm_hits: int = 3          # [-] hits before a track is published
     max_misses: int = 5            # [-] scans without a hit before a track is dropped
     moving_speed: float = 0.05     # [m/s] slower tracks keep their heading
+    use_numba: bool = True         # the compiled clustering pass when numba is installed
 
     def __post_init__(self) -> None:
         for name in ("max_range", "cluster_radius", "breakpoint_angle", "range_sd", "max_extent", "gate", "accel_sd", "meas_sd",
@@ -155,20 +157,22 @@ def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
 def cluster_points(sp: ScanPoints, p: TrackerParams) -> list[Cluster]:
     """Object-sized clusters of a scan (see module doc, step 2), in scan order.
 
-    Each cluster is measured by :func:`_measure`'s box, for all segments at once.
+    With numba (and ``use_numba``) one compiled pass (:mod:`nodes.tracker.kernels`),
+    else :func:`_breaks` and :func:`_measure` for all segments at once in numpy.
     """
     n = len(sp.beams)
     if n < p.min_points:
         return []
-    order, starts = _breaks(sp, p)
-    counts = np.diff(starts, append=n)
-    big = counts >= p.min_points
-    if not big.any():
-        return []
-    xy = sp.xy[order]
-    boxes = _measure(xy, starts, counts)
-    return [Cluster(*box) for box, keep in zip(boxes.tolist(), big.tolist(), strict=True)
-            if keep and box[3] <= p.max_extent]
+    if p.use_numba and kernels.HAVE_NUMBA:
+        boxes, counts = kernels.segment_boxes(
+            sp.xy, sp.ranges, sp.beams.astype(np.int64), sp.beam_count, sp.increment,
+            p.cluster_radius, p.breakpoint_angle, p.range_sd, p.max_beam_gap)
+    else:
+        order, starts = _breaks(sp, p)
+        counts = np.diff(starts, append=n)
+        boxes = _measure(sp.xy[order], starts, counts)
+    return [Cluster(*box) for box, count in zip(boxes.tolist(), counts.tolist(), strict=True)
+            if count >= p.min_points and box[3] <= p.max_extent]
 
 
 def _measure(xy: np.ndarray, starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -219,6 +223,14 @@ class Tracker:
         self.t_ns: int | None = None
         self._next_id = 1
         self._model: tuple | None = None     # (dt, F, F^T, Q) of the last prediction
+
+    def warm_up(self) -> None:
+        """Compile the numba kernel (a few seconds, once per machine with its cache) now
+        rather than in the first cycle; the tracker's state is untouched."""
+        if self.params.use_numba and kernels.HAVE_NUMBA:
+            xy = np.array([[1.0, 0.0], [1.0, 0.01], [1.0, 0.02]])
+            sp = ScanPoints(xy, np.ones(3), np.arange(3), 360, math.radians(1.0))
+            cluster_points(sp, self.params)
 
     def update(self, scan: Scan, odom: Odometry) -> Objects:
         """One cycle on ``scan`` taken at pose ``odom``; the confirmed tracks, scan-stamped."""

@@ -15,7 +15,8 @@ import bench
 
 BENCHES = {
     "planner": "planner cycle time p50/p99 per planner, incl. the PAPF worst case (M = 10)",
-    "sim": "sim-time / wall-time ratio of the lockstep driver + LiDAR loop",
+    "sim": "sim-time / wall-time of papf run (full stack, CPU per process); --loop: driver + LiDAR",
+    "sweep": "full-stack runs per hour of a sweep at --workers 1 and 2 (Dask)",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
     "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",

@@ -1,4 +1,4 @@
-"""``papf experiment energy | paper-tests | random``: many runs, a table, plots.
+"""``papf experiment energy | paper-tests | random | traffic``: many runs, a table, plots.
 
 ``energy`` is the PAPF paper's energy experiment (IV-C) through the process stack,
 recorded (:mod:`papf.experiments.energy`); ``paper-tests`` every paper world with every
@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
-from nodes.planner.registry import PLANNERS
 from papf.experiments.energy import TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
 
@@ -26,6 +25,7 @@ def register(sub) -> None:
     _add_energy(exp)
     _add_paper_tests(exp)
     _add_random(exp)
+    _add_traffic(exp)
 
 
 def _add_energy(exp) -> None:
@@ -44,7 +44,26 @@ def _add_energy(exp) -> None:
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
                    help="the live meter's model (default motor)")
+    _add_sweep(p)
     p.set_defaults(func=cmd_energy)
+
+
+def _add_sweep(p) -> None:
+    g = p.add_argument_group("sweep (docs/sweeps.md)")
+    g.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="runs at once on a local Dask cluster of N worker processes "
+                        "(default 1: one after the other, no Dask)")
+    g.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                   help="run on an existing Dask cluster; results are gathered here")
+
+
+def sweep_options(args):
+    """The sweep options of ``--workers`` / ``--scheduler`` (ConfigError on a bad value)."""
+    from papf.experiments.sweep import SweepOptions
+
+    opts = SweepOptions(workers=args.workers, scheduler=args.scheduler)
+    opts.validate()
+    return opts
 
 
 def _add_common(p, default_out: str) -> None:
@@ -54,6 +73,7 @@ def _add_common(p, default_out: str) -> None:
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
+    _add_sweep(p)
 
 
 def _add_paper_tests(exp) -> None:
@@ -83,8 +103,40 @@ def _add_random(exp) -> None:
     p.set_defaults(func=cmd_random, mode="offline")
 
 
+def _add_traffic(exp) -> None:
+    p = exp.add_parser("traffic", help="IAPF (truth and tracker tracks), APF, PAPF, AR-APF on "
+                                       "the road-* worlds, through the stack",
+                       description="Every road-* world with IAPF (--objects truth and tracker) "
+                                   "and APF, PAPF, AR-APF, each run recorded; writes traffic.md "
+                                   "and traffic.csv (outcome, collisions, left_road, lane "
+                                   "changes, speeds) into --out.")
+    p.add_argument("--out", default="traffic", metavar="DIR", help="output directory")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument("--timeout", type=float, default=150.0, metavar="S",
+                   help="sim-time limit per run (default 150)")
+    p.add_argument("--worlds", help="comma-separated subset of the road-* worlds")
+    p.set_defaults(func=cmd_traffic)
+
+
+def cmd_traffic(args) -> int:
+    from papf.experiments.traffic import ROAD_WORLDS, run_traffic  # zenoh, mcap: when run
+
+    worlds = ROAD_WORLDS
+    if args.worlds:
+        worlds = tuple(w.strip() for w in args.worlds.split(",") if w.strip())
+        bad = [w for w in worlds if w not in ROAD_WORLDS]
+        if bad:
+            raise ConfigError(f"--worlds: {bad} are not road worlds; valid: {list(ROAD_WORLDS)}")
+    run_traffic(args.out, worlds, seed=args.seed, timeout_s=args.timeout,
+                echo=lambda line: print(line, file=sys.stderr, flush=True))
+    print((Path(args.out) / "traffic.md").read_text())
+    return 0
+
+
 def planner_list(text: str) -> list[str]:
     """``"apf,papf"`` -> ``["apf", "papf"]``; ConfigError names the unknown ones."""
+    from nodes.planner.registry import PLANNERS  # numba: not when building the parser
+
     names = [p.strip() for p in text.split(",") if p.strip()]
     bad = [p for p in names if p not in PLANNERS]
     if bad or not names:
@@ -98,7 +150,8 @@ def cmd_energy(args) -> int:
     planners = tuple(p.strip() for p in args.planners.split(",") if p.strip())
     exp = EnergyExperiment(out=Path(args.out), runs=args.runs, planners=planners, seed=args.seed,
                            world=args.world, timeout_s=args.timeout,
-                           energy_model=args.energy_model)  # validated by run_experiment
+                           energy_model=args.energy_model,
+                           sweep=sweep_options(args))  # validated by run_experiment
     result = run_experiment(exp)
     print_summary(result)
     return result.exit_code
@@ -114,7 +167,8 @@ def cmd_paper_tests(args) -> int:
         if bad:
             raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
     run_paper_tests(args.out, planner_list(args.planners), args.seed,
-                    "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set)
+                    "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set,
+                    sweep=sweep_options(args))
     print((Path(args.out) / "paper-tests.md").read_text())
     print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
     return 0
@@ -124,7 +178,7 @@ def cmd_random(args) -> int:
     from papf.experiments.random_worlds import run_random  # pybullet, matplotlib: when run
 
     run_random(args.out, args.n, args.seed, planner_list(args.planners), args.mode, args.timeout,
-               args.plots, sets=args.set)
+               args.plots, sets=args.set, sweep=sweep_options(args))
     print((Path(args.out) / "random.md").read_text())
     print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
     return 0

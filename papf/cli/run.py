@@ -24,9 +24,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument("--port", type=int, help="embedded router port (default 7447, or a free one)")
     p.add_argument("--namespace", default="rosbot", help="robot key namespace")
-    p.add_argument("--zenoh-mode", choices=("client", "peer"), default="client",
-                   help="nodes' Zenoh mode: client (all through the router, default) or peer "
-                        "(direct loopback links too; a few %% faster)")
+    p.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
+                   help="nodes' Zenoh mode: peer (direct loopback links, the launcher's router "
+                        "only for discovery; default) or client (all through the router)")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
     add_planner_settings(p)
     p.add_argument("--continue-on-collision", action="store_true",

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from common.errors import ConfigError
+from papf.experiments.sweep import SweepOptions
 
 if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `papf --help` stays fast
     from rich.console import Console
@@ -48,6 +49,7 @@ class EnergyExperiment:
     world: str = WORLD
     timeout_s: float = TIMEOUT_S
     energy_model: str = "motor"
+    sweep: SweepOptions = SweepOptions()   # how the runs are spread (papf.experiments.sweep)
 
 
 @dataclass(frozen=True)
@@ -209,6 +211,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     run_fn = run_fn or run
 
     validate(exp)
+    exp.sweep.validate()
     console = console or Console(stderr=True)
     world = load_world(exp.world)
     out = Path(exp.out)
@@ -216,6 +219,11 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     specs = plan(exp)
     _warn_foreign_files(out, specs, console)
     wall0 = time.monotonic()
+    if exp.sweep.distributed:
+        results = _run_spread(exp, specs, console)
+        report = build_report([s.path for s, _r in results], out)
+        return ExperimentResult(results, report, time.monotonic() - wall0,
+                                _mismatches(results, report))
     results: list[tuple[RunSpec, RunResult]] = []
     columns = (TextColumn("[bold]energy experiment[/]"), BarColumn(bar_width=16), MofNCompleteColumn(),
                TimeElapsedColumn(), TextColumn("{task.fields[live]}"))
@@ -235,6 +243,41 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     report = build_report([s.path for s, _r in results], out)
     wall = time.monotonic() - wall0
     return ExperimentResult(results, report, wall, _mismatches(results, report))
+
+
+def _run_spread(exp: EnergyExperiment, specs: list[RunSpec], console: Console) -> list:
+    """Every run on Dask (:mod:`papf.experiments.sweep`), recorded where it runs, each file
+    written here under its usual name: the report sees the same files as a sequential one."""
+    from papf.experiments.sweep import map_runs
+
+    jobs = [(exp, spec, i) for i, spec in enumerate(specs)]
+    done = map_runs(energy_job, jobs, exp.sweep, label=lambda j: f"{j[1].name} seed {j[1].seed}",
+                    title="energy experiment")
+    results = []
+    for spec, (result, data) in zip(specs, done, strict=True):
+        if data is not None:
+            spec.path.write_bytes(data)
+        results.append((spec, result))
+        console.print(_result_line(spec, result), highlight=False)
+    return results
+
+
+def energy_job(job: tuple[EnergyExperiment, RunSpec, int]) -> tuple[RunResult, bytes | None]:
+    """One recorded run of a spread experiment: (its result, its recording's bytes)."""
+    import dataclasses
+    import tempfile
+
+    from papf.experiments.sweep import run_namespace
+    from papf.runner import run
+    from papf.supervisor import free_port
+
+    exp, spec, index = job
+    with tempfile.TemporaryDirectory(prefix="papf-energy-") as tmp:
+        local = dataclasses.replace(spec, path=Path(tmp) / spec.path.name)
+        cfg = dataclasses.replace(run_config(exp, local, free_port()),
+                                  namespace=run_namespace(index))
+        result = run(cfg)
+        return result, (local.path.read_bytes() if local.path.exists() else None)
 
 
 def _warn_foreign_files(out: Path, specs: Sequence[RunSpec], console: Console) -> None:

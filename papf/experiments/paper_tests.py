@@ -18,18 +18,19 @@ Sec. 4 give outcomes only.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from common.errors import ConfigError
+from papf.experiments.sweep import SweepOptions, map_runs
 from papf.experiments.trials import (
     markdown_table,
-    progress_bar,
     quiet_runner_logs,
-    run_offline,
-    run_stack,
+    run_job,
+    trial_job,
     trial_line,
     write_csv,
 )
@@ -128,10 +129,11 @@ def acceptance(trials) -> list[str]:
 def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS, seed: int = 0,
                     mode: str = "stack", worlds: Sequence[str] = PAPER_WORLDS,
                     timeout_s: float = 300.0, progress: bool | None = None,
-                    sets: Sequence[str] = ()) -> list:
+                    sets: Sequence[str] = (), sweep: SweepOptions | None = None) -> list:
     """Run every (world, planner); write the table, CSV and plots into ``out``; return the trials.
 
-    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
+    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
+    ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
     """
     from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
@@ -140,24 +142,23 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()
-    trials = []
-    with progress_bar(progress) as bar:
-        task = bar.add_task("paper tests", total=len(worlds) * len(planners))
-        for name in worlds:
-            world = load_world(name)
-            for planner in planners:
-                bar.update(task, description=f"{name} {planner}")
-                if mode == "offline":
-                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets))
-                else:
-                    trial = run_stack(world_path(name), planner, seed, timeout_s,
-                                      record=out / "recordings" / f"{name}-{planner}.mcap",
-                                      planner_args=[a for kv in sets for a in ("--set", kv)])
-                trials.append(trial)
-                bar.advance(task)
-                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
-            paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}
-            plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
+    jobs = [trial_job(load_world(name), world_path(name), planner=planner, seed=seed, mode=mode,
+                      timeout_s=timeout_s, sets=tuple(sets), record=mode == "stack")
+            for name in worlds for planner in planners]
+    jobs = [dataclasses.replace(job, index=i) for i, job in enumerate(jobs)]
+    opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
+    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="paper tests",
+                    line=lambda _j, r: trial_line(r[0]))
+    trials = [trial for trial, _ in done]
+    for job, (_trial, data) in zip(jobs, done, strict=True):
+        if data is not None:  # recorded where it ran; kept here
+            rec = out / "recordings" / f"{job.world.name}-{job.planner}.mcap"
+            rec.parent.mkdir(parents=True, exist_ok=True)
+            rec.write_bytes(data)
+    for name in worlds:
+        world = load_world(name)
+        paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}
+        plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
     write_csv([t.row() for t in trials], out / "paper-tests.csv")
     text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, table_rows(trials))
             + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")

@@ -16,16 +16,17 @@ The planners' parameters are their defaults: nothing is tuned to these worlds.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
 from common.errors import ConfigError
+from papf.experiments.sweep import SweepOptions, map_runs
 from papf.experiments.trials import (
     markdown_table,
-    progress_bar,
     quiet_runner_logs,
-    run_offline,
-    run_stack,
+    run_job,
+    trial_job,
     trial_line,
     write_csv,
 )
@@ -83,10 +84,11 @@ def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected
 def run_random(out: str | Path, n: int = 50, seed: int = 0,
                planners: Sequence[str] = DEFAULT_PLANNERS, mode: str = "offline",
                timeout_s: float = 300.0, plots: bool = False, progress: bool | None = None,
-               sets: Sequence[str] = ()):
+               sets: Sequence[str] = (), sweep: SweepOptions | None = None):
     """Run the experiment; write its files into ``out``; return (trials, summary rows).
 
-    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``).
+    ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
+    ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
     """
     from papf.plots import plot_paths  # matplotlib: only when the experiment runs
 
@@ -99,28 +101,27 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     quiet_runner_logs()
     worlds, rejected = generate_solvable(n, seed)
     bottleneck = {w.name: bottleneck_width(w) for w in worlds}
-    trials = []
-    with progress_bar(progress) as bar:
-        task = bar.add_task("random worlds", total=len(worlds) * len(planners))
+    jobs = []
+    for world in worlds:
+        file = out / "worlds" / f"{world.name}.toml"
+        file.write_text(world_to_toml(world))
+        jobs += [trial_job(world, file, planner=planner, seed=seed, mode=mode, timeout_s=timeout_s,
+                           sets=tuple(sets), record=plots and mode == "stack", index=len(jobs) + k)
+                 for k, planner in enumerate(planners)]
+    opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
+    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="random worlds",
+                    line=lambda _j, r: trial_line(r[0]))
+    trials = [trial for trial, _ in done]
+    for job, (_trial, data) in zip(jobs, done, strict=True):
+        if data is not None:  # recorded where it ran; kept here
+            rec = out / "recordings" / f"{job.world.name}-{job.planner}.mcap"
+            rec.parent.mkdir(parents=True, exist_ok=True)
+            rec.write_bytes(data)
+    if plots:
         for world in worlds:
-            file = out / "worlds" / f"{world.name}.toml"
-            file.write_text(world_to_toml(world))
-            mine = []
-            for planner in planners:
-                bar.update(task, description=f"{world.name} {planner}")
-                if mode == "offline":
-                    trial = run_offline(world, planner, seed, timeout_s, params=list(sets))
-                else:
-                    rec = out / "recordings" / f"{world.name}-{planner}.mcap" if plots else None
-                    trial = run_stack(file, planner, seed, timeout_s, record=rec,
-                                      planner_args=[a for kv in sets for a in ("--set", kv)])
-                mine.append(trial)
-                bar.advance(task)
-                bar.console.print(trial_line(trial), highlight=False, markup=False, soft_wrap=True)
-            trials += mine
-            if plots:
-                plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},
-                           out / "plots" / f"{world.name}.png", world.name)
+            mine = [t for t in trials if t.world == world.name]
+            plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},
+                       out / "plots" / f"{world.name}.png", world.name)
     summary = summarize(trials, bottleneck)
     write_csv([{**t.row(), "bottleneck_m": round(bottleneck[t.world], 3)} for t in trials],
               out / "random.csv")

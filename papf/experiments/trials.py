@@ -47,11 +47,13 @@ class Trial:
 
     def row(self) -> dict:
         """The CSV row (no path)."""
+        # No wall time: a row depends on the run alone, so a sweep's CSV is byte-identical
+        # however its runs were spread (papf.experiments.sweep).
         return {"world": self.world, "planner": self.planner, "seed": self.seed, "mode": self.mode,
                 "outcome": self.outcome, "duration_s": round(self.duration_s, 3),
                 "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
                 "min_clearance_m": _r(self.min_clearance_m), "charge_mAh": _r(self.charge_mAh),
-                "wall_time_s": round(self.wall_time_s, 2), "reason": self.reason}
+                "reason": self.reason}
 
 
 def _r(x: float, nd: int = 3):
@@ -71,7 +73,8 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
 
 
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
-              record: str | Path | None = None, planner_args: Sequence[str] = ()) -> Trial:
+              record: str | Path | None = None, planner_args: Sequence[str] = (),
+              objects: str | None = None, namespace: str = "rosbot") -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
     from papf.runner import RunConfig, run  # zenoh: only for stack runs
 
@@ -80,12 +83,56 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
         Path(record).unlink(missing_ok=True)
     cfg = RunConfig(world=str(world_file), planner=planner, seed=seed, timeout_s=timeout_s,
                     record=str(record) if record else None, port=free_port(), progress=False,
-                    planner_args=list(planner_args))
+                    planner_args=list(planner_args), objects=objects, namespace=namespace)
     res = run(cfg)
     path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
     return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,
                  res.collisions, res.reason, charge_mAh=res.charge_mAh,
                  wall_time_s=res.wall_time_s, path=path)
+
+
+@dataclass(frozen=True)
+class TrialJob:
+    """One run of a sweep, self-contained so any machine of a Dask cluster can make it."""
+
+    world: World                    # offline runs use it as is
+    world_file: str                 # stack runs: the world file's name and text (the nodes
+    world_text: str                 # load it on the machine that runs them)
+    planner: str
+    seed: int
+    mode: str                       # offline | stack
+    timeout_s: float = 300.0
+    sets: tuple[str, ...] = ()      # name=value planner settings
+    record: bool = False            # stack: record it and send the file back
+    index: int = 0                  # position in the sweep (its key namespace)
+
+    @property
+    def label(self) -> str:
+        return f"{self.world.name} {self.planner} seed {self.seed}"
+
+
+def trial_job(world: World, world_file: str | Path, text: str | None = None, **kw) -> TrialJob:
+    """A job for ``world`` whose file is ``world_file`` (its text read unless given)."""
+    return TrialJob(world, Path(world_file).name,
+                    Path(world_file).read_text(encoding="utf-8") if text is None else text, **kw)
+
+
+def run_job(job: TrialJob) -> tuple[Trial, bytes | None]:
+    """Make one sweep run: (the trial, the recording's bytes when ``job.record``)."""
+    import tempfile
+
+    from papf.experiments.sweep import run_namespace
+
+    if job.mode == "offline":
+        return run_offline(job.world, job.planner, job.seed, job.timeout_s, list(job.sets)), None
+    with tempfile.TemporaryDirectory(prefix="papf-sweep-") as tmp:
+        file = Path(tmp) / job.world_file
+        file.write_text(job.world_text, encoding="utf-8")
+        rec = Path(tmp) / "run.mcap" if job.record else None
+        trial = run_stack(file, job.planner, job.seed, job.timeout_s, record=rec,
+                          planner_args=[a for kv in job.sets for a in ("--set", kv)],
+                          namespace=run_namespace(job.index))
+        return trial, (rec.read_bytes() if rec is not None and rec.exists() else None)
 
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:

@@ -1,0 +1,53 @@
+"""Sweeps on Dask (papf.experiments.sweep): the same CSV however the runs are spread."""
+
+import pytest
+
+from common.errors import ConfigError
+from papf.experiments.paper_tests import run_paper_tests
+from papf.experiments.random_worlds import run_random
+from papf.experiments.sweep import SweepOptions, map_runs, run_namespace
+
+
+def _square(x: int) -> int:
+    return x * x
+
+
+def test_options_name_what_is_wrong():
+    for bad, what in ((SweepOptions(workers=0), "--workers"),
+                      (SweepOptions(scheduler="10.0.0.5:8786"), "tcp://HOST:PORT"),
+                      (SweepOptions(workers=2, scheduler="tcp://h:8786"), "exclude")):
+        with pytest.raises(ConfigError, match=what):
+            bad.validate()
+    assert SweepOptions(scheduler="tcp://10.0.0.5:8786").distributed
+    assert not SweepOptions().distributed
+
+
+def test_sequential_map_keeps_job_order_and_prints_a_line_per_run(capsys):
+    assert map_runs(_square, [3, 1, 2], SweepOptions(progress=False)) == [9, 1, 4]
+    assert capsys.readouterr().err.count("\n") == 3          # piped: one line per run
+    assert len({run_namespace(i) for i in range(100)}) == 100
+
+
+def test_local_cluster_map_keeps_job_order():
+    assert map_runs(_square, list(range(6)), SweepOptions(workers=2, progress=False)) == [
+        x * x for x in range(6)]
+
+
+def test_offline_random_sweep_same_csv_with_two_workers(tmp_path):
+    for workers in (1, 2):
+        run_random(tmp_path / f"w{workers}", n=2, seed=3, planners=("apf", "papf"),
+                   mode="offline", timeout_s=60, progress=False, sweep=SweepOptions(workers))
+    assert (tmp_path / "w1" / "random.csv").read_bytes() == (tmp_path / "w2" / "random.csv").read_bytes()
+
+
+@pytest.mark.e2e
+def test_stack_sweep_same_csv_with_two_workers(tmp_path):
+    """Two full-stack runs at once (own router ports and namespaces): the CSV of a
+    sequential sweep, byte for byte, and every recording gathered here."""
+    for workers in (1, 2):
+        run_paper_tests(tmp_path / f"w{workers}", ("apf", "papf"), 0, "stack", ("papf-test-1",),
+                        timeout_s=8.0, progress=False, sweep=SweepOptions(workers))
+    one, two = (tmp_path / f"w{w}" / "paper-tests.csv" for w in (1, 2))
+    assert one.read_bytes() == two.read_bytes()
+    assert sorted(p.name for p in (tmp_path / "w2" / "recordings").iterdir()) == [
+        "papf-test-1-apf.mcap", "papf-test-1-papf.mcap"]
