@@ -4,7 +4,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 PY      = $(VENV)/bin/python
 WORLD  ?= energy
-PLANNER ?= apf
+PLANNER ?= papf
 
 .PHONY: demo test lint coverage setup clean
 setup: $(VENV)/.installed
@@ -16,6 +16,9 @@ $(VENV)/.installed: pyproject.toml
 	touch $@
 
 demo: setup
+	@echo "papf run --world $(WORLD) --planner $(PLANNER): the whole stack, as separate processes"
+	@echo "watch a run live: in another terminal, while .venv/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime runs:"
+	@echo "  .venv/bin/papf topic list   |   .venv/bin/papf topic echo planner/status   |   .venv/bin/papf topic hz scan"
 	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER)
 
 test: setup

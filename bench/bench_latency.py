@@ -27,6 +27,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from common.ports import plain
+
 PY = sys.executable
 ROOT = Path(__file__).resolve().parent.parent
 NS = "benchlat"
@@ -106,7 +108,7 @@ def latencies(steps: list[dict], wheel: list[dict]) -> list[float]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="papf bench latency", description=plain(__doc__.splitlines()[0]))
     ap.add_argument("--probes", type=int, default=40, help="steps up (and as many down)")
     ap.add_argument("--split", choices=("auto", "netns", "loopback"), default="auto")
     ap.add_argument("--probe", metavar="OUT", help=argparse.SUPPRESS)

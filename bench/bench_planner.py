@@ -27,6 +27,7 @@ import time
 
 import numpy as np
 
+from common.ports import plain
 from nodes.planner.registry import PLANNERS, make_planner
 from papf.toysim import box_segments, cast_scan, toy_world
 from schemas.messages import Goal, Odometry
@@ -85,7 +86,7 @@ def _r(x) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="papf bench planner", description=plain(__doc__.split("\n")[0]))
     ap.add_argument("--cycles", type=int, default=300)
     args = ap.parse_args()
     print(json.dumps({"machine": platform.processor() or platform.machine(),

@@ -30,6 +30,7 @@ sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
+from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.supervisor import Supervisor, free_port, wait_port  # noqa: E402
 from schemas import Keys  # noqa: E402
@@ -103,7 +104,7 @@ def bench_stack(world: str, planner: str, seed: int, zenoh_mode: str) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--loop", action="store_true", help="the driver + LiDAR loop alone")
     parser.add_argument("--sim-s", type=float, default=30.0, help="--loop: sim seconds to run (30)")
     parser.add_argument("--world", default="energy")

@@ -33,6 +33,7 @@ import time
 
 import numpy as np
 
+from common.ports import plain
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.tracker.core import Tracker, TrackerParams
 from nodes.tracker.kernels import HAVE_NUMBA
@@ -103,7 +104,7 @@ def _r3(x) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="papf bench tracker", description=plain(__doc__.split("\n")[0]))
     ap.add_argument("--world", action="append", help="world (repeatable; default: every road-*)")
     ap.add_argument("--seconds", type=float, default=30.0, help="sim time per world (30)")
     ap.add_argument("--match", type=float, default=1.0, help="track-to-truth match radius [m]")

@@ -20,6 +20,7 @@ are checked against them (tests/test_node_graph.py).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 
 Port = tuple[str, str, str]
@@ -58,3 +59,9 @@ def _table(title: str, ports: Sequence[Port]) -> str:
         shown = f"<bridge>/{key[len(BRIDGE):]}" if key.startswith(BRIDGE) else f"<ns>/{key}"
         lines.append(f"  {direction:<4} {shown:<34} {msg_type}")
     return "\n".join(lines)
+
+
+def plain(doc: str) -> str:
+    """A module docstring as ``--help`` text: RST markup (``code``, :mod:`x`) made plain."""
+    doc = re.sub(r":(?:mod|class|func|meth|data|attr):`~?([^`]+)`", r"\1", doc)
+    return re.sub(r"``([^`]+)``", r"\1", doc)

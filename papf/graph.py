@@ -36,11 +36,15 @@ OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks c
 OBJECT_PLANNERS = ("iapf",)              # planners that use tracks: their default is truth
 
 
-def objects_for(planner: str | None, objects: str | None) -> str:
-    """``--objects`` as given, else ``truth`` for a planner that uses tracks, else ``none``."""
+def objects_for(planner: str | None, objects: str | None,
+                allowed: tuple[str, ...] = OBJECTS) -> str:
+    """``--objects`` as given, else for a planner that uses tracks the first of ``truth``,
+    ``tracker`` the profile offers (``allowed``), else ``none``."""
     if objects is not None:
         return objects
-    return "truth" if planner in OBJECT_PLANNERS else "none"
+    if planner in OBJECT_PLANNERS:
+        return next((o for o in ("truth", "tracker") if o in allowed), "none")
+    return "none"
 # What the launcher of a run subscribes to and publishes (papf.run_sequence), besides the
 # profile's pose topic: it is a process of the graph too.
 LAUNCHER_PORTS: tuple[Port, ...] = (
@@ -74,6 +78,7 @@ class Profile:
     remote_nodes: tuple[str, ...] = ()      # nodes on the other host that a run waits for
     pose_topic: str = "odom"                # pose samples of the run summary
     defaults: dict = field(default_factory=dict)
+    objects: tuple[str, ...] = OBJECTS      # the --objects sources this host can serve
 
 
 @dataclass(frozen=True)
@@ -126,7 +131,7 @@ def load_profile(name_or_path: str) -> Profile:
                        bool(data.get("router", False)), tuple(data.get("listen", ())),
                        tuple(data.get("connect", ())), bool(data.get("run", False)),
                        tuple(data.get("remote_nodes", ())), data.get("pose_topic", "odom"),
-                       dict(data.get("defaults", {})))
+                       dict(data.get("defaults", {})), tuple(data.get("objects", OBJECTS)))
     except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(f"launch profile {str(path)!r} is invalid: {type(exc).__name__}: "
                           f"{exc} (see docs/architecture.md for the format)") from None
@@ -169,6 +174,10 @@ def template_values(prof: Profile, opt: LaunchOptions) -> dict[str, str]:
               **{k: str(v) for k, v in opt.values.items() if v is not None}}
     values["planner_args"] = " ".join(opt.planner_args)
     values["timeout_s"] = f"{opt.timeout_s:g}"
+    values["objects"] = objects_for(values.get("planner"), values.get("objects"), prof.objects)
+    if values["objects"] not in prof.objects:
+        raise ConfigError(f"profile {prof.name}: --objects {values['objects']} is not available "
+                          f"here; valid: {', '.join(prof.objects)}")
     if "world" in values:
         values["world_file"] = str(world_path(values["world"]))
         load_world(values["world"])                 # WorldError before anything starts

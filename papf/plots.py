@@ -2,8 +2,12 @@
 
 - :func:`draw_world` — obstacles (boxes/walls as their footprints, cylinders as discs,
   spheres as wireframes on a 3-D axes), start and goal (with its tolerance) on an axes.
-- :func:`plot_paths` — one figure: the world plus one line per labelled path, saved as PNG.
-  2-D worlds give a 2-D plot (equal axes), 3-D worlds a 3-D axes.
+- :func:`path_style` — line width, dash and end marker of the i-th path, so paths that lie
+  on top of each other stay visible (the first is widest and underneath);
+- :func:`view_extent` / :func:`set_view` — axes limits covering the world and every path,
+  padded, never a thin strip (a straight run gets a span of at least ``MIN_RATIO``);
+- :func:`footprint_corners` / :func:`draw_footprints` — the ROSbot's chassis rectangle
+  (``common.robot``) at poses along a path.
 
 Used by ``papf plan``, the paper-tests and random-world experiments and the energy report.
 """
@@ -11,7 +15,6 @@ Used by ``papf plan``, the paper-tests and random-world experiments and the ener
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 
 import matplotlib
 
@@ -21,6 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 
+from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from worlds import World  # noqa: E402
 
 OBSTACLE_COLOUR = "0.35"
@@ -28,13 +32,18 @@ GOAL_COLOUR = "tab:red"
 START_COLOUR = "tab:green"
 PATH_COLOURS = ("tab:blue", "tab:orange", "tab:purple", "tab:brown", "tab:pink", "tab:cyan",
                 "tab:olive", "tab:gray")
+LINESTYLES = ("-", "--", "-.", ":")
+MARKERS = ("o", "s", "^", "D", "v", "P")
+PAD_M = 0.4            # [m] margin around the world and the paths
+MIN_RATIO = 0.35       # [-] the shorter side of a view spans at least this much of the longer
+FOOTPRINT_EVERY_M = 1.0   # [m] of path between footprint outlines
 PLANNER_COLOURS = {"apf": "tab:blue", "papf": "tab:orange", "arapf": "tab:purple",
                    "wang": "tab:brown"}
 
 
 def new_axes(world: World, figsize=(7.0, 6.0)):
     """(figure, axes) suited to the world's dimension (3-D axes for 3-D worlds)."""
-    fig = plt.figure(figsize=figsize)
+    fig = plt.figure(figsize=figsize, layout="constrained")
     ax = fig.add_subplot(projection="3d") if world.dims == 3 else fig.add_subplot()
     return fig, ax
 
@@ -93,6 +102,69 @@ def colour_for(label: str, index: int) -> str:
     return PLANNER_COLOURS.get(head, PATH_COLOURS[index % len(PATH_COLOURS)])
 
 
+def path_style(i: int) -> dict:
+    """Matplotlib line keywords of the i-th path: wide solid underneath, narrower dashes on top."""
+    return {"lw": max(3.2 - 0.6 * i, 1.1), "ls": LINESTYLES[i % len(LINESTYLES)],
+            "zorder": 3 + 0.1 * i, "solid_capstyle": "butt"}
+
+
+def view_extent(world: World | None, paths=(), pad: float = PAD_M,
+                min_ratio: float = MIN_RATIO) -> tuple[float, float, float, float]:
+    """(x0, x1, y0, y1) [m] covering the world's start, goal, obstacles and every path."""
+    xs, ys = [], []
+    if world is not None:
+        xs += [world.start[0], world.goal[0]]
+        ys += [world.start[1], world.goal[1]]
+        for ob in world.obstacles_at(0.0):
+            pts = ob.corners() if ob.shape == "box" else [
+                (ob.center[0] + dx * ob.radius, ob.center[1] + dy * ob.radius)
+                for dx, dy in ((-1, -1), (1, 1))] if ob.center else []
+            xs += [p[0] for p in pts]
+            ys += [p[1] for p in pts]
+    for arr in paths:
+        arr = np.asarray(arr, dtype=float)
+        if arr.size:
+            xs += [float(np.nanmin(arr[:, 0])), float(np.nanmax(arr[:, 0]))]
+            ys += [float(np.nanmin(arr[:, 1])), float(np.nanmax(arr[:, 1]))]
+    if not xs:
+        return (-1.0, 1.0, -1.0, 1.0)
+    x0, x1, y0, y1 = min(xs) - pad, max(xs) + pad, min(ys) - pad, max(ys) + pad
+    w, h = x1 - x0, y1 - y0
+    if h < min_ratio * w:
+        y0, y1 = (y0 + y1 - min_ratio * w) / 2, (y0 + y1 + min_ratio * w) / 2
+    elif w < min_ratio * h:
+        x0, x1 = (x0 + x1 - min_ratio * h) / 2, (x0 + x1 + min_ratio * h) / 2
+    return x0, x1, y0, y1
+
+
+def set_view(ax, extent: tuple[float, float, float, float]) -> None:
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_aspect("equal", adjustable="box")
+
+
+def footprint_corners(x: float, y: float, yaw: float) -> np.ndarray:
+    """(4, 2) corners of the ROSbot's chassis rectangle at a pose [m] (common.robot)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    hx, hy = BODY_LENGTH_M / 2, BODY_WIDTH_M / 2
+    local = np.array([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
+    return local @ np.array([[c, s], [-s, c]]) + (x, y)
+
+
+def draw_footprints(ax, x, y, yaw, colour, every_m: float = FOOTPRINT_EVERY_M) -> None:
+    """Chassis outlines every ``every_m`` of path, and the final pose filled."""
+    x, y, yaw = (np.asarray(a, dtype=float) for a in (x, y, yaw))
+    if x.size == 0:
+        return
+    travelled = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    marks = np.searchsorted(travelled, np.arange(0.0, travelled[-1], every_m))
+    for k in marks:
+        ax.add_patch(Polygon(footprint_corners(x[k], y[k], yaw[k]), closed=True, fill=False,
+                             edgecolor=colour, lw=0.6, alpha=0.7, zorder=4))
+    ax.add_patch(Polygon(footprint_corners(x[-1], y[-1], yaw[-1]), closed=True, facecolor=colour,
+                         edgecolor="k", lw=0.6, alpha=0.6, zorder=4))
+
+
 def draw_paths(ax, paths: Mapping[str, np.ndarray], dims: int = 2) -> None:
     """One line per labelled path ((N, >=2) arrays [m]); the last point marked."""
     for i, (label, path) in enumerate(paths.items()):
@@ -100,27 +172,11 @@ def draw_paths(ax, paths: Mapping[str, np.ndarray], dims: int = 2) -> None:
         if arr.size == 0:
             continue
         c = colour_for(label, i)
+        style, marker = path_style(i), MARKERS[i % len(MARKERS)]
         if dims == 3:
-            ax.plot(arr[:, 0], arr[:, 1], arr[:, 2], color=c, lw=1.6, label=label)
-            ax.scatter(arr[-1, 0], arr[-1, 1], arr[-1, 2], color=c, marker="x", s=30)
+            ax.plot(arr[:, 0], arr[:, 1], arr[:, 2], color=c, label=label, **style)
+            ax.scatter(arr[-1, 0], arr[-1, 1], arr[-1, 2], color=c, marker=marker, s=30)
         else:
-            ax.plot(arr[:, 0], arr[:, 1], color=c, lw=1.6, label=label)
-            ax.plot(arr[-1, 0], arr[-1, 1], "x", color=c, ms=7)
-
-
-def plot_paths(world: World, paths: Mapping[str, np.ndarray], out_png: str | Path,
-               title: str = "") -> Path:
-    """Save a PNG of ``world`` with every path of ``{label: (N, 2|3) array}``; returns the path."""
-    fig, ax = new_axes(world)
-    try:
-        draw_world(ax, world)
-        draw_paths(ax, paths, world.dims)
-        ax.set_title(title or world.name)
-        ax.legend(loc="best", fontsize=8)
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.tight_layout()
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
-    return out
+            ax.plot(arr[:, 0], arr[:, 1], color=c, label=label, **style)
+            ax.plot(arr[-1, 0], arr[-1, 1], marker, color=c, mec="k", mew=0.5, ms=7,
+                    zorder=style["zorder"] + 1)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import zenoh
 
 from common.transport import wait_alive, zenoh_config
-from papf.graph import LaunchOptions, Resolved, load_profile, objects_for, resolve
+from papf.graph import LaunchOptions, Resolved, load_profile, resolve
 from papf.monitor import RunMonitor, RunResult
 from papf.progress import RunProgress
 from papf.run_sequence import RunSequence
@@ -50,7 +50,7 @@ class RunConfig:
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
     zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
-    objects: str | None = None         # none | truth | tracker; None: per planner (objects_for)
+    objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
 
 
 def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
@@ -59,7 +59,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "energy_model": cfg.energy_model, "record": cfg.record,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
-              "objects": objects_for(cfg.planner, cfg.objects), "view": cfg.view}
+              "objects": cfg.objects, "view": cfg.view}
     return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,
                          values={k: v for k, v in values.items() if v is not None},
                          planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,

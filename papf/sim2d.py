@@ -27,7 +27,7 @@ from papf.monitor import MOVING_SPEED
 from papf.plan_result import PlanResult
 from schemas.messages import Odometry, Scan
 from worlds import World
-from worlds.bullet import build_world
+from worlds.bullet import MovingBodies, build_world
 from worlds.messages import goal_message
 
 p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
@@ -48,13 +48,17 @@ class FootprintChecker:
         self.z = z0 + sz / 2
         self.cid = p.connect(p.DIRECT)
         self.bodies = build_world(self.cid, world)
+        self.moving = MovingBodies(self.cid, world, self.bodies)
         shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=[sx / 2, sy / 2, sz / 2],
                                        physicsClientId=self.cid)
         self.robot = p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
                                        basePosition=[0.0, 0.0, self.z], physicsClientId=self.cid)
 
-    def clearance(self, x: float, y: float, yaw: float) -> float:
-        """Signed distance footprint-obstacles [m] (< 0: overlap), capped at CLEARANCE_CAP_M."""
+    def clearance(self, x: float, y: float, yaw: float, t_ns: int = 0) -> float:
+        """Signed distance footprint-obstacles [m] (< 0: overlap), capped at CLEARANCE_CAP_M,
+        with moving obstacles where they are at sim time ``t_ns``."""
+        if self.moving:
+            self.moving.place(t_ns)
         quat = p.getQuaternionFromEuler([0.0, 0.0, yaw])
         p.resetBasePositionAndOrientation(self.robot, [x, y, self.z], quat, physicsClientId=self.cid)
         lo, hi = p.getAABB(self.robot, physicsClientId=self.cid)
@@ -84,11 +88,11 @@ def start_pose(world: World, seed: int) -> tuple[float, float, float]:
 
 def closed_loop(world: World, planner, name: str, seed: int, start: tuple[float, float, float],
                 scan: Callable[[float, float, float, int], Scan],
-                clearance: Callable[[float, float, float], float], max_time_s: float,
+                clearance: Callable[[float, float, float, int], float], max_time_s: float,
                 dt: float = 0.1, gate: CommandGate | None = None, keep_states: bool = False,
                 stop_on_collision: bool = True) -> PlanResult:
     """Drive ``planner`` from ``start`` to an outcome (see the module doc); ``scan(x, y, yaw,
-    t_ns)`` senses, ``clearance(x, y, yaw)`` [m] < 0 is a collision."""
+    t_ns)`` senses, ``clearance(x, y, yaw, t_ns)`` [m] < 0 is a collision."""
     x, y, yaw = start
     step_ns = int(round(dt * NS))
     n_sub = max(1, int(round(dt / SUBSTEP_S)))
@@ -97,7 +101,7 @@ def closed_loop(world: World, planner, name: str, seed: int, start: tuple[float,
     planner.set_goal(goal_message(world))
     rows, states = [(0.0, x, y, yaw)], []
     outcome, reason, t_end, moved_ns = "", "", 0, None
-    min_clear = clearance(x, y, yaw)
+    min_clear = clearance(x, y, yaw, 0)
     collisions, t = 0, 0
     while not outcome:
         cmd, state, status = planner.step(scan(x, y, yaw, t), Odometry(stamp_ns=t, x=x, y=y,
@@ -115,7 +119,7 @@ def closed_loop(world: World, planner, name: str, seed: int, start: tuple[float,
             x, y, yaw = unicycle(x, y, yaw, v, w, sub_s)
             if moved_ns is None and abs(v) > MOVING_SPEED:
                 moved_ns = t_sub
-            c = clearance(x, y, yaw)
+            c = clearance(x, y, yaw, t + ((k + 1) * step_ns) // n_sub)
             min_clear = min(min_clear, c)
             if c < 0.0:
                 collisions += 1

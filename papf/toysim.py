@@ -72,7 +72,7 @@ def simulate(planner, world: World, start=(0.0, 0.0, 0.0), goal=(5.0, 0.0),
                   world.obstacles)
     r = closed_loop(world, planner, "toy", 0, tuple(map(float, start)),
                     lambda x, y, yaw, t: cast_scan(world, x, y, yaw, t, beams),
-                    lambda x, y, yaw: clearance(world, x, y), max_time_s, SCAN_PERIOD_S,
+                    lambda x, y, yaw, t: clearance(world, x, y), max_time_s, SCAN_PERIOD_S,
                     keep_states=keep_states, stop_on_collision=False)
     return SimResult(np.column_stack([r.path, r.headings]), r.outcome, r.sim_time_s,
                      r.min_clearance_m, r.states)

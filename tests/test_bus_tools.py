@@ -265,6 +265,27 @@ def test_goal_cli_handshake_start_run_and_outcome(router, session):
         ev_sub.undeclare()
 
 
+def test_goal_superseded_by_another_goal_exits_6(router, session):
+    import zenoh
+
+    from common.transport import zenoh_config
+
+    def on_goal(sample) -> None:
+        g = Goal.from_bytes(sample.payload.to_bytes())
+        session.put(KEYS.planner_status, PlannerStatus(stamp_ns=0, state="ready").to_bytes())
+        if g.x == 1.0:   # someone else re-targets the planner right after
+            threading.Timer(0.3, lambda: session.put(KEYS.goal, Goal(
+                stamp_ns=0, x=5.0, y=0.0).to_bytes())).start()
+
+    sub = session.declare_subscriber(KEYS.goal, on_goal)
+    try:
+        with zenoh.open(zenoh_config("client", [router])) as s2:
+            res = send_goal(s2, KEYS, 1.0, 2.0, out=[].append, timeout_s=20.0)
+        assert res.outcome == "superseded" and res.exit_code == 6 and "(5, 0)" in res.reason
+    finally:
+        sub.undeclare()
+
+
 def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypatch, router):
     import papf.bus.goal as goal_mod
 
@@ -274,4 +295,12 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
     r = subprocess.run([sys.executable, "-m", "papf", "goal", "1", "--connect", router],
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "X Y" in r.stderr and "Traceback" not in r.stderr
+    from papf.supervisor import free_port
+
+    nobody = f"tcp/127.0.0.1:{free_port()}"
+    for cmd in (["goal", "1", "2"], ["topic", "list"], ["teleop"]):
+        r = subprocess.run([sys.executable, "-m", "papf", *cmd, "--connect", nobody],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and "cannot reach the bus" in r.stderr, (cmd, r.stderr)
+        assert "Traceback" not in r.stderr
 

@@ -13,6 +13,7 @@ import sys
 
 import pytest
 
+from common.errors import ConfigError
 from common.ports import BRIDGE, DIRECTIONS
 from papf.graph import (
     LAUNCHER_PORTS,
@@ -101,3 +102,18 @@ def test_ports_are_well_formed_and_printed_by_help(module):
                           text=True, timeout=60, check=True).stdout
     for _d, key, msg_type in decl.PORTS:
         assert key.removeprefix(BRIDGE) in text and msg_type in text
+
+
+def test_objects_default_per_planner_and_profile():
+    def objects_of(name, **values):
+        graph = resolve(load_profile(name), LaunchOptions(name, connect=["tcp/h:1"],
+                                                          values={**VALUES, **values}))
+        return {p.name: p.argv for p in graph.processes}
+
+    sim = objects_of("sim", planner="iapf")
+    assert "--truth-objects" in sim["lidar_sim"] and "--objects" in sim["planner"]
+    assert "--objects" not in objects_of("sim", planner="apf")["planner"]
+    laptop = objects_of("laptop", planner="iapf")        # no ground truth on the real robot
+    assert "tracker" in laptop and "--objects" in laptop["planner"]
+    with pytest.raises(ConfigError, match="--objects truth is not available here; valid: none, tracker"):
+        objects_of("laptop", planner="iapf", objects="truth")

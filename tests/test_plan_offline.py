@@ -9,9 +9,9 @@ import pytest
 
 from common.errors import ConfigError
 from nodes.planner.registry import PLANNERS
+from papf.path_plot import plot_paths
 from papf.plan import FootprintChecker, plan, write_path
 from papf.plan3d import cast_points, fibonacci_directions
-from papf.plots import plot_paths
 from papf.randworlds import (
     GAP_RANGE_M,
     KINDS,

@@ -26,7 +26,8 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int = 100,
                     total_k: int = 120, speed: float = SPEED, model: str = "paper",
-                    outcome: str | None = "reached", meta: dict | None = None) -> EnergyMeter:
+                    outcome: str | None = "reached", meta: dict | None = None,
+                  ground_truth: bool = True) -> EnergyMeter:
     """A straight run along x: standing at k = 0, ``speed`` from k = 1; outcome at ``end_k``.
 
     Samples continue to ``total_k`` (after the outcome, as a real recording does). The
@@ -35,6 +36,7 @@ def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int 
     meter = EnergyMeter(model)
     run_meta = {"world": "energy", "planner": planner, "seed": str(seed), "namespace": "rosbot",
                 "energy_model": model, **(meta or {})}
+    run_meta = {k: v for k, v in run_meta.items() if v is not None}   # None: not recorded
     with RunWriter(path, run_meta) as w:
         w.write_message("rosbot/events", Event(stamp_ns=0, kind="run_started", source="test"))
         for k in range(total_k + 1):
@@ -44,7 +46,8 @@ def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int 
             wheels = WheelStates(stamp_ns=t, speed=(v / WHEEL_RADIUS_M,) * 4, torque=(0.05,) * 4)
             for key, msg in (("sim/pose", odom), ("odom", odom), ("wheels", wheels),
                              ("clock", Clock(stamp_ns=t))):
-                w.write_message(f"rosbot/{key}", msg)
+                if key != "sim/pose" or ground_truth:
+                    w.write_message(f"rosbot/{key}", msg)
             meter.feed(odom)
             w.write_message("rosbot/battery", meter.feed(wheels))
             if k % 5 == 0:
@@ -188,7 +191,8 @@ def test_cli_report_and_experiment_options(tmp_path, capsys):
     args = parser.parse_args(["report", str(tmp_path), "--energy-model", "motor", "--json"])
     assert args.func(args) == 0
     assert '"energy_model": "motor"' in capsys.readouterr().out
-    assert (tmp_path / "report.md").is_file()
+    assert (tmp_path / "report-motor.md").is_file()       # re-metered: files of its own
+    assert not (tmp_path / "report.md").exists()
     args = parser.parse_args(["experiment", "energy", "--runs", "2", "--planners", "apf,papf",
                               "--out", str(tmp_path / "x"), "--seed", "7"])
     assert (args.runs, args.planners, args.seed) == (2, "apf,papf", 7)
@@ -197,6 +201,51 @@ def test_cli_report_and_experiment_options(tmp_path, capsys):
         args.func(args)
     with pytest.raises(ConfigError, match="paper, motor"):
         build_report([tmp_path], energy_model="magic")
+
+
+def test_report_groups_worlds_and_names_model_and_pose_source(tmp_path):
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    for world, speed in (("energy", 0.4), ("open", 0.6)):
+        for planner in ("apf", "papf"):
+            write_synthetic(runs / f"{world}-{planner}.mcap", planner, seed=1,
+                            speed=speed + (0.05 if planner == "papf" else 0.0),
+                            meta={"world": world})
+    report = build_report([runs], tmp_path / "out")
+    assert [(s.world, s.planner, s.runs) for s in report.summaries] == [
+        ("energy", "apf", 1), ("energy", "papf", 1), ("open", "apf", 1), ("open", "papf", 1)]
+    energy_apf = next(r for r in report.runs if (r.world, r.planner) == ("energy", "apf"))
+    assert report.summary("apf", "energy").stats["charge_mAh"].mean == energy_apf.charge_mAh
+    names = {p.name for p in report.files}
+    assert {"trajectories-energy.png", "trajectories-open.png", "motion-energy.png",
+            "motion-open.png", "mind-energy.png", "mind-open.png", "charge.png", "report.md",
+            "report.csv"} == names
+    md = (tmp_path / "out" / "report.md").read_text()
+    assert md.count("## World `") == 2 and "never averaged together" in md
+    assert "energy model: paper (as the live meter ran)" in md
+    assert "pose: ground truth (sim/pose)" in md and "charge [mAh, paper model]" in md
+    rows = list(csv.DictReader(open(tmp_path / "out" / "report.csv")))
+    means = [(r["world"], r["planner"]) for r in rows if r["row"] == "mean"]
+    assert means == [("energy", "apf"), ("energy", "papf"), ("open", "apf"), ("open", "papf")]
+
+
+def test_report_takes_the_live_model_and_names_unknown_seed_and_odometry(tmp_path):
+    # a laptop-profile recording of old: no seed, no energy_model in the metadata, no ground truth
+    write_synthetic(tmp_path / "robot.mcap", model="paper", meta={"seed": None,
+                                                                  "energy_model": None},
+                    ground_truth=False)
+    m = run_metrics(tmp_path / "robot.mcap")
+    assert (m.energy_model, m.live_model, m.pose_source, m.seed) == ("paper", "paper", "odom", -1)
+    assert m.remeter_diff_mAh == 0.0                  # the live meter, reproduced
+    report = build_report([tmp_path], tmp_path / "out")
+    md = (tmp_path / "out" / "report.md").read_text()
+    assert "pose: odometry" in md and "| robot.mcap | apf | ? |" in md
+    again = build_report([tmp_path / "robot.mcap"], tmp_path / "out", energy_model="motor")
+    assert again.suffix == "-motor" and (tmp_path / "out" / "report-motor.md").is_file()
+    assert (tmp_path / "out" / "report.md").read_text() == md       # not overwritten
+    assert {p.name for p in again.files} >= {"charge-motor.png", "trajectories-motor.png"}
+    assert "re-metered; the live meter ran paper" in (tmp_path / "out" / "report-motor.md").read_text()
+    assert report.runs[0].charge_mAh != again.runs[0].charge_mAh
 
 
 # -- a real run through the whole process stack -------------------------------------------------

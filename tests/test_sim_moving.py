@@ -9,6 +9,7 @@ import pytest
 from nodes.base_driver.core import DriverCore
 from nodes.base_driver.sim import SimBase
 from nodes.lidar_sim.core import LidarParams, LidarSim
+from papf.plan import plan
 from worlds import parse_world
 from worlds.messages import truth_objects
 
@@ -69,3 +70,12 @@ def test_truth_objects_give_pose_velocity_and_size():
     assert (tr.id, tr.x, tr.y, tr.vx, tr.vy) == pytest.approx((0, 2.5, 0.0, -1.0, 0.0))
     assert (tr.yaw, tr.length, tr.width) == pytest.approx((math.pi, 0.4, 0.3))
     assert truth_objects(w, 0, near=(10.0, 0.0), max_range=5.0).tracks == ()
+
+
+def test_offline_plan_checks_moving_obstacles_where_they_are():
+    # a box drives at 1 m/s down the robot's line towards it: an offline run must see the
+    # contact when the box arrives, not against the box's start pose (2.5 m away)
+    w = parse_world({"goal": {"position": [3.0, 0.0]}, "obstacles": [
+        {"kind": "box", "size": [0.4, 0.3], "motion": {"track": [[0.0, 3.0, 0.0], [3.0, 0.0, 0.0]]}}]})
+    r = plan(w, "apf", seed=0, max_time_s=10.0)
+    assert r.outcome == "collision" and 1.0 < r.sim_time_s < 3.0

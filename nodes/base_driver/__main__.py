@@ -22,7 +22,7 @@ import sys
 import time
 
 from common.errors import PapfError
-from common.ports import describe
+from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.base_driver.loop import DriverLoop
 from nodes.base_driver.ports import PORTS, VARIANTS
@@ -75,6 +75,8 @@ def main_sim(args: argparse.Namespace) -> int:
         node.subscribe("cmd_vel")
         node.declare_publishers(*PUBLISHES)
         node.ready()
+        log.info("waiting for run_started on %s (a launcher sends it; alone: papf goal X Y "
+                 "--start-run, or papf teleop --start-run with --realtime)", node.keys.events)
         while wait_for_start(node):  # one run per run_started; run_ended waits for the next
             with DriverCore(world, args.seed, config) as core:
                 log.info("run started: world %s, seed %d, %s", world.name, args.seed,
@@ -94,9 +96,9 @@ def main_rosbot(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.base_driver",
-                                     description=__doc__.split("\n\n")[0],
+                                     description=plain(__doc__.split("\n\n")[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1] + "\n"
+                                     epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"
                                      + describe(PORTS, VARIANTS))
     parser.add_argument("--driver", choices=("sim", "rosbot"), default="sim",
                         help="simulated ROSbot (default) or the real robot over the ROS 2 bridge")

@@ -18,7 +18,7 @@ import argparse
 import sys
 
 from common.errors import ConfigError, PapfError
-from common.ports import describe
+from common.ports import describe, plain
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.energy_meter.ports import PORTS, VARIANTS
 
@@ -71,7 +71,7 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nodes.energy_meter",
-                                     description=__doc__.splitlines()[0],
+                                     description=plain(__doc__.splitlines()[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=describe(PORTS, VARIANTS))
     parser.add_argument("--model", choices=sorted(MODELS), default="motor",

@@ -25,7 +25,7 @@ import argparse
 import sys
 
 from common.errors import PapfError
-from common.ports import describe
+from common.ports import describe, plain
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
 from worlds import load_world
@@ -90,9 +90,9 @@ def main_ros2(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
-                                     description=__doc__.split("\n\n")[0],
+                                     description=plain(__doc__.split("\n\n")[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1] + "\n"
+                                     epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"
                                      + describe(PORTS, VARIANTS, EXTRAS))
     parser.add_argument("--source", choices=("sim", "ros2"), default="sim",
                         help="simulated scans (default) or the real RPLIDAR over the ROS 2 bridge")

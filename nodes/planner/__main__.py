@@ -19,7 +19,7 @@ import sys
 import time
 
 from common.errors import ConfigError
-from common.ports import describe
+from common.ports import describe, plain
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
@@ -31,7 +31,7 @@ NODE_NAME = "planner"
 
 
 def parse_args(argv=None) -> argparse.Namespace:
-    ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=__doc__.split("\n")[0],
+    ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS, EXTRAS))
     ap.add_argument("--planner", default="apf", choices=sorted(PLANNERS), help="algorithm")
@@ -69,7 +69,8 @@ def run(args: argparse.Namespace) -> int:
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
             node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()
-        log.info("planner %s (%s)", args.planner, "realtime" if args.realtime else "lockstep")
+        log.info("planner %s (%s); waiting for a goal on %s (papf goal X Y)", args.planner,
+                 "realtime" if args.realtime else "lockstep", node.keys.goal)
         last_status = None
         for topic, msg in node.messages(tick_s=0.05):
             now = time.monotonic()

@@ -22,7 +22,7 @@ from pathlib import Path
 import zenoh
 
 from common.errors import ConfigError, PapfError
-from common.ports import describe
+from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.recorder.ports import PORTS, VARIANTS
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
@@ -158,7 +158,7 @@ def main(args: argparse.Namespace) -> int:
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="python -m nodes.recorder",
-                                     description=__doc__.splitlines()[0],
+                                     description=plain(__doc__.splitlines()[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=describe(PORTS, VARIANTS))
     add_recorder_args(parser)

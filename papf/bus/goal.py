@@ -4,8 +4,9 @@ The same handshake as the launcher's (docs/architecture.md, "Start and end of a 
 publish ``<ns>/goal`` every 0.5 s until the planner answers ``planner/status`` ``ready``;
 with ``start_run`` then publish ``events`` ``run_started`` (what a sim driver started alone
 waits for). Then, unless told not to wait, follow ``planner/status`` until ``reached``
-(exit 0), ``stagnated`` (3) or ``failed`` (6); a ``collision`` event gives 4 and
-``timeout_s`` without an outcome 5. In a session started by ``papf launch`` the launcher
+(exit 0), ``stagnated`` (3) or ``failed`` (6); a ``collision`` event gives 4,
+``timeout_s`` without an outcome 5, and another goal on ``<ns>/goal`` (someone re-targeted
+the planner: its statuses are no longer about this goal) 6. In a session started by ``papf launch`` the launcher
 keeps deciding the run's outcome; this command only steers the planner.
 """
 
@@ -36,6 +37,8 @@ class GoalResult:
 
     @property
     def exit_code(self) -> int:
+        if self.outcome == "superseded":
+            return 6
         if self.outcome == "acknowledged":
             return 0
         if self.outcome == "interrupted":
@@ -47,7 +50,8 @@ class _Watch:
     def __init__(self, session: zenoh.Session, keys: Keys):
         self.q: queue.Queue = queue.Queue()
         self.subs = [session.declare_subscriber(keys.planner_status, self._cb(PlannerStatus)),
-                     session.declare_subscriber(keys.events, self._cb(Event))]
+                     session.declare_subscriber(keys.events, self._cb(Event)),
+                     session.declare_subscriber(keys.goal, self._cb(Goal))]
 
     def _cb(self, msg_type):
         def on_sample(sample: zenoh.Sample) -> None:
@@ -89,7 +93,7 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
             out(f"run_started published on {keys.events}")
         if not wait:
             return GoalResult("acknowledged", "", math.nan)
-        return _follow(watch, timeout_s, out, progress, stop)
+        return _follow(watch, goal, timeout_s, out, progress, stop)
     finally:
         watch.close()
 
@@ -106,7 +110,8 @@ def _handshake(session, keys: Keys, goal: Goal, watch: _Watch, stop) -> bool:
     return False
 
 
-def _follow(watch: _Watch, timeout_s: float, out, progress: bool | None, stop) -> GoalResult:
+def _follow(watch: _Watch, goal: Goal, timeout_s: float, out, progress: bool | None,
+            stop) -> GoalResult:
     deadline = time.monotonic() + timeout_s if timeout_s > 0 else math.inf
     dist = math.nan
     with DecileProgress("to the goal", enabled=progress) as bar:
@@ -116,6 +121,10 @@ def _follow(watch: _Watch, timeout_s: float, out, progress: bool | None, stop) -
             msg = watch.next(0.1)
             if isinstance(msg, Event) and msg.kind == "collision":
                 return GoalResult("collision", msg.detail or "collision", dist)
+            if isinstance(msg, Goal) and (msg.x, msg.y, msg.tolerance) != (goal.x, goal.y,
+                                                                          goal.tolerance):
+                return GoalResult("superseded", f"another goal ({msg.x:g}, {msg.y:g}) was sent "
+                                  "to the planner; its statuses are no longer about this one", dist)
             if not isinstance(msg, PlannerStatus):
                 continue
             if not math.isnan(msg.distance_to_goal):

@@ -21,7 +21,10 @@ def cmd_info(args) -> int:
     try:
         with Recording(args.file) as rec:
             first, last = rec.time_span_ns()
+            channels = rec.channels()
             info = {"file": args.file, "metadata": rec.metadata, "messages": rec.counts(),
+                    "channels": {k: {"schema": s, "schema_encoding": se, "message_encoding": me}
+                                 for k, (s, se, me) in channels.items()},
                     "first_log_ns": first, "last_log_ns": last}
     except PapfError as exc:
         print(f"papf info: {exc}", file=sys.stderr)
@@ -32,6 +35,10 @@ def cmd_info(args) -> int:
     print(f"{args.file}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
     for name, meta in info["metadata"].items():
         print(f"  metadata {name}: " + ", ".join(f"{k}={v}" for k, v in meta.items()))
-    for key, n in sorted(info["messages"].items()):
-        print(f"  {key:<40} {n:>8}")
+    width = max((len(k) for k in channels), default=10)
+    print(f"  {'KEY':<{width}} {'MESSAGES':>8}  {'SCHEMA':<24} ENCODING (message / schema)")
+    for key, (schema, schema_enc, msg_enc) in sorted(channels.items()):
+        n = info["messages"].get(key, 0)
+        enc = f"{msg_enc} / {schema_enc}" if schema_enc else f"{msg_enc} / no schema (raw)"
+        print(f"  {key:<{width}} {n:>8}  {schema or '-':<24} {enc}")
     return 0

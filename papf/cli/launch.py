@@ -27,9 +27,13 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int)
     p.add_argument("--objects", choices=("none", "truth", "tracker"),
                    help="obstacle tracks for the planner: sim ground truth (sim, HIL), the "
-                        "tracker node, or none (default: truth for iapf where a sim runs, else none)")
+                        "tracker node, or none (default for iapf: truth where a sim runs, "
+                        "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--energy-model", choices=("motor", "paper"))
+    p.add_argument("--realtime", action="store_true",
+                   help="sim profile: pace sim time to the wall clock (to watch, steer with "
+                        "papf goal, or drive with papf teleop)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner parameter, repeatable")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="run-time limit (300)")
@@ -44,14 +48,14 @@ def register(sub) -> None:
 
 
 def cmd_launch(args) -> int:
-    from papf.graph import LaunchOptions, objects_for
+    from papf.graph import LaunchOptions
     from papf.launch import launch  # zenoh: only when launching
 
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,
               "bridge_namespace": args.bridge_namespace, "view": args.view,
-              "objects": args.objects if args.objects or not args.planner
-              else objects_for(args.planner, None)}
+              "realtime": "1" if args.realtime else None,
+              "objects": args.objects}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import sys
 
 from papf.cli.options import add_planner_settings, add_world_and_planner
 
@@ -53,10 +55,11 @@ def cmd_plan(args) -> int:
 
             plot_plan(world, result, args.plot, title)
         else:
-            from papf.plots import plot_paths
+            from papf.path_plot import plot_paths
 
-            plot_paths(world, {f"{args.planner} ({result.outcome})": result.path}, args.plot,
-                       title)
+            label = f"{args.planner} ({result.outcome})"
+            plot_paths(world, {label: result.path}, args.plot, title,
+                       times={label: result.times})
     s = result.summary()
     if args.json:
         print(json.dumps(s))
@@ -64,4 +67,7 @@ def cmd_plan(args) -> int:
         print(f"{s['world']} {s['planner']}: {s['outcome']} after {s['duration_s']:.1f} s, "
               f"{s['path_length_m']:.2f} m, min clearance {s['min_clearance_m']:.2f} m"
               + (f" ({s['reason']})" if s["reason"] else ""))
+    for what, path in (("plot", args.plot), ("path", args.out)):
+        if path:  # on stderr: with --json, stdout holds the one JSON object only
+            print(f"{what}: {os.path.abspath(path)}", file=sys.stderr)
     return EXIT_CODES.get(result.outcome, 6)

@@ -18,7 +18,8 @@ def register(sub) -> None:
     p.add_argument("inputs", nargs="+", metavar="DIR|FILE",
                    help="directories (every *.mcap inside) and/or .mcap files")
     p.add_argument("--energy-model", choices=("paper", "motor"),
-                   help="re-meter with this model (default: the model the live meter ran)")
+                   help="re-meter with this model (default: the model the live meter ran); "
+                        "a re-metered report goes to its own files (report-paper.md, …)")
     p.add_argument("--out", metavar="DIR",
                    help="output directory (default: the one DIR given, else the first file's)")
     p.add_argument("--json", action="store_true", help="print per-run figures as JSON lines")
@@ -34,6 +35,9 @@ def cmd_report(args) -> int:
         for m in report.runs:
             print(json.dumps(m.row()))
         return 0
-    print(summary_markdown(report.summaries))
-    print(f"wrote {', '.join(str(f) for f in report.files)}")
+    print(f"{report.model_note}; {report.pose_note}")
+    for world in sorted({s.world for s in report.summaries}):
+        print(f"\nworld {world}:")
+        print(summary_markdown([s for s in report.summaries if s.world == world], report.model))
+    print(f"\nwrote {', '.join(str(f) for f in report.files)}")
     return 0

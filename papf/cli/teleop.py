@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 
-from common.transport import add_zenoh_args, config_from_args
+from common.transport import add_zenoh_args
 from schemas import Keys
 
 
@@ -31,9 +31,9 @@ def register(sub) -> None:
 
 
 def _session(args):
-    import zenoh
+    from papf.bus.session import open_session  # zenoh: only when connecting
 
-    return zenoh.open(config_from_args(args))
+    return open_session(args)
 
 
 def cmd_teleop(args) -> int:

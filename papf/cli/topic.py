@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from common.transport import StopRequested, add_zenoh_args, config_from_args
+from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
 
 TOPIC_EPILOG = """\
@@ -63,9 +63,9 @@ def register(sub) -> None:
 
 
 def _session(args):
-    import zenoh
+    from papf.bus.session import open_session  # zenoh: only when connecting
 
-    return zenoh.open(config_from_args(args))
+    return open_session(args)
 
 
 def _out(line: str) -> None:

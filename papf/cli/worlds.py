@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import shutil
+import textwrap
+
 from worlds import load_world, packaged_worlds
 
 
@@ -11,6 +14,10 @@ def register(sub) -> None:
 
 
 def cmd_worlds(args) -> int:
-    for name in packaged_worlds():
-        print(f"{name:24} {load_world(name).description.splitlines()[0][:90]}")
+    names = packaged_worlds()
+    width = max(len(n) for n in names) + 2
+    room = max(shutil.get_terminal_size((100, 24)).columns - width, 40)
+    for name in names:
+        text = " ".join(load_world(name).description.split())   # the whole text, one line
+        print(f"{name:<{width}}{textwrap.shorten(text, room, placeholder=' …')}")
     return 0

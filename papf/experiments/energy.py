@@ -237,7 +237,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
                 result = _one_run(exp, spec, progress, task, world.goal[:2], run_fn)
                 results.append((spec, result))
                 progress.advance(task)
-                console.print(_result_line(spec, result), highlight=False)
+                console.print(_result_line(spec, result), highlight=False, soft_wrap=True)
     finally:
         run_log.setLevel(level)
     report = build_report([s.path for s, _r in results], out)
@@ -315,12 +315,14 @@ def print_summary(res, console=None) -> None:
     from rich.console import Console  # rich: only to print
     from rich.table import Table
 
-    from papf.report.report import REPORT_MD  # matplotlib: only once reported
     from papf.report.tables import PAPER, change_pct
 
     console = console or Console()
-    t = Table(title="energy experiment (runs that reached the goal: mean ± sd)")
-    for col in ("planner", "reached", "charge [mAh]", "energy [J]", "duration [s]", "path [m]"):
+    model = res.report.model
+    t = Table(title=f"energy experiment on {', '.join(sorted({s.world for s in res.report.summaries}))}"
+                    f" (runs that reached the goal: mean ± sd; {model} model)")
+    for col in ("planner", "reached", f"charge [mAh, {model}]", f"energy [J, {model}]",
+                "duration [s]", "path [m]"):
         t.add_column(col, justify="right")
     for s in res.report.summaries:
         st = s.stats
@@ -336,6 +338,6 @@ def print_summary(res, console=None) -> None:
                           f"   paper: {PAPER[attr]}", highlight=False)
     for m in res.mismatches:
         console.print(f"[red]report differs from the live run:[/] {m}")
-    console.print(f"report: {res.report.out_dir / REPORT_MD}")
+    console.print(f"report: {res.report.files[-1]}")
     console.print(f"wall time: {res.wall_s:.1f} s for {len(res.results)} runs and the report",
                   highlight=False)

@@ -135,7 +135,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
     """
-    from papf.plots import plot_paths  # matplotlib: only when the experiment runs
+    from papf.path_plot import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")

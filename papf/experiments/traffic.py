@@ -29,6 +29,7 @@ from worlds import load_world, packaged_worlds, world_path
 ROAD_WORLDS = tuple(w for w in packaged_worlds() if w.startswith("road-"))
 CASES = (("iapf", "truth"), ("iapf", "tracker"), ("apf", "none"), ("papf", "none"),
          ("arapf", "none"))
+STARTUP_S = 180.0   # [s wall] for the nodes to come up: JIT warm-ups are slow on a busy machine
 HEADER = ["world", "planner", "objects", "outcome", "duration [s]", "path [m]", "collisions",
           "left road", "lane changes", "min speed [m/s]", "max speed [m/s]"]
 
@@ -89,7 +90,7 @@ def run_traffic(out: str | Path, worlds: Sequence[str] = ROAD_WORLDS,
         for planner, objects in cases:
             mcap = out / "recordings" / f"{name}-{planner}-{objects}.mcap"
             trial = run_stack(world_path(name), planner, seed, timeout_s, record=mcap,
-                              objects=objects)
+                              objects=objects, startup_timeout_s=STARTUP_S)
             rows.append(road_row(name, planner, objects, trial, mcap))
             r = rows[-1]
             echo(f"{name:>17} {planner:<6} {objects:<8} {r['outcome']:<9} "

@@ -74,7 +74,8 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
 
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
               record: str | Path | None = None, planner_args: Sequence[str] = (),
-              objects: str | None = None, namespace: str = "rosbot") -> Trial:
+              objects: str | None = None, namespace: str = "rosbot",
+              startup_timeout_s: float = 60.0) -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
     from papf.runner import RunConfig, run  # zenoh: only for stack runs
 
@@ -83,7 +84,8 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
         Path(record).unlink(missing_ok=True)
     cfg = RunConfig(world=str(world_file), planner=planner, seed=seed, timeout_s=timeout_s,
                     record=str(record) if record else None, port=free_port(), progress=False,
-                    planner_args=list(planner_args), objects=objects, namespace=namespace)
+                    planner_args=list(planner_args), objects=objects, namespace=namespace,
+                    startup_timeout_s=startup_timeout_s)
     res = run(cfg)
     path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
     return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,

@@ -135,6 +135,16 @@ class Recording:
             return {}
         return {channels[c].topic: n for c, n in stats.channel_message_counts.items()}
 
+    def channels(self) -> dict[str, tuple[str, str, str]]:
+        """key -> (schema name, schema encoding, message encoding); "" where a channel has none."""
+        schemas = self.summary.schemas
+        out = {}
+        for c in self.summary.channels.values():
+            schema = schemas.get(c.schema_id)
+            out[c.topic] = (schema.name if schema else "", schema.encoding if schema else "",
+                            c.message_encoding)
+        return out
+
     def time_span_ns(self) -> tuple[int, int]:
         """(first, last) log time [ns]; (0, 0) when empty."""
         stats = self.summary.statistics

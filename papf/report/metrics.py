@@ -36,7 +36,7 @@ class Series:
     """Time series of one run up to ``t_end`` (for figures). Arrays of equal length."""
 
     t_s: np.ndarray          # [s] sim time
-    x: np.ndarray            # [m] ground truth (sim/pose; odom on a real robot)
+    x: np.ndarray            # [m] pose from RunMetrics.pose_source (sim/pose or odom)
     y: np.ndarray            # [m]
     heading: np.ndarray      # [rad] unwrapped yaw
     v: np.ndarray            # [m/s] odometry forward speed
@@ -66,6 +66,8 @@ class RunMetrics:
     live_model: str             # model the live meter ran ("" if no battery recorded)
     remeter_diff_mAh: float     # [mAh] re-metered minus live charge at live_stamp_s (0: exact)
     energy_model: str           # model used for charge_mAh / energy_J
+    pose_source: str            # where path and trajectory come from: sim/pose (ground truth)
+                                #     or odom (odometry: a real robot has no ground truth)
     ang_accel_sq: float         # [rad^2/s^3] integral of (dw/dt)^2 over the motion
     jerk_sq: float              # [m^2/s^5] integral of (d^2v/dt^2)^2 over the motion
     heading_oscillations: int   # sign changes of w beyond +-OSCILLATION_W_RAD_S
@@ -126,15 +128,20 @@ class _Collector:
         self.remeter = remeter
         self.odom: list[Odometry] = []
         self.poses: list[Odometry] = []
+        self.ground_truth = False       # poses came from sim/pose (else from odom)
         m = self.monitor
         self.handlers = {f"{ns}/clock": (Clock, m.on_clock),
                          f"{ns}/planner/status": (PlannerStatus, m.on_status),
                          f"{ns}/events": (Event, m.on_event),
                          f"{ns}/battery": (BatteryState, m.on_battery),
-                         f"{ns}/sim/pose": (Odometry, self._on_pose),
+                         f"{ns}/sim/pose": (Odometry, self._on_sim_pose),
                          f"{ns}/cmd_vel": (Twist, m.on_cmd),
                          f"{ns}/odom": (Odometry, self._on_odom),
                          f"{ns}/wheels": (WheelStates, self.remeter.feed)}
+
+    def _on_sim_pose(self, msg: Odometry) -> None:
+        self.ground_truth = True
+        self._on_pose(msg)
 
     def _on_pose(self, msg: Odometry) -> None:
         self.poses.append(msg)
@@ -175,13 +182,26 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
     with Recording(path) as rec:
         meta = rec.run_metadata
         ns = meta.get("namespace") or _guess_namespace(rec)
-        model = energy_model or meta.get("energy_model") or "motor"
+        model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or "motor"
         timeout_s = float(meta.get("timeout_s") or NO_TIMEOUT_S)
         col = _Collector(ns, timeout_s, Remeter(model, energy_params))
         for key, msg, _t in rec.messages(list(col.handlers)):
             col.feed(key, msg)
     col.finish()
     return _assemble(Path(path), meta, col, model, with_series)
+
+
+def _recorded_model(rec: Recording, ns: str) -> str:
+    """The model the live meter ran, from its first recorded battery message ("" if none)."""
+    for _key, msg, _t in rec.messages([f"{ns}/battery"]):
+        if isinstance(msg, BatteryState):
+            return msg.model
+    return ""
+
+
+def seed_text(seed: int) -> str:
+    """A seed for people: "?" when the recording did not say (stored as -1)."""
+    return "?" if seed < 0 else str(seed)
 
 
 def _guess_namespace(rec: Recording) -> str:
@@ -216,6 +236,7 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
         live_energy_J=live.energy_J if live else math.nan,
         live_stamp_s=live.stamp_ns / NS if live else math.nan,
         live_model=live.model if live else "", energy_model=model,
+        pose_source="sim/pose" if col.ground_truth else "odom",
         remeter_diff_mAh=_remeter_diff(col.remeter.states, live),
         ang_accel_sq=ang, jerk_sq=jerk, heading_oscillations=heading_oscillations(w),
         collisions=res.collisions,

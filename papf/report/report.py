@@ -2,13 +2,25 @@
 
 ``build_report(["DIR"], out="DIR")`` reads every ``*.mcap`` (per-run figures:
 :mod:`papf.report.metrics`), then writes ``report.md`` (tables with the figures beside
-them), ``report.csv`` (runs, then per-planner mean and sd) and three PNGs. Nothing in it
-depends on the wall clock or the order files are listed in, so running it again on the
-same files gives the same files.
+them), ``report.csv`` (runs, then per world and planner mean and sd) and the PNGs.
+
+- **Energy model**: charge and energy come from the model the live meter ran (the run
+  metadata, else the recorded battery messages), unless ``energy_model`` says otherwise;
+  every table header and figure names the model. A report re-metered with another model
+  than the live one goes to its own files (``report-paper.md``, ``charge-paper.png``, …), so
+  it never overwrites the as-run report.
+- **Worlds**: runs of different worlds are grouped per world — a section, a statistics
+  row per planner, a trajectory and a motion figure each — and never averaged together.
+- **Pose source**: trajectories and path lengths come from the ground truth
+  (``sim/pose``) in simulation and from odometry on a real robot; the report says which.
+
+Nothing depends on the wall clock or the order files are listed in, so running it again
+on the same files gives the same files.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,15 +28,13 @@ from pathlib import Path
 from common.errors import ConfigError, PapfError, RecordingError
 from papf.mind_plots import mind_png
 from papf.report import figures, tables
-from papf.report.metrics import OSCILLATION_W_RAD_S, RunMetrics, run_metrics
+from papf.report.markdown import markdown
+from papf.report.metrics import RunMetrics, run_metrics
 from worlds import World, load_world
 
-REPORT_MD = "report.md"
-REPORT_CSV = "report.csv"
-TRAJECTORIES_PNG = "trajectories.png"
-CHARGE_PNG = "charge.png"
-MOTION_PNG = "motion.png"
-MIND_PNG = "mind.png"
+MODELS = ("paper", "motor")
+POSE_TEXT = {"sim/pose": "ground truth (sim/pose)",
+             "odom": "odometry (odom: a real robot has no ground truth)"}
 
 
 @dataclass
@@ -33,9 +43,38 @@ class Report:
     summaries: list[tables.PlannerSummary]
     out_dir: Path
     files: list[Path] = field(default_factory=list)   # what was written
+    suffix: str = ""                                  # "-<model>" for a re-metered report
+    pngs: dict = field(default_factory=dict)          # (kind, world) -> file name
 
-    def summary(self, planner: str) -> tables.PlannerSummary | None:
-        return next((s for s in self.summaries if s.planner == planner), None)
+    def summary(self, planner: str, world: str | None = None) -> tables.PlannerSummary | None:
+        return next((s for s in self.summaries if s.planner == planner
+                     and (world is None or s.world == world)), None)
+
+    @property
+    def model(self) -> str:
+        return ", ".join(sorted({r.energy_model for r in self.runs}))
+
+    @property
+    def live_models(self) -> str:
+        return ", ".join(sorted({r.live_model for r in self.runs if r.live_model}))
+
+    @property
+    def model_note(self) -> str:
+        live = self.live_models
+        if not self.suffix:
+            return f"energy model: {self.model} (as the live meter ran)"
+        return f"energy model: {self.model} (re-metered; the live meter ran {live or 'none'})"
+
+    @property
+    def pose_note(self) -> str:
+        return "pose: " + "; ".join(POSE_TEXT.get(p, p) for p in
+                                    sorted({r.pose_source for r in self.runs}))
+
+    def name(self, stem: str, world: str | None = None, ext: str = ".png") -> str:
+        """``stem[-world][-model]ext``: the world only when the report covers several."""
+        several = len(tables.worlds_of(self.runs)) > 1
+        w = f"-{re.sub(r'[^A-Za-z0-9_.-]+', '_', Path(world).stem)}" if world and several else ""
+        return f"{stem}{w}{self.suffix}{ext}"
 
 
 def find_recordings(inputs: Iterable[str | Path]) -> list[Path]:
@@ -62,106 +101,57 @@ def default_out(inputs: Sequence[str | Path]) -> Path:
 
 def collect(paths: Sequence[Path], energy_model: str | None = None,
             energy_params: dict | None = None) -> list[RunMetrics]:
-    """Per-run figures, ordered by planner (apf, papf, ...), seed, file name."""
+    """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name."""
     runs = [run_metrics(p, energy_model, energy_params) for p in paths]
     order = tables.planner_order([r.planner for r in runs])
-    return sorted(runs, key=lambda r: (order.index(r.planner), r.seed, r.file))
+    return sorted(runs, key=lambda r: (r.world, order.index(r.planner), r.seed, r.file))
+
+
+def suffix_for(runs: Sequence[RunMetrics], energy_model: str | None) -> str:
+    """"" when the figures use the live meter's model; "-<model>" for a re-metered report."""
+    if energy_model is None:
+        return ""
+    live = {r.live_model for r in runs if r.live_model}
+    return "" if live == {energy_model} else f"-{energy_model}"
 
 
 def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None,
                  energy_model: str | None = None, energy_params: dict | None = None) -> Report:
     """Read the recordings, write report.md, report.csv and the PNGs into ``out_dir``."""
-    if energy_model not in (None, "paper", "motor"):
-        raise ConfigError(f"energy model {energy_model!r} is not one of paper, motor")
+    if energy_model not in (None, *MODELS):
+        raise ConfigError(f"energy model {energy_model!r} is not one of {', '.join(MODELS)}")
     paths = find_recordings(inputs)
     runs = collect(paths, energy_model, energy_params)
+    files = {Path(p).name: Path(p) for p in paths}
     out = Path(out_dir) if out_dir is not None else default_out(inputs)
     out.mkdir(parents=True, exist_ok=True)
-    summaries = tables.summarise(runs)
-    report = Report(runs, summaries, out)
-    world = _world(runs)
-    report.files += [figures.trajectories_png(runs, world, out / TRAJECTORIES_PNG),
-                     figures.charge_png(runs, summaries, out / CHARGE_PNG),
-                     figures.motion_png(runs, out / MOTION_PNG),
-                     mind_png(runs, {Path(p).name: Path(p) for p in paths}, world,
-                              out / MIND_PNG)]
-    tables.write_csv(out / REPORT_CSV, runs, summaries)
-    (out / REPORT_MD).write_text(markdown(report))
-    report.files += [out / REPORT_CSV, out / REPORT_MD]
+    report = Report(runs, tables.summarise(runs), out, suffix=suffix_for(runs, energy_model))
+    note = f"{report.model_note} · {report.pose_note} · papf report"
+    charge = report.name("charge")
+    report.files.append(figures.charge_png(runs, report.summaries, out / charge, note,
+                                           report.model))
+    report.pngs[("charge", None)] = charge
+    pose = "; ".join(sorted({r.pose_source for r in runs}))
+    for world_name in tables.worlds_of(runs):
+        mine = [r for r in runs if r.world == world_name]
+        traj, motion = report.name("trajectories", world_name), report.name("motion", world_name)
+        report.files += [figures.trajectories_png(mine, _world(world_name), out / traj, note,
+                                                  pose),
+                         figures.motion_png(mine, out / motion, note)]
+        report.pngs[("trajectories", world_name)] = traj
+        report.pngs[("motion", world_name)] = motion
+        mind = report.name("mind", world_name)
+        report.files.append(mind_png(mine, files, _world(world_name), out / mind))
+        report.pngs[("mind", world_name)] = mind
+    csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
+    tables.write_csv(csv_path, runs, report.summaries)
+    md_path.write_text(markdown(report))
+    report.files += [csv_path, md_path]
     return report
 
 
-def _world(runs: Sequence[RunMetrics]) -> World | None:
-    names = {r.world for r in runs}
+def _world(name: str) -> World | None:
     try:
-        return load_world(sorted(names)[0]) if len(names) == 1 else None
+        return load_world(name)
     except PapfError:  # a world file that moved since the run: plot the paths alone
         return None
-
-
-def _models(runs: Sequence[RunMetrics]) -> str:
-    used = sorted({r.energy_model for r in runs})
-    live = sorted({r.live_model for r in runs if r.live_model})
-    text = f"re-metered with the **{', '.join(used)}** model"
-    return text + (f" (the live meter ran: {', '.join(live)})" if live else "")
-
-
-def _headline(report: Report) -> str:
-    apf, papf = report.summary("apf"), report.summary("papf")
-    if apf is None or papf is None:
-        return ""
-    a, p = apf.stats["charge_mAh"], papf.stats["charge_mAh"]
-    pct = tables.change_pct(a, p)
-    if pct != pct:  # nan: a planner has no completed run
-        return ("**PAPF vs APF:** no comparison (a planner has no run that reached the goal).\n")
-    verdict = "lower" if pct < 0 else "higher"
-    return (f"**PAPF vs APF:** mean charge {p.mean:.2f} vs {a.mean:.2f} mAh — PAPF draws "
-            f"{abs(pct):.1f} % {verdict} (paper: {tables.PAPER_CHARGE_MAH['papf']} vs "
-            f"{tables.PAPER_CHARGE_MAH['apf']} mAh, {tables.PAPER_CHARGE_CHANGE_PCT:+.1f} %).\n")
-
-
-def markdown(report: Report) -> str:
-    runs = report.runs
-    worlds = ", ".join(sorted({r.world for r in runs}))
-    return "\n".join([
-        "# Energy report",
-        "",
-        f"{len(runs)} recorded runs on world `{worlds}`; charge and energy {_models(runs)}. "
-        "Every figure comes from the MCAP files alone (`papf report`); definitions: "
-        "docs/experiments-energy.md.",
-        "",
-        _headline(report),
-        "## Per planner (runs that reached the goal: mean ± sd)",
-        "",
-        tables.summary_markdown(report.summaries),
-        "",
-        f"![charge per run]({CHARGE_PNG})",
-        "",
-        "## Comparison with the paper",
-        "",
-        tables.comparison_markdown(report.summaries),
-        "",
-        "The paper's absolute charge (a real ROSbot, its own track, the charger's reading) is not "
-        "comparable with a simulated run's; the relative change is.",
-        "",
-        "## Runs",
-        "",
-        tables.runs_markdown(runs),
-        "",
-        "duration: first motion (|v| > 0.01 m/s) to the outcome; path: ground-truth pose up to "
-        "the outcome; mean P: energy / outcome time; ∫β² dt [rad²/s³] and ∫j² dt [m²/s⁵]: "
-        "squared angular acceleration and linear jerk of the odometry over the motion; osc.: "
-        f"sign changes of ω beyond ±{OSCILLATION_W_RAD_S} rad/s; live charge: the live meter's "
-        "last recorded figure at or before the outcome; re-meter Δ: re-metered minus live "
-        "charge at that stamp (0 = the live meter is reproduced exactly).",
-        "",
-        f"![trajectories]({TRAJECTORIES_PNG})",
-        "",
-        "## Motion (like the paper's Fig. 13)",
-        "",
-        f"![heading, v and ω over time]({MOTION_PNG})",
-        "",
-        f"![the planner's mind: prediction, abandoned predictions, top quarks, temporary goal, "
-        f"footprints]({MIND_PNG})",
-        "",
-    ])

@@ -1,6 +1,7 @@
 """Per-planner statistics, the PAPF-vs-APF comparison with the paper, Markdown and CSV.
 
-Statistics are over the runs that **reached** the goal (the paper compares completed
+Statistics are per world and planner — runs of different worlds are never averaged
+together — over the runs that **reached** the goal (the paper compares completed
 runs; a collision or a timeout has no comparable charge): mean and sample standard
 deviation (ddof = 1; nan for a single run). Changes are ``(other − base) / base`` of the
 means, in %, base = APF.
@@ -22,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from papf.report.metrics import RunMetrics
+from papf.report.metrics import RunMetrics, seed_text
 
 # (attribute, label, unit, format) of the figures that get statistics
 STAT_METRICS: tuple[tuple[str, str, str, str], ...] = (
@@ -62,6 +63,7 @@ class Stat:
 
 @dataclass(frozen=True)
 class PlannerSummary:
+    world: str
     planner: str
     runs: int
     reached: int
@@ -74,18 +76,27 @@ def planner_order(planners: Sequence[str]) -> list[str]:
     return sorted(set(planners), key=lambda p: (rank.get(p, 2), p))
 
 
+def worlds_of(runs: Sequence[RunMetrics]) -> list[str]:
+    """The worlds of the runs, sorted (the report's sections, in this order)."""
+    return sorted({r.world for r in runs})
+
+
 def summarise(runs: Sequence[RunMetrics]) -> list[PlannerSummary]:
+    """One summary per (world, planner): worlds sorted, planners in :func:`planner_order`."""
     out = []
-    for planner in planner_order([r.planner for r in runs]):
-        mine = [r for r in runs if r.planner == planner]
-        done = [r for r in mine if r.outcome == "reached"]
-        stats = {}
-        for attr, *_ in STAT_METRICS:
-            vals = np.array([float(getattr(r, attr)) for r in done])
-            vals = vals[np.isfinite(vals)]
-            stats[attr] = Stat(float(vals.mean()) if vals.size else math.nan,
-                               float(vals.std(ddof=1)) if vals.size > 1 else math.nan, int(vals.size))
-        out.append(PlannerSummary(planner, len(mine), len(done), stats))
+    for world in worlds_of(runs):
+        here = [r for r in runs if r.world == world]
+        for planner in planner_order([r.planner for r in here]):
+            mine = [r for r in here if r.planner == planner]
+            done = [r for r in mine if r.outcome == "reached"]
+            stats = {}
+            for attr, *_ in STAT_METRICS:
+                vals = np.array([float(getattr(r, attr)) for r in done])
+                vals = vals[np.isfinite(vals)]
+                stats[attr] = Stat(float(vals.mean()) if vals.size else math.nan,
+                                   float(vals.std(ddof=1)) if vals.size > 1 else math.nan,
+                                   int(vals.size))
+            out.append(PlannerSummary(world, planner, len(mine), len(done), stats))
     return out
 
 
@@ -107,10 +118,20 @@ def _f(x: float, fmt: str) -> str:
     return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:{fmt}}"
 
 
-def runs_markdown(runs: Sequence[RunMetrics]) -> str:
-    header = ["run", "seed", "outcome", "duration [s]", "path [m]", "charge [mAh]", "energy [J]",
-              "mean P [W]", "∫β² dt", "∫j² dt", "osc.", "live charge [mAh]", "re-meter Δ [mAh]"]
-    rows = [[r.file, str(r.seed), r.outcome, _f(r.duration_s, ".2f"), _f(r.path_length_m, ".3f"),
+def _unit(unit: str, model: str, attr: str) -> str:
+    """Units of a figure; the energy model is named beside the ones it produced."""
+    return f"{unit}, {model} model" if model and attr in MODEL_METRICS else unit
+
+
+MODEL_METRICS = ("charge_mAh", "energy_J", "mean_power_W")
+
+
+def runs_markdown(runs: Sequence[RunMetrics], model: str = "") -> str:
+    m = f", {model} model" if model else ""
+    header = ["run", "planner", "seed", "outcome", "duration [s]", "path [m]", f"charge [mAh{m}]",
+              f"energy [J{m}]", f"mean P [W{m}]", "∫β² dt", "∫j² dt", "osc.",
+              "live charge [mAh]", "re-meter Δ [mAh]"]
+    rows = [[r.file, r.planner, seed_text(r.seed), r.outcome, _f(r.duration_s, ".2f"), _f(r.path_length_m, ".3f"),
              _f(r.charge_mAh, ".3f"), _f(r.energy_J, ".1f"), _f(r.mean_power_W, ".3f"),
              _f(r.ang_accel_sq, ".3g"), _f(r.jerk_sq, ".3g"), str(r.heading_oscillations),
              f"{_f(r.live_charge_mAh, '.3f')} @ {_f(r.live_stamp_s, '.2f')} s",
@@ -118,16 +139,19 @@ def runs_markdown(runs: Sequence[RunMetrics]) -> str:
     return _md_table(header, rows)
 
 
-def summary_markdown(summaries: Sequence[PlannerSummary]) -> str:
-    header = ["planner", "reached"] + [f"{label} [{unit}]" if unit else label
-                                       for _a, label, unit, _f2 in STAT_METRICS]
-    rows = [[s.planner, f"{s.reached}/{s.runs}"]
+def summary_markdown(summaries: Sequence[PlannerSummary], model: str = "") -> str:
+    """Mean ± sd per planner; give the summaries of one world (several: a world column)."""
+    several = len({s.world for s in summaries}) > 1
+    header = (["world"] if several else []) + ["planner", "reached"] + [
+        f"{label} [{_unit(unit, model, a)}]" if unit else label
+        for a, label, unit, _f2 in STAT_METRICS]
+    rows = [([s.world] if several else []) + [s.planner, f"{s.reached}/{s.runs}"]
             + [s.stats[a].text(fmt) for a, _l, _u, fmt in STAT_METRICS] for s in summaries]
     return _md_table(header, rows)
 
 
-def comparison_markdown(summaries: Sequence[PlannerSummary]) -> str:
-    """Every other planner against the first (APF), next to the paper's figures."""
+def comparison_markdown(summaries: Sequence[PlannerSummary], model: str = "") -> str:
+    """Every other planner against the first (APF) of one world, next to the paper's figures."""
     if len(summaries) < 2:
         return "_Only one planner: nothing to compare._"
     base = summaries[0]
@@ -140,7 +164,8 @@ def comparison_markdown(summaries: Sequence[PlannerSummary]) -> str:
         rows = []
         for attr, label, unit, fmt in STAT_METRICS:
             b, o = base.stats[attr], other.stats[attr]
-            rows.append([f"{label} [{unit}]" if unit else label, _f(b.mean, fmt), _f(o.mean, fmt),
+            rows.append([f"{label} [{_unit(unit, model, attr)}]" if unit else label,
+                         _f(b.mean, fmt), _f(o.mean, fmt),
                          _f(change_pct(b, o), "+.1f") + (" %" if b.n and o.n else ""),
                          PAPER.get(attr, "") if paper_ok else ""])
         blocks.append(_md_table(header, rows))
@@ -158,7 +183,7 @@ def write_csv(path: Path, runs: Sequence[RunMetrics], summaries: Sequence[Planne
             w.writerow({"row": "run", "n": 1, **{k: _csv(v) for k, v in r.row().items()}})
         for s in summaries:
             for kind in ("mean", "sd"):
-                row = {"row": kind, "planner": s.planner, "n": s.reached}
+                row = {"row": kind, "world": s.world, "planner": s.planner, "n": s.reached}
                 row.update({a: _csv(getattr(s.stats[a], kind)) for a, *_ in STAT_METRICS})
                 w.writerow(row)
 
