@@ -6,7 +6,7 @@ PY      = $(VENV)/bin/python
 WORLD  ?= energy
 PLANNER ?= papf
 
-.PHONY: demo test lint coverage setup clean
+.PHONY: demo test lint coverage setup clean docs docs-check
 setup: $(VENV)/.installed
 
 $(VENV)/.installed: pyproject.toml
@@ -30,6 +30,12 @@ lint: setup
 coverage: setup   # in-process coverage of the unit and pub/sub tiers (node processes not traced)
 	$(VENV)/bin/coverage run -m pytest -q -m "not e2e"
 	$(VENV)/bin/coverage report
+
+docs: setup        # regenerate the tables and numbers of README.md and docs/ from docs/data/*.csv
+	$(PY) -m papf.docs_tables render
+
+docs-check: setup  # fail when a table or number in README.md or docs/ differs from its CSV
+	$(PY) -m papf.docs_tables check
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

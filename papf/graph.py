@@ -79,6 +79,7 @@ class Profile:
     pose_topic: str = "odom"                # pose samples of the run summary
     defaults: dict = field(default_factory=dict)
     objects: tuple[str, ...] = OBJECTS      # the --objects sources this host can serve
+    zenoh_mode: str = "client"              # nodes' mode: client (via the router) or peer (direct too)
 
 
 @dataclass(frozen=True)
@@ -131,7 +132,11 @@ def load_profile(name_or_path: str) -> Profile:
                        bool(data.get("router", False)), tuple(data.get("listen", ())),
                        tuple(data.get("connect", ())), bool(data.get("run", False)),
                        tuple(data.get("remote_nodes", ())), data.get("pose_topic", "odom"),
-                       dict(data.get("defaults", {})), tuple(data.get("objects", OBJECTS)))
+                       dict(data.get("defaults", {})), tuple(data.get("objects", OBJECTS)),
+                       str(data.get("zenoh_mode", "client")))
+        if prof.zenoh_mode not in ("client", "peer"):
+            raise ConfigError(f"launch profile {str(path)!r}: zenoh_mode = {prof.zenoh_mode!r}; "
+                              "valid: client, peer")
     except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(f"launch profile {str(path)!r} is invalid: {type(exc).__name__}: "
                           f"{exc} (see docs/architecture.md for the format)") from None
@@ -156,7 +161,7 @@ class LaunchOptions:
     values: dict = field(default_factory=dict)   # template variables given on the command line
     planner_args: list[str] = field(default_factory=list)
     timeout_s: float = 300.0                 # [s run time]
-    zenoh_mode: str = "client"               # client: all through the router; peer: direct too
+    zenoh_mode: str | None = None            # client | peer; None: the profile's zenoh_mode
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
     startup_timeout_s: float = 60.0          # [s wall] for every node to become alive
     stall_s: float | None = None             # [s wall] no clock progress: stuck (None: default)
@@ -199,7 +204,7 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
     common = [a for ep in connect for a in ("--connect", ep)] + ["--namespace", opt.namespace]
     if opt.zenoh_config:
         common += ["--zenoh-config", opt.zenoh_config]
-    if opt.zenoh_mode == "peer":  # peers also talk directly: one loopback hop, not two
+    if (opt.zenoh_mode or prof.zenoh_mode) == "peer":  # peers also talk directly: one loopback hop, not two
         common += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
     procs = []
     if prof.router:

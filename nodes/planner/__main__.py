@@ -24,7 +24,7 @@ from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
-from nodes.planner.registry import PLANNERS, make_planner
+from nodes.planner.registry import PLANNERS, PRESETS, make_planner, preset_sets
 from schemas.messages import Event
 
 NODE_NAME = "planner"
@@ -38,6 +38,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="override one setting, repeatable (e.g. --set d_o=0.8)")
+    ap.add_argument("--preset", choices=PRESETS, default="default",
+                    help="default (our improvements) or paper (the paper read literally)")
     ap.add_argument("--realtime", action="store_true",
                     help="pair each scan with the latest odometry (robot / HIL)")
     ap.add_argument("--stale-timeout", type=float, default=0.5, metavar="S",
@@ -54,7 +56,7 @@ def parse_args(argv=None) -> argparse.Namespace:
 def run(args: argparse.Namespace) -> int:
     log = setup_logging(NODE_NAME, args.log_level)
     try:
-        planner = make_planner(args.planner, args.params, args.set)
+        planner = make_planner(args.planner, args.params, [*preset_sets(args.preset), *args.set])
     except ConfigError as exc:
         log.error("%s", exc)
         return 2

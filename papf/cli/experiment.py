@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
+from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
 
@@ -26,6 +27,7 @@ def register(sub) -> None:
     _add_paper_tests(exp)
     _add_random(exp)
     _add_traffic(exp)
+    add_paper_studies(exp)
 
 
 def _add_energy(exp) -> None:
@@ -44,8 +46,18 @@ def _add_energy(exp) -> None:
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
                    help="the live meter's model (default motor)")
+    p.add_argument("--worlds", metavar="W1,W2",
+                   help="several worlds, each into DIR/world-<name>/, plus DIR/energy-worlds.md/.csv "
+                        "(e.g. energy,energy-blocking,energy-empty)")
+    _add_presets(p)
     _add_sweep(p)
     p.set_defaults(func=cmd_energy)
+
+
+def _add_presets(p) -> None:
+    p.add_argument("--presets", default="default", metavar="P1,P2",
+                   help="planner presets side by side: default, paper or default,paper "
+                        "(a planner whose paper preset changes nothing runs once)")
 
 
 def _add_sweep(p) -> None:
@@ -73,6 +85,7 @@ def _add_common(p, default_out: str) -> None:
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
+    _add_presets(p)
     _add_sweep(p)
 
 
@@ -151,7 +164,16 @@ def cmd_energy(args) -> int:
     exp = EnergyExperiment(out=Path(args.out), runs=args.runs, planners=planners, seed=args.seed,
                            world=args.world, timeout_s=args.timeout,
                            energy_model=args.energy_model,
-                           sweep=sweep_options(args))  # validated by run_experiment
+                           sweep=sweep_options(args),
+                           presets=tuple(preset_list(args.presets)))  # validated by run_experiment
+    if args.worlds:
+        from papf.experiments.energy_worlds import run_energy_worlds
+
+        results = run_energy_worlds(exp, [w.strip() for w in args.worlds.split(",") if w.strip()])
+        for r in results:
+            print_summary(r)
+        print((Path(args.out) / "energy-worlds.md").read_text())
+        return max(r.exit_code for r in results)
     result = run_experiment(exp)
     print_summary(result)
     return result.exit_code
@@ -168,7 +190,7 @@ def cmd_paper_tests(args) -> int:
             raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
     run_paper_tests(args.out, planner_list(args.planners), args.seed,
                     "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set,
-                    sweep=sweep_options(args))
+                    sweep=sweep_options(args), presets=preset_list(args.presets))
     print((Path(args.out) / "paper-tests.md").read_text())
     print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
     return 0
@@ -178,7 +200,8 @@ def cmd_random(args) -> int:
     from papf.experiments.random_worlds import run_random  # pybullet, matplotlib: when run
 
     run_random(args.out, args.n, args.seed, planner_list(args.planners), args.mode, args.timeout,
-               args.plots, sets=args.set, sweep=sweep_options(args))
+               args.plots, sets=args.set, sweep=sweep_options(args),
+               presets=preset_list(args.presets))
     print((Path(args.out) / "random.md").read_text())
     print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
     return 0

@@ -23,6 +23,11 @@ def register(sub) -> None:
                    help="sim-time limit [s] (default 300)")
     p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
     add_planner_settings(p)
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper literally)")
+    p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
+                   help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
+                        "the obstacles' centres known (planners wang-apf and wang only)")
     p.add_argument("--plot", metavar="OUT.png",
                    help="write a PNG: world, path, footprints, and the planner's prediction, "
                         "abandoned predictions, top quarks and temporary goal at its most "
@@ -33,17 +38,21 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
+    from nodes.planner.registry import preset_sets
     from papf.monitor import EXIT_CODES
     from papf.plan import plan, write_path  # pybullet: only when planning
     from worlds import load_world
 
     world = load_world(args.world)
+    if args.motion == "fixed-step":
+        return _fixed_step(world, args)
+    sets = [*preset_sets(args.preset), *args.set]
     if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
         from papf.plan_road import plan_car
 
-        result = plan_car(world, args.planner, args.set, args.params, max_time_s=args.timeout)
+        result = plan_car(world, args.planner, sets, args.params, max_time_s=args.timeout)
     else:
-        result = plan(world, args.planner, params=args.set, seed=args.seed,
+        result = plan(world, args.planner, params=sets, seed=args.seed,
                       max_time_s=args.timeout, dt=args.dt, params_file=args.params,
                       keep_states=bool(args.plot))
     if args.out:
@@ -71,3 +80,24 @@ def cmd_plan(args) -> int:
         if path:  # on stderr: with --json, stdout holds the one JSON object only
             print(f"{what}: {os.path.abspath(path)}", file=sys.stderr)
     return EXIT_CODES.get(result.outcome, 6)
+
+
+def _fixed_step(world, args) -> int:
+    """Wang's published simulation (:func:`papf.pointsim.fixed_step`)."""
+    from common.errors import ConfigError
+    from papf.pointsim import fixed_step
+
+    methods = {"wang-apf": "traditional", "wang": "improved"}
+    if args.planner not in methods:
+        raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
+    r = fixed_step(world, methods[args.planner])
+    if args.plot:
+        from papf.plots import plot_paths
+
+        plot_paths(world, {f"{args.planner} ({r.outcome})": r.path}, args.plot,
+                   f"{world.name}: {args.planner}, fixed step (Wang's simulation)")
+    s = r.summary()
+    print(json.dumps(s) if args.json else
+          f"{s['world']} {args.planner} (fixed step): {s['outcome']} after {s['iterations']} "
+          f"iterations, path {s['path_length']:.2f}, min clearance {s['min_clearance']:.2f}")
+    return {"reached": 0, "collision": 4}.get(r.outcome, 3)

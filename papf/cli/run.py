@@ -29,6 +29,9 @@ def register(sub) -> None:
                         "only for discovery; default) or client (all through the router)")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
     add_planner_settings(p)
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper read "
+                        "literally, docs/planners.md \"Presets\")")
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
     p.add_argument("--objects", choices=("none", "truth", "tracker"),
@@ -43,9 +46,10 @@ def register(sub) -> None:
 
 def run_config(args):
     """The :class:`papf.runner.RunConfig` of parsed ``papf run`` options."""
+    from nodes.planner.registry import preset_sets
     from papf.runner import RunConfig  # zenoh: only when a run is made
 
-    planner_args = [x for kv in args.set for x in ("--set", kv)]
+    planner_args = [x for kv in (*preset_sets(args.preset), *args.set) for x in ("--set", kv)]
     if args.params:
         planner_args += ["--params", args.params]
     return RunConfig(world=args.world, planner=args.planner, seed=args.seed,
