@@ -28,7 +28,10 @@ def register(sub) -> None:
     p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
                    help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
                         "the obstacles' centres known (planners wang-apf and wang only)")
-    p.add_argument("--plot", metavar="OUT.png", help="write a PNG of the world and the path")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="write a PNG: world, path, footprints, and the planner's prediction, "
+                        "abandoned predictions, top quarks and temporary goal at its most "
+                        "telling cycle")
     p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
     p.add_argument("--json", action="store_true", help="print one JSON summary object")
     p.set_defaults(func=cmd_plan)
@@ -50,16 +53,22 @@ def cmd_plan(args) -> int:
         result = plan_car(world, args.planner, sets, args.params, max_time_s=args.timeout)
     else:
         result = plan(world, args.planner, params=sets, seed=args.seed,
-                      max_time_s=args.timeout, dt=args.dt, params_file=args.params)
+                      max_time_s=args.timeout, dt=args.dt, params_file=args.params,
+                      keep_states=bool(args.plot))
     if args.out:
         write_path(result, args.out)
-    if args.plot:
-        from papf.path_plot import plot_paths  # matplotlib: only with --plot
+    if args.plot:  # matplotlib: only with --plot
+        title = f"{world.name}: {args.planner} (offline, seed {args.seed})"
+        if world.dims == 2 and world.vehicle != "car":  # with the mind and the ROSbot's footprint
+            from papf.mind_plots import plot_plan
 
-        label = f"{args.planner} ({result.outcome})"
-        plot_paths(world, {label: result.path}, args.plot,
-                   f"{world.name}: {args.planner} (offline, seed {args.seed})",
-                   times={label: result.times})
+            plot_plan(world, result, args.plot, title)
+        else:
+            from papf.path_plot import plot_paths
+
+            label = f"{args.planner} ({result.outcome})"
+            plot_paths(world, {label: result.path}, args.plot, title,
+                       times={label: result.times})
     s = result.summary()
     if args.json:
         print(json.dumps(s))

@@ -6,6 +6,7 @@ import sys
 
 from common.errors import PapfError
 from common.transport import StopRequested, add_zenoh_args, config_from_args
+from papf.cli.view import add_view_flag
 
 
 def register(sub) -> None:
@@ -18,17 +19,25 @@ def register(sub) -> None:
     p.add_argument("--keys", action="append", metavar="EXPR",
                    help="replay only keys matching this key expression, repeatable (default all)")
     add_zenoh_args(p)
+    add_view_flag(p)
     # --namespace from add_zenoh_args: here it remaps; unset = the recorded keys as they are.
     p.set_defaults(func=cmd_replay, namespace=None)
 
 
 def cmd_replay(args) -> int:
+    if args.view is not None:
+        from papf.replay_view import replay_with_view
+
+        return replay_with_view(args, _replay)
+    return _replay(args, StopRequested())
+
+
+def _replay(args, stop: StopRequested) -> int:
     import zenoh  # the session: only when replaying
 
     from papf.progress import DecileProgress
     from papf.recording.replay import replay
 
-    stop = StopRequested()
     try:
         with zenoh.open(config_from_args(args)) as session, DecileProgress("replay") as bar:
             stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 from papf.cli.options import add_planner_settings, add_world_and_planner
+from papf.cli.view import add_view_flag
 
 
 def register(sub) -> None:
@@ -39,6 +40,7 @@ def register(sub) -> None:
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    add_view_flag(p)
     p.set_defaults(func=cmd_run)
 
 
@@ -55,7 +57,7 @@ def run_config(args):
                      port=args.port, namespace=args.namespace, planner_args=planner_args,
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
-                     zenoh_mode=args.zenoh_mode, objects=args.objects,
+                     zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      progress=None if not args.json else False)
 
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from common.errors import ConfigError, PapfError, RecordingError
+from papf.mind_plots import mind_png
 from papf.report import figures, tables
 from papf.report.markdown import markdown
 from papf.report.metrics import RunMetrics, run_metrics
@@ -119,7 +120,9 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     """Read the recordings, write report.md, report.csv and the PNGs into ``out_dir``."""
     if energy_model not in (None, *MODELS):
         raise ConfigError(f"energy model {energy_model!r} is not one of {', '.join(MODELS)}")
-    runs = collect(find_recordings(inputs), energy_model, energy_params)
+    paths = find_recordings(inputs)
+    runs = collect(paths, energy_model, energy_params)
+    files = {Path(p).name: Path(p) for p in paths}
     out = Path(out_dir) if out_dir is not None else default_out(inputs)
     out.mkdir(parents=True, exist_ok=True)
     report = Report(runs, tables.summarise(runs), out, suffix=suffix_for(runs, energy_model))
@@ -137,6 +140,9 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
                          figures.motion_png(mine, out / motion, note)]
         report.pngs[("trajectories", world_name)] = traj
         report.pngs[("motion", world_name)] = motion
+        mind = report.name("mind", world_name)
+        report.files.append(mind_png(mine, files, _world(world_name), out / mind))
+        report.pngs[("mind", world_name)] = mind
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
     tables.write_csv(csv_path, runs, report.summaries)
     md_path.write_text(markdown(report))
