@@ -15,11 +15,17 @@ $(VENV)/.installed: pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev,fast]'
 	touch $@
 
-demo: setup
+VIEW   ?=
+demo: setup   # VIEW=1: at the wall clock's pace, with a live Foxglove view on ws://127.0.0.1:8765
 	@echo "papf run --world $(WORLD) --planner $(PLANNER): the whole stack, as separate processes"
-	@echo "watch a run live: in another terminal, while .venv/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime runs:"
-	@echo "  .venv/bin/papf topic list   |   .venv/bin/papf topic echo planner/status   |   .venv/bin/papf topic hz scan"
+ifeq ($(VIEW),)
+	@echo "watch it live: make demo VIEW=1, then open ws://127.0.0.1:8765 in Foxglove with the layout docs/foxglove-layout.json"
 	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER)
+else
+	@echo "watch it live: open ws://127.0.0.1:8765 in Foxglove (layout: docs/foxglove-layout.json);"
+	@echo "  or in another terminal: .venv/bin/papf topic list | topic echo planner/status | topic hz scan"
+	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime --view
+endif
 
 test: setup
 	$(PY) -m pytest
