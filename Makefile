@@ -6,7 +6,7 @@ PY      = $(VENV)/bin/python
 WORLD  ?= energy
 PLANNER ?= papf
 
-.PHONY: demo test lint coverage setup clean
+.PHONY: demo test lint coverage setup clean docs docs-check
 setup: $(VENV)/.installed
 
 $(VENV)/.installed: pyproject.toml
@@ -15,11 +15,17 @@ $(VENV)/.installed: pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev,fast]'
 	touch $@
 
-demo: setup
+VIEW   ?=
+demo: setup   # VIEW=1: at the wall clock's pace, with a live Foxglove view on ws://127.0.0.1:8765
 	@echo "papf run --world $(WORLD) --planner $(PLANNER): the whole stack, as separate processes"
-	@echo "watch a run live: in another terminal, while .venv/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime runs:"
-	@echo "  .venv/bin/papf topic list   |   .venv/bin/papf topic echo planner/status   |   .venv/bin/papf topic hz scan"
+ifeq ($(VIEW),)
+	@echo "watch it live: make demo VIEW=1, then open ws://127.0.0.1:8765 in Foxglove with the layout docs/foxglove-layout.json"
 	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER)
+else
+	@echo "watch it live: open ws://127.0.0.1:8765 in Foxglove (layout: docs/foxglove-layout.json);"
+	@echo "  or in another terminal: .venv/bin/papf topic list | topic echo planner/status | topic hz scan"
+	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime --view
+endif
 
 test: setup
 	$(PY) -m pytest
@@ -30,6 +36,12 @@ lint: setup
 coverage: setup   # in-process coverage of the unit and pub/sub tiers (node processes not traced)
 	$(VENV)/bin/coverage run -m pytest -q -m "not e2e"
 	$(VENV)/bin/coverage report
+
+docs: setup        # regenerate the tables and numbers of README.md and docs/ from docs/data/*.csv
+	$(PY) -m papf.docs_tables render
+
+docs-check: setup  # fail when a table or number in README.md or docs/ differs from its CSV
+	$(PY) -m papf.docs_tables check
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -11,7 +11,10 @@ on every scene. Scenes:
 - ``energy``: the energy world's three obstacles seen from along the approach;
 - ``trap``: the robot inside a ring of returns with one narrow gap, goal outside; every
   PAPF prediction stagnates, so with ``persist_quarks=false`` each cycle places all
-  M = 10 top quarks and runs M + 1 predictions — the PAPF worst case.
+  M = 10 top quarks and runs M + 1 predictions — the PAPF worst case;
+- ``road``: a two-lane ROSbot road (0.6 m lanes) with three tracked vehicles near the robot
+  (a slow leader, one in the other lane, one behind), handed over as obstacle tracks; IAPF
+  (which needs the road and the tracks) runs only here, with its F_step = 20 prediction.
 
 PAPF is also timed with the numpy fallback (``use_numba=false``). Speed is reported,
 never asserted (tests/ do not time anything).
@@ -28,6 +31,7 @@ import time
 import numpy as np
 
 from common.ports import plain
+from nodes.planner.iapf_fields import Track
 from nodes.planner.registry import PLANNERS, make_planner
 from papf.toysim import box_segments, cast_scan, toy_world
 from schemas.messages import Goal, Odometry
@@ -42,11 +46,22 @@ SCENES = {  # world, start x range [m], goal
     "open": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
     "energy": (ENERGY, (0.0, 2.0), (10.0, 0.0)),
     "trap": (RING, (-0.05, 0.05), (3.0, 0.0)),
+    "road": (toy_world(), (0.0, 2.0), (10.0, 0.0)),
 }
+ROAD = dict(road_lanes=2, road_y_min=-0.3, road_lane_width=0.6)   # ROSbot-scale two-lane road
+# vehicles relative to the robot: (dx, y, vx) [m, m, m/s], 0.5 x 0.3 m: a slow leader, one in
+# the other lane, one behind (each within IAPF's safety distance: all fields evaluated)
+ROAD_VEHICLES = ((1.0, 0.0, 0.1), (1.6, 0.6, 0.2), (-0.8, 0.0, 0.25))
+ONLY = {"iapf": ("road",)}   # IAPF needs the road and obstacle tracks
 CASES = [(name, name, []) for name in sorted(PLANNERS)] + [  # (label, planner, --set overrides)
     ("papf_worst_numba", "papf", ["persist_quarks=false"]),
     ("papf_worst_numpy", "papf", ["persist_quarks=false", "use_numba=false"]),
 ]
+
+
+def road_tracks(x: float) -> list:
+    """The road scene's vehicles as obstacle tracks for a robot at ``x`` [m]."""
+    return [Track(x + dx, y, 0.0, vx, 0.0, 0.5, 0.3, i) for i, (dx, y, vx) in enumerate(ROAD_VEHICLES)]
 
 
 def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
@@ -55,12 +70,15 @@ def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
     xs = np.linspace(x0, x1, cycles)
     scans = [cast_scan(world, x, 0.0, 0.0, stamp_ns=k) for k, x in enumerate(xs)]
     odoms = [Odometry(stamp_ns=k, x=x, y=0.0, yaw=0.0, v=0.0, w=0.0) for k, x in enumerate(xs)]
-    planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1]))
+    road = ROAD if scene == "road" else {}
+    planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1], **road))
     planner.step(scans[0], odoms[0])                     # warm-up (JIT compile)
     times, cpu, cmd_times, cmd_cpu, quarks = [], [], [], [], 0
     for scan, odom in zip(scans, odoms, strict=True):
-        planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1]))
+        planner.set_goal(Goal(stamp_ns=0, x=goal[0], y=goal[1], **road))
         planner.state = "driving"                          # keep timing the algorithm
+        if road:
+            planner.set_objects(road_tracks(odom.x))
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
         _, finish = planner.command(scan, odom)
         t1, c1 = time.perf_counter_ns(), time.thread_time_ns()
@@ -92,7 +110,7 @@ def main() -> None:
     print(json.dumps({"machine": platform.processor() or platform.machine(),
                       "python": platform.python_version()}))
     for label, name, sets in CASES:
-        for scene in SCENES:
+        for scene in ONLY.get(name, SCENES):
             cycles = args.cycles if "numpy" not in label else max(20, args.cycles // 10)
             print(json.dumps({"case": label, **bench(name, sets, scene, cycles)}), flush=True)
 

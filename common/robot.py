@@ -43,5 +43,8 @@ NOMINAL_VOLTAGE_V = 11.1       # [V] 3S nominal
 LIDAR_RATE_HZ = 10.0           # [Hz]
 LIDAR_RANGE_MIN_M = 0.2        # [m]
 LIDAR_RANGE_MAX_M = 25.0       # [m]
+# [m] scan plane above the floor: the A3 sits on the 0.22 m tall robot's top and scans ~2 cm
+# below its own top (assumption from the outline)
+LIDAR_HEIGHT_M = 0.2
 # The robot's footprint circle: half the chassis diagonal, what a planner must keep clear.
 FOOTPRINT_RADIUS_M = 0.5 * (BODY_LENGTH_M**2 + BODY_WIDTH_M**2) ** 0.5   # = 0.154

@@ -29,7 +29,8 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
-             "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects")
+             "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
+             "view")
 ROUTER_MODULE = "papf.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = ("iapf",)              # planners that use tracks: their default is truth

@@ -73,6 +73,7 @@ class RoadRun:
     temp_goal: np.ndarray           # (N,) y of the active temporary goal, nan when none
     local_counts: np.ndarray        # (N,) eq. 24 count of each step
     step_us: np.ndarray             # (N-1,) wall time of each planning step [us]
+    step_cpu_us: np.ndarray         # (N-1,) thread CPU time of each planning step [us]
     min_clearance_m: float
     collisions: int                 # contact episodes (a vehicle touching the host, once each)
     left_road: bool
@@ -118,7 +119,8 @@ class _Contacts:
 
 def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: Lanes,
              duration_s: float, name: str = "iapf", y_goal: float | None = None,
-             finish_x: float | None = None, stop_on_collision: bool = False) -> RoadRun:
+             finish_x: float | None = None, stop_on_collision: bool = False,
+             goal_x: float | None = None) -> RoadRun:
     """Run ``core`` from ``start`` among ``movers`` for ``duration_s`` of sim time, or until the
     host passes ``finish_x`` (outcome ``reached``) or, with ``stop_on_collision``, touches a
     vehicle (``collision``)."""
@@ -126,7 +128,7 @@ def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: L
     core.reset()
     n = int(round(duration_s / p.step_s))
     s = start
-    rows, temp, counts, times_us = [(0.0, s.x, s.y, s.v, s.yaw)], [math.nan], [0], []
+    rows, temp, counts, times_us, cpu_us = [(0.0, s.x, s.y, s.v, s.yaw)], [math.nan], [0], [], []
     others = [[] for _ in movers]
     contacts, left, outcome = _Contacts(len(movers)), False, "timeout"
     for k in range(n + 1):
@@ -145,8 +147,9 @@ def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: L
             break
         if k == n:
             break
-        t0 = time.perf_counter_ns()
-        s, info = core.step(s, tracks, lanes, t, y_goal)
+        t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
+        s, info = core.step(s, tracks, lanes, t, y_goal, goal_x=goal_x)
+        cpu_us.append((time.thread_time_ns() - c0) / 1e3)
         times_us.append((time.perf_counter_ns() - t0) / 1e3)
         rows.append((t + p.step_s, s.x, s.y, s.v, s.yaw))
         temp.append(math.nan if info.temp_goal_y is None else info.temp_goal_y)
@@ -154,7 +157,7 @@ def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: L
     arr = np.array(rows)
     return RoadRun(planner=name, outcome=outcome, times=arr[:, 0], states=arr[:, 1:],
                    temp_goal=np.array(temp), local_counts=np.array(counts),
-                   step_us=np.array(times_us), min_clearance_m=float(contacts.min_clear),
+                   step_us=np.array(times_us), step_cpu_us=np.array(cpu_us), min_clearance_m=float(contacts.min_clear),
                    collisions=contacts.episodes, left_road=left,
                    lane_changes=lane_changes(arr[:, 2], lanes),
                    others=[np.array(o) for o in others])

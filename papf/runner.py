@@ -51,6 +51,7 @@ class RunConfig:
     lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
     zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
+    view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
 
 
@@ -60,7 +61,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "energy_model": cfg.energy_model, "record": cfg.record,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
-              "objects": cfg.objects}
+              "objects": cfg.objects, "view": cfg.view}
     return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,
                          values={k: v for k, v in values.items() if v is not None},
                          planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,

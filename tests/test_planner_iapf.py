@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -200,7 +201,7 @@ def test_scaled_planner_drives_the_scaled_trajectory():
     big, small = IAPFCore(p), IAPFCore(q)
     road_s = Lanes(0.0, 4.0 * s, 2)
     a, b = HostState(0.0, 6.0, 10.0), HostState(0.0, 6.0 * s, 10.0 * s / tau)
-    ob = Track(25.0, 5.5, 0.0, 5.0, 0.0, 4.5, 1.8)
+    ob = Track(25.0, 5.5, 0.0, 6.0, 0.0, 4.5, 1.8)   # not at the 0.5 V_c threshold (rounding)
     for k in range(120):
         obs_a = [ob.moved(k * p.step_s)]
         obs_b = [Track(ob.x * s, ob.y * s, 0.0, ob.vx * s / tau, 0.0, ob.length * s, ob.width * s)
@@ -227,11 +228,89 @@ def test_registry_and_planner_step_with_road_and_tracks():
     odom = Odometry(stamp_ns=0, x=0.0, y=0.15, yaw=0.0, v=0.3, w=0.0)
     cmd, state, _ = planner.step(scan, odom)
     assert cmd.v == 0.0 and state.mode == "no-road"            # no road announced yet
+    objects = SimpleNamespace(tracks=[Track(1.0, 0.15, 0.0, 0.1, 0.0, 0.5, 0.3, 7)])
     planner.set_goal(Goal(stamp_ns=0, x=20.0, y=0.15, tolerance=0.2, road_lanes=2,
                           road_y_min=-0.15, road_lane_width=0.6))   # the handshake's road
     assert planner.road == Lanes(-0.15, 0.6, 2)
-    planner.set_objects([Track(1.0, 0.15, 0.0, 0.1, 0.0, 0.5, 0.3)])
-    cmd, state, _ = planner.step(scan, odom)
+    cmd, state, _ = planner.step(scan, odom, objects)
     assert state.algorithm == "iapf" and 0.0 < cmd.v <= 0.36
     assert len(state.predicted_path) == IAPFParams().f_step and state.obstacle_count == 1
-    assert state.v_target == pytest.approx(cmd.v, rel=0.1)
+    # the slow track ahead (0.1 m/s < 0.5 V_c) and a free left lane: a lane change starts;
+    # the command is the planned speed along the robot's heading
+    assert state.mode == "lane-goal" and state.lane_goal_y == pytest.approx(0.75)
+    assert cmd.v == pytest.approx(state.v_target * math.cos(state.heading_ref))
+
+
+@pytest.mark.parametrize("traditional", [False, True])
+def test_prediction_kernel_matches_the_step_by_step_core(traditional):
+    from nodes.planner.iapf_kernel import HAVE_NUMBA
+
+    p = dataclasses.replace(IAPFParams(), traditional=traditional, literal_rotation=traditional)
+    tracks = [Track(14.0, 5.5, 0.1, 5.0, 0.3, 4.5, 1.8), Track(-6.0, 6.2, 0.0, 9.0, 0.0, 4.5, 1.8)]
+    s0 = HostState(0.0, 6.3, 9.5, 0.05)
+    s, ref = s0, []
+    core = IAPFCore(p)
+    for k in range(p.f_step):      # the readable path: iapf_fields through IAPFCore.advance
+        s, _ = core.advance(s, tracks, ROAD, 2.0, p.b3, p.predict_step_s, k * p.predict_step_s)
+        ref.append((s.x, s.y))
+    for use_numba in ([False, True] if HAVE_NUMBA else [False]):
+        got = IAPFCore(p, use_numba=use_numba).predict(s0, tracks, ROAD, 2.0)
+        np.testing.assert_allclose(got[:, :2], ref, rtol=1e-12, atol=1e-12)
+
+
+def test_cannot_follow_a_slow_leader_when_the_next_lane_is_free():
+    core = IAPFCore(IAPFParams())
+    slow = Track(20.0, 2.0, 0.0, 4.0, 0.0, 4.5, 1.8)          # 4 m/s < 0.5 V_c, gap 15.5 m
+    # D_S at the cruise speed: (100 - 16) / 12 + 5 = 12 m: 15.5 m is beyond -> follow on
+    _, info = core.step(HostState(0.0, 2.0, 10.0), [slow], ROAD, 0.0)
+    assert not info.cannot_follow and info.temp_goal_y is None
+    _, info = core.step(HostState(5.0, 2.0, 10.0), [slow], ROAD, 0.0)      # gap 10.5 m
+    assert info.cannot_follow and info.temp_goal_y == pytest.approx(6.0)
+    # a vehicle beside in the left lane: not free, no lane change
+    core.reset()
+    beside = Track(6.0, 6.0, 0.0, 10.0, 0.0, 4.5, 1.8)
+    _, info = core.step(HostState(5.0, 2.0, 10.0), [slow, beside], ROAD, 0.0)
+    assert not info.cannot_follow
+    # 28.8 km/h (case C's leader) is not slow: follow it
+    _, info = core.step(HostState(5.0, 2.0, 10.0), [Track(20.0, 2.0, 0.0, 8.0, 0.0, 4.5, 1.8)],
+                        ROAD, 0.0)
+    assert not info.cannot_follow
+
+
+def test_lane_free_ahead_beside_and_behind():
+    core = IAPFCore(IAPFParams())
+    s = HostState(0.0, 2.0, 10.0)
+    assert core.lane_free(6.0, s, [], ROAD)
+    assert not core.lane_free(6.0, s, [Track(7.0, 6.0, 0.0, 8.0, 0.0, 4.5, 1.8)], ROAD)    # ahead
+    assert core.lane_free(6.0, s, [Track(40.0, 6.0, 0.0, 10.0, 0.0, 4.5, 1.8)], ROAD)      # far
+    assert not core.lane_free(6.0, s, [Track(-6.0, 6.0, 0.0, 12.0, 0.0, 4.5, 1.8)], ROAD)  # behind
+    assert core.lane_free(6.0, s, [Track(-30.0, 6.0, 0.0, 5.0, 0.0, 4.5, 1.8)], ROAD)
+
+
+def test_goal_lane_pull_near_the_goal():
+    p = IAPFParams()
+    core = IAPFCore(p)
+    s = HostState(0.0, 6.0, 10.0)
+    assert core.lane_goal(s, [], ROAD, 2.0, None) == (2.0, p.b3)            # no goal point
+    assert core.lane_goal(s, [], ROAD, 2.0, 100.0) == (2.0, p.b3)           # 100 m > 6 s x V_c
+    assert core.lane_goal(s, [], ROAD, 2.0, 50.0) == (2.0, p.b3_temp)
+    blocked = [Track(5.0, 2.0, 0.0, 5.0, 0.0, 4.5, 1.8)]
+    assert core.lane_goal(s, blocked, ROAD, 2.0, 50.0) == (2.0, p.b3)
+    # b3_temp crosses the broken line's ridge k2 d_w unaided: b3_temp sin(pi/4) > k2 d_w
+    assert p.b3_temp * math.sin(math.pi / 4) > p.k2 * ROAD.width
+
+
+def test_brake_priority_suspends_the_return_to_cruise():
+    p = dataclasses.replace(IAPFParams(), brake_priority=True)
+    ob = Track(10.5, 2.0, 0.0, 0.0, 0.0, 4.5, 1.8)
+    _, ux, _ = obstacle_gradient(0.0, 2.0, ob, p.obstacle_gain, p.a_x, p.a_y)
+    _, info = IAPFCore(p).step(HostState(0.0, 2.0, 6.0), [ob], ROAD, 0.0)
+    assert info.accel == pytest.approx(max(-p.a_b, 0.63 * -ux))      # eta1 F_oX alone
+    _, plain = IAPFCore(IAPFParams()).step(HostState(0.0, 2.0, 6.0), [ob], ROAD, 0.0)
+    assert plain.accel > 0.0                                        # eq. 25: (V_c - v)^3 wins
+    from nodes.planner.iapf_kernel import HAVE_NUMBA
+    s0 = HostState(0.0, 2.0, 6.0)
+    ref = IAPFCore(p, use_numba=False).predict(s0, [ob], ROAD, 2.0)
+    if HAVE_NUMBA:
+        np.testing.assert_allclose(IAPFCore(p).predict(s0, [ob], ROAD, 2.0), ref, rtol=1e-12)
+    assert ref[-1, 2] < 6.0

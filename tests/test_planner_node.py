@@ -160,7 +160,7 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
 def test_help_lists_every_planner():
     r = subprocess.run([sys.executable, "-m", "nodes.planner", "--help"], capture_output=True,
                        text=True, timeout=60, start_new_session=True)
-    assert r.returncode == 0 and "{apf,arapf,iapf,papf,wang}" in r.stdout
+    assert r.returncode == 0 and "{apf,arapf,iapf,papf,wang,wang-apf}" in r.stdout
 
 
 def test_bad_setting_exits_2():

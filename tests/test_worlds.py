@@ -95,3 +95,11 @@ def test_unreadable_bytes(tmp_path):
     p.write_bytes(b"\xff\xfe\x00garbage")
     with pytest.raises(WorldError, match="cannot read|not valid TOML"):
         load_world(p)
+
+
+def test_a_directory_named_like_a_world_does_not_hide_the_packaged_world(tmp_path, monkeypatch):
+    from worlds import load_world as _load
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "energy").mkdir()             # e.g. `papf experiment energy --out energy`
+    assert _load("energy").name == "energy"

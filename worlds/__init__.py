@@ -111,7 +111,8 @@ def packaged_worlds() -> list[str]:
 def world_path(name_or_path: str | Path) -> Path:
     """Resolve a packaged world name or a file path; WorldError says what exists."""
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists() or "/" in str(name_or_path):
+    # a directory of that name (e.g. an experiment's output "energy") is not a world file
+    if p.suffix == ".toml" or p.is_file() or "/" in str(name_or_path):
         if not p.is_file():
             raise WorldError(f"world file {str(p)!r} does not exist; give a packaged world name "
                              f"({', '.join(packaged_worlds())}) or a path to a .toml file")

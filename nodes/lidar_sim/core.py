@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from common import robot
 from common.errors import ConfigError
 from common.params import check_value
 from common.quiet import import_quietly
@@ -39,8 +40,7 @@ p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 
 RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
-SENSOR_HEIGHT = 0.2      # [m] scan plane above the floor: the A3 sits on the 0.22 m tall robot's
-                         # top and scans ~2 cm below its own top (assumption from the outline)
+SENSOR_HEIGHT = robot.LIDAR_HEIGHT_M   # [m] scan plane above the floor (common.robot)
 SENSOR_X = 0.02          # [m] sensor ahead of the robot centre (assumption: mounted slightly
                          # forward on the top plate)
 

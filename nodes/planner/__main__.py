@@ -14,6 +14,7 @@ Exit code 2 on a bad setting.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 
@@ -23,9 +24,11 @@ from common.params import arg_type
 from common.ports import describe, plain
 from common.transport import add_zenoh_args, open_node, setup_logging
 from nodes.planner.loop import PlannerLoop
+from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
-from nodes.planner.registry import PLANNERS, make_planner
+from nodes.planner.registry import PLANNERS, PRESETS, make_planner, preset_sets
 from nodes.planner.settings import NODE
+from schemas.messages import Event
 
 NODE_NAME = "planner"
 
@@ -38,6 +41,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="override one setting, repeatable (e.g. --set d_o=0.8)")
+    ap.add_argument("--preset", choices=PRESETS, default="default",
+                    help="default (our improvements) or paper (the paper read literally)")
     ap.add_argument("--realtime", action="store_true",
                     help="pair each scan with the latest odometry (robot / HIL)")
     ap.add_argument("--stale-timeout", type=arg_type("--stale-timeout", NODE["stale_timeout"]),
@@ -56,7 +61,7 @@ def parse_args(argv=None) -> argparse.Namespace:
 def run(args: argparse.Namespace) -> int:
     log = setup_logging(NODE_NAME, args.log_level)
     try:
-        planner = make_planner(args.planner, args.params, args.set)
+        planner = make_planner(args.planner, args.params, [*preset_sets(args.preset), *args.set])
     except ConfigError as exc:
         log.error("%s", exc)
         return 2
@@ -67,21 +72,41 @@ def run(args: argparse.Namespace) -> int:
                            send_command=lambda cmd: node.publish("cmd_vel", cmd))
         for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
-        node.declare_publishers("cmd_vel", "planner/state", "planner/status")
+        node.declare_publishers("cmd_vel", "planner/state", "planner/status", "events")
+        params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
+            node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()
         log.info("planner %s (%s); waiting for a goal on %s (papf goal X Y)", args.planner,
                  "realtime" if args.realtime else "lockstep", node.keys.goal)
         last_status = None
         for topic, msg in node.messages(tick_s=0.05):
             now = time.monotonic()
+            if topic == "planner/params":
+                _answer_params(node, args.planner, planner, msg, loop.last_stamp)
+                continue
             out = loop.on_message(topic, msg, now) if topic else []
             for out_topic, out_msg in out + loop.poll(now):
                 node.publish(out_topic, out_msg)
                 if out_topic == "planner/status" and out_msg.state != last_status:
                     last_status = out_msg.state
                     log.info("status %s at %d ns %s", out_msg.state, out_msg.stamp_ns, out_msg.reason)
+        params_q.undeclare()
         log.info("stopping after %d cycles (%d stale)", loop.cycles, loop.stale_cycles)
     return 0
+
+
+def _answer_params(node, name: str, planner, query, stamp_ns: int) -> None:
+    """Reply to a ``planner/params`` query; a change is logged and published as an event."""
+    payload = query.payload.to_bytes() if query.payload is not None else b""
+    reply, changed = answer(name, planner, payload)
+    query.reply(query.key_expr, json.dumps(reply).encode())
+    if reply["error"]:
+        node.log.warning("parameter change refused: %s", reply["error"])
+    if changed:
+        detail = "parameters set: " + ", ".join(f"{k}={reply['params'][k]}" for k in changed)
+        node.log.info("%s", detail)
+        node.publish("events", Event(stamp_ns=stamp_ns, kind="info", source="planner",
+                                     detail=detail))
 
 
 def warm_up(planner) -> None:

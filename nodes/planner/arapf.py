@@ -192,6 +192,10 @@ class ARAPFStrategy:
 
     name = "arapf"
     Params = ARAPFParams
+    #: ``--preset paper``: eqs. 2-4 without range limits, the obstacle placed once, the
+    #: passage measured bound to bound (docs/planners.md, "Presets").
+    PAPER_PRESET = {"range_limited": False, "wall_range_limited": False, "follow": False,
+                    "passage_width": "gap"}
 
     def __init__(self, params: ARAPFParams | None = None):
         self.params = params or ARAPFParams()

@@ -147,6 +147,12 @@ class Planner:
             self.strategy.reset()
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
+    def set_params(self, apf: APFParams, algo) -> None:
+        """New settings from the next cycle on (the stagnation watch and strategy memory stay)."""
+        self.apf = apf
+        self._apf_for_l.clear()
+        self.strategy.params = algo
+
     # -- one cycle ----------------------------------------------------------
     def step(self, scan: Scan, odom: Odometry, objects: Objects | None = None
              ) -> tuple[Twist, PlannerState, PlannerStatus]:

@@ -26,6 +26,8 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from nodes.planner.iapf_fields import (
     Lanes,
     attraction_gradient,
@@ -35,6 +37,7 @@ from nodes.planner.iapf_fields import (
     safety_distance,
     traditional_gradient,
 )
+from nodes.planner.iapf_kernel import HALF, pack_obstacles, pack_params, rollout
 
 
 @dataclass(frozen=True)
@@ -64,7 +67,7 @@ class IAPFParams:
     v_max_factor: float = 1.2    # v <= factor * V_c (ours: "accelerate when passing")
     predict_step_s: float = 0.15  # [s] step of the low-resolution prediction (ours)
     goal_half_period_lanes: float = 2.0  # D_g / d_w of eqs. 8, 19 (ours; 1 = eq. 8 as printed)
-    b3_temp: float = 25.0        # lane-goal amplitude while a temporary goal is active (ours)
+    b3_temp: float = 70.0        # lane-goal amplitude while a temporary goal is active (ours)
     heading_max_deg: float = 30.0  # [deg] |phi_E| limit about +x (ours; 90 = none)
     yaw_rate_max_deg: float = 90.0  # [deg/s] heading change limit (ours; 0 = none, as eq. 21)
     host_length: float = 4.5     # [m] host footprint along its heading (ours: a car)
@@ -73,6 +76,9 @@ class IAPFParams:
     prediction: bool = True      # Algorithm 1 on (off: "IAPF without prediction", Table 2)
     traditional: bool = False    # the traditional APF baseline (eq. 12, constant speed)
     k_trad: float = 3000.0       # eq. 12 k of the baseline (ours)
+    brake_priority: bool = False  # an obstacle pushing back suspends eq. 25's return to V_c (ours)
+    follow_min_frac: float = 0.5  # leader slower than this * V_c: change lanes if free (ours; 0 = off)
+    goal_lane_s: float = 6.0     # [s] of cruise before the goal: pull to its lane (ours; 0 = off)
     lane_width_ref: float = 4.0  # [m] the lane width d_w these values are for (Table 1)
     cruise_speed: float = 0.3    # [m/s] V_c of the planner node on the run's road (ours, ROSbot)
 
@@ -81,11 +87,13 @@ class IAPFParams:
 # value goes back, every addition of ours is switched off.
 PAPER_PRESET = {"a_x": -0.15, "t_c": 0.4, "obstacle_gain": 1.0, "predict_step_s": 0.02,
                 "goal_half_period_lanes": 1.0, "b3_temp": 1.52, "heading_max_deg": 90.0,
-                "yaw_rate_max_deg": 0.0, "literal_rotation": True}
+                "yaw_rate_max_deg": 0.0, "literal_rotation": True, "follow_min_frac": 0.0,
+                "goal_lane_s": 0.0}
 
 _LENGTH_TIMES = {"s_m": (1, 0), "host_length": (1, 0), "host_width": (1, 0),
                  "lane_width_ref": (1, 0), "k_trad": (1, 0),
-                 "step_s": (0, 1), "horizon_s": (0, 1), "t_c": (0, 1), "predict_step_s": (0, 1),
+                 "step_s": (0, 1), "horizon_s": (0, 1), "goal_lane_s": (0, 1), "t_c": (0, 1),
+                 "predict_step_s": (0, 1),
                  "yaw_rate_max_deg": (0, -1), "v_cruise": (1, -1), "a_b": (1, -2),
                  "a_max": (1, -2), "k1": (-4, 0), "k2": (-2, 0), "b1": (-1, 0), "b2": (-1, 0),
                  "b3": (-1, 0), "b3_temp": (-1, 0), "a_x": (-2, 0), "a_y": (-2, 0),
@@ -127,6 +135,8 @@ class StepInfo:
     accel: float = 0.0
     predicted: list = field(default_factory=list)   # [(x, y)] of the prediction
     local_count: int = 0                            # eq. 24
+    predicted_speed: float = math.nan               # [m/s] at the end of the prediction
+    cannot_follow: bool = False                     # the lane goal was set because of it
     temp_goal_y: float | None = None                # active temporary lane goal [m]
     active: int = 0                                 # obstacles within D_S
 
@@ -145,7 +155,7 @@ def local_count(points, y_now: float, lanes: Lanes) -> int:
     total = 0
     for _, y in points:
         s = (y - mid) * toward
-        total += (s > 0.0) - (s < 0.0)
+        total += 1 if s > 0.0 else (-1 if s < 0.0 else 0)
     return total
 
 
@@ -163,10 +173,12 @@ def temporary_goal(y_now: float, lanes: Lanes) -> float:
 class IAPFCore:
     """One IAPF planner (or the traditional baseline) with its temporary-goal memory."""
 
-    def __init__(self, params: IAPFParams | None = None):
+    def __init__(self, params: IAPFParams | None = None, use_numba: bool = True):
         self.p = params or IAPFParams()
+        self.use_numba = use_numba
         self.temp_goal_y: float | None = None
         self.t_goal = -math.inf
+        self._prm = None       # the kernel's params vector (packed once)
 
     def reset(self) -> None:
         self.temp_goal_y, self.t_goal = None, -math.inf
@@ -207,7 +219,10 @@ class IAPFCore:
         v = s.v
         if not p.traditional:
             dv = p.v_cruise - v
-            accel = (p.eta1 * fox + p.eta2 * dv * dv * dv) / p.mass
+            back = p.eta2 * dv * dv * dv
+            if p.brake_priority and fox < 0.0:
+                back = min(back, 0.0)
+            accel = (p.eta1 * fox + back) / p.mass
             accel = min(max(accel, -p.a_b), p.a_max)
             v = min(max(v + accel * dt, 0.0), p.v_max_factor * p.v_cruise)
         lim = math.radians(p.heading_max_deg)
@@ -219,31 +234,79 @@ class IAPFCore:
                 (fx, fy, fox, accel, active))
 
     # -- Algorithm 1 --------------------------------------------------------------------
-    def predict(self, s: HostState, tracks, lanes: Lanes, y_goal: float | None) -> list:
-        """Step 1: ``f_step`` points ``predict_step_s`` apart, obstacles at constant velocity,
-        the field without the temporary goal (the future the vehicle would drive into)."""
+    def predict(self, s: HostState, tracks, lanes: Lanes, y_goal: float | None) -> np.ndarray:
+        """Step 1: ``f_step`` states (x, y, v, yaw) ``predict_step_s`` apart, obstacles at
+        constant velocity, the field without the temporary goal (the future the vehicle would
+        drive into). Runs :func:`nodes.planner.iapf_kernel.rollout` (numba when available)."""
         p = self.p
-        pts = []
-        for k in range(p.f_step):
-            s, _ = self.advance(s, tracks, lanes, y_goal, p.b3, p.predict_step_s,
-                                k * p.predict_step_s)
-            pts.append((s.x, s.y))
-        return pts
+        if self._prm is None:
+            self._prm = pack_params(p)
+        self._prm[HALF] = p.goal_half_period_lanes * lanes.width
+        return rollout((s.x, s.y, s.v, s.yaw), pack_obstacles(tracks), self._prm,
+                       (lanes.y_min, lanes.width, lanes.count), y_goal, p.b3, p.predict_step_s,
+                       p.f_step, self.use_numba)
+
+    def lane_free(self, y_lane: float, s: HostState, tracks, lanes: Lanes) -> bool:
+        """No vehicle in the lane centred at ``y_lane`` beside the host or ahead within the
+        safety distance at the cruise speed, and none behind closing in within its own (ours:
+        the "decision module" the paper assumes)."""
+        p = self.p
+        for ob in tracks:
+            if abs(ob.y - y_lane) >= 0.5 * lanes.width:
+                continue
+            g = gap(s.x, s.y, p.host_length, ob)
+            if ob.x > s.x - 0.5 * (p.host_length + ob.length):      # beside or ahead
+                if g < safety_distance(p.v_cruise, ob.speed, p.a_b, p.s_m):
+                    return False
+            elif ob.vx > s.v and g < safety_distance(ob.speed, s.v, p.a_b, p.s_m):
+                return False                                         # closing from behind
+        return True
+
+    def _cannot_follow(self, s: HostState, tracks, lanes: Lanes) -> bool:
+        """A vehicle ahead in the host's lane, within D_S at the cruise speed, slower than
+        ``follow_min_frac`` V_c,
+        and the next lane free (ours, Sec. 2.1: "if the obstacle vehicle has a much lower speed
+        than the host vehicle, the host will have to perform lane-changing maneuvers")."""
+        p = self.p
+        if p.follow_min_frac <= 0.0:
+            return False
+        lane = lanes.lane_of(s.y)
+        slow = any(lanes.lane_of(ob.y) == lane and ob.x > s.x and ob.speed < p.follow_min_frac *
+                   p.v_cruise and gap(s.x, s.y, p.host_length, ob) < safety_distance(
+                       p.v_cruise, ob.speed, p.a_b, p.s_m) for ob in tracks)
+        return slow and self.lane_free(temporary_goal(s.y, lanes), s, tracks, lanes)
+
+    def lane_goal(self, s: HostState, tracks, lanes: Lanes | None, y_goal: float | None,
+                  goal_x: float | None) -> tuple[float | None, float]:
+        """(Y_goal, b3) of the permanent lane goal: Table 1's b3, or ``b3_temp`` within
+        ``goal_lane_s`` of cruising from the goal when the goal's lane is free (ours: the host
+        must be near the goal lane's centre to reach a goal point)."""
+        p = self.p
+        if (y_goal is None or goal_x is None or lanes is None or p.goal_lane_s <= 0.0
+                or goal_x - s.x > p.goal_lane_s * p.v_cruise
+                or not self.lane_free(y_goal, s, tracks, lanes)):
+            return y_goal, p.b3
+        return y_goal, p.b3_temp
 
     def step(self, s: HostState, tracks, lanes: Lanes | None, t: float,
-             y_goal: float | None = None, dt: float | None = None) -> tuple[HostState, StepInfo]:
-        """One planning step at time ``t`` [s] of ``dt`` (default ``step_s``)."""
+             y_goal: float | None = None, dt: float | None = None,
+             goal_x: float | None = None) -> tuple[HostState, StepInfo]:
+        """One planning step at time ``t`` [s] of ``dt`` (default ``step_s``); ``y_goal``,
+        ``goal_x``: the goal's lane centre and x [m] (None: cruise along the road)."""
         p = self.p
         dt = p.step_s if dt is None else dt
         info = StepInfo()
         if self.temp_goal_y is not None and t >= self.t_goal + p.t_c:      # Step 6
             self.temp_goal_y = None
         if p.prediction and not p.traditional and lanes is not None:
-            info.predicted = self.predict(s, tracks, lanes, y_goal)
+            future = self.predict(s, tracks, lanes, y_goal)
+            info.predicted = [tuple(r) for r in future[:, :2].tolist()]
+            info.predicted_speed = float(future[-1, 2])
             info.local_count = local_count(info.predicted, s.y, lanes)      # Step 2
-            if info.local_count > p.c_f:                                    # Step 3
+            info.cannot_follow = self._cannot_follow(s, tracks, lanes)
+            if info.local_count > p.c_f or info.cannot_follow:              # Step 3
                 self.temp_goal_y, self.t_goal = temporary_goal(s.y, lanes), t  # Step 4
-        goal_y, b3 = y_goal, p.b3
+        goal_y, b3 = self.lane_goal(s, tracks, lanes, y_goal, goal_x)
         if self.temp_goal_y is not None:                                    # Step 5
             goal_y, b3 = self.temp_goal_y, p.b3_temp
         new, (fx, fy, fox, accel, active) = self.advance(s, tracks, lanes, goal_y, b3, dt)

@@ -176,7 +176,7 @@ def obstacle_gradient(x: float, y: float, ob: Track, gain: float, a_x: float, a_
     g = abs(ax) / d                                    # G_cos
     grx = 2.0 * a_x * rx * c + 2.0 * a_y * ry * s      # G_Rx (eq. 16)
     gry = -2.0 * a_x * rx * s + 2.0 * a_y * ry * c     # G_Ry (eq. 16)
-    sg = (ax > 0.0) - (ax < 0.0)
+    sg = 1.0 if ax > 0.0 else (-1.0 if ax < 0.0 else 0.0)
     d3 = d2 * d
     dgx = sg * px / d - abs(ax) * dx / d3
     dgy = sg * py / d - abs(ax) * dy / d3

@@ -2,8 +2,8 @@
 :mod:`nodes.planner.iapf` on obstacle tracks and the road the run announced.
 
 Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the latest obstacle tracks
-(``<ns>/objects``: ground truth or the LiDAR tracker) and the road (:class:`Lanes`) —
-the planner never reads a world file. The scan itself is not used: IAPF's fields are
+(``<ns>/objects``: ground truth or the LiDAR tracker, paired with the scan by the planner
+core) and the road (from the goal handshake) — the planner never reads a world file. The scan itself is not used: IAPF's fields are
 built from tracked vehicles (Sec. 2.2.3), and the road is lines on the floor.
 
 Scale: :class:`IAPFParams` are the paper's car-scale values (lanes of ``lane_width_ref``
@@ -15,10 +15,12 @@ updated speed v_c (eq. 26), which the planner's heading controller then tracks.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
+from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.planner.apf import APFParams
 from nodes.planner.core import Plan, ScanView
 from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
@@ -49,6 +51,12 @@ class IAPFStrategy:
             self._core.reset()
         self.v = None
 
+    def warm_up(self, apf: APFParams) -> None:
+        """Compile the prediction kernel (numba) before the node declares itself ready."""
+        core = IAPFCore(self.params)
+        core.predict(HostState(0.0, 0.0, 1.0), [Track(5.0, 0.0, 0.0, 1.0, 0.0, 4.5, 1.8)],
+                     Lanes(-2.0, 4.0, 2), 0.0)
+
     def observe(self, tracks, lanes: Lanes | None, t_s: float, v_odom: float) -> None:
         """The latest obstacle tracks, the road (None: not known yet), sim time [s], speed."""
         self.tracks = tuple(tracks)
@@ -61,7 +69,13 @@ class IAPFStrategy:
             p = self.params
             s = lanes.width / p.lane_width_ref
             tau = s * p.v_cruise / p.cruise_speed
-            self._core, self._core_for = IAPFCore(scaled(p, s, tau)), lanes
+            # the robot's heading controller limits its turn rate: no particle rate limit on top
+            # and the safety gaps are measured from the robot's own footprint
+            # the robot must be able to stop behind a vehicle: an obstacle pushing back
+            # suspends the return to cruise (eq. 25's cubic beats any braking force otherwise)
+            q = dataclasses.replace(scaled(p, s, tau), yaw_rate_max_deg=0.0, brake_priority=True,
+                                    host_length=BODY_LENGTH_M, host_width=BODY_WIDTH_M)
+            self._core, self._core_for = IAPFCore(q), lanes
         return self._core
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
@@ -69,11 +83,12 @@ class IAPFStrategy:
         if self.lanes is None:
             return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw)
         core = self.core_for(self.lanes)
-        if self.v is None:
+        if self.v is None:   # the planned speed starts at the robot's own
             self.v = max(0.0, self.v_odom)
         state = HostState(float(pos[0]), float(pos[1]), self.v, yaw)
         y_goal = self.lanes.centre(self.lanes.lane_of(float(goal[1])))
-        new, info = core.step(state, self.tracks, self.lanes, self.t_s, y_goal)
+        new, info = core.step(state, self.tracks, self.lanes, self.t_s, y_goal,
+                              goal_x=float(goal[0]))
         self.v = new.v
         temp = ()
         if info.temp_goal_y is not None:

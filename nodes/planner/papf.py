@@ -25,6 +25,8 @@ goal (mode ``unresolved``); in the motion law a quark acts as a charged ball of 
 lambda_stag (no singular push when the robot stands on it) acting within d_o (eq. 7's
 where-clause); the prediction stops at the goal; ties in eq. 8 go to the farthest point
 along the path; a cycle that places a quark tells the stagnation watch the search goes on.
+Each choice is a switch of :class:`PAPFParams`; ``--preset paper`` (:data:`PAPER_PRESET`)
+turns them all off.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ import numpy as np
 
 from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
-from nodes.planner.kernels import field_force, predict_paths
+from nodes.planner.kernels import field_force, predict_paths, rollout, tail_stagnation
 
 
 @dataclass(frozen=True)
@@ -56,6 +58,10 @@ class PAPFParams:
     use_numba: bool = True          # numba kernel if installed (identical results to numpy)
     persist_quarks: bool = True     # keep quarks (world frame) across cycles (ours)
     pull_range_fraction: float = 1.0  # prediction: goal pull as if the goal were <= this * lambda away (ours; 0: literal)
+    motion_quarks_within_d_o: bool = True  # motion law: quarks act within d_o (ours; false: within d_q, as the prediction)
+    unresolved_global_goal: bool = True    # after M repetitions: eq. 7 with the global goal (ours; false: eq. 8 on the last path)
+    stop_at_goal: bool = True       # the prediction stops within Delta of the goal (ours; false: always i_max + n_stag steps)
+    quark_restarts_watch: bool = True      # a cycle that places a quark restarts the stagnation watch (ours)
 
     @property
     def i_max(self) -> int:
@@ -106,10 +112,37 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
         reach = (pp.i_max + pp.n_stag) * pp.step_m + apf.d_o + 1e-6
         rel = obstacles - pos
         obstacles = obstacles[np.sum(rel * rel, axis=1) <= reach * reach]
+    if not pp.stop_at_goal:
+        return _predict_past_goal(pos, goal, obstacles, apf, pp, quarks)
     path, quarks, abandoned, resolved, reached = predict_paths(
         pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q, pp.step_m, pp.i_max,
         pp.n_stag, pp.stag_radius, pp.max_quarks, pp.pull_range, pp.use_numba)
     return Prediction(path, quarks, abandoned, resolved, reached)
+
+
+def _predict_past_goal(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks) -> Prediction:
+    """:func:`predict` with ``stop_at_goal = False`` (Algorithm 1 as written: always
+    ``i_max + n_stag`` steps, so a path that reaches the goal oscillates about it and the
+    stagnation check runs there too). The same loop as the kernel's, on :func:`rollout` with
+    a stop radius of 0 (no stop unless a point lands exactly on the goal)."""
+    g_goal = apf.k_vg * apf.q_v * apf.q_g
+    g_obs = apf.k_vo * apf.q_v * apf.q_o
+    g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
+    quarks = quarks[max(0, quarks.shape[0] - pp.max_quarks):]
+    abandoned = []
+    while True:
+        path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
+                                pp.step_m, pp.i_max + pp.n_stag, 0.0, pp.use_numba, pp.pull_range)
+        if reached:
+            return Prediction(path, quarks, abandoned, True, True)
+        main = path[: pp.i_max + 1]
+        stuck, mean = tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
+        if not stuck:
+            return Prediction(main, quarks, abandoned, True, False)
+        if len(abandoned) >= pp.max_quarks or pp.max_quarks <= 0:
+            return Prediction(main, quarks, abandoned, False, False)
+        abandoned.append(main)
+        quarks = np.vstack([quarks[max(0, quarks.shape[0] - pp.max_quarks + 1):], mean])
 
 
 def temporary_goal(pos, direction, path: np.ndarray, tie_tol: float) -> np.ndarray:
@@ -144,10 +177,18 @@ def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.n
         return force
     r = np.asarray(quarks, dtype=float) - pos
     dist = np.sqrt(np.sum(r * r, axis=1))
-    keep = (dist > EPS_M) & (dist <= apf.d_o)
+    keep = (dist > EPS_M) & (dist <= (apf.d_o if pp.motion_quarks_within_d_o else pp.d_q))
     soft = np.maximum(dist[keep], pp.quark_ball_m)
     gain = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
     return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
+
+
+#: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off, one
+#: quark range d_q = d_o for prediction and motion (eq. 7's where-clause defines d_o only).
+PAPER_PRESET = {"pull_range_fraction": 0.0, "motion_quarks_within_d_o": False, "quark_ball_m": 0.0,
+                "unresolved_global_goal": False, "stop_at_goal": False,
+                "quark_restarts_watch": False, "persist_quarks": False, "tie_tol_m": 0.0,
+                "d_q": 0.5}
 
 
 class PAPFStrategy:
@@ -155,6 +196,7 @@ class PAPFStrategy:
 
     name = "papf"
     Params = PAPFParams
+    PAPER_PRESET = PAPER_PRESET
 
     def __init__(self, params: PAPFParams | None = None):
         self.params = params or PAPFParams()
@@ -177,15 +219,15 @@ class PAPFStrategy:
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
         g_goal, g_obs = apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o
-        if pred.resolved:                                         # eq. 2: the direction line
+        if pred.resolved or not pp.unresolved_global_goal:       # eq. 2: the direction line
             f_apf = field_force(pos, goal, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
             direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
             target = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
-            mode = "bypass" if pred.quarks.shape[0] else "drive"
+            mode = ("bypass" if pred.quarks.shape[0] else "drive") if pred.resolved else "unresolved"
         else:   # no stagnation-free path after M repetitions: eq. 7 with the global goal
             target, mode = goal, "unresolved"
         force = (field_force(pos, target, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
                  + quark_force(pos, pred.quarks, apf, pp))
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
-                    top_quarks=pred.quarks, searching=bool(pred.abandoned))
+                    top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)

@@ -25,7 +25,7 @@ from nodes.planner.core import Plan, Planner, ScanView
 from nodes.planner.iapf_strategy import IAPFStrategy
 from nodes.planner.papf import PAPFStrategy
 from nodes.planner.settings import specs_of
-from nodes.planner.wang import WangStrategy
+from nodes.planner.wang import WangAPFStrategy, WangStrategy
 
 try:
     import tomllib
@@ -33,10 +33,14 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 
+PRESETS = ("default", "paper")
+
+
 class APFStrategy:
     """Classic APF (PAPF paper eq. 2): steer by the resultant force towards the global goal."""
 
     name = "apf"
+    PAPER_PRESET: dict = {}   # eq. 2 as written already: no deviation to switch off
 
     @dataclass(frozen=True)
     class Params:
@@ -58,6 +62,7 @@ PLANNERS: dict[str, type] = {
     "papf": PAPFStrategy,
     "arapf": ARAPFStrategy,
     "wang": WangStrategy,
+    "wang-apf": WangAPFStrategy,
     "iapf": IAPFStrategy,
 }
 
@@ -118,9 +123,37 @@ def _apply(apf: APFParams, algo, items: list[tuple[str, str, object]], planner: 
     return apf, algo
 
 
+def preset_settings(planner: str, preset: str) -> dict:
+    """The settings a preset makes: ``default`` none, ``paper`` the strategy's ``PAPER_PRESET``
+    (the paper read literally, every deviation of ours off; docs/planners.md, "Presets")."""
+    if preset not in PRESETS:
+        raise ConfigError(f"unknown preset {preset!r}; valid: {list(PRESETS)}")
+    return dict(getattr(PLANNERS[planner], "PAPER_PRESET", {})) if preset == "paper" else {}
+
+
+def preset_sets(preset: str) -> list[str]:
+    """``--preset NAME`` as ``--set`` strings (none for ``default``, so a file's preset stands)."""
+    if preset not in PRESETS:
+        raise ConfigError(f"unknown preset {preset!r}; valid: {list(PRESETS)}")
+    return [] if preset == "default" else [f"preset={preset}"]
+
+
+def _with_preset(planner: str, items: list[tuple[str, str, object]]):
+    """Resolve the reserved setting ``preset`` (last one wins): its settings go first, so a
+    file or ``--set`` can still switch a single deviation back."""
+    chosen = [str(v).strip() for t, n, v in items if n == "preset" and t in ("", planner)]
+    rest = [it for it in items if not (it[1] == "preset" and it[0] in ("", planner))]
+    if not chosen:
+        return rest
+    return [("", k, v) for k, v in preset_settings(planner, chosen[-1]).items()] + rest
+
+
 def load_params(planner: str, file: str | Path | None = None, sets: list[str] = ()):
-    """(APFParams, algorithm Params) from defaults, then ``file``, then ``sets``; every
-    value checked against its declared range (:mod:`nodes.planner.settings`)."""
+    """(APFParams, algorithm Params) from defaults, then the preset, then ``file``, then
+    ``sets``; every value checked against its declared range (:mod:`nodes.planner.settings`).
+
+    ``preset=NAME`` (in the file or as a ``--set``; :data:`PRESETS`) selects a preset.
+    """
     apf, algo = APFParams(), _planner_class(planner).Params()
     items: list[tuple[str, str, object]] = []
     if file:
@@ -137,7 +170,7 @@ def load_params(planner: str, file: str | Path | None = None, sets: list[str] = 
         key, value = text.split("=", 1)
         table, _, name = key.strip().rpartition(".")
         items.append((table, name, value.strip()))
-    return _apply(apf, algo, items, planner)
+    return _apply(apf, algo, _with_preset(planner, items), planner)
 
 
 def _read_toml(file: str | Path) -> dict:

@@ -20,7 +20,7 @@ from nodes.planner.apf import APFParams
 from nodes.planner.arapf import ARAPFParams
 from nodes.planner.iapf import IAPFParams
 from nodes.planner.papf import PAPFParams
-from nodes.planner.wang import WangParams
+from nodes.planner.wang import WangAPFParams, WangParams
 
 MAX_BEAMS = 100_000      # [-] LiDAR points a planner is configured for
 MAX_GAIN = 1e4           # [-] largest force constant (defaults are 1 .. 10)
@@ -58,6 +58,10 @@ PAPF: dict[str, Spec] = {
     "use_numba": FLAG,
     "persist_quarks": FLAG,
     "pull_range_fraction": num(0.0, 100.0),
+    "motion_quarks_within_d_o": FLAG,
+    "unresolved_global_goal": FLAG,
+    "stop_at_goal": FLAG,
+    "quark_restarts_watch": FLAG,
 }
 
 ARAPF: dict[str, Spec] = {
@@ -86,6 +90,14 @@ WANG: dict[str, Spec] = {
     "control_offset_m": num(0.0, 1.0, "m"),
 }
 
+# Wang's traditional APF baseline (eqs. 1-5)
+WANG_APF: dict[str, Spec] = {
+    "k_att": pos(1000.0),
+    "k_rep_l": pos(MAX_GAIN, safety=True),
+    "lidar_points": integer(1, MAX_BEAMS),
+    "rho_0": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+}
+
 # IAPF (Yang et al.): car-scale road planner; Table 1 values and ours (nodes/planner/iapf.py).
 # Its a_x, a_y are negative by the paper's eq. 11 (the obstacle field decays with them).
 IAPF: dict[str, Spec] = {
@@ -104,10 +116,12 @@ IAPF: dict[str, Spec] = {
     "host_width": pos(10.0, "m"), "literal_rotation": FLAG, "prediction": FLAG,
     "traditional": FLAG, "k_trad": pos(1e7), "lane_width_ref": pos(20.0, "m"),
     "cruise_speed": pos(V_MAX_M_S, "m/s", safety=True),
+    "brake_priority": FLAG, "follow_min_frac": num(0.0, 1.0), "goal_lane_s": num(0.0, 600.0, "s"),
 }
 
 SPECS: dict[type, dict[str, Spec]] = {
     APFParams: APF, PAPFParams: PAPF, ARAPFParams: ARAPF, WangParams: WANG, IAPFParams: IAPF,
+    WangAPFParams: WANG_APF,
 }
 
 

@@ -135,6 +135,8 @@ class WangStrategy:
 
     name = "wang"
     Params = WangParams
+    #: ``--preset paper``: the force at the robot itself (Wang moves a point along it).
+    PAPER_PRESET = {"control_offset_m": 0.0}
 
     def __init__(self, params: WangParams | None = None):
         self.params = params or WangParams()
@@ -149,3 +151,49 @@ class WangStrategy:
             wp = dataclasses.replace(wp, lidar_points=apf.lidar_points)
         at = control_point(pos, yaw, goal, wp)
         return Plan(force=wang_force(at, goal, view.points, wp))
+
+
+@dataclass(frozen=True)
+class WangAPFParams:
+    """Wang's traditional APF (eqs. 1-5), gains of Table 1 per LiDAR point."""
+
+    k_att: float = 10.0             # K_att (Wang Table 1)
+    k_rep_l: float = 2.0            # K_rep * L: Table 1's K_rep = 2 per obstacle, spread over the beams
+    lidar_points: int = 300         # L used to scale k_rep
+    rho_0: float = 0.5              # [m] influence radius (ours, = d_o; Table 1's 20 is in map units)
+
+
+def traditional_force(pos, goal, obstacles, wp: WangAPFParams) -> np.ndarray:
+    """Eqs. 2 and 4: ``K_att (X_g - X_u)`` plus, per point within rho_0,
+    ``k_rep (1/rho - 1/rho_0) / rho^2`` away from it (eq. 2's convention: factor 2 dropped)."""
+    pos = np.asarray(pos, dtype=float)
+    force = wp.k_att * (np.asarray(goal, dtype=float) - pos)
+    away = pos - np.asarray(obstacles, dtype=float).reshape(-1, pos.shape[0])
+    rho = np.sqrt(np.sum(away * away, axis=1))
+    near = (rho > EPS_M) & (rho < wp.rho_0)
+    if near.any():
+        r = rho[near]
+        mag = (wp.k_rep_l / wp.lidar_points) * (1.0 / r - 1.0 / wp.rho_0) / r**2
+        force = force + np.sum(away[near] * (mag / r)[:, None], axis=0)
+    return force
+
+
+class WangAPFStrategy:
+    """Wang's traditional APF baseline, eqs. 1-5 (registered as ``wang-apf``)."""
+
+    name = "wang-apf"
+    Params = WangAPFParams
+    PAPER_PRESET: dict = {}   # eqs. 1-5 as written
+
+    def __init__(self, params: WangAPFParams | None = None):
+        self.params = params or WangAPFParams()
+
+    def reset(self) -> None:
+        pass
+
+    def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
+             apf: APFParams) -> Plan:
+        wp = self.params
+        if apf.scale_to_scan and apf.lidar_points != wp.lidar_points:
+            wp = dataclasses.replace(wp, lidar_points=apf.lidar_points)
+        return Plan(force=traditional_force(pos, goal, view.points, wp))

@@ -21,10 +21,12 @@ import sys
 
 from common.errors import PapfError
 from papf.cli import (
+    animate,
     bench,
     certs,
     emulator,
     experiment,
+    export,
     goal,
     info,
     launch,
@@ -36,11 +38,12 @@ from papf.cli import (
     run,
     teleop,
     topic,
+    view,
     worlds,
 )
 
 COMMANDS = (run, worlds, launch, topic, goal, teleop, plan, experiment, report, record, replay,
-            recover, info, bench, emulator, certs)
+            recover, info, view, export, animate, bench, emulator, certs)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -19,6 +19,7 @@ BENCHES = {
     "sweep": "full-stack runs per hour of a sweep at --workers 1 and 2 (Dask)",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
+    "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
 }
 

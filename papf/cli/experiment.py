@@ -1,4 +1,4 @@
-"""``papf experiment energy | paper-tests | random | traffic``: many runs, a table, plots.
+"""``papf experiment energy | paper-tests | random | iapf | traffic``: many runs, a table, plots.
 
 ``energy`` is the PAPF paper's energy experiment (IV-C) through the process stack,
 recorded (:mod:`papf.experiments.energy`); ``paper-tests`` every paper world with every
@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
+from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
 
@@ -25,7 +26,9 @@ def register(sub) -> None:
     _add_energy(exp)
     _add_paper_tests(exp)
     _add_random(exp)
+    _add_iapf(exp)
     _add_traffic(exp)
+    add_paper_studies(exp)
 
 
 def _add_energy(exp) -> None:
@@ -44,8 +47,18 @@ def _add_energy(exp) -> None:
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
                    help="the live meter's model (default motor)")
+    p.add_argument("--worlds", metavar="W1,W2",
+                   help="several worlds, each into DIR/world-<name>/, plus DIR/energy-worlds.md/.csv "
+                        "(e.g. energy,energy-blocking,energy-empty)")
+    _add_presets(p)
     _add_sweep(p)
     p.set_defaults(func=cmd_energy)
+
+
+def _add_presets(p) -> None:
+    p.add_argument("--presets", default="default", metavar="P1,P2",
+                   help="planner presets side by side: default, paper or default,paper "
+                        "(a planner whose paper preset changes nothing runs once)")
 
 
 def _add_sweep(p) -> None:
@@ -73,6 +86,7 @@ def _add_common(p, default_out: str) -> None:
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
+    _add_presets(p)
     _add_sweep(p)
 
 
@@ -101,6 +115,50 @@ def _add_random(exp) -> None:
     mode.add_argument("--stack", dest="mode", action="store_const", const="stack",
                       help="every run through the whole process stack (slow)")
     p.set_defaults(func=cmd_random, mode="offline")
+
+
+def _add_iapf(exp) -> None:
+    p = exp.add_parser("iapf", help="the IAPF paper's cases A-D at car scale: a Table-2 table, figures",
+                       description="Cases A-D (worlds iapf-case-a ... d) for the paper's case times "
+                                   "with IAPF, IAPF without prediction and the traditional APF, in "
+                                   "the paper's vehicle model (0.02 s steps); write iapf.md, "
+                                   "iapf.csv, one CSV per run and one PNG per case into --out.")
+    p.add_argument("--out", default="iapf-cases", metavar="DIR", help="output directory")
+    p.add_argument("--planners", default="iapf,iapf-np,apf",
+                   help="comma-separated: iapf, iapf-np, apf (default all three)")
+    p.add_argument("--cases", default="a,b,c,d", help="comma-separated subset of a,b,c,d")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="IAPF setting for every run, repeatable (e.g. --set t_c=0.4)")
+    p.add_argument("--no-horizon", action="store_true",
+                   help="skip timing the T = 5 s trajectory plans (faster)")
+    p.add_argument("--readings", action="store_true",
+                   help="instead: every case with each of our readings switched back to the "
+                        "paper (readings.md, readings.csv)")
+    p.set_defaults(func=cmd_iapf)
+
+
+def cmd_iapf(args) -> int:
+    from papf.experiments.iapf import CASES, run_iapf_experiment  # matplotlib: when run
+    from papf.plan_road import CAR_PLANNERS
+
+    planners = [p.strip() for p in args.planners.split(",") if p.strip()]
+    bad = [p for p in planners if p not in CAR_PLANNERS]
+    cases = [f"iapf-case-{c.strip()}" for c in args.cases.split(",") if c.strip()]
+    bad_cases = [c for c in cases if c not in CASES]
+    if bad or not planners:
+        raise ConfigError(f"--planners {args.planners!r}: unknown {bad}; valid: {sorted(CAR_PLANNERS)}")
+    if bad_cases or not cases:
+        raise ConfigError(f"--cases {args.cases!r}: valid: a, b, c, d")
+    if args.readings:
+        from papf.experiments.iapf_readings import run_readings
+
+        run_readings(args.out, progress=lambda m: print(m, file=sys.stderr))
+        print((Path(args.out) / "readings.md").read_text())
+        return 0
+    run_iapf_experiment(args.out, planners, cases, args.set, horizon=not args.no_horizon,
+                        progress=lambda m: print(m, file=sys.stderr))
+    print((Path(args.out) / "iapf.md").read_text())
+    print(f"wrote {args.out}/iapf.md, iapf.csv, per-run CSVs and one PNG per case", file=sys.stderr)
 
 
 def _add_traffic(exp) -> None:
@@ -151,7 +209,16 @@ def cmd_energy(args) -> int:
     exp = EnergyExperiment(out=Path(args.out), runs=args.runs, planners=planners, seed=args.seed,
                            world=args.world, timeout_s=args.timeout,
                            energy_model=args.energy_model,
-                           sweep=sweep_options(args))  # validated by run_experiment
+                           sweep=sweep_options(args),
+                           presets=tuple(preset_list(args.presets)))  # validated by run_experiment
+    if args.worlds:
+        from papf.experiments.energy_worlds import run_energy_worlds
+
+        results = run_energy_worlds(exp, [w.strip() for w in args.worlds.split(",") if w.strip()])
+        for r in results:
+            print_summary(r)
+        print((Path(args.out) / "energy-worlds.md").read_text())
+        return max(r.exit_code for r in results)
     result = run_experiment(exp)
     print_summary(result)
     return result.exit_code
@@ -168,7 +235,7 @@ def cmd_paper_tests(args) -> int:
             raise ConfigError(f"--worlds: {bad} are not paper worlds; valid: {list(PAPER_WORLDS)}")
     run_paper_tests(args.out, planner_list(args.planners), args.seed,
                     "offline" if args.offline else "stack", worlds, args.timeout, sets=args.set,
-                    sweep=sweep_options(args))
+                    sweep=sweep_options(args), presets=preset_list(args.presets))
     print((Path(args.out) / "paper-tests.md").read_text())
     print(f"wrote {args.out}/paper-tests.md, paper-tests.csv and one PNG per world", file=sys.stderr)
     return 0
@@ -178,7 +245,8 @@ def cmd_random(args) -> int:
     from papf.experiments.random_worlds import run_random  # pybullet, matplotlib: when run
 
     run_random(args.out, args.n, args.seed, planner_list(args.planners), args.mode, args.timeout,
-               args.plots, sets=args.set, sweep=sweep_options(args))
+               args.plots, sets=args.set, sweep=sweep_options(args),
+               presets=preset_list(args.presets))
     print((Path(args.out) / "random.md").read_text())
     print(f"wrote {args.out}/random.md, random.csv and worlds/", file=sys.stderr)
     return 0

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+from papf.cli.view import add_view_flag
+
 
 def register(sub) -> None:
     p = sub.add_parser("launch", help="start this host's part of the stack from a profile",
@@ -41,6 +43,7 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
     p.add_argument("--dry-run", action="store_true", help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    add_view_flag(p)
     p.set_defaults(func=cmd_launch)
 
 
@@ -50,7 +53,7 @@ def cmd_launch(args) -> int:
 
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,
-              "bridge_namespace": args.bridge_namespace,
+              "bridge_namespace": args.bridge_namespace, "view": args.view,
               "realtime": "1" if args.realtime else None,
               "objects": args.objects}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,

@@ -25,13 +25,22 @@ def register(sub) -> None:
                    help="sim-time limit [s] (default 300)")
     p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
     add_planner_settings(p)
-    p.add_argument("--plot", metavar="OUT.png", help="write a PNG of the world and the path")
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper literally)")
+    p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
+                   help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
+                        "the obstacles' centres known (planners wang-apf and wang only)")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="write a PNG: world, path, footprints, and the planner's prediction, "
+                        "abandoned predictions, top quarks and temporary goal at its most "
+                        "telling cycle")
     p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
     p.add_argument("--json", action="store_true", help="print one JSON summary object")
     p.set_defaults(func=cmd_plan)
 
 
 def cmd_plan(args) -> int:
+    from nodes.planner.registry import preset_sets
     from papf.monitor import EXIT_CODES
     from papf.plan import plan, write_path  # pybullet: only when planning
     from worlds import load_world
@@ -39,22 +48,31 @@ def cmd_plan(args) -> int:
 
     world = load_world(args.world)
     check_runnable(world, max_obstacles=sys.maxsize)   # offline: no obstacle limit
+    if args.motion == "fixed-step":
+        return _fixed_step(world, args)
+    sets = [*preset_sets(args.preset), *args.set]
     if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
         from papf.plan_road import plan_car
 
-        result = plan_car(world, args.planner, args.set, args.params, max_time_s=args.timeout)
+        result = plan_car(world, args.planner, sets, args.params, max_time_s=args.timeout)
     else:
-        result = plan(world, args.planner, params=args.set, seed=args.seed,
-                      max_time_s=args.timeout, dt=args.dt, params_file=args.params)
+        result = plan(world, args.planner, params=sets, seed=args.seed,
+                      max_time_s=args.timeout, dt=args.dt, params_file=args.params,
+                      keep_states=bool(args.plot))
     if args.out:
         write_path(result, args.out)
-    if args.plot:
-        from papf.path_plot import plot_paths  # matplotlib: only with --plot
+    if args.plot:  # matplotlib: only with --plot
+        title = f"{world.name}: {args.planner} (offline, seed {args.seed})"
+        if world.dims == 2 and world.vehicle != "car":  # with the mind and the ROSbot's footprint
+            from papf.mind_plots import plot_plan
 
-        label = f"{args.planner} ({result.outcome})"
-        plot_paths(world, {label: result.path}, args.plot,
-                   f"{world.name}: {args.planner} (offline, seed {args.seed})",
-                   times={label: result.times})
+            plot_plan(world, result, args.plot, title)
+        else:
+            from papf.path_plot import plot_paths
+
+            label = f"{args.planner} ({result.outcome})"
+            plot_paths(world, {label: result.path}, args.plot, title,
+                       times={label: result.times})
     s = result.summary()
     if args.json:
         print(json.dumps(s))
@@ -66,3 +84,24 @@ def cmd_plan(args) -> int:
         if path:  # on stderr: with --json, stdout holds the one JSON object only
             print(f"{what}: {os.path.abspath(path)}", file=sys.stderr)
     return EXIT_CODES.get(result.outcome, 6)
+
+
+def _fixed_step(world, args) -> int:
+    """Wang's published simulation (:func:`papf.pointsim.fixed_step`)."""
+    from common.errors import ConfigError
+    from papf.pointsim import fixed_step
+
+    methods = {"wang-apf": "traditional", "wang": "improved"}
+    if args.planner not in methods:
+        raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
+    r = fixed_step(world, methods[args.planner])
+    if args.plot:
+        from papf.plots import plot_paths
+
+        plot_paths(world, {f"{args.planner} ({r.outcome})": r.path}, args.plot,
+                   f"{world.name}: {args.planner}, fixed step (Wang's simulation)")
+    s = r.summary()
+    print(json.dumps(s) if args.json else
+          f"{s['world']} {args.planner} (fixed step): {s['outcome']} after {s['iterations']} "
+          f"iterations, path {s['path_length']:.2f}, min clearance {s['min_clearance']:.2f}")
+    return {"reached": 0, "collision": 4}.get(r.outcome, 3)

@@ -12,6 +12,7 @@ from common.transport import (
     alive_nodes,
     open_session,
 )
+from papf.cli.view import add_view_flag
 from schemas import Keys
 
 
@@ -28,17 +29,25 @@ def register(sub) -> None:
                    help="replay even where a live stack runs in the target namespace "
                         "(its nodes would act on the recorded messages)")
     add_zenoh_args(p)
+    add_view_flag(p)
     # --namespace from add_zenoh_args: here it remaps; unset = the recorded keys as they are.
     p.set_defaults(func=cmd_replay, namespace=None)
 
 
 def cmd_replay(args) -> int:
+    if args.view is not None:
+        from papf.replay_view import replay_with_view
+
+        return replay_with_view(args, _replay)
+    return _replay(args, StopRequested())
+
+
+def _replay(args, stop: StopRequested) -> int:
     """Check the file, the rate and where it would publish before publishing anything."""
     from papf.progress import DecileProgress
     from papf.recording.reader import Recording  # mcap: only when replaying
     from papf.recording.replay import check_rate, replay, target_namespaces
 
-    stop = StopRequested()
     try:
         check_rate(args.rate)
         with Recording(args.file) as rec:

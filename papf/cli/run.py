@@ -6,6 +6,7 @@ import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from papf.cli.options import add_planner_settings, add_world_and_planner
+from papf.cli.view import add_view_flag
 
 
 def register(sub) -> None:
@@ -31,6 +32,9 @@ def register(sub) -> None:
                         "only for discovery; default) or client (all through the router)")
     p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
     add_planner_settings(p)
+    p.add_argument("--preset", choices=("default", "paper"), default="default",
+                   help="planner preset: default (our improvements) or paper (the paper read "
+                        "literally, docs/planners.md \"Presets\")")
     p.add_argument("--continue-on-collision", action="store_true",
                    help="count collisions but keep driving (default: a collision ends the run)")
     p.add_argument("--objects", choices=("none", "truth", "tracker"),
@@ -39,14 +43,16 @@ def register(sub) -> None:
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    add_view_flag(p)
     p.set_defaults(func=cmd_run)
 
 
 def run_config(args):
     """The :class:`papf.runner.RunConfig` of parsed ``papf run`` options."""
+    from nodes.planner.registry import preset_sets
     from papf.runner import RunConfig  # zenoh: only when a run is made
 
-    planner_args = [x for kv in args.set for x in ("--set", kv)]
+    planner_args = [x for kv in (*preset_sets(args.preset), *args.set) for x in ("--set", kv)]
     if args.params:
         planner_args += ["--params", args.params]
     return RunConfig(world=args.world, planner=args.planner, seed=args.seed,
@@ -54,7 +60,7 @@ def run_config(args):
                      port=args.port, namespace=args.namespace, planner_args=planner_args,
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
-                     zenoh_mode=args.zenoh_mode, objects=args.objects,
+                     zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      progress=None if not args.json else False)
 
 

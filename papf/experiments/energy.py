@@ -49,6 +49,7 @@ class EnergyExperiment:
     world: str = WORLD
     timeout_s: float = TIMEOUT_S
     energy_model: str = "motor"
+    presets: tuple[str, ...] = ("default",)
     sweep: SweepOptions = SweepOptions()   # how the runs are spread (papf.experiments.sweep)
 
 
@@ -58,6 +59,7 @@ class RunSpec:
     k: int            # 1-based run number of this planner
     seed: int
     path: Path        # where the run is recorded
+    preset: str = "default"
 
     @property
     def name(self) -> str:
@@ -91,6 +93,11 @@ def validate(exp: EnergyExperiment) -> None:
         raise ConfigError(f"unknown planner(s) {', '.join(unknown)}; valid: {', '.join(PLANNERS)}")
     if len(set(exp.planners)) != len(exp.planners):
         raise ConfigError(f"--planners {','.join(exp.planners)} names a planner twice")
+    from nodes.planner.registry import PRESETS
+
+    bad = [p for p in exp.presets if p not in PRESETS]
+    if bad or not exp.presets:
+        raise ConfigError(f"--presets {','.join(exp.presets)}: unknown {bad}; valid: {list(PRESETS)}")
     if exp.energy_model not in ("motor", "paper"):
         raise ConfigError(f"energy model {exp.energy_model!r} is not one of motor, paper")
     if not exp.timeout_s > 0:
@@ -98,15 +105,23 @@ def validate(exp: EnergyExperiment) -> None:
 
 
 def plan(exp: EnergyExperiment) -> list[RunSpec]:
-    """Every run, planner by planner: ``OUT/<planner>-<k>.mcap`` with seed ``seed + k``."""
-    return [RunSpec(p, k, exp.seed + k, Path(exp.out) / f"{p}-{k}.mcap")
-            for p in exp.planners for k in range(1, exp.runs + 1)]
+    """Every run, planner (and preset) by planner: ``OUT/<planner>[-<preset>]-<k>.mcap`` with
+    seed ``seed + k``. A planner whose paper preset changes nothing runs once."""
+    from papf.experiments.trials import variants
+
+    def stem(p, preset):
+        return p if preset == "default" else f"{p}-{preset}"
+
+    return [RunSpec(p, k, exp.seed + k, Path(exp.out) / f"{stem(p, pre)}-{k}.mcap", pre)
+            for p, pre in variants(exp.planners, exp.presets) for k in range(1, exp.runs + 1)]
 
 
 def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
+    from nodes.planner.registry import preset_sets
     from papf.runner import RunConfig
 
     return RunConfig(world=exp.world, planner=spec.planner, seed=spec.seed,
+                     planner_args=[a for kv in preset_sets(spec.preset) for a in ("--set", kv)],
                      timeout_s=exp.timeout_s, record=str(spec.path), port=port,
                      energy_model=exp.energy_model, progress=False,
                      extra_node_args={"recorder": ["--meta", "experiment=energy"]})

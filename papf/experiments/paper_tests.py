@@ -32,6 +32,7 @@ from papf.experiments.trials import (
     run_job,
     trial_job,
     trial_line,
+    variants,
     write_csv,
 )
 from worlds import load_world, world_path
@@ -75,14 +76,15 @@ def _num(x, nd=2) -> str:
 
 
 def table_rows(trials) -> list[list[str]]:
-    """Markdown rows: world, planner, ours (outcome, duration, change, length, change), paper."""
-    by = {(t.world, t.planner): t for t in trials}
+    """Markdown rows: world, planner (preset), ours (outcome, duration, change, length,
+    change), paper. Changes are against the default-preset APF of the same world."""
+    by = {(t.world, t.label): t for t in trials}
     rows = []
     for t in trials:
         apf = by.get((t.world, "apf"))
         both = apf is not None and apf.outcome == t.outcome == "reached" and t.planner != "apf"
         ref = PAPER.get(t.world, {}).get(t.planner)
-        rows.append([t.world, t.planner, t.outcome, _num(t.duration_s, 1),
+        rows.append([t.world, t.label, t.outcome, _num(t.duration_s, 1),
                      _pct(t.duration_s, apf.duration_s) if both else "",
                      _num(t.path_length_m), _pct(t.path_length_m, apf.path_length_m) if both else "",
                      ref.outcome if ref else "", _num(ref.duration_s) if ref and ref.duration_s else "",
@@ -92,48 +94,67 @@ def table_rows(trials) -> list[list[str]]:
 
 HEADER = ["world", "planner", "outcome", "duration [s]", "vs APF", "path [m]", "vs APF",
           "paper outcome", "paper duration [s]", "paper path [m]"]
+TABLE_KEYS = ["world", "planner", "outcome", "duration_s", "duration_vs_apf", "path_m",
+              "path_vs_apf", "paper_outcome", "paper_duration_s", "paper_path_m"]
+DURATION_TOL, PATH_TOL = 0.15, 0.10   # issue 14's acceptance band around Table 2
+
+
+def table2_check(trials, label: str) -> tuple[int, int, int]:
+    """(reached, durations within 15 %, paths within 10 %) of ``label`` in Tests I-VI vs Table 2."""
+    mine = {t.world: t for t in trials if t.label == label and t.world in PAPF_WORLDS}
+    reached = dur = path = 0
+    for w, t in mine.items():
+        ref = PAPER[w]["papf"]
+        if t.outcome != "reached":
+            continue
+        reached += 1
+        dur += abs(t.duration_s - ref.duration_s) <= DURATION_TOL * ref.duration_s
+        path += abs(t.path_length_m - ref.path_length_m) <= PATH_TOL * ref.path_length_m
+    return reached, dur, path
 
 
 def acceptance(trials) -> list[str]:
-    """Issue 3's checks on the PAPF-paper worlds, as sentences."""
-    by = {(t.world, t.planner): t for t in trials}
+    """Issue 3's and 14's checks on the PAPF-paper worlds, as sentences."""
+    by = {(t.world, t.label): t for t in trials}
     lines = []
-    papf = [by[(w, "papf")] for w in PAPF_WORLDS if (w, "papf") in by]
-    if papf:
-        reached = sum(t.outcome == "reached" for t in papf)
+    for label in dict.fromkeys(t.label for t in trials if t.planner == "papf"):
+        papf = [by[(w, label)] for w in PAPF_WORLDS if (w, label) in by]
+        reached, dur, path = table2_check(trials, label)
         coll = sum(t.collisions for t in papf)
-        lines.append(f"PAPF reached the goal in {reached}/{len(papf)} PAPF-paper worlds, "
-                     f"{coll} collision(s).")
-        pairs = [(by[(w, "apf")], by[(w, "papf")]) for w in PAPF_WORLDS
-                 if (w, "apf") in by and (w, "papf") in by
-                 and by[(w, "apf")].outcome == by[(w, "papf")].outcome == "reached"]
+        lines.append(f"{label}: reached {reached}/{len(papf)} PAPF-paper worlds, {coll} collision(s); "
+                     f"duration within 15 % of Table 2 in {dur}/{len(papf)}, path within 10 % in "
+                     f"{path}/{len(papf)}.")
+        pairs = [(by[(w, "apf")], by[(w, label)]) for w in PAPF_WORLDS
+                 if (w, "apf") in by and (w, label) in by
+                 and by[(w, "apf")].outcome == by[(w, label)].outcome == "reached"]
         if pairs:
             ok = sum(p.duration_s <= a.duration_s for a, p in pairs)
-            lines.append(f"PAPF duration <= APF's in {ok}/{len(pairs)} worlds where both reached.")
+            lines.append(f"{label}: duration <= APF's in {ok}/{len(pairs)} worlds where both reached.")
     apf_dead = [by[(w, "apf")] for w in ("papf-test-4", "papf-test-5", *ARAPF_WORLDS) if (w, "apf") in by]
     if apf_dead:
         st = sum(t.outcome == "stagnated" for t in apf_dead)
         lines.append(f"APF reported `stagnated` in {st}/{len(apf_dead)} dead-end worlds "
                      "(PAPF Tests IV-V, AR-APF Tests I-III).")
-    ar = [by[(w, "arapf")] for w in ARAPF_WORLDS if (w, "arapf") in by]
-    if ar:
-        lines.append(f"AR-APF reached the goal in {sum(t.outcome == 'reached' for t in ar)}/{len(ar)} "
-                     "AR-APF-paper worlds.")
-    wang = [by[(w, "wang")] for w in WANG_WORLDS if (w, "wang") in by]
-    if wang:
-        lines.append(f"Wang reached the goal in {sum(t.outcome == 'reached' for t in wang)}/{len(wang)} "
-                     "Wang worlds.")
+    for planner, worlds, name in (("arapf", ARAPF_WORLDS, "AR-APF"), ("wang", WANG_WORLDS, "Wang")):
+        for label in dict.fromkeys(t.label for t in trials if t.planner == planner):
+            mine = [by[(w, label)] for w in worlds if (w, label) in by]
+            if mine:
+                lines.append(f"{label}: reached {sum(t.outcome == 'reached' for t in mine)}/{len(mine)} "
+                             f"{name}-paper worlds.")
     return lines
 
 
 def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS, seed: int = 0,
                     mode: str = "stack", worlds: Sequence[str] = PAPER_WORLDS,
                     timeout_s: float = 300.0, progress: bool | None = None,
-                    sets: Sequence[str] = (), sweep: SweepOptions | None = None) -> list:
-    """Run every (world, planner); write the table, CSV and plots into ``out``; return the trials.
+                    sets: Sequence[str] = (), sweep: SweepOptions | None = None,
+                    presets: Sequence[str] = ("default",)) -> list:
+    """Run every (world, planner, preset); write the table, CSV and plots into ``out``; return
+    the trials.
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
-    ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
+    ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one);
+    ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
     from papf.path_plot import plot_paths  # matplotlib: only when the experiment runs
 
@@ -143,8 +164,8 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     out.mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()
     jobs = [trial_job(load_world(name), world_path(name), planner=planner, seed=seed, mode=mode,
-                      timeout_s=timeout_s, sets=tuple(sets), record=mode == "stack")
-            for name in worlds for planner in planners]
+                      timeout_s=timeout_s, sets=tuple(sets), record=mode == "stack", preset=preset)
+            for name in worlds for planner, preset in variants(planners, presets)]
     jobs = [dataclasses.replace(job, index=i) for i, job in enumerate(jobs)]
     opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
     done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="paper tests",
@@ -152,15 +173,31 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     trials = [trial for trial, _ in done]
     for job, (_trial, data) in zip(jobs, done, strict=True):
         if data is not None:  # recorded where it ran; kept here
-            rec = out / "recordings" / f"{job.world.name}-{job.planner}.mcap"
+            stem = job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
+            rec = out / "recordings" / f"{stem}.mcap"
             rec.parent.mkdir(parents=True, exist_ok=True)
             rec.write_bytes(data)
     for name in worlds:
         world = load_world(name)
-        paths = {f"{t.planner} ({t.outcome})": t.path for t in trials if t.world == world.name}
+        paths = {f"{t.label} ({t.outcome})": t.path for t in trials if t.world == world.name}
         plot_paths(world, paths, out / f"{name}.png", f"{name} ({mode}, seed {seed})")
     write_csv([t.row() for t in trials], out / "paper-tests.csv")
-    text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, table_rows(trials))
-            + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")
-    (out / "paper-tests.md").write_text(text)
+    write_tables(out, trials, mode, seed)
     return trials
+
+
+def write_tables(out: Path, trials, mode: str, seed: int) -> None:
+    """``paper-tests.md`` and ``paper-tests-table.csv`` (the Markdown table's rows)."""
+    rows = table_rows(trials)
+    write_csv([dict(zip(TABLE_KEYS, r, strict=True)) for r in rows], Path(out) / "paper-tests-table.csv")
+    text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, rows)
+            + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")
+    (Path(out) / "paper-tests.md").write_text(text)
+
+
+def rebuild(out: str | Path) -> None:
+    """Rewrite ``paper-tests.md`` and ``paper-tests-table.csv`` from ``paper-tests.csv``."""
+    from papf.experiments.trials import trials_from_csv
+
+    trials = trials_from_csv(Path(out) / "paper-tests.csv")
+    write_tables(Path(out), trials, trials[0].mode if trials else "", trials[0].seed if trials else 0)

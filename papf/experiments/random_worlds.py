@@ -28,6 +28,7 @@ from papf.experiments.trials import (
     run_job,
     trial_job,
     trial_line,
+    variants,
     write_csv,
 )
 from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
@@ -52,8 +53,8 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
     bottleneck = bottleneck or {}
     rows = []
-    for planner in dict.fromkeys(t.planner for t in trials):
-        mine = [t for t in trials if t.planner == planner]
+    for planner in dict.fromkeys(t.label for t in trials):
+        mine = [t for t in trials if t.label == planner]
         row = {"planner": planner, "worlds": len(mine)}
         for o in OUTCOMES:
             row[o] = 100.0 * sum(t.outcome == o for t in mine) / len(mine)
@@ -84,11 +85,13 @@ def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected
 def run_random(out: str | Path, n: int = 50, seed: int = 0,
                planners: Sequence[str] = DEFAULT_PLANNERS, mode: str = "offline",
                timeout_s: float = 300.0, plots: bool = False, progress: bool | None = None,
-               sets: Sequence[str] = (), sweep: SweepOptions | None = None):
+               sets: Sequence[str] = (), sweep: SweepOptions | None = None,
+               presets: Sequence[str] = ("default",)):
     """Run the experiment; write its files into ``out``; return (trials, summary rows).
 
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
-    ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one).
+    ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one);
+    ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
     from papf.path_plot import plot_paths  # matplotlib: only when the experiment runs
 
@@ -101,29 +104,54 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     quiet_runner_logs()
     worlds, rejected = generate_solvable(n, seed)
     bottleneck = {w.name: bottleneck_width(w) for w in worlds}
+    runs = variants(planners, presets)
     jobs = []
     for world in worlds:
         file = out / "worlds" / f"{world.name}.toml"
         file.write_text(world_to_toml(world))
         jobs += [trial_job(world, file, planner=planner, seed=seed, mode=mode, timeout_s=timeout_s,
-                           sets=tuple(sets), record=plots and mode == "stack", index=len(jobs) + k)
-                 for k, planner in enumerate(planners)]
+                           sets=tuple(sets), record=plots and mode == "stack", index=len(jobs) + k,
+                           preset=preset)
+                 for k, (planner, preset) in enumerate(runs)]
     opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
     done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="random worlds",
                     line=lambda _j, r: trial_line(r[0]))
     trials = [trial for trial, _ in done]
     for job, (_trial, data) in zip(jobs, done, strict=True):
         if data is not None:  # recorded where it ran; kept here
-            rec = out / "recordings" / f"{job.world.name}-{job.planner}.mcap"
+            stem = job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
+            rec = out / "recordings" / f"{stem}.mcap"
             rec.parent.mkdir(parents=True, exist_ok=True)
             rec.write_bytes(data)
     if plots:
         for world in worlds:
             mine = [t for t in trials if t.world == world.name]
-            plot_paths(world, {f"{t.planner} ({t.outcome})": t.path for t in mine},
+            plot_paths(world, {f"{t.label} ({t.outcome})": t.path for t in mine},
                        out / "plots" / f"{world.name}.png", world.name)
     summary = summarize(trials, bottleneck)
     write_csv([{**t.row(), "bottleneck_m": round(bottleneck[t.world], 3)} for t in trials],
               out / "random.csv")
     (out / "random.md").write_text(summary_markdown(summary, len(worlds), seed, mode, rejected))
+    write_summary_csv(summary, out / "random-summary.csv")
     return trials, summary
+
+
+def write_summary_csv(summary: list[dict], path: Path) -> None:
+    """The summary rows (rates rounded to 0.1 %), the CSV of ``random.md``'s table."""
+    write_csv([{k: (round(v, 1) if isinstance(v, float) else v) for k, v in r.items()}
+               for r in summary], path)
+
+
+def rebuild_summary(out: str | Path) -> list[dict]:
+    """``random-summary.csv`` from ``random.csv`` (per-run rows with ``bottleneck_m``)."""
+    import csv
+
+    from papf.experiments.trials import trials_from_csv
+
+    out = Path(out)
+    trials = trials_from_csv(out / "random.csv")
+    with (out / "random.csv").open(newline="") as fh:
+        bottleneck = {r["world"]: float(r["bottleneck_m"]) for r in csv.DictReader(fh)}
+    summary = summarize(trials, bottleneck)
+    write_summary_csv(summary, out / "random-summary.csv")
+    return summary

@@ -44,12 +44,19 @@ class Trial:
     charge_mAh: float = math.nan        # stack only [mAh]
     wall_time_s: float = 0.0
     path: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (N, 2|3) [m]
+    preset: str = "default"             # planner preset (nodes.planner.registry.PRESETS)
+
+    @property
+    def label(self) -> str:
+        """``planner`` for the default preset, ``planner (paper)`` otherwise (table rows)."""
+        return variant_label(self.planner, self.preset)
 
     def row(self) -> dict:
         """The CSV row (no path)."""
         # No wall time: a row depends on the run alone, so a sweep's CSV is byte-identical
         # however its runs were spread (papf.experiments.sweep).
-        return {"world": self.world, "planner": self.planner, "seed": self.seed, "mode": self.mode,
+        return {"world": self.world, "planner": self.planner, "preset": self.preset,
+                "seed": self.seed, "mode": self.mode,
                 "outcome": self.outcome, "duration_s": round(self.duration_s, 3),
                 "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
                 "min_clearance_m": _r(self.min_clearance_m), "charge_mAh": _r(self.charge_mAh),
@@ -60,25 +67,48 @@ def _r(x: float, nd: int = 3):
     return "" if x is None or not math.isfinite(x) else round(x, nd)
 
 
+def variant_label(planner: str, preset: str) -> str:
+    return planner if preset == "default" else f"{planner} ({preset})"
+
+
+def variants(planners: Sequence[str], presets: Sequence[str] = ("default",)) -> list[tuple[str, str]]:
+    """(planner, preset) pairs to run. A planner whose paper preset changes nothing (APF: eq. 2
+    as written) runs once, as ``default``: both presets would give the same run."""
+    from nodes.planner.registry import preset_settings
+
+    out = []
+    for planner in planners:
+        for preset in presets:
+            if preset != "default" and not preset_settings(planner, preset):
+                preset = "default"
+            if (planner, preset) not in out:
+                out.append((planner, preset))
+    return out
+
+
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
-                params=None) -> Trial:
-    """One offline run (:func:`papf.plan.plan`)."""
-    from papf.plan import plan  # pybullet: only for offline runs
+                params=None, preset: str = "default") -> Trial:
+    """One offline run (:func:`papf.plan.plan`) with the planner's ``preset``."""
+    from nodes.planner.registry import preset_sets
+    from papf.plan import param_sets, plan  # pybullet: only for offline runs
 
     t0 = time.monotonic()
-    r = plan(world, planner, params=params, seed=seed, max_time_s=timeout_s)
+    r = plan(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
+             max_time_s=timeout_s)
     return Trial(r.world, planner, seed, "offline", r.outcome, r.duration_s, r.length_m,
                  r.collisions, r.reason, min_clearance_m=r.min_clearance_m,
-                 wall_time_s=time.monotonic() - t0, path=r.path)
+                 wall_time_s=time.monotonic() - t0, path=r.path, preset=preset)
 
 
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
               record: str | Path | None = None, planner_args: Sequence[str] = (),
               objects: str | None = None, namespace: str = "rosbot",
-              startup_timeout_s: float = 60.0) -> Trial:
+              startup_timeout_s: float = 60.0, preset: str = "default") -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
+    from nodes.planner.registry import preset_sets
     from papf.runner import RunConfig, run  # zenoh: only for stack runs
 
+    planner_args = [*(a for kv in preset_sets(preset) for a in ("--set", kv)), *planner_args]
     if record is not None:
         Path(record).parent.mkdir(parents=True, exist_ok=True)
         Path(record).unlink(missing_ok=True)
@@ -90,7 +120,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
     path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
     return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,
                  res.collisions, res.reason, charge_mAh=res.charge_mAh,
-                 wall_time_s=res.wall_time_s, path=path)
+                 wall_time_s=res.wall_time_s, path=path, preset=preset)
 
 
 @dataclass(frozen=True)
@@ -107,10 +137,11 @@ class TrialJob:
     sets: tuple[str, ...] = ()      # name=value planner settings
     record: bool = False            # stack: record it and send the file back
     index: int = 0                  # position in the sweep (its key namespace)
+    preset: str = "default"         # planner preset
 
     @property
     def label(self) -> str:
-        return f"{self.world.name} {self.planner} seed {self.seed}"
+        return f"{self.world.name} {variant_label(self.planner, self.preset)} seed {self.seed}"
 
 
 def trial_job(world: World, world_file: str | Path, text: str | None = None, **kw) -> TrialJob:
@@ -126,15 +157,29 @@ def run_job(job: TrialJob) -> tuple[Trial, bytes | None]:
     from papf.experiments.sweep import run_namespace
 
     if job.mode == "offline":
-        return run_offline(job.world, job.planner, job.seed, job.timeout_s, list(job.sets)), None
+        return run_offline(job.world, job.planner, job.seed, job.timeout_s, list(job.sets),
+                           preset=job.preset), None
     with tempfile.TemporaryDirectory(prefix="papf-sweep-") as tmp:
         file = Path(tmp) / job.world_file
         file.write_text(job.world_text, encoding="utf-8")
         rec = Path(tmp) / "run.mcap" if job.record else None
         trial = run_stack(file, job.planner, job.seed, job.timeout_s, record=rec,
                           planner_args=[a for kv in job.sets for a in ("--set", kv)],
-                          namespace=run_namespace(job.index))
+                          namespace=run_namespace(job.index), preset=job.preset)
         return trial, (rec.read_bytes() if rec is not None and rec.exists() else None)
+
+
+def trials_from_csv(path: str | Path) -> list[Trial]:
+    """The trials of an experiment's per-run CSV (no paths): to rebuild its tables."""
+    def num(x):
+        return float(x) if x not in ("", None) else math.nan
+
+    with Path(path).open(newline="") as fh:
+        return [Trial(r["world"], r["planner"], int(r["seed"]), r["mode"], r["outcome"],
+                      num(r["duration_s"]), num(r["path_length_m"]), int(r["collisions"]),
+                      r.get("reason", ""), num(r.get("min_clearance_m")), num(r.get("charge_mAh")),
+                      num(r.get("wall_time_s")), preset=r.get("preset") or "default")
+                for r in csv.DictReader(fh)]
 
 
 def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
@@ -187,7 +232,7 @@ def progress_bar(enabled: bool | None = None) -> Progress:
 def trial_line(t: Trial) -> str:
     """One line per finished trial (printed in a terminal and when piped alike)."""
     extra = f"  {t.charge_mAh:7.2f} mAh" if math.isfinite(t.charge_mAh) else ""
-    return (f"{t.world:>16} {t.planner:<6} seed {t.seed:<3} {t.outcome:<9} "
+    return (f"{t.world:>16} {t.label:<6} seed {t.seed:<3} {t.outcome:<9} "
             f"{t.duration_s:7.2f} s  {t.path_length_m:6.2f} m{extra}  wall {t.wall_time_s:5.1f} s"
             + (f"  {t.reason}" if t.outcome != "reached" and t.reason else ""))
 

@@ -82,6 +82,11 @@ def _world_section(report, world: str) -> list[str]:
         "",
         f"![heading, v and ω over time on {world}]({report.pngs[('motion', world)]})",
         "",
+        "The planner's mind (first run of each planner: prediction, abandoned predictions, top "
+        "quarks, temporary goal, footprints):",
+        "",
+        f"![the planner's mind on {world}]({report.pngs[('mind', world)]})",
+        "",
     ]
 
 

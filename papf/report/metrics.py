@@ -216,7 +216,10 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
               with_series: bool) -> RunMetrics:
     m = col.monitor
     t_end = m.t_end_ns or 0
-    res = m.result(meta.get("planner", "?"), meta.get("world", "?"), int(meta.get("seed", -1)), 0.0)
+    planner = meta.get("planner", "?")
+    if "preset=paper" in meta.get("planner_args", ""):
+        planner += " (paper)"            # the variant label of papf.experiments.trials
+    res = m.result(planner, meta.get("world", "?"), int(meta.get("seed", -1)), 0.0)
     remetered = battery_at(col.remeter.states, t_end)
     live = m.battery_at_end()
     start_ns = m.motion_start_ns()

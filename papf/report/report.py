@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from common.errors import ConfigError, PapfError, RecordingError
+from papf.mind_plots import mind_png
 from papf.report import figures, tables
 from papf.report.markdown import markdown
 from papf.report.metrics import RunMetrics, run_metrics
@@ -122,23 +123,24 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     """Read the recordings, write report.md, report.csv and the PNGs into ``out_dir``."""
     if energy_model not in (None, *MODELS):
         raise ConfigError(f"energy model {energy_model!r} is not one of {', '.join(MODELS)}")
-    recordings = find_recordings(inputs)
+    paths = find_recordings(inputs)
     out = Path(out_dir) if out_dir is not None else default_out(inputs)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise RecordingError(f"cannot create the report directory {str(out)!r}: "
                              f"{exc.strerror}") from None
-    runs = collect(recordings, energy_model, energy_params)
+    runs = collect(paths, energy_model, energy_params)
+    files = {Path(p).name: Path(p) for p in paths}
     report = Report(runs, tables.summarise(runs), out, suffix=suffix_for(runs, energy_model))
     try:
-        _write(report, runs, out)
+        _write(report, runs, files, out)
     except OSError as exc:
         raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}") from None
     return report
 
 
-def _write(report: Report, runs: list, out: Path) -> None:
+def _write(report: Report, runs: list, files: dict, out: Path) -> None:
     """The report's PNGs, CSV and Markdown into ``out``."""
     note = f"{report.model_note} · {report.pose_note} · papf report"
     charge = report.name("charge")
@@ -154,6 +156,9 @@ def _write(report: Report, runs: list, out: Path) -> None:
                          figures.motion_png(mine, out / motion, note)]
         report.pngs[("trajectories", world_name)] = traj
         report.pngs[("motion", world_name)] = motion
+        mind = report.name("mind", world_name)
+        report.files.append(mind_png(mine, files, _world(world_name), out / mind))
+        report.pngs[("mind", world_name)] = mind
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
     tables.write_csv(csv_path, runs, report.summaries)
     md_path.write_text(markdown(report))

@@ -73,7 +73,7 @@ class PlannerSummary:
 def planner_order(planners: Sequence[str]) -> list[str]:
     """apf first, papf second, the rest alphabetically (the base of comparisons comes first)."""
     rank = {"apf": 0, "papf": 1}
-    return sorted(set(planners), key=lambda p: (rank.get(p, 2), p))
+    return sorted(set(planners), key=lambda p: (rank.get(p.split(" ")[0], 2), p))
 
 
 def worlds_of(runs: Sequence[RunMetrics]) -> list[str]:

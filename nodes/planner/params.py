@@ -1,0 +1,59 @@
+"""The planner's settings at run time (pure): list them, change them through ``--set``'s rules.
+
+The planner node answers Zenoh queries on ``<ns>/planner/params`` with :func:`answer`
+(the viewer's Parameters panel uses it). Names are ``table.name`` as ``--set`` takes them:
+``apf.<field>`` for :class:`~nodes.planner.apf.APFParams`, ``<planner>.<field>`` for the
+algorithm's own. A change goes through :func:`nodes.planner.registry.load_params` — the
+same parsing and validation as ``--set`` — on top of the current values, and takes effect
+at the next cycle; a refused change leaves every value as it was.
+
+Wire format (JSON): request ``{}`` (list) or ``{"set": ["apf.v_max=0.3", ...]}``; reply
+``{"planner": NAME, "params": {name: value}, "error": ""}`` (``error`` says why a change
+was refused).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+from common.errors import ConfigError
+from nodes.planner.core import Planner
+from nodes.planner.registry import load_params
+
+
+def current(name: str, planner: Planner) -> dict[str, object]:
+    """Every setting of the running planner, ``table.field -> value``."""
+    out = {f"apf.{f.name}": getattr(planner.apf, f.name) for f in dataclasses.fields(planner.apf)}
+    algo = planner.strategy.params
+    out.update({f"{name}.{f.name}": getattr(algo, f.name) for f in dataclasses.fields(algo)})
+    return out
+
+
+def _as_set(key: str, value: object) -> str:
+    return f"{key}={repr(value) if isinstance(value, float) else value}"
+
+
+def apply(name: str, planner: Planner, sets: list[str]) -> list[str]:
+    """Apply ``--set`` strings on top of the current values; ConfigError if any is invalid
+    (then nothing changes). Returns the names whose value changed."""
+    before = current(name, planner)
+    apf, algo = load_params(name, None, [_as_set(k, v) for k, v in before.items()] + list(sets))
+    planner.set_params(apf, algo)
+    after = current(name, planner)
+    return [k for k in after if after[k] != before[k]]
+
+
+def answer(name: str, planner: Planner, payload: bytes) -> tuple[dict, list[str]]:
+    """(reply, changed names) for one query payload (see the module doc)."""
+    error, changed = "", []
+    try:
+        request = json.loads(payload.decode("utf-8")) if payload else {}
+        sets = request.get("set", []) if isinstance(request, dict) else None
+        if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
+            raise ConfigError('expected {"set": ["name=value", ...]}')
+        if sets:
+            changed = apply(name, planner, sets)
+    except (ConfigError, UnicodeDecodeError, ValueError) as exc:
+        error = str(exc)
+    return {"planner": name, "params": current(name, planner), "error": error}, changed

@@ -1,0 +1,79 @@
+"""``papf experiment wang | horizon | deviations``: the paper-fidelity studies (issue 14).
+
+``wang`` Wang's Figs. 5-12 as published and on the ROSbot (:mod:`papf.experiments.wang_figs`);
+``horizon`` PAPF's lambda study of Fig. 7 and ``deviations`` each of our PAPF deviations
+switched alone (:mod:`papf.experiments.paper_study`). Offline; exit code 0 done, 2 usage.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from common.errors import ConfigError
+
+
+def preset_list(text: str) -> list[str]:
+    """``"default,paper"`` -> ``["default", "paper"]``; ConfigError names the valid presets."""
+    from nodes.planner.registry import PRESETS
+
+    names = [p.strip() for p in text.split(",") if p.strip()]
+    bad = [p for p in names if p not in PRESETS]
+    if bad or not names:
+        raise ConfigError(f"--presets {text!r}: unknown {bad}; valid: {list(PRESETS)}")
+    return list(dict.fromkeys(names))
+
+
+def add_paper_studies(exp) -> None:
+    w = exp.add_parser("wang", help="Wang's Figs. 5-12: the published point simulation and the ROSbot",
+                       description="Each of Wang's figures as published (a point stepping 0.5 along "
+                                   "the force, J = 200, Table 1 gains) and with the wang-apf / wang "
+                                   "planners offline; writes wang.md and wang.csv into --out.")
+    w.add_argument("--out", default="wang-figs", metavar="DIR", help="output directory")
+    w.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    w.set_defaults(func=cmd_wang)
+
+    h = exp.add_parser("horizon", help="PAPF's horizon of prediction (paper Fig. 7), offline",
+                       description="PAPF with lambda in {0.5, 1, 1.5, 2} m (both presets) and APF on "
+                                   "the Fig. 7-like world papf-horizon: path, duration, turning, cycle "
+                                   "time; writes horizon.md and horizon.csv into --out.")
+    h.add_argument("--out", default="horizon", metavar="DIR", help="output directory")
+    h.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    h.set_defaults(func=cmd_horizon)
+
+    d = exp.add_parser("deviations", help="each PAPF deviation from the paper switched alone, offline",
+                       description="PAPF default and paper presets, and each deviation switched on "
+                                   "alone over the paper preset (--both: and off alone from the "
+                                   "default), on N "
+                                   "random worlds and PAPF Tests I-VI; writes deviations.md/.csv.")
+    d.add_argument("--out", default="deviations", metavar="DIR", help="output directory")
+    d.add_argument("--n", type=int, default=3, help="random worlds (default 3: a field, a dead end, a gap)")
+    d.add_argument("--both", action="store_true",
+                   help="also switch each deviation off alone from the default preset")
+    d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
+    d.set_defaults(func=cmd_deviations)
+
+
+def cmd_wang(args) -> int:
+    from papf.experiments.wang_figs import run_wang
+
+    run_wang(args.out, args.seed)
+    print((Path(args.out) / "wang.md").read_text())
+    return 0
+
+
+def cmd_horizon(args) -> int:
+    from papf.experiments.paper_study import run_horizon
+
+    run_horizon(args.out, args.seed)
+    print((Path(args.out) / "horizon.md").read_text())
+    return 0
+
+
+def cmd_deviations(args) -> int:
+    from papf.experiments.paper_study import run_deviations
+
+    if args.n < 1:
+        raise ConfigError(f"--n {args.n}: need at least 1 world")
+    run_deviations(args.out, args.n, args.seed, both=args.both)
+    print((Path(args.out) / "deviations.md").read_text())
+    return 0

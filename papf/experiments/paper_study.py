@@ -1,0 +1,125 @@
+"""Two studies of PAPF against its paper (offline, :func:`papf.plan.plan`):
+
+- ``papf experiment horizon`` (:func:`run_horizon`): PAPF IV-A / Fig. 7 — lambda in
+  {0.5, 1, 1.5, 2} m on the Fig. 7-like world ``papf-horizon`` (goal 7 m straight ahead,
+  three obstacles), both presets, APF for reference: outcome, duration, path length,
+  turning (sum of |heading change|, the smoothness the paper judges by eye), and the
+  planner's cycle time (``PlannerState.compute_ns``, median and 99th percentile).
+- ``papf experiment deviations`` (:func:`run_deviations`): each of our deviations from the
+  literal PAPF (:data:`DEVIATIONS`) switched *alone* — on top of ``--preset paper`` and off
+  from the default — on the first ``n`` random worlds of a set and on PAPF Tests I-VI.
+
+Both write ``OUT/<name>.csv`` and ``OUT/<name>.md``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+HORIZONS = (0.5, 1.0, 1.5, 2.0)
+HORIZON_WORLD = "papf-horizon"
+
+#: (setting, default value, paper value, what it is)
+DEVIATIONS = (
+    ("pull_range_fraction", "1.0", "0.0", "prediction's goal pull evaluated at most lambda away"),
+    ("motion_quarks_within_d_o", "true", "false", "motion law: quarks act within d_o, not d_q"),
+    ("quark_ball_m", "0.25", "0.0", "motion law: a quark is a charged ball of radius lambda_stag"),
+    ("unresolved_global_goal", "true", "false", "after M repetitions: eq. 7 with the global goal"),
+    ("stop_at_goal", "true", "false", "the prediction stops at the goal"),
+    ("quark_restarts_watch", "true", "false", "a placed quark restarts the stagnation watch"),
+    ("persist_quarks", "true", "false", "quarks persist in the world frame across cycles"),
+    ("d_q", "2.0", "0.5", "quark range 2 lambda (paper: eq. 7's range, read as d_o)"),
+)
+
+
+def _turning(headings: np.ndarray) -> float:
+    """Sum of |heading change| [rad] over the run."""
+    if headings.size < 2:
+        return 0.0
+    return float(np.sum(np.abs(np.angle(np.exp(1j * np.diff(headings))))))
+
+
+def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORIZONS,
+                world: str = HORIZON_WORLD) -> list[dict]:
+    """PAPF with each horizon (both presets) and APF on ``world``; write horizon.csv/.md."""
+    from papf.experiments.trials import markdown_table, write_csv
+    from papf.plan import plan
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    runs = [("apf", "default", None)] + [("papf", pre, h) for pre in ("default", "paper")
+                                         for h in horizons]
+    rows = []
+    for planner, preset, h in runs:
+        sets = (["preset=paper"] if preset == "paper" else []) + ([f"horizon_m={h}"] if h else [])
+        r = plan(world, planner, params=sets, seed=seed, keep_states=True)
+        cyc = np.array([s.compute_ns for s in r.states], float) / 1e6
+        rows.append({"planner": planner, "preset": preset, "horizon_m": "" if h is None else h,
+                     "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
+                     "path_m": round(r.length_m, 2), "turning_rad": round(_turning(r.headings), 2),
+                     "min_clearance_m": round(r.min_clearance_m, 2),
+                     "cycle_ms_p50": round(float(np.median(cyc)), 2) if cyc.size else "",
+                     "cycle_ms_p99": round(float(np.percentile(cyc, 99)), 2) if cyc.size else ""})
+    write_csv(rows, out / "horizon.csv")
+    (out / "horizon.md").write_text(f"# Horizon of prediction on {world} (offline, seed {seed})\n\n"
+                                    + markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
+    return rows
+
+
+def _variants(both: bool = False) -> list[tuple[str, list[str]]]:
+    """default, paper, and each deviation switched on alone over the paper preset; with
+    ``both`` also each deviation switched off alone from the default."""
+    out = [("default", []), ("paper", ["preset=paper"])]
+    for name, on, off, _what in DEVIATIONS:
+        out.append((f"paper + {name}", ["preset=paper", f"{name}={on}"]))
+        if both:
+            out.append((f"default - {name}", [f"{name}={off}"]))
+    return out
+
+
+def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float = 300.0,
+                   part: tuple[int, int] = (0, 1), both: bool = False) -> list[dict]:
+    """Every variant of :func:`_variants` on ``n`` random worlds and PAPF Tests I-VI.
+
+    ``part = (k, K)``: only every K-th variant from the k-th, written to
+    ``deviations-<k>.csv`` (split a long study over processes; concatenate the CSVs)."""
+    from papf.experiments.paper_tests import PAPF_WORLDS, table2_check
+    from papf.experiments.trials import markdown_table, progress_bar, run_offline, write_csv
+    from papf.randworlds import generate_solvable
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    worlds, _rejected = generate_solvable(n, seed)
+    k, parts = part
+    variants = _variants(both)[k::parts]
+    rows = []
+    with progress_bar() as bar:
+        task = bar.add_task("deviations", total=len(variants) * (len(worlds) + len(PAPF_WORLDS)))
+        for label, sets in variants:
+            rand = []
+            for w in worlds:
+                rand.append(run_offline(w, "papf", seed, timeout_s, params=sets))
+                bar.advance(task)
+            paper = []
+            for w in PAPF_WORLDS:
+                t = run_offline(w, "papf", 0, timeout_s, params=sets)
+                t.preset = "paper"   # table2_check looks rows up by label: give them one
+                paper.append(t)
+                bar.advance(task)
+            _reached, dur, path = table2_check(paper, "papf (paper)")
+            rows.append({"variant": label,
+                         "random_reached_pct": round(100.0 * sum(t.outcome == "reached" for t in rand) / len(rand), 1),
+                         "random_collisions": sum(t.collisions for t in rand),
+                         "tests_I_VI_reached": f"{sum(t.outcome == 'reached' for t in paper)}/{len(paper)}",
+                         "tests_I_VI_duration_within_15pct": f"{dur}/{len(PAPF_WORLDS)}",
+                         "tests_I_VI_path_within_10pct": f"{path}/{len(PAPF_WORLDS)}",
+                         "tests_I_VI_duration_s": " ".join(f"{t.duration_s:.1f}" if t.outcome == "reached"
+                                                           else t.outcome for t in paper)})
+    write_csv(rows, out / ("deviations.csv" if parts == 1 else f"deviations-{k}.csv"))
+    (out / "deviations.md").write_text(
+        f"# PAPF deviations, each alone (offline; random set {seed}, {len(worlds)} worlds; PAPF "
+        f"Tests I-VI seed 0)\n\n" + markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
+    return rows

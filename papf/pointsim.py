@@ -1,0 +1,149 @@
+"""Wang's MATLAB simulation as published: a point stepping a fixed length along the force.
+
+Wang (papers/improved-apf-wang.txt, Sec. 4, Table 1) moves a point from the start by a
+constant step ``I = 0.5`` along the resultant force, for at most ``J = 200`` iterations of
+the force function, on a map with round obstacles whose centres and radii are known (no
+sensor). :func:`fixed_step` does that, on a packaged world (cylinders in 2-D, spheres in
+3-D), in the paper's map units (``units_per_m``: 1 for the Table 1 maps, which are
+written in map units; 10 for the 3-D worlds, which are stored scaled 0.1 to metres).
+
+Two fields:
+
+- ``traditional`` — eqs. 1-5: ``F_att = K_att (X_g - X_u)`` (eq. 2; the paper drops eq. 1's
+  factor 2, and so do we) and per obstacle within ``rho_0`` of its centre
+  ``F_rep = K_rep (1/rho - 1/rho_0) / rho^2`` away from it (the gradient of eq. 3 with
+  the same factor dropped). Table 1: K_att = 10, K_rep = 2, rho_0 = 20.
+- ``improved`` — eqs. 6-8 as :func:`nodes.planner.wang.wang_force` reads them (the ROSbot
+  planner's field), on the obstacle centres with R_0 = the obstacle's radius in eq. 6, and
+  K_rep = 5 (Sec. 4: "the basic parameters remained unchanged ... except for the repulsion
+  gain coefficient").
+
+Outcomes: ``reached`` (the point comes within ``step / 2`` of the target: the closest a
+fixed-step walk straight at it is sure to get), ``collision`` (a step ends inside an
+obstacle or its segment crosses one), ``failed`` (``J`` iterations spent: the paper's
+"local oscillations", "failed to reach the final target point").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from common.errors import ConfigError
+from nodes.planner.wang import WangParams, wang_force
+from worlds import World, load_world
+
+METHODS = ("traditional", "improved")
+
+
+@dataclass(frozen=True)
+class PointParams:
+    """Wang Table 1 (map units)."""
+
+    step: float = 0.5          # I, step size
+    iterations: int = 200      # J, iterations of the force function
+    k_att: float = 10.0        # K_att
+    k_rep: float = 2.0         # K_rep (traditional; the improved run uses k_rep_improved)
+    k_rep_improved: float = 5.0  # Sec. 4: K_rep = 5 for the improved APF
+    rho_0: float = 20.0        # influence radius of the obstacles
+
+
+@dataclass
+class PointResult:
+    world: str
+    method: str
+    outcome: str               # reached | collision | failed
+    iterations: int            # force evaluations made
+    path: np.ndarray           # (N, D) in map units
+    min_clearance: float       # closest approach to an obstacle surface [map units]
+    final_distance: float      # to the target [map units]
+
+    @property
+    def length(self) -> float:
+        return float(np.sum(np.linalg.norm(np.diff(self.path, axis=0), axis=1))) if len(self.path) > 1 else 0.0
+
+    def summary(self) -> dict:
+        return {"world": self.world, "method": self.method, "outcome": self.outcome,
+                "iterations": self.iterations, "path_length": round(self.length, 3),
+                "min_clearance": round(self.min_clearance, 3),
+                "final_distance": round(self.final_distance, 3)}
+
+
+def obstacles_of(world: World, units_per_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(centres (K, D), radii (K,)) of the world's round obstacles, in map units."""
+    dims = world.dims
+    cs, rs = [], []
+    for i, ob in enumerate(world.obstacles):
+        if ob.shape not in ("cylinder", "sphere"):
+            raise ConfigError(f"world {world.name!r}: obstacles[{i}] is a {ob.kind}; Wang's point "
+                              "simulation takes round obstacles only (cylinders, spheres)")
+        cs.append(ob.center[:dims])
+        rs.append(ob.radius)
+    return (np.array(cs, float).reshape(-1, dims) * units_per_m, np.array(rs, float) * units_per_m)
+
+
+def traditional_force(pos, goal, centres, pp: PointParams) -> np.ndarray:
+    """Eqs. 2 and 4 (gradients of eqs. 1 and 3, factor 2 dropped as the paper's eq. 2 does)."""
+    force = pp.k_att * (goal - pos)
+    away = pos - centres
+    rho = np.sqrt(np.sum(away * away, axis=1))
+    near = (rho < pp.rho_0) & (rho > 1e-12)
+    if near.any():
+        r = rho[near]
+        mag = pp.k_rep * (1.0 / r - 1.0 / pp.rho_0) / r**2
+        force = force + np.sum(away[near] * (mag / r)[:, None], axis=0)
+    return force
+
+
+def _improved(pp: PointParams, r_0: float) -> WangParams:
+    return WangParams(k_att=pp.k_att, k_rep_l=pp.k_rep_improved, lidar_points=1, rho_0=pp.rho_0,
+                      r_0=r_0, control_offset_m=0.0)
+
+
+def _clearance(p, q, centres, radii) -> float:
+    """Smallest distance from the segment p-q to an obstacle surface (< 0: it enters one)."""
+    if not len(centres):
+        return math.inf
+    d = q - p
+    L2 = float(d @ d)
+    t = np.clip(((centres - p) @ d) / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(centres))
+    closest = p + t[:, None] * d
+    return float(np.min(np.linalg.norm(centres - closest, axis=1) - radii))
+
+
+def fixed_step(world: World | str, method: str, pp: PointParams | None = None,
+               units_per_m: float | None = None) -> PointResult:
+    """Wang's point walk on ``world`` with the ``traditional`` or ``improved`` field."""
+    if method not in METHODS:
+        raise ConfigError(f"method {method!r}; valid: {list(METHODS)}")
+    world = world if isinstance(world, World) else load_world(world)
+    pp = pp or PointParams()
+    scale = units_per_m if units_per_m is not None else (10.0 if world.dims == 3 else 1.0)
+    centres, radii = obstacles_of(world, scale)
+    goal = np.array(world.goal[: world.dims], float) * scale
+    pos = np.array(world.start[: world.dims], float) * scale
+    wps = [_improved(pp, float(r)) for r in radii] if method == "improved" else []
+    path, clear, outcome, used = [pos.copy()], math.inf, "failed", 0
+    for k in range(1, pp.iterations + 1):
+        used = k
+        if method == "traditional":
+            f = traditional_force(pos, goal, centres, pp)
+        else:   # R_0 of eq. 6 is the radius of the nearest obstacle
+            near = int(np.argmin(np.linalg.norm(centres - pos, axis=1))) if len(centres) else 0
+            f = wang_force(pos, goal, centres, wps[near] if wps else _improved(pp, 0.0))
+        n = float(np.linalg.norm(f))
+        nxt = pos + (pp.step * f / n if n > 0 else 0.0)
+        c = _clearance(pos, nxt, centres, radii)
+        clear = min(clear, c)
+        pos = nxt
+        path.append(pos.copy())
+        if c < 0:
+            outcome = "collision"
+            break
+        if np.linalg.norm(goal - pos) <= pp.step / 2:
+            outcome = "reached"
+            break
+    return PointResult(world.name, method, outcome, used, np.array(path), clear,
+                       float(np.linalg.norm(goal - pos)))

@@ -1,0 +1,73 @@
+"""A recorded run as arrays for pictures (``papf animate``, the report's mind figure).
+
+Poses from ground truth (``sim/pose``) when recorded, else odometry; speed from odometry;
+charge from ``battery``; every ``planner/state``. Times in seconds of the recording's
+stamps. Pure: reads the file, nothing else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from common.errors import ConfigError, PapfError
+from papf.recording.foxglove_export import stack_topic
+from papf.recording.reader import Recording
+from schemas.messages import BatteryState, Odometry, PlannerState
+from worlds import World, load_world
+
+
+@dataclass
+class RunTrack:
+    """What a picture of a run needs, from a recording (times [s])."""
+
+    world: World | None
+    title: str
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0))      # pose times
+    xyyaw: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    v_t: np.ndarray = field(default_factory=lambda: np.zeros(0))    # odometry times
+    v: np.ndarray = field(default_factory=lambda: np.zeros(0))      # [m/s]
+    q_t: np.ndarray = field(default_factory=lambda: np.zeros(0))    # battery times
+    q: np.ndarray = field(default_factory=lambda: np.zeros(0))      # [mAh]
+    states: list[PlannerState] = field(default_factory=list)
+    state_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def load_track(path: str | Path, world: str | None = None) -> RunTrack:
+    """Poses (ground truth if recorded, else odometry), speed, charge, planner states."""
+    poses: dict[str, list[Odometry]] = {"sim/pose": [], "odom": []}
+    batt: list[BatteryState] = []
+    states: list[PlannerState] = []
+    with Recording(path) as rec:
+        meta = rec.run_metadata
+        for key, msg, _ in rec.messages():
+            topic = stack_topic(key)
+            if topic in poses and isinstance(msg, Odometry):
+                poses[topic].append(msg)
+            elif topic == "battery" and isinstance(msg, BatteryState):
+                batt.append(msg)
+            elif topic == "planner/state" and isinstance(msg, PlannerState):
+                states.append(msg)
+    name = world or meta.get("world")
+    w = None
+    if name:
+        try:
+            w = load_world(name)
+        except PapfError:
+            if world:
+                raise
+    src = poses["sim/pose"] or poses["odom"]
+    if not src:
+        raise ConfigError(f"{path}: no sim/pose or odom messages to animate")
+    odom = poses["odom"] or src
+    return RunTrack(
+        world=w, title=f"{meta.get('planner', '?')} on {w.name if w else meta.get('world', '?')}"
+                       + (f" (seed {meta['seed']})" if "seed" in meta else ""),
+        t=np.array([m.stamp_ns for m in src]) / 1e9,
+        xyyaw=np.array([(m.x, m.y, m.yaw) for m in src]),
+        v_t=np.array([m.stamp_ns for m in odom]) / 1e9, v=np.array([m.v for m in odom]),
+        q_t=np.array([b.stamp_ns for b in batt]) / 1e9,
+        q=np.array([b.charge_used_mAh for b in batt]),
+        states=states, state_t=np.array([s.stamp_ns for s in states]) / 1e9)
