@@ -72,11 +72,14 @@ def _replay(args, stop: StopRequested) -> int:
     return 130 if stop else 0
 
 
+PASSIVE = {"viewer"}   # nodes that only watch (replay --view starts one itself)
+
+
 def _refuse_live(session, namespaces: set[str], into_live: bool) -> None:
     """A live stack in a target namespace would act on recorded messages: refuse."""
     for ns in sorted(namespaces):
         try:
-            alive = alive_nodes(session, Keys(ns))
+            alive = alive_nodes(session, Keys(ns)) - PASSIVE
         except ValueError:
             continue
         if alive and not into_live:
