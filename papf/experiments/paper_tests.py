@@ -25,13 +25,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from common.errors import ConfigError
-from papf.experiments.sweep import SweepOptions, map_runs
+from papf.experiments.sweep import SweepOptions
 from papf.experiments.trials import (
     markdown_table,
     quiet_runner_logs,
-    run_job,
+    sweep_trials,
     trial_job,
-    trial_line,
     variants,
     write_csv,
 )
@@ -167,16 +166,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
                       timeout_s=timeout_s, sets=tuple(sets), record=mode == "stack", preset=preset)
             for name in worlds for planner, preset in variants(planners, presets)]
     jobs = [dataclasses.replace(job, index=i) for i, job in enumerate(jobs)]
-    opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
-    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="paper tests",
-                    line=lambda _j, r: trial_line(r[0]))
-    trials = [trial for trial, _ in done]
-    for job, (_trial, data) in zip(jobs, done, strict=True):
-        if data is not None:  # recorded where it ran; kept here
-            stem = job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
-            rec = out / "recordings" / f"{stem}.mcap"
-            rec.parent.mkdir(parents=True, exist_ok=True)
-            rec.write_bytes(data)
+    trials = sweep_trials(jobs, sweep, progress, "paper tests", out)
     for name in worlds:
         world = load_world(name)
         paths = {f"{t.label} ({t.outcome})": t.path for t in trials if t.world == world.name}

@@ -16,18 +16,16 @@ The planners' parameters are their defaults: nothing is tuned to these worlds.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
 from common.errors import ConfigError
-from papf.experiments.sweep import SweepOptions, map_runs
+from papf.experiments.sweep import SweepOptions
 from papf.experiments.trials import (
     markdown_table,
     quiet_runner_logs,
-    run_job,
+    sweep_trials,
     trial_job,
-    trial_line,
     variants,
     write_csv,
 )
@@ -113,16 +111,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
                            sets=tuple(sets), record=plots and mode == "stack", index=len(jobs) + k,
                            preset=preset)
                  for k, (planner, preset) in enumerate(runs)]
-    opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
-    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title="random worlds",
-                    line=lambda _j, r: trial_line(r[0]))
-    trials = [trial for trial, _ in done]
-    for job, (_trial, data) in zip(jobs, done, strict=True):
-        if data is not None:  # recorded where it ran; kept here
-            stem = job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
-            rec = out / "recordings" / f"{stem}.mcap"
-            rec.parent.mkdir(parents=True, exist_ok=True)
-            rec.write_bytes(data)
+    trials = sweep_trials(jobs, sweep, progress, "random worlds", out)
     if plots:
         for world in worlds:
             mine = [t for t in trials if t.world == world.name]

@@ -9,6 +9,7 @@ drawn); plus the CSV / Markdown writers and the progress bar the experiments sha
 from __future__ import annotations
 
 import csv
+import dataclasses
 import logging
 import math
 import time
@@ -21,6 +22,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from common.errors import RecordingError
+from papf.experiments.sweep import SweepOptions, map_runs
 from papf.supervisor import free_port
 from worlds import World, load_world
 
@@ -240,3 +242,22 @@ def trial_line(t: Trial) -> str:
 def quiet_runner_logs() -> None:
     """The launcher logs a line per 10 s of sim time when it has no progress bar: mute those."""
     logging.getLogger("papf.run").setLevel(logging.WARNING)
+
+
+def sweep_trials(jobs: Sequence[TrialJob], sweep: SweepOptions | None, progress: bool | None,
+                 title: str, out: Path) -> list[Trial]:
+    """Run the jobs (in order, on the sweep's engine) and keep their recordings under ``out``.
+
+    A recording is made where its run ran and comes back as bytes; it is written here as
+    ``out/recordings/<world>-<planner>[-<preset>].mcap``.
+    """
+    opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
+    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title=title,
+                    line=lambda _j, r: trial_line(r[0]))
+    for job, (_trial, data) in zip(jobs, done, strict=True):
+        if data is not None:
+            stem = job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
+            rec = out / "recordings" / f"{stem}.mcap"
+            rec.parent.mkdir(parents=True, exist_ok=True)
+            rec.write_bytes(data)
+    return [trial for trial, _ in done]
