@@ -16,8 +16,10 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import queue
 import signal
+import sys
 import threading
 import time
 from collections import Counter
@@ -133,6 +135,21 @@ def direct(callback) -> zenoh.handlers.Callback:
     across topics.
     """
     return zenoh.handlers.Callback(callback, indirect=False)
+
+
+def exit_fast(code: int | None) -> None:
+    """End a node process whose work is done (its session closed, its files and pybullet
+    clients closed by their ``with`` blocks): flush the logs and the standard streams, then
+    ``os._exit`` — skipping the interpreter's teardown of every module and object, which
+    takes 0.1–1 s with numpy, pybullet and numba loaded and which the launcher would wait
+    for at the end of every run. ``if __name__ == "__main__": exit_fast(main())``."""
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(code or 0)
 
 
 def setup_logging(name: str, level: str = "INFO") -> logging.Logger:

@@ -15,11 +15,10 @@ Bad payloads and messages the meter cannot use are logged, counted and dropped.
 from __future__ import annotations
 
 import argparse
-import sys
 
 from common.errors import ConfigError, PapfError
 from common.ports import describe, plain
-from common.transport import add_zenoh_args, open_node, setup_logging
+from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from nodes.energy_meter.ports import PORTS, VARIANTS
 
 from .core import EnergyMeter
@@ -93,4 +92,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown
