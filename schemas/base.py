@@ -33,6 +33,7 @@ import msgpack
 import numpy as np
 
 from common.errors import SchemaError
+from schemas.json_schema import json_type as _json_type
 
 Floats = tuple[float, ...]
 Points = tuple[tuple[float, float], ...]
@@ -106,8 +107,33 @@ class Message:
         return out
 
     def to_bytes(self) -> bytes:
-        """msgpack bytes of this message."""
-        return msgpack.packb(self.to_wire(), use_bin_type=True)
+        """msgpack bytes of this message (those of :meth:`to_wire`, byte for byte)."""
+        return msgpack.packb(self._packable(), use_bin_type=True)
+
+    def _packable(self) -> dict:
+        # to_wire without copying points and paths into lists: msgpack packs a tuple as
+        # the array it packs for a list, so the bytes are the same (tests/test_schemas.py)
+        out: dict[str, Any] = {"_type": self.TYPE}
+        for name, kind, _ in self._FIELDS:
+            value = getattr(self, name)
+            if kind == "f32array":
+                value = np.ascontiguousarray(value, dtype=_F32).tobytes()
+            elif kind == "items":
+                value = [m._packable() for m in value]
+            out[name] = value
+        return out
+
+    @classmethod
+    def from_normal(cls, **values: Any):
+        """The message from values already in the form the constructor makes (Python floats;
+        ``Floats``/``Points``/``Paths`` as tuples of them): no copy, no normalisation — for hot
+        paths that build them so (the planner's debug state). Unknown/missing fields: TypeError."""
+        bad = (values.keys() - cls._DEFAULTS.keys()) | (cls._REQUIRED - values.keys())
+        if bad:
+            raise TypeError(f"{cls.__name__}: unknown or missing fields {sorted(bad)}")
+        obj = object.__new__(cls)
+        obj.__dict__.update(cls._DEFAULTS, **values)
+        return obj
 
     # -- decoding ---------------------------------------------------------
     @classmethod
@@ -203,6 +229,8 @@ def message(name: str, version: int):
             for f in dataclasses.fields(cls) for kind in (_kind(hints[f.name]),)
         )
         cls.TYPE = f"papf/{name}/v{version}"
+        cls._DEFAULTS = {f.name: f.default for f in dataclasses.fields(cls)}  # MISSING: required
+        cls._REQUIRED = {k for k, v in cls._DEFAULTS.items() if v is dataclasses.MISSING}
         return cls
 
     return wrap
@@ -322,31 +350,3 @@ def _len(value: Any) -> str:
         return str(len(value))
     except TypeError:
         return "n/a"
-
-
-def _json_type(kind: str, md: dict) -> dict:
-    if kind == "items":
-        item = {k: v for k, v in md["item"].json_schema().items() if k != "$schema"}
-        return {"type": "array", "items": item}
-    number = {"type": "number"}
-    pair = {"type": "array", "items": number, "minItems": 2, "maxItems": 2}
-    out: dict[str, Any] = {
-        "int": {"type": "integer"},
-        "float": dict(number),
-        "str": {"type": "string"},
-        "bool": {"type": "boolean"},
-        "floats": {"type": "array", "items": number},
-        "strs": {"type": "array", "items": {"type": "string"}},
-        "points": {"type": "array", "items": pair},
-        "paths": {"type": "array", "items": {"type": "array", "items": pair}},
-        "f32array": {"type": "string", "contentEncoding": "binary",
-                     "description": "little-endian float32 array"},
-    }[kind]
-    if md.get("choices"):
-        out["enum"] = list(md["choices"])
-    if md.get("length") is not None:
-        out["minItems"] = out["maxItems"] = md["length"]
-    text = " ".join(x for x in (md.get("doc", ""), f"[{md['unit']}]" if md.get("unit") else "") if x)
-    if text:
-        out["description"] = (out.get("description", "") + " " + text).strip()
-    return out

@@ -20,6 +20,7 @@ Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -54,13 +55,25 @@ def scan_view(scan: Scan, odom: Odometry) -> ScanView:
     origin = np.array([odom.x + c * scan.sensor_x - s * scan.sensor_y,
                        odom.y + s * scan.sensor_x + c * scan.sensor_y])
     ranges = np.asarray(scan.ranges, dtype=float)
-    angles = odom.yaw + scan.sensor_yaw + scan.angle_min + scan.angle_increment * np.arange(ranges.size)
-    with np.errstate(invalid="ignore"):
-        valid = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
+    angles = odom.yaw + scan.sensor_yaw + scan.angle_min + _beam_offsets(
+        scan.angle_increment, ranges.size, math.copysign(1.0, scan.angle_increment))
+    with np.errstate(invalid="ignore"):  # nan compares False; finite limits also drop +-inf
+        valid = (ranges >= scan.range_min) & (ranges <= scan.range_max)
+        if not (math.isfinite(scan.range_min) and math.isfinite(scan.range_max)):
+            valid &= np.isfinite(ranges)
     ranges = np.where(valid, ranges, np.inf)
     r, a = ranges[valid], angles[valid]
     points = origin + np.column_stack([r * np.cos(a), r * np.sin(a)])
     return ScanView(origin, angles, ranges, points.reshape(-1, 2), valid)
+
+
+@functools.lru_cache(maxsize=8)
+def _beam_offsets(increment: float, beams: int, _sign: float) -> np.ndarray:
+    """``increment * arange(beams)`` (read-only; the same few scan layouts every cycle;
+    ``_sign`` keeps -0.0 and 0.0 apart in the cache)."""
+    out = increment * np.arange(beams)
+    out.flags.writeable = False
+    return out
 
 
 @dataclass
@@ -97,12 +110,17 @@ class Strategy(Protocol):
         """The force at ``pos`` (world frame) and the debug geometry."""
 
 
-def _points(a) -> list:
-    """(K, >=2) array-like -> list of (x, y) (the first two coordinates)."""
+def _points(a) -> tuple:
+    """(K, >=2) array-like -> tuple of (x, y) Python floats (the first two coordinates)."""
     arr = np.asarray(a, dtype=float)
     if arr.size == 0:
-        return []
-    return list(map(tuple, arr.reshape(arr.shape[0] if arr.ndim > 1 else 1, -1)[:, :2].tolist()))
+        return ()
+    return tuple(map(tuple, arr.reshape(arr.shape[0] if arr.ndim > 1 else 1, -1)[:, :2].tolist()))
+
+
+def _paths(paths) -> tuple:
+    """Sequence of (K, >=2) arrays -> tuple of :func:`_points`."""
+    return tuple(map(_points, paths))
 
 
 class Planner:
@@ -248,17 +266,19 @@ class Planner:
 
     def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
         force = np.asarray(plan.force, dtype=float)
-        return PlannerState(
-            stamp_ns=t, algorithm=self.strategy.name, mode=plan.mode,
+        # every value below is already in the message's own form (Python floats, tuples):
+        # from_normal skips the constructor's second pass over the paths
+        return PlannerState.from_normal(
+            stamp_ns=int(t), algorithm=self.strategy.name, mode=str(plan.mode),
             force=(float(force[0]), float(force[1])), heading_ref=float(theta_ref),
             v_ref=float(v), w_ref=float(w),
             temporary_goal=tuple(float(x) for x in plan.temporary_goal),
             predicted_path=_points(plan.predicted_path),
-            abandoned_paths=tuple(_points(p) for p in plan.abandoned_paths),
+            abandoned_paths=_paths(plan.abandoned_paths),
             top_quarks=_points(plan.top_quarks),
-            virtual_walls=tuple(_points(p) for p in plan.virtual_walls),
+            virtual_walls=_paths(plan.virtual_walls),
             virtual_obstacles=_points(plan.virtual_obstacles),
-            obstacle_count=(plan.obstacles_used if plan.v_ref is not None else
+            obstacle_count=(int(plan.obstacles_used) if plan.v_ref is not None else
                             0 if view is None else int(view.points.shape[0])),
             local_minimum_count=int(plan.local_count), lane_goal_y=float(plan.lane_goal_y),
             v_target=float(plan.v_ref) if plan.v_ref is not None else float(v),

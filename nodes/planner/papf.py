@@ -38,7 +38,8 @@ import numpy as np
 
 from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
-from nodes.planner.kernels import field_force, predict_paths, rollout, tail_stagnation
+from nodes.planner.kernels import HAVE_NUMBA, field_force, predict_paths, rollout, tail_stagnation
+from nodes.planner.papf_kernel import plan_compiled
 
 
 @dataclass(frozen=True)
@@ -216,6 +217,8 @@ class PAPFStrategy:
         pp = self.params
         obstacles = view.points
         kept = self.quarks if pp.persist_quarks else None
+        if pp.use_numba and HAVE_NUMBA and pp.stop_at_goal and len(pos) == 2:
+            return self._plan_compiled(pos, goal, obstacles, apf, kept)
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
         g_goal, g_obs = apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o
@@ -231,3 +234,17 @@ class PAPFStrategy:
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
                     top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)
+
+    def _plan_compiled(self, pos, goal, obstacles, apf: APFParams, kept) -> Plan:
+        """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf_kernel.plan_compiled`)."""
+        pp = self.params
+        out = plan_compiled(pos, goal, obstacles, apf, pp, kept)
+        path, quarks, abandoned, resolved, target, force = out
+        self.quarks = quarks
+        if resolved:
+            mode = "bypass" if quarks.shape[0] else "drive"
+        else:
+            mode = "unresolved"
+        return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
+                    predicted_path=path, abandoned_paths=abandoned, top_quarks=quarks,
+                    searching=bool(abandoned) and pp.quark_restarts_watch)
