@@ -103,3 +103,22 @@ def test_run_without_ties_identical_with_and_without_numba():
                      max_time_s=30, keep_states=True) for extra in ([], ["use_numba=false"])]
     fast, slow = ([dataclasses.replace(s, compute_ns=0).to_bytes() for s in r.states] for r in runs)
     assert fast == slow and np.array_equal(runs[0].path, runs[1].path)
+
+
+def test_debug_state_is_in_the_messages_own_form():
+    """Planner._state builds PlannerState without normalising: the values must be exactly
+    what the constructor would make (tuples of Python floats)."""
+    world = toy_world(segments=box_segments(1.2, 0.0, 0.4, 0.4))
+    for name in ("papf", "apf", "arapf", "wang"):
+        pl = make_planner(name)
+        pl.set_goal(Goal(stamp_ns=0, x=4.0, y=0.0))
+        _cmd, state, _status = pl.step(cast_scan(world, 0.0, 0.0, 0.0, stamp_ns=1),
+                                       Odometry(stamp_ns=1, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+        values = {f: getattr(state, f) for f, _k, _m in state._FIELDS}
+        again = type(state)(**values)
+        assert again == state and again.to_bytes() == state.to_bytes()
+        for f, kind, _m in state._FIELDS:
+            assert type(values[f]) is type(getattr(again, f)), f
+            if kind in ("points", "paths"):
+                flat = values[f] if kind == "points" else [p for path in values[f] for p in path]
+                assert all(type(p) is tuple and type(p[0]) is float for p in flat), f
