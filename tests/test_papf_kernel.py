@@ -122,3 +122,22 @@ def test_debug_state_is_in_the_messages_own_form():
             if kind in ("points", "paths"):
                 flat = values[f] if kind == "points" else [p for path in values[f] for p in path]
                 assert all(type(p) is tuple and type(p[0]) is float for p in flat), f
+
+
+def test_scan_points_numba_and_numpy_identical():
+    """Beams -> points with nan, +-inf and out-of-range returns, finite and infinite limits."""
+    from nodes.planner.scan_kernel import scan_points
+
+    rng = np.random.default_rng(4)
+    for k in range(40):
+        ranges = rng.uniform(-1.0, 14.0, 300)
+        ranges[rng.random(300) < 0.1] = np.nan
+        ranges[rng.random(300) < 0.1] = np.inf
+        ranges[rng.random(300) < 0.05] = -np.inf
+        angles = rng.uniform(-7, 7) + 0.021 * np.arange(300)
+        limits = (0.2, 12.0) if k % 3 else (0.2, np.inf)
+        args = (ranges, np.cos(angles), np.sin(angles), *limits, rng.uniform(-5, 5, 2))
+        fast, slow = scan_points(*args, use_numba=True), scan_points(*args, use_numba=False)
+        for a, b in zip(fast, slow, strict=True):
+            assert a.dtype == b.dtype and np.array_equal(a, b)
+        assert fast[2].sum() > 100 and not np.isfinite(fast[0][~fast[2]]).any()

@@ -209,6 +209,10 @@ class PAPFStrategy:
     def warm_up(self, apf: APFParams) -> None:
         """Compile the kernels (numba) before the node declares itself ready."""
         predict(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf, self.params)
+        if self.params.use_numba and HAVE_NUMBA:   # the compiled cycle, with and without quarks
+            for quarks in (None, np.array([[0.4, 0.3]])):
+                plan_compiled(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
+                              self.params, quarks)
         field_force(np.zeros(2), np.array([1.0, 0.0]), 1.0, np.array([[0.5, 0.1]]), 1.0, 0.5,
                     self.params.use_numba)
 
@@ -247,4 +251,4 @@ class PAPFStrategy:
             mode = "unresolved"
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=path, abandoned_paths=abandoned, top_quarks=quarks,
-                    searching=bool(abandoned) and pp.quark_restarts_watch)
+                    searching=len(abandoned) > 0 and pp.quark_restarts_watch)

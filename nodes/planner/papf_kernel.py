@@ -22,6 +22,7 @@ Python and numpy call overhead around the kernel is gone.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -92,36 +93,64 @@ def plan_compiled(pos, goal, obstacles, apf, pp, quarks=None):
 
     ``apf``/``pp``: :class:`~nodes.planner.apf.APFParams` and
     :class:`~nodes.planner.papf.PAPFParams`; ``quarks``: the ones already placed (or None).
+    ``abandoned`` is one ``(n, i_max + 1, 2)`` array (a sequence of the abandoned paths).
     """
-    g_goal = apf.k_vg * apf.q_v * apf.q_g
-    g_obs = apf.k_vo * apf.q_v * apf.q_o
-    g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
-    d_o = float(apf.d_o)
+    c = _LAST[2] if (apf is _LAST[0] and pp is _LAST[1]) else _remember(apf, pp)
     pos = np.ascontiguousarray(pos, dtype=float)
     goal = np.ascontiguousarray(goal, dtype=float)
     obstacles = np.ascontiguousarray(obstacles, dtype=float).reshape(-1, 2)
-    quarks = (np.zeros((0, 2)) if quarks is None else
+    quarks = (_NO_QUARKS if quarks is None else
               np.ascontiguousarray(quarks, dtype=float).reshape(-1, 2))
-    i_max = pp.i_max
     paths, n_paths, length, qbuf, lo, hi, resolved, reached, f_apf, qdist = _front(
-        pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, float(pp.d_q), float(pp.step_m),
-        i_max, pp.n_stag, float(pp.stag_radius), int(pp.max_quarks), float(pp.pull_range))
+        pos, goal, c.g_goal, obstacles, c.g_obs, c.d_o, quarks, c.g_q, c.d_q, c.step, c.i_max,
+        c.n_stag, c.stag_radius, c.max_quarks, c.pull_range)
     path = paths[n_paths - 1, :length]
-    used = qbuf[lo:hi]
-    abandoned = [paths[k, : i_max + 1] for k in range(n_paths - 1)]
-    eq8 = bool(resolved) or not pp.unresolved_global_goal
-    if eq8:   # numpy's own rounding (BLAS): as temporary_goal does it
-        direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
+    eq8 = resolved or not pp.unresolved_global_goal
+    if eq8:   # numpy's own rounding (BLAS) as in temporary_goal; norm(v) is sqrt(v . v)
+        direction = f_apf if math.sqrt(f_apf.dot(f_apf)) > 0 else goal - pos
         pts = path[1:] if path.shape[0] > 1 else path
-        u = direction / np.linalg.norm(direction)
+        u = direction / math.sqrt(direction.dot(direction))
         proj = (pts - pos) @ u
     else:     # no stagnation-free path after M repetitions: eq. 7 with the global goal
         pts, proj, u = path, _EMPTY, _EMPTY
-    cube = np.maximum(qdist, pp.quark_ball_m) ** 3     # numpy's power, as quark_force
-    q_lim = apf.d_o if pp.motion_quarks_within_d_o else pp.d_q
-    target, force = _back(pos, pts, proj, u, float(pp.tie_tol_m), eq8, goal, g_goal, obstacles,
-                          g_obs, d_o, used, qdist, cube, float(q_lim), g_q)
-    return path, used, abandoned, bool(resolved), target, force
+    cube = np.maximum(qdist, c.ball) ** 3     # numpy's power, as quark_force
+    target, force = _back(pos, pts, proj, u, c.tie_tol, eq8, goal, c.g_goal, obstacles, c.g_obs,
+                          c.d_o, qbuf[lo:hi], qdist, cube, c.q_lim, c.g_q)
+    return path, qbuf[lo:hi], paths[: n_paths - 1, : c.i_max + 1], bool(resolved), target, force
+
+
+class _Constants(NamedTuple):
+    g_goal: float
+    g_obs: float
+    g_q: float
+    d_o: float
+    d_q: float
+    step: float
+    i_max: int
+    n_stag: int
+    stag_radius: float
+    max_quarks: int
+    pull_range: float
+    ball: float
+    tie_tol: float
+    q_lim: float
+
+
+def _remember(apf, pp) -> _Constants:
+    """The gains and derived numbers of one (APFParams, PAPFParams) pair, kept for the next
+    cycles (the planner passes the same two objects until its settings change)."""
+    global _LAST
+    _LAST = (apf, pp, _Constants(
+        apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o,
+        pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q, float(apf.d_o), float(pp.d_q),
+        float(pp.step_m), int(pp.i_max), int(pp.n_stag), float(pp.stag_radius),
+        int(pp.max_quarks), float(pp.pull_range), float(pp.quark_ball_m), float(pp.tie_tol_m),
+        float(apf.d_o if pp.motion_quarks_within_d_o else pp.d_q)))
+    return _LAST[2]
+
+
+_LAST: tuple = (None, None, None)
 
 
 _EMPTY = np.zeros(0)
+_NO_QUARKS = np.zeros((0, 2))
