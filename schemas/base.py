@@ -76,6 +76,7 @@ class Message:
 
     TYPE: ClassVar[str] = ""
     _FIELDS: ClassVar[tuple[tuple[str, str, dict], ...]] = ()
+    _PLAIN: ClassVar[bool] = False   # no __post_init__ of its own: decoding may skip __init__
 
     # -- encoding ---------------------------------------------------------
     def to_dict(self) -> dict:
@@ -90,38 +91,26 @@ class Message:
             out[name] = value
         return out
 
-    def to_wire(self) -> dict:
-        """The msgpack map, ``_type`` first."""
+    def to_wire(self, lists: bool = True) -> dict:
+        """The msgpack map, ``_type`` first (``lists=False``: points and paths stay tuples,
+        which msgpack packs as the same arrays — what :meth:`to_bytes` packs)."""
         out: dict[str, Any] = {"_type": self.TYPE}
         for name, kind, _ in self._FIELDS:
             value = getattr(self, name)
             if kind == "f32array":
                 value = np.ascontiguousarray(value, dtype=_F32).tobytes()
-            elif kind == "points":
+            elif kind == "points" and lists:
                 value = [list(p) for p in value]
-            elif kind == "paths":
+            elif kind == "paths" and lists:
                 value = [[list(p) for p in path] for path in value]
             elif kind == "items":
-                value = [m.to_wire() for m in value]
+                value = [m.to_wire(lists) for m in value]
             out[name] = value
         return out
 
     def to_bytes(self) -> bytes:
         """msgpack bytes of this message (those of :meth:`to_wire`, byte for byte)."""
-        return msgpack.packb(self._packable(), use_bin_type=True)
-
-    def _packable(self) -> dict:
-        # to_wire without copying points and paths into lists: msgpack packs a tuple as
-        # the array it packs for a list, so the bytes are the same (tests/test_schemas.py)
-        out: dict[str, Any] = {"_type": self.TYPE}
-        for name, kind, _ in self._FIELDS:
-            value = getattr(self, name)
-            if kind == "f32array":
-                value = np.ascontiguousarray(value, dtype=_F32).tobytes()
-            elif kind == "items":
-                value = [m._packable() for m in value]
-            out[name] = value
-        return out
+        return msgpack.packb(self.to_wire(lists=False), use_bin_type=True)
 
     @classmethod
     def from_normal(cls, **values: Any):
@@ -131,6 +120,8 @@ class Message:
         bad = (values.keys() - cls._DEFAULTS.keys()) | (cls._REQUIRED - values.keys())
         if bad:
             raise TypeError(f"{cls.__name__}: unknown or missing fields {sorted(bad)}")
+        if not cls._PLAIN:
+            return cls(**values)
         obj = object.__new__(cls)
         obj.__dict__.update(cls._DEFAULTS, **values)
         return obj
@@ -154,12 +145,29 @@ class Message:
         if got != cls.TYPE:
             raise SchemaError(f"{cls.TYPE}: wrong message type {got!r} (expected {cls.TYPE!r})")
         values = {}
+        complete = True
         for name, kind, md in cls._FIELDS:
             if name not in wire:
                 if cls._default_of(name) is not dataclasses.MISSING:
+                    complete = False
                     continue
                 raise SchemaError(f"{cls.TYPE}: missing field {name!r}")
-            values[name] = _check(cls.TYPE, name, kind, md, wire[name])
+            value = wire[name]
+            # fast path of the two commonest checks; anything else (and every error) via _check
+            if kind == "float" and type(value) is float and (value - value == 0.0
+                                                             or md.get("nonfinite")):
+                values[name] = value
+            elif kind == "int" and type(value) is int or kind == "str" and type(value) is str \
+                    and (not md.get("choices") or value in md["choices"]):
+                values[name] = value
+            else:
+                values[name] = _check(cls.TYPE, name, kind, md, value)
+        if complete and cls._PLAIN:
+            # every field checked and already in its normal form (what __post_init__ would
+            # make of it): fill the frozen instance without __init__'s per-field setattr
+            obj = object.__new__(cls)
+            obj.__dict__.update(values)
+            return obj
         return cls(**values)
 
     @classmethod
@@ -229,6 +237,7 @@ def message(name: str, version: int):
             for f in dataclasses.fields(cls) for kind in (_kind(hints[f.name]),)
         )
         cls.TYPE = f"papf/{name}/v{version}"
+        cls._PLAIN = cls.__post_init__ is Message.__post_init__
         cls._DEFAULTS = {f.name: f.default for f in dataclasses.fields(cls)}  # MISSING: required
         cls._REQUIRED = {k for k, v in cls._DEFAULTS.items() if v is dataclasses.MISSING}
         return cls
@@ -298,6 +307,9 @@ def _f32array(where: str, value: Any, md: dict) -> np.ndarray:
 def _floats(where: str, value: Any, md: dict) -> tuple[float, ...]:
     if md.get("length") is not None and len(value) != md["length"]:
         raise SchemaError(f"{where}: expected {md['length']} values, got {len(value)}")
+    out = tuple(value)
+    if all(type(v) is float and (v - v == 0.0 or md.get("nonfinite")) for v in out):
+        return out   # what _float gives each of them
     return tuple(_float(where, v, md) for v in value)
 
 
