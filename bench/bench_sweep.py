@@ -9,7 +9,7 @@ in this process; N: a Dask LocalCluster of N single-threaded worker processes, i
 start-up and shut-down included). Per sweep: wall time, runs per hour, sim seconds per
 wall second, CPU seconds of every process the sweep started (from /proc: steadier than
 wall time when other jobs share the cores) and the 1-minute load average before and
-after. ``--csv`` appends one row per sweep (``docs/data/bench-sweep.csv``; ``make docs``
+after. ``--csv`` writes one row per sweep (``docs/data/bench-sweep.csv``; ``make docs``
 renders the tables in docs/performance.md and docs/sweeps.md). Speed is reported, never
 asserted.
 """
@@ -60,11 +60,11 @@ def bench(runs: int, timeout_s: float, workers: int) -> dict:
             "load_before": round(load0, 1), "load_after": round(os.getloadavg()[0], 1)}
 
 
-def write_rows(path: Path, rows: list[dict]) -> None:
-    """Append ``rows`` to the CSV at ``path`` (header when new)."""
-    new = not path.exists() or path.stat().st_size == 0
+def write_rows(path: Path, rows: list[dict], append: bool = False) -> None:
+    """Write ``rows`` to the CSV at ``path`` (``append``: after its rows, if any)."""
+    new = not (append and path.exists() and path.stat().st_size)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("a", newline="") as fh:
+    with path.open("w" if new else "a", newline="") as fh:
         out = csv.DictWriter(fh, FIELDS)
         if new:
             out.writeheader()
@@ -88,16 +88,18 @@ def main() -> None:
                     help="sim seconds at most per run (300: every run ends at the goal)")
     ap.add_argument("--workers", type=_workers, default=[1, 2],
                     help="comma-separated worker counts (1,2)")
-    ap.add_argument("--csv", type=Path, help="append one row per sweep to this CSV")
+    ap.add_argument("--csv", type=Path, help="write one row per sweep to this CSV")
+    ap.add_argument("--append", action="store_true", help="add the rows to --csv instead of replacing it")
     a = ap.parse_args()
     if a.runs < 1 or a.timeout <= 0:
         ap.error("--runs must be >= 1 and --timeout > 0")
     quiet_runner_logs()
+    rows = []
     for w in a.workers:
-        row = bench(a.runs, a.timeout, w)
-        print(json.dumps(row), flush=True)
-        if a.csv:
-            write_rows(a.csv, [row])
+        rows.append(bench(a.runs, a.timeout, w))
+        print(json.dumps(rows[-1]), flush=True)
+    if a.csv:
+        write_rows(a.csv, rows, a.append)
 
 
 if __name__ == "__main__":
