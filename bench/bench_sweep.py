@@ -57,7 +57,8 @@ def bench(runs: int, timeout_s: float, workers: int) -> dict:
             "sim_s": round(sim_s, 1), "wall_s": round(wall, 1),
             "runs_per_hour": round(runs * 3600 / wall), "sim_per_wall": round(sim_s / wall, 1),
             "cpu_s": round(cpu_s, 1), "cpu_s_per_run": round(cpu_s / runs, 1),
-            "load_before": round(load0, 1), "load_after": round(os.getloadavg()[0], 1)}
+            "load_before": round(load0, 1), "load_after": round(os.getloadavg()[0], 1),
+            "durations_s": [round(t.duration_s, 2) for t in trials]}   # JSON only, per run
 
 
 def write_rows(path: Path, rows: list[dict], append: bool = False) -> None:
@@ -65,7 +66,7 @@ def write_rows(path: Path, rows: list[dict], append: bool = False) -> None:
     new = not (append and path.exists() and path.stat().st_size)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w" if new else "a", newline="") as fh:
-        out = csv.DictWriter(fh, FIELDS)
+        out = csv.DictWriter(fh, FIELDS, extrasaction="ignore")
         if new:
             out.writeheader()
         out.writerows(rows)
