@@ -79,7 +79,8 @@ class IAPFParams:
     traditional: bool = False    # the traditional APF baseline (eq. 12, constant speed)
     k_trad: float = 3000.0       # eq. 12 k of the baseline (ours)
     brake_priority: bool = False  # an obstacle pushing back suspends eq. 25's return to V_c (ours)
-    stop_decel_frac: float = 0.0  # stop law: brake as needed above this * a_b (ours; node: 0.5)
+    stop_decel_frac: float = 0.0  # stop law: brake as needed above this * a_b (ours; 0 = off)
+    node_stop_decel_frac: float = 0.5  # stop_decel_frac in the planner node (ours; 0 = off)
     heading_min_speed: float = 2.5  # [m/s] slower tracks head along the road (ours; 0 = off)
     follow_min_frac: float = 0.5  # leader slower than this * V_c: change lanes if free (ours; 0 = off)
     goal_lane_s: float = 6.0     # [s] of cruise before the goal: pull to its lane (ours; 0 = off)
@@ -92,7 +93,8 @@ class IAPFParams:
 PAPER_PRESET = {"a_x": -0.15, "t_c": 0.4, "obstacle_gain": 1.0, "predict_step_s": 0.02,
                 "goal_half_period_lanes": 1.0, "b3_temp": 1.52, "heading_max_deg": 90.0,
                 "yaw_rate_max_deg": 0.0, "literal_rotation": True, "follow_min_frac": 0.0,
-                "goal_lane_s": 0.0, "stop_decel_frac": 0.0, "heading_min_speed": 0.0}
+                "goal_lane_s": 0.0, "stop_decel_frac": 0.0, "node_stop_decel_frac": 0.0,
+                "heading_min_speed": 0.0}
 
 _LENGTH_TIMES = {"s_m": (1, 0), "host_length": (1, 0), "host_width": (1, 0),
                  "lane_width_ref": (1, 0), "k_trad": (1, 0),

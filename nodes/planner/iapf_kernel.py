@@ -73,7 +73,7 @@ def _obstacle_grad_py(hx, hy, ob, prm):
 
 
 def _stop_need_py(x, y, v, obs, prm, y_min, width, count, shift):
-    """The stop law's deceleration (:func:`nodes.planner.iapf.stop_deceleration`)."""
+    """The stop law's deceleration (:func:`nodes.planner.iapf_fields.stop_deceleration`)."""
     lane = min(max(int(math.floor((y - y_min) / width)), 0), count - 1)
     need = 0.0
     for i in range(obs.shape[0]):

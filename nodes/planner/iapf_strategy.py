@@ -27,7 +27,6 @@ from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, sc
 from nodes.planner.iapf_fields import Lanes, Track
 
 LANE_GOAL_AHEAD = 1.0  # [s] the temporary lane goal is drawn this far ahead at the cruise speed
-NODE_STOP_DECEL_FRAC = 0.5  # the stop law in the node unless --set stop_decel_frac=... (ours)
 
 
 class IAPFStrategy:
@@ -77,7 +76,7 @@ class IAPFStrategy:
             # and it must stop S_m short of a standing vehicle in its lane (the stop law)
             q = dataclasses.replace(scaled(p, s, tau), yaw_rate_max_deg=0.0, brake_priority=True,
                                     host_length=BODY_LENGTH_M, host_width=BODY_WIDTH_M,
-                                    stop_decel_frac=p.stop_decel_frac or NODE_STOP_DECEL_FRAC)
+                                    stop_decel_frac=p.node_stop_decel_frac)
             self._core, self._core_for = IAPFCore(q), lanes
         return self._core
 
