@@ -109,10 +109,9 @@ def _answer_params(node, name: str, planner, query, stamp_ns: int) -> None:
 
 
 def warm_up(planner) -> None:
-    """Run one throw-away cycle on a copy so JIT kernels compile before ``ready``."""
-    warm = getattr(planner.strategy, "warm_up", None)
-    if warm is not None:
-        warm(planner.apf)
+    """Compile (or load) the JIT kernels before ``ready``: the scan view every planner uses
+    and the strategy's own, so the first lockstep cycle is not late."""
+    planner.warm_up()
 
 
 def main(argv=None) -> int:

@@ -24,7 +24,8 @@ HAVE_NUMBA = numba is not None
 
 def _segment_boxes(xy, ranges, beams, beam_count, increment, cluster_radius, lam, range_sd,
                    max_beam_gap):
-    """(boxes (S, 5): x, y, axis, length, width; counts (S,)) of the scan-order segments."""
+    """(boxes (S, 5): x, y, axis, length, width; counts (S,); first) of the scan-order
+    segments: segment s holds the returns ``(first + sum(counts[:s]) + q) % n``."""
     n = beams.shape[0]
     cut = np.zeros(n, dtype=np.bool_)
     last = -1
@@ -55,7 +56,7 @@ def _segment_boxes(xy, ranges, beams, beam_count, increment, cluster_radius, lam
         counts[s] = m
         s += 1
         k += m
-    return boxes[:s], counts[:s]
+    return boxes[:s], counts[:s], first
 
 
 def _box(xy, first, k, m, n, out):
@@ -88,8 +89,22 @@ def _box(xy, first, k, m, n, out):
     out[2], out[3], out[4] = axis, umax - umin, vmax - vmin
 
 
+def _extents(points, c, s):
+    """(min along, min across, max along, max across) [m] of ``points`` (m, 2) in the frame
+    turned by (cos, sin) = (c, s): the box model's measurement (:func:`nodes.tracker.box.fit`)."""
+    ulo = vlo = math.inf
+    uhi = vhi = -math.inf
+    for q in range(points.shape[0]):
+        u = points[q, 0] * c + points[q, 1] * s
+        v = points[q, 1] * c - points[q, 0] * s
+        ulo, uhi = min(ulo, u), max(uhi, u)
+        vlo, vhi = min(vlo, v), max(vhi, v)
+    return ulo, vlo, uhi, vhi
+
+
 if HAVE_NUMBA:
     _box = numba.njit(cache=True)(_box)
     segment_boxes = numba.njit(cache=True)(_segment_boxes)
+    extents = numba.njit(cache=True)(_extents)
 else:
-    segment_boxes = None
+    segment_boxes = extents = None
