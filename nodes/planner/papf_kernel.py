@@ -95,7 +95,8 @@ def plan_compiled(pos, goal, obstacles, apf, pp, quarks=None):
     :class:`~nodes.planner.papf.PAPFParams`; ``quarks``: the ones already placed (or None).
     ``abandoned`` is one ``(n, i_max + 1, 2)`` array (a sequence of the abandoned paths).
     """
-    c = _LAST[2] if (apf is _LAST[0] and pp is _LAST[1]) else _remember(apf, pp)
+    last = _LAST   # one read: another thread may replace it meanwhile
+    c = last[2] if (apf is last[0] and pp is last[1]) else _remember(apf, pp)
     pos = np.ascontiguousarray(pos, dtype=float)
     goal = np.ascontiguousarray(goal, dtype=float)
     obstacles = np.ascontiguousarray(obstacles, dtype=float).reshape(-1, 2)
@@ -140,13 +141,14 @@ def _remember(apf, pp) -> _Constants:
     """The gains and derived numbers of one (APFParams, PAPFParams) pair, kept for the next
     cycles (the planner passes the same two objects until its settings change)."""
     global _LAST
-    _LAST = (apf, pp, _Constants(
+    c = _Constants(
         apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o,
         pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q, float(apf.d_o), float(pp.d_q),
         float(pp.step_m), int(pp.i_max), int(pp.n_stag), float(pp.stag_radius),
         int(pp.max_quarks), float(pp.pull_range), float(pp.quark_ball_m), float(pp.tie_tol_m),
-        float(apf.d_o if pp.motion_quarks_within_d_o else pp.d_q)))
-    return _LAST[2]
+        float(apf.d_o if pp.motion_quarks_within_d_o else pp.d_q))
+    _LAST = (apf, pp, c)
+    return c
 
 
 _LAST: tuple = (None, None, None)
