@@ -15,14 +15,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 
 from common import runauth
 from common.errors import ConfigError
 from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import add_zenoh_args, open_node, setup_logging
+from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
@@ -122,4 +121,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown

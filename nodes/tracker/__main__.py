@@ -22,7 +22,7 @@ import time
 from common.errors import ConfigError
 from common.params import arg_type, pos
 from common.ports import describe
-from common.transport import add_zenoh_args, open_node, setup_logging
+from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.tracker.core import Tracker, TrackerParams
 from nodes.tracker.loop import TrackerLoop
@@ -100,4 +100,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown
