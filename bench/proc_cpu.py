@@ -1,7 +1,9 @@
 """CPU seconds per process (and per thread kind) of this process's descendants, from /proc.
 
 :class:`TreeCPU` samples every ``period_s`` in a thread, so a child's last figures are
-kept after it exits (Linux only; elsewhere it reports nothing). Used by ``bench sim``.
+kept after it exits (Linux only; elsewhere it reports nothing). It walks the tree through
+``/proc/PID/task/TID/children`` (a scan of /proc where the kernel lacks it) and leaves its
+own sampling thread out of the root's figures. Used by ``bench sim``.
 """
 
 from __future__ import annotations
