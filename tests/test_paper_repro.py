@@ -9,7 +9,7 @@ import pytest
 from common.errors import ConfigError
 from nodes.planner.wang import WangAPFParams, traditional_force
 from papf.experiments.energy import EnergyExperiment, plan, validate
-from papf.experiments.paper_study import DEVIATIONS, _turning, _variants
+from papf.experiments.paper_study import DEVIATIONS, READINGS, _turning, _variants
 from papf.pointsim import PointParams, fixed_step
 from papf.pointsim import traditional_force as point_force
 from worlds import parse_world
@@ -63,8 +63,10 @@ def test_energy_experiment_runs_a_paper_variant_only_where_it_differs(tmp_path):
 
 def test_deviation_variants_switch_one_setting_each():
     v = dict(_variants(both=True))
-    assert len(_variants()) == 2 + len(DEVIATIONS)
+    assert len(_variants()) == 2 + len(READINGS) + len(DEVIATIONS)
     assert v["paper"] == ["preset=paper"] and v["default"] == []
+    for name, value, _what in READINGS:
+        assert v[f"paper, {name}={value}"] == ["preset=paper", f"{name}={value}"]
     for name, on, off, _what in DEVIATIONS:
         assert v[f"paper + {name}"] == ["preset=paper", f"{name}={on}"]
         assert v[f"default - {name}"] == [f"{name}={off}"]
