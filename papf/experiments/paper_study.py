@@ -88,6 +88,15 @@ def _variants(both: bool = False) -> list[tuple[str, list[str]]]:
     return out
 
 
+def _group(label: str) -> str:
+    """The deviation study's row group: preset, reading, paper + deviation, default - deviation."""
+    if label in ("default", "paper"):
+        return "preset"
+    if label.startswith("paper, "):
+        return "reading"
+    return "paper + deviation" if label.startswith("paper + ") else "default - deviation"
+
+
 def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float = 300.0,
                    part: tuple[int, int] = (0, 1), both: bool = False) -> list[dict]:
     """Every variant of :func:`_variants` on ``n`` random worlds and PAPF Tests I-VI.
@@ -118,7 +127,7 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
                 paper.append(t)
                 bar.advance(task)
             _reached, dur, path = table2_check(paper, "papf (paper)")
-            rows.append({"variant": label,
+            rows.append({"variant": label, "group": _group(label),
                          "random_reached_pct": round(100.0 * sum(t.outcome == "reached" for t in rand) / len(rand), 1),
                          "random_collisions": sum(t.collisions for t in rand),
                          "tests_I_VI_reached": f"{sum(t.outcome == 'reached' for t in paper)}/{len(paper)}",
