@@ -66,7 +66,7 @@ def test_deviation_variants_switch_one_setting_each():
     assert len(_variants()) == 2 + len(READINGS) + len(DEVIATIONS)
     assert v["paper"] == ["preset=paper"] and v["default"] == []
     for name, value, _what in READINGS:
-        assert v[f"paper, {name}={value}"] == ["preset=paper", f"{name}={value}"]
+        assert v[f"paper with {name}={value}"] == ["preset=paper", f"{name}={value}"]
     for name, on, off, _what in DEVIATIONS:
         assert v[f"paper + {name}"] == ["preset=paper", f"{name}={on}"]
         assert v[f"default - {name}"] == [f"{name}={off}"]

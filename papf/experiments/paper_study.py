@@ -80,7 +80,7 @@ def _variants(both: bool = False) -> list[tuple[str, list[str]]]:
     each deviation switched on alone over the paper preset; with
     ``both`` also each deviation switched off alone from the default."""
     out = [("default", []), ("paper", ["preset=paper"])]
-    out += [(f"paper, {name}={value}", ["preset=paper", f"{name}={value}"]) for name, value, _w in READINGS]
+    out += [(f"paper with {name}={value}", ["preset=paper", f"{name}={value}"]) for name, value, _w in READINGS]
     for name, on, off, _what in DEVIATIONS:
         out.append((f"paper + {name}", ["preset=paper", f"{name}={on}"]))
         if both:
@@ -92,7 +92,7 @@ def _group(label: str) -> str:
     """The deviation study's row group: preset, reading, paper + deviation, default - deviation."""
     if label in ("default", "paper"):
         return "preset"
-    if label.startswith("paper, "):
+    if label.startswith("paper with "):
         return "reading"
     return "paper + deviation" if label.startswith("paper + ") else "default - deviation"
 
