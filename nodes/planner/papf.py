@@ -18,8 +18,10 @@ One cycle (:meth:`PAPFStrategy.plan`):
 4. **Motion** (Sec. III-D): the eq. 7 force with the temporary goal in place of the global
    one (obstacles + quarks); the planner core turns it into (v, w) by eqs. 3, 5.
 
-Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda; quarks
-persist in the world frame, the oldest giving way when a new one needs a place beyond M;
+Quarks are placed obstacles: they persist in the world frame until the goal changes (the
+paper never removes one; ``persist_quarks=false`` recomputes them every cycle instead).
+Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda (eq. 7 names
+d_q, Table 1 gives no value); beyond M quarks the oldest gives way (the paper: at most M);
 after M repetitions without a stagnation-free path the motion uses eq. 7 with the global
 goal (mode ``unresolved``); in the motion law a quark acts as a charged ball of radius
 lambda_stag (no singular push when the robot stands on it) acting within d_o (eq. 7's
@@ -56,7 +58,7 @@ class PAPFParams:
     quark_ball_m: float = 0.25      # [m] motion law: quark as a charged ball of this radius (ours: lambda_stag)
     tie_tol_m: float = 1e-3         # [m] eq. 8 ties: prefer the farther point along the path (ours)
     use_numba: bool = True          # numba kernel if installed (identical results to numpy)
-    persist_quarks: bool = True     # keep quarks (world frame) across cycles (ours)
+    persist_quarks: bool = True     # keep quarks (world frame) across cycles (the paper never removes one)
     pull_range_fraction: float = 1.0  # prediction: goal pull as if the goal were <= this * lambda away (ours; 0: literal)
     motion_quarks_within_d_o: bool = True  # motion law: quarks act within d_o (ours; false: within d_q, as the prediction)
     unresolved_global_goal: bool = True    # after M repetitions: eq. 7 with the global goal (ours; false: eq. 8 on the last path)
@@ -194,8 +196,9 @@ def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.n
     return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
 
 
-#: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off, one
-#: quark range d_q = d_o for prediction and motion (eq. 7's where-clause defines d_o only).
+#: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off: quarks
+#: kept, at most M per goal (eq. 7: 0 <= M_curr <= M), one quark field (range d_q) for
+#: prediction and motion. d_q keeps its value (no value in the paper, like d_o).
 PAPER_PRESET = {"pull_range_fraction": 0.0, "motion_quarks_within_d_o": False, "quark_ball_m": 0.0,
                 "unresolved_global_goal": False, "stop_at_goal": False,
                 "quark_restarts_watch": False, "replace_oldest_quark": False, "tie_tol_m": 0.0}
