@@ -1,22 +1,29 @@
 """Speed of the simulation: sim time / wall time, printed as JSON lines.
 
 Full stack (default): ``papf run --world W --planner P --seed S`` for each ``--planners``
-(router, driver, LiDAR, planner, energy meter, the launcher itself; start-up and
-shut-down included, like the ``wall_time_s`` of ``papf run``), with the CPU seconds of
-every process (its Python threads and Zenoh's) sampled from /proc — where a cycle's time
-goes. ``--repeat N`` runs each N times; every run is printed.
+(every node and the launcher with its embedded router; start-up and shut-down included,
+like the ``wall_time_s`` of ``papf run``), with the CPU seconds of every process (its
+Python threads and Zenoh's) sampled from /proc — where a cycle's time goes, and a figure
+far less disturbed than wall time when other work shares the cores. ``--repeat N`` runs
+each N times; every run is printed, then one ``sim_stack_min`` line per planner: the
+minimum over the runs of the wall time and of each process's CPU seconds (and whether
+every run gave the same figures). ``--csv FILE --label L`` also writes those minima as
+rows labelled ``L`` (rows of other labels in FILE are kept: a before/after table).
+``--timeout 0.2`` measures start-up and shut-down alone.
 
 ``--loop``: the lockstep loop alone — ``nodes.base_driver`` (sim) and ``nodes.lidar_sim``
 as processes, every scan answered here with a constant Twist of the same stamp (a
 trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
 
     papf bench sim [--planners apf,papf] [--world energy] [--seed 1] [--repeat 1]
+                   [--timeout 300] [--csv FILE --label L]
     papf bench sim --loop [--sim-s 30] [--world energy] [--beams 300]
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import logging
 import os
@@ -87,20 +94,64 @@ def bench(sim_s: float, world: str, beams: int) -> dict:
             "scans_answered": scans[0], "finished": finished, "cpus": os.cpu_count()}
 
 
-def bench_stack(world: str, planner: str, seed: int, zenoh_mode: str) -> dict:
+def bench_stack(world: str, planner: str, seed: int, zenoh_mode: str,
+                timeout_s: float = 300.0) -> dict:
     from bench.proc_cpu import TreeCPU
     from papf.runner import RunConfig, run
 
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     with TreeCPU() as cpu:
         res = run(RunConfig(world=world, planner=planner, seed=seed, progress=False,
-                            zenoh_mode=zenoh_mode))
+                            zenoh_mode=zenoh_mode, timeout_s=timeout_s))
     procs = cpu.per_process()
+    figures = {k: v for k, v in res.to_json().items() if k != "wall_time_s"}
     return {"bench": "sim_stack", "world": world, "planner": planner, "seed": seed,
             "zenoh_mode": zenoh_mode, "outcome": res.outcome, "sim_s": res.sim_time_s,
             "wall_s": round(res.wall_time_s, 3),
             "sim_over_wall": round(res.sim_time_s / max(res.wall_time_s, 1e-9), 2),
             "cpu_s": round(sum(p["cpu_s"] for p in procs.values()), 2), "processes": procs,
-            "cpus": os.cpu_count()}
+            "load_1min": load, "cpus": os.cpu_count(), "figures": figures}
+
+
+def minimum(runs: list[dict]) -> dict:
+    """The minimum over repeated runs of one planner: wall time, each process's CPU."""
+    best = min(runs, key=lambda r: r["wall_s"])
+    names = sorted({n for r in runs for n in r["processes"]},
+                   key=lambda n: -max(r["processes"].get(n, {}).get("cpu_s", 0) for r in runs))
+    procs = {n: min(r["processes"][n]["cpu_s"] for r in runs if n in r["processes"])
+             for n in names}
+    return {"bench": "sim_stack_min", "world": best["world"], "planner": best["planner"],
+            "seed": best["seed"], "zenoh_mode": best["zenoh_mode"], "runs": len(runs),
+            "sim_s": best["sim_s"], "wall_s": best["wall_s"],
+            "sim_over_wall": best["sim_over_wall"],
+            "cpu_s": round(min(r["cpu_s"] for r in runs), 2), "processes": procs,
+            "same_figures": all(r["figures"] == runs[0]["figures"] for r in runs),
+            "load_1min": [r["load_1min"] for r in runs], "cpus": best["cpus"]}
+
+
+CSV_FIELDS = ("label", "planner", "world", "seed", "runs", "process", "cpu_s", "wall_s",
+              "sim_over_wall")
+
+
+def write_csv(path: Path, label: str, summaries: list[dict]) -> None:
+    """Rows of ``label`` (one per process, then ``all`` with the wall time) replace that
+    label's rows in ``path``; other labels' rows stay."""
+    kept = []
+    if path.exists():
+        with path.open(newline="") as fh:
+            kept = [r for r in csv.DictReader(fh) if r["label"] != label]
+    rows = []
+    for s in summaries:
+        base = {"label": label, "planner": s["planner"], "world": s["world"], "seed": s["seed"],
+                "runs": s["runs"]}
+        rows += [{**base, "process": n.removeprefix("nodes."), "cpu_s": f"{c:.2f}"}
+                 for n, c in s["processes"].items()]
+        rows.append({**base, "process": "all", "cpu_s": f"{s['cpu_s']:.2f}",
+                     "wall_s": f"{s['wall_s']:.2f}", "sim_over_wall": f"{s['sim_over_wall']:.1f}"})
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, CSV_FIELDS, restval="")
+        w.writeheader()
+        w.writerows(kept + rows)
 
 
 def main() -> None:
@@ -114,14 +165,27 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=1, help="full stack: runs per planner (1)")
     parser.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
                         help="full stack: the nodes' Zenoh mode (as papf run --zenoh-mode)")
+    parser.add_argument("--timeout", type=float, default=300.0,
+                        help="full stack: sim seconds at most (0.2: start-up and shut-down alone)")
+    parser.add_argument("--csv", type=Path, help="full stack: write the minima here (with --label)")
+    parser.add_argument("--label", help="full stack: the rows' label in --csv (e.g. before, after)")
     a = parser.parse_args()
     if a.loop:
         print(json.dumps(bench(a.sim_s, a.world, a.beams)))
         return
+    if a.repeat < 1 or not a.timeout > 0 or bool(a.csv) != bool(a.label):
+        parser.error("--repeat must be >= 1, --timeout > 0, and --csv and --label go together")
     logging.getLogger("papf.run").setLevel(logging.WARNING)
+    summaries = []
     for planner in a.planners.split(","):
+        runs = []
         for _ in range(a.repeat):
-            print(json.dumps(bench_stack(a.world, planner, a.seed, a.zenoh_mode)), flush=True)
+            runs.append(bench_stack(a.world, planner, a.seed, a.zenoh_mode, a.timeout))
+            print(json.dumps(runs[-1]), flush=True)
+        summaries.append(minimum(runs))
+        print(json.dumps(summaries[-1]), flush=True)
+    if a.csv:
+        write_csv(a.csv, a.label, summaries)
 
 
 if __name__ == "__main__":

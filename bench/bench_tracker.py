@@ -19,17 +19,23 @@ confirmed tracks are compared with the world's ground truth at that instant:
 Timing is the wall time of ``Tracker.update`` (clustering + association + filter + the
 message): p50, p99, max, and the thread's CPU time p50/p99 (less disturbed when other
 processes share the cores); ``--no-numba`` times the numpy clustering instead of the
-compiled one. Prints one JSON object per world. Speed is reported, never
-asserted (tests/ do not time anything).
+compiled one. Prints one JSON object per world, each with the machine's 1-minute load
+average at its end (``load_avg``: other processes on the cores inflate the wall-time
+p99); ``--csv FILE`` also writes the rows as CSV (appending to an existing file, so the
+numba and numpy runs can share one). Speed is reported, never asserted (tests/ do not
+time anything).
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
+import os
 import platform
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -92,7 +98,8 @@ def run_world(name: str, seconds: float, match: float, seed: int, numba: bool = 
             "vel_err_mean_mps": _r3(np.mean(vel)) if vel else None,
             "vel_err_p95_mps": _r3(np.percentile(vel, 95)) if vel else None,
             "coverage": _r3(near_hit / near_total) if near_total else None,
-            "false_tracks": _r3(tracks_false / tracks_total) if tracks_total else None}
+            "false_tracks": _r3(tracks_false / tracks_total) if tracks_total else None,
+            "load_avg": round(os.getloadavg()[0], 2)}
 
 
 def _r(x) -> float:
@@ -110,14 +117,21 @@ def main() -> None:
     ap.add_argument("--match", type=float, default=1.0, help="track-to-truth match radius [m]")
     ap.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (0)")
     ap.add_argument("--no-numba", action="store_true", help="numpy clustering, not the numba pass")
+    ap.add_argument("--csv", type=Path, help="also append the rows to this CSV file")
     args = ap.parse_args()
     names = args.world or [w for w in packaged_worlds() if w.startswith("road-")]
     print(json.dumps({"machine": platform.processor() or platform.machine(),
-                      "python": platform.python_version()}))
+                      "python": platform.python_version(), "cpus": os.cpu_count()}))
     for name in names:
-        print(json.dumps({"bench": "tracker", **run_world(name, args.seconds, args.match,
-                                                          args.seed, not args.no_numba)}),
-              flush=True)
+        row = run_world(name, args.seconds, args.match, args.seed, not args.no_numba)
+        print(json.dumps({"bench": "tracker", **row}), flush=True)
+        if args.csv is not None:
+            new = not args.csv.exists() or args.csv.stat().st_size == 0
+            with args.csv.open("a", newline="") as fh:
+                writer = csv.DictWriter(fh, fieldnames=list(row))
+                if new:
+                    writer.writeheader()
+                writer.writerow(row)
 
 
 if __name__ == "__main__":

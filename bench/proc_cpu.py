@@ -31,6 +31,8 @@ class TreeCPU:
         self.names: dict[int, str] = {}
         self.threads: dict[tuple[int, int], tuple[str, float]] = {}
         self._stop = threading.Event()
+        self._own_tid: int | None = None   # the sampler's own thread: not the run's CPU
+        self._pre_exec = _name(self.root, -1)  # what a forked child is called until it execs
         self._thread = threading.Thread(target=self._run, daemon=True, name="tree-cpu")
 
     def __enter__(self) -> TreeCPU:
@@ -45,21 +47,18 @@ class TreeCPU:
         self._sample()
 
     def _run(self) -> None:
+        self._own_tid = threading.get_native_id()
         while not self._stop.wait(self.period_s):
             self._sample()
 
     def _sample(self) -> None:
-        parents = {}
-        for d in os.listdir("/proc"):
-            if d.isdigit() and (st := _stat(f"/proc/{d}/stat")):
-                parents[int(d)] = st[1]
-        tree, grew = {self.root}, True
-        while grew:
-            new = {p for p, pp in parents.items() if pp in tree and p not in tree}
-            tree |= new
-            grew = bool(new)
-        for pid in tree:
-            if pid not in self.names:
+        stack, seen = [self.root], set()
+        while stack:                      # the tree from the root, by each task's children
+            pid = stack.pop()
+            if pid in seen:
+                continue
+            seen.add(pid)
+            if self.names.get(pid) in (None, "", self._pre_exec):  # seen between fork and exec
                 self.names[pid] = _name(pid, self.root)
             try:
                 tids = os.listdir(f"/proc/{pid}/task")
@@ -68,11 +67,14 @@ class TreeCPU:
             for tid in tids:
                 if st := _stat(f"/proc/{pid}/task/{tid}/stat"):
                     self.threads[(pid, int(tid))] = (st[0], st[2])
+                stack += _children(pid, tid)
 
     def per_process(self) -> dict[str, dict]:
         """name -> {"cpu_s": total, "python_s": Python threads, "zenoh_s": Zenoh's threads}."""
         out: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
-        for (pid, _tid), (comm, cpu) in self.threads.items():
+        for (pid, tid), (comm, cpu) in self.threads.items():
+            if pid == self.root and tid == self._own_tid:
+                continue
             name = self.names.get(pid, str(pid))
             kind = "python_s" if comm.startswith(("python", "pt_main")) or pid == self.root and \
                 not re.match(r"(rx|tx|net|acc|app)-\d+", comm) else "zenoh_s"
@@ -80,6 +82,20 @@ class TreeCPU:
             out[name][kind] += cpu
         return {k: {m: round(v, 2) for m, v in c.items()} for k, c in
                 sorted(out.items(), key=lambda kv: -kv[1]["cpu_s"])}
+
+
+def _children(pid: int, tid: str) -> list[int]:
+    """Children of one task (CONFIG_PROC_CHILDREN); else, once per process, from a /proc scan."""
+    try:
+        with open(f"/proc/{pid}/task/{tid}/children") as fh:
+            return [int(c) for c in fh.read().split()]
+    except FileNotFoundError:
+        if int(tid) != pid:
+            return []
+        return [int(d) for d in os.listdir("/proc") if d.isdigit()
+                and (st := _stat(f"/proc/{d}/stat")) and st[1] == pid]
+    except OSError:
+        return []
 
 
 def _name(pid: int, root: int) -> str:

@@ -123,6 +123,18 @@ def open_session(args: argparse.Namespace, where: str = ""):
         yield session
 
 
+def direct(callback) -> zenoh.handlers.Callback:
+    """``callback`` as a subscriber handler run on Zenoh's receiving thread itself.
+
+    A plain callable is run by zenoh-python on a Python thread of its own per subscriber
+    (``indirect``): every sample then wakes that thread, which wakes the node's main
+    thread — two hops. Our callbacks only decode and queue (they never block or put), so
+    they run where the sample arrives: one hop, and samples keep their arrival order
+    across topics.
+    """
+    return zenoh.handlers.Callback(callback, indirect=False)
+
+
 def setup_logging(name: str, level: str = "INFO") -> logging.Logger:
     logging.basicConfig(level=level, format=f"%(asctime)s {name:>12} %(levelname)-7s %(message)s",
                         datefmt="%H:%M:%S")
@@ -130,13 +142,24 @@ def setup_logging(name: str, level: str = "INFO") -> logging.Logger:
 
 
 class StopRequested:
-    """SIGINT/SIGTERM -> a flag the main loop polls (the session then closes cleanly)."""
+    """SIGINT/SIGTERM -> a flag the main loop polls (the session then closes cleanly).
 
-    def __init__(self) -> None:
+    ``wake`` (optional) is called right after, from the signal handler, to wake a main
+    thread that sleeps on a queue (a ``SimpleQueue.put``, which is reentrant): the node
+    then stops at once instead of at its next idle tick.
+    """
+
+    def __init__(self, wake=None) -> None:
         self.event = threading.Event()
+        self._wake = wake
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
-                signal.signal(sig, lambda *_: self.event.set())
+                signal.signal(sig, self._on_signal)
+
+    def _on_signal(self, *_) -> None:
+        self.event.set()
+        if self._wake is not None:
+            self._wake()
 
     def __bool__(self) -> bool:
         return self.event.is_set()
@@ -158,7 +181,7 @@ class Node:
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.bad_messages: Counter[str] = Counter()
         self.stamps = StampGuard(STAMP_ORDERED)
-        self.stop = StopRequested()
+        self.stop = StopRequested(wake=lambda: self.inbox.put((None, None)))  # a tick, at once
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
         self._token = None
@@ -204,7 +227,8 @@ class Node:
             if msg is not None:
                 deliver(msg)
 
-        self._subscribers.append(self.session.declare_subscriber(self.keys.key(topic), on_sample))
+        self._subscribers.append(self.session.declare_subscriber(self.keys.key(topic),
+                                                                 direct(on_sample)))
 
     def accept(self, topic: str, payload: bytes, msg_type: type[Message] | None = None):
         """``payload`` decoded as ``topic``'s message, or None: a bad payload or stamp is
@@ -293,7 +317,7 @@ def wait_alive(session: zenoh.Session, keys: Keys, names: Iterable[str], timeout
             (alive.add if sample.kind == zenoh.SampleKind.PUT else alive.discard)(name)
             changed.notify_all()
 
-    sub = session.liveliness().declare_subscriber(keys.alive("*"), on_token, history=True)
+    sub = session.liveliness().declare_subscriber(keys.alive("*"), direct(on_token), history=True)
     deadline = time.monotonic() + timeout_s
     try:
         with changed:

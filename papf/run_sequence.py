@@ -17,6 +17,7 @@ import zenoh
 
 from common import runauth
 from common.errors import SchemaError
+from common.transport import direct
 from common.units import StampGuard
 from papf.monitor import NS, RunMonitor, RunResult
 from papf.supervisor import Supervisor
@@ -43,14 +44,14 @@ class RunSequence:
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
         self.stop, self.stall_s = stop, stall_s
         self.run_key = run_key               # goals signed, statuses verified (common.runauth)
-        self._q: queue.Queue = queue.Queue()
+        self._q: queue.SimpleQueue = queue.SimpleQueue()   # C-level: no Python lock per message
         self.stamps = StampGuard(STAMP_ORDERED, restart_at_zero=False)
         self.dropped = 0                     # bad payloads, stamps and tags: not acted on
         self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
                           "events": monitor.on_event, "battery": monitor.on_battery,
                           "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose,
                           "goal": monitor.on_goal}
-        self._subs = [session.declare_subscriber(keys.key(t), self._callback(t))
+        self._subs = [session.declare_subscriber(keys.key(t), direct(self._callback(t)))
                       for t in self._handlers]
 
     def _callback(self, topic: str):

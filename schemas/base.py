@@ -75,6 +75,7 @@ class Message:
 
     TYPE: ClassVar[str] = ""
     _FIELDS: ClassVar[tuple[tuple[str, str, dict], ...]] = ()
+    _PLAIN: ClassVar[bool] = False   # no __post_init__ of its own: decoding may skip __init__
 
     # -- encoding ---------------------------------------------------------
     def to_dict(self) -> dict:
@@ -128,12 +129,29 @@ class Message:
         if got != cls.TYPE:
             raise SchemaError(f"{cls.TYPE}: wrong message type {got!r} (expected {cls.TYPE!r})")
         values = {}
+        complete = True
         for name, kind, md in cls._FIELDS:
             if name not in wire:
                 if cls._default_of(name) is not dataclasses.MISSING:
+                    complete = False
                     continue
                 raise SchemaError(f"{cls.TYPE}: missing field {name!r}")
-            values[name] = _check(cls.TYPE, name, kind, md, wire[name])
+            value = wire[name]
+            # fast path of the two commonest checks; anything else (and every error) via _check
+            if kind == "float" and type(value) is float and (value - value == 0.0
+                                                             or md.get("nonfinite")):
+                values[name] = value
+            elif kind == "int" and type(value) is int or kind == "str" and type(value) is str \
+                    and (not md.get("choices") or value in md["choices"]):
+                values[name] = value
+            else:
+                values[name] = _check(cls.TYPE, name, kind, md, value)
+        if complete and cls._PLAIN:
+            # every field checked and already in its normal form (what __post_init__ would
+            # make of it): fill the frozen instance without __init__'s per-field setattr
+            obj = object.__new__(cls)
+            obj.__dict__.update(values)
+            return obj
         return cls(**values)
 
     @classmethod
@@ -203,6 +221,7 @@ def message(name: str, version: int):
             for f in dataclasses.fields(cls) for kind in (_kind(hints[f.name]),)
         )
         cls.TYPE = f"papf/{name}/v{version}"
+        cls._PLAIN = cls.__post_init__ is Message.__post_init__
         return cls
 
     return wrap
@@ -270,6 +289,9 @@ def _f32array(where: str, value: Any, md: dict) -> np.ndarray:
 def _floats(where: str, value: Any, md: dict) -> tuple[float, ...]:
     if md.get("length") is not None and len(value) != md["length"]:
         raise SchemaError(f"{where}: expected {md['length']} values, got {len(value)}")
+    out = tuple(value)
+    if all(type(v) is float and (v - v == 0.0 or md.get("nonfinite")) for v in out):
+        return out   # what _float gives each of them
     return tuple(_float(where, v, md) for v in value)
 
 

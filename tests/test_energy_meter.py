@@ -48,6 +48,19 @@ def test_ocv_table_is_monotone_and_hits_documented_points():
     assert Battery(PackParams(initial_soc=0.5)).ocv() == pytest.approx(3 * 3.74)
 
 
+def test_ocv_is_numpy_interp_bit_for_bit():
+    """cell_ocv runs in plain floats (50 Hz in the meter) but must stay numpy.interp exactly:
+    random SoCs, every knot and its neighbours, the clamped ends and a run near full."""
+    rng = np.random.default_rng(7)
+    knots = [float(np.nextafter(k, d)) for k in CELL_OCV_SOC for d in (-2.0, 2.0)]
+    socs = [*rng.uniform(-0.2, 1.2, 20000), *CELL_OCV_SOC, *knots,
+            *(1.0 - k * 3.3e-7 for k in range(3000))]
+    for soc in map(float, socs):
+        ref = float(np.interp(min(max(soc, 0.0), 1.0), CELL_OCV_SOC, CELL_OCV_V))
+        assert cell_ocv(soc) == ref, soc
+    assert math.isnan(cell_ocv(math.nan))
+
+
 def test_current_solves_the_voltage_sag_quadratic():
     current, over = solve_current(10.0, 12.6, 0.24)
     assert not over

@@ -129,3 +129,27 @@ def test_build_world_places_every_shape():
     np.testing.assert_allclose(aabbs[0], [[0.8, 1.9, 0.0], [1.2, 2.1, 0.3]], atol=margin)
     np.testing.assert_allclose(aabbs[1], [[0.0, -1.05, 0.0], [2.0, -0.95, 0.5]], atol=margin)
     np.testing.assert_allclose(aabbs[2], [[-1.25, 0.25, 0.0], [-0.75, 0.75, 0.5]], atol=margin)
+
+
+def test_cast_equals_the_plain_per_beam_reference():
+    """true_ranges builds its rays and reads the hits with array and C-level maps; the
+    result must be the straightforward per-beam cast's, bit for bit (hits and misses)."""
+    lidar = LidarSim(world(WALL_AHEAD, {"kind": "cylinder", "center": [-1.0, 1.5], "radius": 0.3}),
+                     LidarParams(noise_sd=0.0), seed=0)
+    prm, rng = lidar.params, np.random.default_rng(5)
+    for _ in range(40):
+        x, y, yaw = rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-4, 4)
+        c, s = math.cos(yaw), math.sin(yaw)
+        ox, oy = x + c * prm.sensor_x - s * prm.sensor_y, y + s * prm.sensor_x + c * prm.sensor_y
+        d = lidar._angles + yaw
+        origin = np.empty((prm.beams, 3))
+        origin[:] = (ox, oy, prm.height)
+        end = origin.copy()
+        end[:, 0] += prm.range_max * np.cos(d)
+        end[:, 1] += prm.range_max * np.sin(d)
+        hits = p.rayTestBatch(origin.tolist(), end.tolist(), physicsClientId=lidar.cid)
+        ref = np.array([h[2] if h[0] >= 0 else np.inf for h in hits]) * prm.range_max
+        got = lidar.true_ranges(x, y, yaw)
+        assert np.isfinite(got).any() and np.isinf(got).any()
+        assert got.tobytes() == ref.tobytes()
+    lidar.close()

@@ -13,7 +13,9 @@ from nodes.planner.iapf import (
     IAPFCore,
     IAPFParams,
     local_count,
+    road_headings,
     scaled,
+    stop_deceleration,
     temporary_goal,
 )
 from nodes.planner.iapf_fields import (
@@ -241,11 +243,12 @@ def test_registry_and_planner_step_with_road_and_tracks():
     assert cmd.v == pytest.approx(state.v_target * math.cos(state.heading_ref))
 
 
-@pytest.mark.parametrize("traditional", [False, True])
-def test_prediction_kernel_matches_the_step_by_step_core(traditional):
+@pytest.mark.parametrize(("traditional", "stop"), [(False, 0.0), (True, 0.0), (False, 0.5)])
+def test_prediction_kernel_matches_the_step_by_step_core(traditional, stop):
     from nodes.planner.iapf_kernel import HAVE_NUMBA
 
-    p = dataclasses.replace(IAPFParams(), traditional=traditional, literal_rotation=traditional)
+    p = dataclasses.replace(IAPFParams(), traditional=traditional, literal_rotation=traditional,
+                            stop_decel_frac=stop)
     tracks = [Track(14.0, 5.5, 0.1, 5.0, 0.3, 4.5, 1.8), Track(-6.0, 6.2, 0.0, 9.0, 0.0, 4.5, 1.8)]
     s0 = HostState(0.0, 6.3, 9.5, 0.05)
     s, ref = s0, []
@@ -314,3 +317,40 @@ def test_brake_priority_suspends_the_return_to_cruise():
     if HAVE_NUMBA:
         np.testing.assert_allclose(IAPFCore(p).predict(s0, [ob], ROAD, 2.0), ref, rtol=1e-12)
     assert ref[-1, 2] < 6.0
+
+
+def test_stop_law_hand_computed():
+    """Host at x = 0 in the left lane at 8 m/s; a car 12 m ahead (centres) at 2 m/s: gap
+    12 - 4.5 = 7.5 m, room 7.5 - S_m = 2.5 m, closing 6 m/s -> 6^2 / (2 * 2.5) = 7.2 m/s^2."""
+    p = IAPFParams()
+    hs = (p.host_length, p.s_m)
+    lead = Track(12.0, 6.0, 0.0, 2.0, 0.0, 4.5, 1.8)
+    assert stop_deceleration(0.0, 6.0, 8.0, [lead], ROAD, *hs) == pytest.approx(7.2)
+    # 0.5 s later the car is 1 m farther: room 3.5 m
+    assert stop_deceleration(0.0, 6.0, 8.0, [lead], ROAD, *hs, 0.5) == pytest.approx(36 / 7)
+    others = [Track(12.0, 2.0, 0.0, 0.0, 0.0, 4.5, 1.8),      # the other lane
+              Track(-12.0, 6.0, 0.0, 0.0, 0.0, 4.5, 1.8),     # behind
+              Track(12.0, 6.0, 0.0, 9.0, 0.0, 4.5, 1.8)]      # ahead but faster
+    assert stop_deceleration(0.0, 6.0, 8.0, others, ROAD, *hs) == 0.0
+    inside = Track(9.0, 6.0, 0.0, 0.0, 0.0, 4.5, 1.8)        # gap 4.5 m < S_m
+    assert stop_deceleration(0.0, 6.0, 1.0, [inside], ROAD, *hs) == math.inf
+    # in the step: the law takes over above stop_decel_frac a_b = 3 m/s^2, limited to a_b
+    on = dataclasses.replace(p, stop_decel_frac=0.5, prediction=False)
+    _, info = IAPFCore(on).step(HostState(0.0, 6.0, 8.0), [lead], ROAD, 0.0)
+    assert info.accel == pytest.approx(-p.a_b)
+    slow = Track(40.0, 6.0, 0.0, 6.0, 0.0, 4.5, 1.8)         # 2^2 / (2 (35.5 - 5)) < 3
+    _, a = IAPFCore(on).step(HostState(0.0, 6.0, 8.0), [slow], ROAD, 0.0)
+    _, b = IAPFCore(dataclasses.replace(on, stop_decel_frac=0.0)).step(
+        HostState(0.0, 6.0, 8.0), [slow], ROAD, 0.0)
+    assert a.accel == b.accel
+
+
+def test_slow_tracks_head_along_the_road():
+    tracks = [Track(5.0, 2.0, 1.2, 0.5, 0.5, 4.5, 1.8),      # 0.71 m/s: along the road
+              Track(5.0, 2.0, 0.0, 3.0, -3.0, 4.5, 1.8)]     # 4.2 m/s: its direction of travel
+    slow, fast = road_headings(tracks, 2.5)
+    assert slow.yaw == 0.0 and (slow.x, slow.vx, slow.length) == (5.0, 0.5, 4.5)
+    assert fast.yaw == pytest.approx(-math.pi / 4)
+    assert road_headings(tracks, 0.0) == tracks
+    # the node's scale: 2.5 m/s at car scale is 0.075 m/s on 0.6 m lanes at 0.3 m/s cruise
+    assert scaled(IAPFParams(), 0.15, 5.0).heading_min_speed == pytest.approx(0.075)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import schemas as s
+from common.errors import SchemaError
 from schemas.base import Message
 
 
@@ -39,6 +40,36 @@ def test_round_trip(msg):
     back = type(msg).from_bytes(msg.to_bytes())
     assert back == msg
     assert back.to_bytes() == msg.to_bytes()
+
+
+@pytest.mark.parametrize("msg", samples(), ids=lambda m: m.TYPE)
+def test_decoding_without_init_equals_the_constructor(msg):
+    """from_wire fills a checked instance without __init__: the same fields, values and
+    types as building it with the constructor (and so __post_init__'s normal form)."""
+    back = type(msg).from_bytes(msg.to_bytes())
+    built = type(msg)(**{name: getattr(back, name) for name, _, _ in back._FIELDS})
+    assert list(vars(back)) == list(vars(built))
+    for name in vars(built):
+        a, b = getattr(back, name), getattr(built, name)
+        assert type(a) is type(b), name
+        if isinstance(a, np.ndarray):
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+        else:
+            assert repr(a) == repr(b), name
+
+
+def test_fast_checks_still_refuse_what_the_full_checks_refuse():
+    wire = s.Odometry(stamp_ns=1, x=1.0, y=2.0, yaw=0.0, v=0.0, w=0.0).to_wire()
+    for field, value in (("x", math.inf), ("y", math.nan), ("stamp_ns", True), ("v", "1"),
+                         ("stamp_ns", 1.0)):
+        with pytest.raises(SchemaError):
+            s.Odometry.from_wire({**wire, field: value})
+    assert s.Odometry.from_wire({**wire, "x": 3}).x == 3.0     # an int where a float goes
+    assert type(s.Odometry.from_wire({**wire, "x": 3}).x) is float
+    wheels = s.WheelStates(stamp_ns=1, speed=(1.0, 2.0), torque=(0.0, 0.0)).to_wire()
+    with pytest.raises(SchemaError):
+        s.WheelStates.from_wire({**wheels, "speed": [1.0, math.inf]})
+    assert s.WheelStates.from_wire({**wheels, "speed": [1, 2.0]}).speed == (1.0, 2.0)
 
 
 def test_every_message_type_is_sampled():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
-from nodes.tracker import kernels
+from nodes.tracker import box, kernels
 from nodes.tracker.__main__ import params_from
 from nodes.tracker.core import Tracker, TrackerParams, cluster_points, scan_points, segments
 from nodes.tracker.loop import TrackerLoop
@@ -191,3 +191,37 @@ def test_settings_are_checked():
         params_from(["gate=-1"])
     with pytest.raises(ConfigError, match="one of max_range"):
         params_from(["nope=1"])
+
+
+def test_box_model_puts_a_seen_face_on_the_known_box():
+    """A track that knows its object is 0.5 m deep (across its face-aligned frame), then sees
+    only the face at x = 1.75 from the origin: the box centre is 0.25 m behind the face."""
+    tr = Tracker(TrackerParams(confirm_hits=1))
+    tr.update(face_scan(1.75), ORIGIN)
+    assert abs(math.cos(tr.tracks.yaw[0])) < 0.05                    # the face's axis
+    tr.tracks.size[0] = (0.3, 0.5)                 # along the face, across it (seen before)
+    sp = scan_points(face_scan(1.75), ORIGIN, 6.0)
+    (cl,) = cluster_points(sp, TrackerParams())
+    fitted = tr._box(0, cl, sp.origin)
+    assert (fitted.x, fitted.y) == pytest.approx((2.0, 0.0), abs=0.01)
+    assert (cl.x, cl.y) == pytest.approx((1.75, 0.0), abs=0.01)     # the plain cluster centre
+    # seen from beyond the box the other face is the near one
+    assert box.anchor(1.0, 1.1, 0.5, 2.0) == pytest.approx(0.85)
+    assert box.anchor(1.0, 1.1, 0.5, 0.0) == pytest.approx(1.25)
+    assert box.anchor(1.0, 1.5, 0.5, 0.0) == pytest.approx(1.25)   # all of it seen
+    assert box.anchor(1.0, 1.1, 0.5, 1.05) == pytest.approx(1.05)  # facing it: both ends
+
+
+def test_a_standing_object_keeps_its_heading_under_measurement_noise():
+    """A face jittering by 3 cm: the filter's velocity stays within its own uncertainty, so the
+    heading stays the first one (the velocity's direction would be noise)."""
+    rng = np.random.default_rng(1)
+    tr = Tracker()
+    for k in range(50):
+        t = k * 100 * MS
+        out = tr.update(face_scan(2.0 + rng.normal(0, 0.03), rng.normal(0, 0.03), t=t),
+                        Odometry(stamp_ns=t, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    (track,) = out.tracks
+    assert abs(math.cos(track.yaw)) < 0.05                           # the face's axis
+    assert (track.length, track.width) == pytest.approx((0.3, 0.0), abs=0.08)
+    assert box.turned((0.5, 0.3), 0.3) == (0.5, 0.3) and box.turned((0.5, 0.3), 1.2) == (0.3, 0.5)

@@ -20,10 +20,9 @@ terminals, i.e. P dt); SoC falls by the charge over the capacity (coulomb counti
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from dataclasses import dataclass
 from typing import ClassVar
-
-import numpy as np
 
 from common.errors import PapfError
 from common.params import Spec, check_all, integer, num, pos
@@ -53,8 +52,21 @@ S_PER_H = 3600.0               # [s/h]
 
 
 def cell_ocv(soc: float) -> float:
-    """Open-circuit voltage [V] of one cell at state of charge ``soc`` (0..1, clamped)."""
-    return float(np.interp(min(max(soc, 0.0), 1.0), CELL_OCV_SOC, CELL_OCV_V))
+    """Open-circuit voltage [V] of one cell at state of charge ``soc`` (0..1, clamped).
+
+    Linear interpolation in the table, in plain floats (the meter runs this 50 times per
+    sim second): the same operations, in the same order, as ``numpy.interp`` — an exact
+    knot gives its voltage, otherwise ``slope * (soc - x_j) + y_j`` with ``slope =
+    (y_j+1 - y_j) / (x_j+1 - x_j)`` — so the result is bit for bit numpy's (tested).
+    """
+    x = min(max(soc, 0.0), 1.0)
+    if x != x:
+        return x
+    j = bisect_right(CELL_OCV_SOC, x) - 1            # CELL_OCV_SOC[j] <= x < CELL_OCV_SOC[j + 1]
+    if j >= len(CELL_OCV_SOC) - 1 or CELL_OCV_SOC[j] == x:
+        return CELL_OCV_V[j]
+    x0, x1, y0, y1 = CELL_OCV_SOC[j], CELL_OCV_SOC[j + 1], CELL_OCV_V[j], CELL_OCV_V[j + 1]
+    return (y1 - y0) / (x1 - x0) * (x - x0) + y0
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import itemgetter
 
 import numpy as np
 
@@ -43,6 +44,9 @@ RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
 SENSOR_HEIGHT = robot.LIDAR_HEIGHT_M   # [m] scan plane above the floor (common.robot)
 SENSOR_X = 0.02          # [m] sensor ahead of the robot centre (assumption: mounted slightly
                          # forward on the top plate)
+
+
+_BODY, _FRACTION = itemgetter(0), itemgetter(2)   # of a rayTestBatch hit
 
 
 @dataclass(frozen=True)
@@ -103,14 +107,18 @@ class LidarSim:
         oy = pose_y + s * prm.sensor_x + c * prm.sensor_y
         directions = self._angles + pose_yaw
         n = prm.beams
-        origin = np.empty((n, 3))
-        origin[:] = (ox, oy, prm.height)
-        end = origin.copy()
+        end = np.empty((n, 3))
+        end[:, 0] = ox
+        end[:, 1] = oy
+        end[:, 2] = prm.height
         end[:, 0] += prm.range_max * np.cos(directions)
         end[:, 1] += prm.range_max * np.sin(directions)
-        hits = p.rayTestBatch(origin.tolist(), end.tolist(), numThreads=1, physicsClientId=self.cid)
-        # hit = (body id or -1, link, fraction of the ray, position, normal)
-        fraction = np.fromiter((h[2] if h[0] >= 0 else np.inf for h in hits), float, n)
+        hits = p.rayTestBatch([(ox, oy, prm.height)] * n, end.tolist(), numThreads=1,
+                              physicsClientId=self.cid)
+        # hit = (body id or -1, link, fraction of the ray, position, normal); C-level maps,
+        # not a Python loop per beam
+        fraction = np.fromiter(map(_FRACTION, hits), float, n)
+        fraction[np.fromiter(map(_BODY, hits), np.int64, n) < 0] = np.inf
         return fraction * prm.range_max
 
     def scan(self, pose_x: float, pose_y: float, pose_yaw: float, stamp_ns: int) -> Scan:

@@ -34,7 +34,9 @@ from nodes.planner.iapf_fields import (
     gap,
     obstacle_gradient,
     road_gradient,
+    road_headings,
     safety_distance,
+    stop_deceleration,
     traditional_gradient,
 )
 from nodes.planner.iapf_kernel import HALF, pack_obstacles, pack_params, rollout
@@ -77,6 +79,9 @@ class IAPFParams:
     traditional: bool = False    # the traditional APF baseline (eq. 12, constant speed)
     k_trad: float = 3000.0       # eq. 12 k of the baseline (ours)
     brake_priority: bool = False  # an obstacle pushing back suspends eq. 25's return to V_c (ours)
+    stop_decel_frac: float = 0.0  # stop law: brake as needed above this * a_b (ours; 0 = off)
+    node_stop_decel_frac: float = 0.5  # stop_decel_frac in the planner node (ours; 0 = off)
+    heading_min_speed: float = 2.5  # [m/s] slower tracks head along the road (ours; 0 = off)
     follow_min_frac: float = 0.5  # leader slower than this * V_c: change lanes if free (ours; 0 = off)
     goal_lane_s: float = 6.0     # [s] of cruise before the goal: pull to its lane (ours; 0 = off)
     lane_width_ref: float = 4.0  # [m] the lane width d_w these values are for (Table 1)
@@ -88,13 +93,14 @@ class IAPFParams:
 PAPER_PRESET = {"a_x": -0.15, "t_c": 0.4, "obstacle_gain": 1.0, "predict_step_s": 0.02,
                 "goal_half_period_lanes": 1.0, "b3_temp": 1.52, "heading_max_deg": 90.0,
                 "yaw_rate_max_deg": 0.0, "literal_rotation": True, "follow_min_frac": 0.0,
-                "goal_lane_s": 0.0}
+                "goal_lane_s": 0.0, "stop_decel_frac": 0.0, "node_stop_decel_frac": 0.0,
+                "heading_min_speed": 0.0}
 
 _LENGTH_TIMES = {"s_m": (1, 0), "host_length": (1, 0), "host_width": (1, 0),
                  "lane_width_ref": (1, 0), "k_trad": (1, 0),
                  "step_s": (0, 1), "horizon_s": (0, 1), "goal_lane_s": (0, 1), "t_c": (0, 1),
                  "predict_step_s": (0, 1),
-                 "yaw_rate_max_deg": (0, -1), "v_cruise": (1, -1), "a_b": (1, -2),
+                 "yaw_rate_max_deg": (0, -1), "v_cruise": (1, -1), "heading_min_speed": (1, -1), "a_b": (1, -2),
                  "a_max": (1, -2), "k1": (-4, 0), "k2": (-2, 0), "b1": (-1, 0), "b2": (-1, 0),
                  "b3": (-1, 0), "b3_temp": (-1, 0), "a_x": (-2, 0), "a_y": (-2, 0),
                  "eta1": (2, -2), "eta2": (-2, 1)}
@@ -212,7 +218,8 @@ class IAPFCore:
 
     def advance(self, s: HostState, tracks, lanes: Lanes | None, y_goal: float | None, b3: float,
                 dt: float, shift: float = 0.0) -> tuple[HostState, tuple]:
-        """One move of ``dt``: velocity update (eqs. 25-26), heading and position (21-22)."""
+        """One move of ``dt``: velocity update (eqs. 25-26, with the stop law of
+        :func:`stop_deceleration`), heading and position (21-22)."""
         p = self.p
         fx, fy, fox, active = self.force(s.x, s.y, s.v, tracks, lanes, y_goal, b3, shift)
         accel = 0.0
@@ -223,6 +230,10 @@ class IAPFCore:
             if p.brake_priority and fox < 0.0:
                 back = min(back, 0.0)
             accel = (p.eta1 * fox + back) / p.mass
+            if p.stop_decel_frac > 0.0 and lanes is not None:
+                need = stop_deceleration(s.x, s.y, v, tracks, lanes, p.host_length, p.s_m, shift)
+                if need > p.stop_decel_frac * p.a_b:
+                    accel = min(accel, -need)
             accel = min(max(accel, -p.a_b), p.a_max)
             v = min(max(v + accel * dt, 0.0), p.v_max_factor * p.v_cruise)
         lim = math.radians(p.heading_max_deg)
@@ -296,6 +307,8 @@ class IAPFCore:
         p = self.p
         dt = p.step_s if dt is None else dt
         info = StepInfo()
+        if lanes is not None:
+            tracks = road_headings(tracks, p.heading_min_speed)
         if self.temp_goal_y is not None and t >= self.t_goal + p.t_c:      # Step 6
             self.temp_goal_y = None
         if p.prediction and not p.traditional and lanes is not None:

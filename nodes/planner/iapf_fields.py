@@ -15,10 +15,13 @@ docs/planners.md ("IAPF").
 - :func:`safety_distance` — eq. 9.
 - :func:`obstacle_gradient` — eqs. 10, 11, 15, 16, 20: the rotated Gaussian field of one
   obstacle; :func:`traditional_gradient` — eq. 12, the traditional APF's 1/d field.
+- ours: :func:`stop_deceleration` (the stop law with eq. 9's S_m) and :func:`road_headings`
+  (phi of eq. 10 for slow tracks).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -192,3 +195,43 @@ def traditional_gradient(x: float, y: float, ob: Track, k: float) -> tuple[float
     d = math.sqrt(d2)
     f = -0.5 * k / (d2 * d)
     return 0.5 * k / d, f * dx, f * dy
+
+
+# -- ours: the stop law and the headings of slow tracks (docs/planners.md "IAPF") ----------
+
+def stop_deceleration(x: float, y: float, v: float, tracks, lanes: Lanes, host_length: float,
+                      s_m: float, shift: float = 0.0) -> float:
+    """[m/s^2] The deceleration that matches the speed of the closest-closing vehicle ahead in
+    the host's lane ``s_m`` (S_m) short of it (the stop law, ours; docs/planners.md "IAPF").
+
+    For each vehicle ahead (moved on by ``shift`` s) in the lane holding ``y`` and slower along
+    X than ``v``: ``(v - v_oX)^2 / (2 (gap - S_m))`` (infinite once inside ``S_m``); the largest.
+    Eq. 9's safety distance is the braking distance at ``a_b`` plus ``S_m``; eq. 25's field
+    alone cannot brake a host at speed to a stop within it (its return term beats the field),
+    so :meth:`nodes.planner.iapf.IAPFCore.advance` brakes with this once it exceeds
+    ``stop_decel_frac a_b``.
+    """
+    lane = lanes.lane_of(y)
+    need = 0.0
+    for ob in tracks:
+        hx, hy = x - ob.vx * shift, y - ob.vy * shift
+        closing = v - ob.vx
+        if ob.x <= hx or closing <= 0.0 or lanes.lane_of(ob.y + y - hy) != lane:
+            continue
+        room = gap(hx, hy, host_length, ob) - s_m
+        need = max(need, closing * closing / (2.0 * room) if room > 1e-9 else math.inf)
+    return need
+
+
+def road_headings(tracks, min_speed: float):
+    """Tracks slower than ``min_speed`` [m/s] turned to head along the road (+X), the others to
+    their direction of travel (ours: phi of eq. 10 is the vehicle's heading; a standing or
+    creeping vehicle on a one-way road faces along it, and a tracker's heading of such a
+    track is noise). ``min_speed <= 0``: the tracks as given."""
+    if min_speed <= 0.0:
+        return tracks
+    out = []
+    for ob in tracks:
+        yaw = math.atan2(ob.vy, ob.vx) if ob.speed >= min_speed else 0.0
+        out.append(ob if yaw == ob.yaw else dataclasses.replace(ob, yaw=yaw))
+    return out

@@ -23,7 +23,7 @@ HAVE_NUMBA = numba is not None
 
 # params vector layout (see pack_params)
 (K1, K2, B1, B2, AX, AY, ETA1, ETA2, AB, SM, GAIN, MASS, AMAX, VMAX, VC, HALF, HMAX, YRATE,
- HLEN, LITERAL, TRAD, KTRAD, BRAKE) = range(23)
+ HLEN, LITERAL, TRAD, KTRAD, BRAKE, STOP) = range(24)
 # obstacle row layout: x, y, yaw, vx, vy, speed, length
 OBS_COLS = 7
 
@@ -72,9 +72,27 @@ def _obstacle_grad_py(hx, hy, ob, prm):
     return e * (g * grx + dgx), e * (g * gry + dgy)
 
 
+def _stop_need_py(x, y, v, obs, prm, y_min, width, count, shift):
+    """The stop law's deceleration (:func:`nodes.planner.iapf_fields.stop_deceleration`)."""
+    lane = min(max(int(math.floor((y - y_min) / width)), 0), count - 1)
+    need = 0.0
+    for i in range(obs.shape[0]):
+        ob = obs[i]
+        hx, hy = x - ob[3] * shift, y - ob[4] * shift
+        closing = v - ob[3]
+        ob_lane = min(max(int(math.floor((ob[1] + y - hy - y_min) / width)), 0), count - 1)
+        if ob[0] <= hx or closing <= 0.0 or ob_lane != lane:
+            continue
+        room = max(0.0, math.sqrt((hx - ob[0]) ** 2 + (hy - ob[1]) ** 2)
+                   - 0.5 * (prm[HLEN] + ob[6])) - prm[SM]
+        need = max(need, closing * closing / (2.0 * room) if room > 1e-9 else math.inf)
+    return need
+
+
 # the helpers are compiled when numba is there (the Python rollout can call them too)
 _road_grad = numba.njit(cache=True)(_road_grad_py) if HAVE_NUMBA else _road_grad_py
 _obstacle_grad = numba.njit(cache=True)(_obstacle_grad_py) if HAVE_NUMBA else _obstacle_grad_py
+_stop_need = numba.njit(cache=True)(_stop_need_py) if HAVE_NUMBA else _stop_need_py
 
 
 def _rollout(state, obs, prm, road, y_goal, has_goal, b3, dt, n, shift0, out):
@@ -111,6 +129,10 @@ def _rollout(state, obs, prm, road, y_goal, has_goal, b3, dt, n, shift0, out):
             if prm[BRAKE] > 0.5 and ox < 0.0:
                 back = min(back, 0.0)
             accel = (prm[ETA1] * ox + back) / prm[MASS]
+            if prm[STOP] > 0.0 and count > 0:
+                need = _stop_need(x, y, v, obs, prm, y_min, width, count, shift)
+                if need > prm[STOP] * prm[AB]:
+                    accel = min(accel, -need)
             accel = min(max(accel, -prm[AB]), prm[AMAX])
             v = min(max(v + accel * dt, 0.0), prm[VMAX])
         new_yaw = min(max(math.atan2(fy, fx), -prm[HMAX]), prm[HMAX])
@@ -132,7 +154,8 @@ def pack_params(p) -> np.ndarray:
     vals = [p.k1, p.k2, p.b1, p.b2, p.a_x, p.a_y, p.eta1, p.eta2, p.a_b, p.s_m, p.obstacle_gain,
             p.mass, p.a_max, p.v_max_factor * p.v_cruise, p.v_cruise, 0.0,
             math.radians(p.heading_max_deg), math.radians(p.yaw_rate_max_deg), p.host_length,
-            float(p.literal_rotation), float(p.traditional), p.k_trad, float(p.brake_priority)]
+            float(p.literal_rotation), float(p.traditional), p.k_trad, float(p.brake_priority),
+            p.stop_decel_frac]
     return np.array(vals, dtype=np.float64)
 
 

@@ -73,8 +73,10 @@ class IAPFStrategy:
             # and the safety gaps are measured from the robot's own footprint
             # the robot must be able to stop behind a vehicle: an obstacle pushing back
             # suspends the return to cruise (eq. 25's cubic beats any braking force otherwise)
+            # and it must stop S_m short of a standing vehicle in its lane (the stop law)
             q = dataclasses.replace(scaled(p, s, tau), yaw_rate_max_deg=0.0, brake_priority=True,
-                                    host_length=BODY_LENGTH_M, host_width=BODY_WIDTH_M)
+                                    host_length=BODY_LENGTH_M, host_width=BODY_WIDTH_M,
+                                    stop_decel_frac=p.node_stop_decel_frac)
             self._core, self._core_for = IAPFCore(q), lanes
         return self._core
 

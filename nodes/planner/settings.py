@@ -118,6 +118,8 @@ IAPF: dict[str, Spec] = {
     "traditional": FLAG, "k_trad": pos(1e7), "lane_width_ref": pos(20.0, "m"),
     "cruise_speed": pos(V_MAX_M_S, "m/s", safety=True),
     "brake_priority": FLAG, "follow_min_frac": num(0.0, 1.0), "goal_lane_s": num(0.0, 600.0, "s"),
+    "stop_decel_frac": num(0.0, 1.0), "node_stop_decel_frac": num(0.0, 1.0),
+    "heading_min_speed": num(0.0, 50.0, "m/s"),
 }
 
 SPECS: dict[type, dict[str, Spec]] = {

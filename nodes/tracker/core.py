@@ -18,20 +18,26 @@ One cycle (:meth:`Tracker.update`) per scan, everything in the world frame:
    in the scan). Why not a library clustering (scipy ``cKDTree`` + ``connected_components``,
    scikit-learn DBSCAN): on a scan the neighbours are already ordered, and the sparse-graph
    set-up took most of the cycle in our first version (nodes/tracker/README.md).
-   A cluster's measurement is the centre of its bounding box in its principal axes
-   (the visible part of the object: a car seen from behind is measured at its rear).
-3. **Association**: predicted tracks vs clusters by centre distance, globally optimal
+   A cluster's box: its bounding box in its principal axes (the visible part).
+3. **Association**: predicted tracks vs cluster boxes by centre distance, globally optimal
    (``scipy.optimize.linear_sum_assignment``, the Hungarian method), pairs farther than
    ``gate`` rejected.
-4. **Filter**: a constant-velocity Kalman filter per track (state x, y, vx, vy;
+4. **Box model** (:mod:`nodes.tracker.box`): a matched cluster is measured in its track's
+   frame, as the centre of a box of the track's size whose faces nearest the sensor lie on
+   the seen points (a car seen from behind is measured at its centre once its length has
+   been seen, not at its rear face).
+5. **Filter**: a constant-velocity Kalman filter per track (state x, y, vx, vy;
    white-noise acceleration of ``accel_sd``; position measurements of ``meas_sd``),
    vectorised over all tracks with numpy. Unmatched clusters start tracks (velocity 0,
    ``init_speed_sd``); a track is published after ``confirm_hits`` hits and dropped
    after ``max_misses`` scans without one.
 
-Heading: the direction of the filtered velocity when faster than ``moving_speed``, else
-the last one (a new track: the cluster's principal axis). Size: the largest extent seen
-along / across the heading (a rigid object only shows more of itself over time).
+Heading: the direction of the filtered velocity when its speed exceeds ``moving_speed``
+and twice the filter's own velocity standard deviation along it, else the last one (a new
+track: the cluster's principal axis) — a standing car's velocity is noise, and its
+direction would turn the box at random. Size: the largest extents seen along / across the
+heading (a rigid object only shows more of itself over time), swapped when the heading
+turns by more than 45 degrees.
 
 Deterministic: the output depends only on the inputs, in order.
 """
@@ -46,7 +52,7 @@ from scipy.optimize import linear_sum_assignment
 
 from common.errors import ConfigError
 from common.units import NS_PER_S
-from nodes.tracker import kernels
+from nodes.tracker import box, kernels
 from schemas.messages import Objects, ObjectTrack, Odometry, Scan
 
 GATED_COST = 1e6   # assignment cost of a pair beyond the gate (rejected afterwards)
@@ -64,7 +70,7 @@ class TrackerParams:
     min_points: int = 3            # [-] smaller clusters are noise
     max_extent: float = 2.0        # [m] longer clusters are structure (walls), not objects
     gate: float = 0.5              # [m] max distance of a cluster to a predicted track
-    accel_sd: float = 1.0          # [m/s^2] white-noise acceleration of the CV model
+    accel_sd: float = 0.5          # [m/s^2] white-noise acceleration of the CV model (road cars)
     meas_sd: float = 0.05          # [m] position measurement noise of a cluster centre
     init_speed_sd: float = 1.0     # [m/s] velocity uncertainty of a new track
     confirm_hits: int = 3          # [-] hits before a track is published
@@ -93,6 +99,7 @@ class Cluster:
     axis: float
     length: float   # along ``axis``
     width: float    # across it
+    points: np.ndarray | None = field(default=None, compare=False, repr=False)   # (m, 2) [m]
 
 
 @dataclass(frozen=True)
@@ -104,6 +111,7 @@ class ScanPoints:
     beams: np.ndarray     # (K,) beam index, increasing
     beam_count: int       # beams per revolution
     increment: float      # [rad] angle between successive beams
+    origin: tuple[float, float] = (0.0, 0.0)   # [m] the sensor, world frame
 
 
 def scan_points(scan: Scan, odom: Odometry, max_range: float) -> ScanPoints:
@@ -120,7 +128,7 @@ def scan_points(scan: Scan, odom: Odometry, max_range: float) -> ScanPoints:
     xy = np.empty((len(beams), 2))
     xy[:, 0] = ox + r * np.cos(a)
     xy[:, 1] = oy + r * np.sin(a)
-    return ScanPoints(xy, r, beams, len(ranges), abs(scan.angle_increment))
+    return ScanPoints(xy, r, beams, len(ranges), abs(scan.angle_increment), (ox, oy))
 
 
 def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
@@ -164,14 +172,17 @@ def cluster_points(sp: ScanPoints, p: TrackerParams) -> list[Cluster]:
     if n < p.min_points:
         return []
     if p.use_numba and kernels.HAVE_NUMBA:
-        boxes, counts = kernels.segment_boxes(
+        boxes, counts, first = kernels.segment_boxes(
             sp.xy, sp.ranges, sp.beams.astype(np.int64), sp.beam_count, sp.increment,
             p.cluster_radius, p.breakpoint_angle, p.range_sd, p.max_beam_gap)
+        order = (np.arange(n) + first) % n
     else:
         order, starts = _breaks(sp, p)
         counts = np.diff(starts, append=n)
         boxes = _measure(sp.xy[order], starts, counts)
-    return [Cluster(*box) for box, count in zip(boxes.tolist(), counts.tolist(), strict=True)
+    ends = np.cumsum(counts).tolist()
+    return [Cluster(*box, points=sp.xy[order[end - count:end]])
+            for box, count, end in zip(boxes.tolist(), counts.tolist(), ends, strict=True)
             if count >= p.min_points and box[3] <= p.max_extent]
 
 
@@ -240,10 +251,12 @@ class Tracker:
             self.tracks, self._next_id = _Tracks(), 1
         dt = 0.0 if self.t_ns is None else (t - self.t_ns) / NS_PER_S
         self.t_ns = t
-        clusters = cluster_points(scan_points(scan, odom, p.max_range), p)
+        sp = scan_points(scan, odom, p.max_range)
+        clusters = cluster_points(sp, p)
         self._predict(dt)
         rows, cols = self._associate(clusters)
-        self._correct(rows, [clusters[j] for j in cols])
+        self._correct(rows, [self._box(i, clusters[j], sp.origin)
+                             for i, j in zip(rows, cols, strict=True)])
         self._age(rows)
         for j in sorted(set(range(len(clusters))) - set(cols)):
             self._start(clusters[j])
@@ -287,8 +300,14 @@ class Tracker:
         ok = cost[rows, cols] <= self.params.gate
         return rows[ok].tolist(), cols[ok].tolist()
 
+    def _box(self, i: int, c: Cluster, origin: tuple[float, float]) -> Cluster:
+        """Cluster ``c`` measured as track ``i``'s box (:func:`nodes.tracker.box.fit`)."""
+        pts = c.points if c.points is not None else np.array([(c.x, c.y)])
+        x, y, along, across = box.fit(pts, self.tracks.yaw[i], self.tracks.size[i], origin)
+        return Cluster(x, y, self.tracks.yaw[i], along, across)
+
     def _correct(self, rows: list[int], clusters: list[Cluster]) -> None:
-        """Kalman update of the matched tracks with their clusters' centres (H = [I 0])."""
+        """Kalman update of the matched tracks with their box centres (H = [I 0])."""
         if not rows:
             return
         tr, p = self.tracks, self.params
@@ -306,10 +325,18 @@ class Tracker:
         for i, c in zip(rows, clusters, strict=True):
             tr.hits[i] += 1
             tr.misses[i] = 0
+            size = (max(tr.size[i][0], c.length), max(tr.size[i][1], c.width))
             vx, vy = tr.x[i, 2], tr.x[i, 3]
-            if math.hypot(vx, vy) > p.moving_speed:
-                tr.yaw[i] = math.atan2(vy, vx)
-            tr.size[i] = _grow(tr.size[i], c, tr.yaw[i])
+            speed = math.hypot(vx, vy)
+            # the filter's own velocity uncertainty along the velocity: a speed within two
+            # standard deviations of it does not tell the direction of travel
+            sd = math.sqrt(max(0.0, (vx * vx * tr.P[i, 2, 2] + 2 * vx * vy * tr.P[i, 2, 3]
+                                     + vy * vy * tr.P[i, 3, 3]) / max(speed * speed, 1e-12)))
+            if speed > max(p.moving_speed, 2.0 * sd):
+                yaw = math.atan2(vy, vx)
+                size = box.turned(size, yaw - tr.yaw[i])
+                tr.yaw[i] = yaw
+            tr.size[i] = size
 
     def _age(self, matched: list[int]) -> None:
         tr = self.tracks
@@ -331,12 +358,3 @@ class Tracker:
         tr.misses.append(0)
         tr.yaw.append(c.axis)
         tr.size.append((c.length, c.width))
-
-
-def _grow(size: tuple[float, float], c: Cluster, yaw: float) -> tuple[float, float]:
-    """Largest extents seen along / across ``yaw`` (a cluster's box projected onto it)."""
-    d = c.axis - yaw
-    ca, sa = abs(math.cos(d)), abs(math.sin(d))
-    along = ca * c.length + sa * c.width
-    across = sa * c.length + ca * c.width
-    return max(size[0], along), max(size[1], across)

@@ -24,7 +24,8 @@ HAVE_NUMBA = numba is not None
 
 def _segment_boxes(xy, ranges, beams, beam_count, increment, cluster_radius, lam, range_sd,
                    max_beam_gap):
-    """(boxes (S, 5): x, y, axis, length, width; counts (S,)) of the scan-order segments."""
+    """(boxes (S, 5): x, y, axis, length, width; counts (S,); first) of the scan-order
+    segments: segment s holds the returns ``(first + sum(counts[:s]) + q) % n``."""
     n = beams.shape[0]
     cut = np.zeros(n, dtype=np.bool_)
     last = -1
@@ -55,7 +56,7 @@ def _segment_boxes(xy, ranges, beams, beam_count, increment, cluster_radius, lam
         counts[s] = m
         s += 1
         k += m
-    return boxes[:s], counts[:s]
+    return boxes[:s], counts[:s], first
 
 
 def _box(xy, first, k, m, n, out):

@@ -173,20 +173,37 @@ def _add_traffic(exp) -> None:
     p.add_argument("--timeout", type=float, default=150.0, metavar="S",
                    help="sim-time limit per run (default 150)")
     p.add_argument("--worlds", help="comma-separated subset of the road-* worlds")
+    p.add_argument("--seeds", help="comma-separated seeds, each a full round (instead of --seed)")
+    p.add_argument("--planners", help="comma-separated subset of iapf,apf,papf,arapf (default all)")
     p.set_defaults(func=cmd_traffic)
 
 
 def cmd_traffic(args) -> int:
-    from papf.experiments.traffic import ROAD_WORLDS, run_traffic  # zenoh, mcap: when run
+    from papf.experiments.traffic import CASES, ROAD_WORLDS, run_traffic  # zenoh, mcap: when run
 
+    cases = CASES
+    if args.planners:
+        names = [p.strip() for p in args.planners.split(",") if p.strip()]
+        valid = sorted({p for p, _ in CASES})
+        if not names or any(p not in valid for p in names):
+            raise ConfigError(f"--planners {args.planners!r}: valid names are {valid}")
+        cases = tuple(c for c in CASES if c[0] in names)
+    seeds = None
+    if args.seeds:
+        try:
+            seeds = tuple(int(x) for x in args.seeds.split(",") if x.strip())
+        except ValueError:
+            raise ConfigError(f"--seeds {args.seeds!r}: comma-separated integers") from None
+        if not seeds:
+            raise ConfigError(f"--seeds {args.seeds!r}: comma-separated integers")
     worlds = ROAD_WORLDS
     if args.worlds:
         worlds = tuple(w.strip() for w in args.worlds.split(",") if w.strip())
         bad = [w for w in worlds if w not in ROAD_WORLDS]
         if bad:
             raise ConfigError(f"--worlds: {bad} are not road worlds; valid: {list(ROAD_WORLDS)}")
-    run_traffic(args.out, worlds, seed=args.seed, timeout_s=args.timeout,
-                echo=lambda line: print(line, file=sys.stderr, flush=True))
+    run_traffic(args.out, worlds, cases, seed=args.seed, timeout_s=args.timeout,
+                echo=lambda line: print(line, file=sys.stderr, flush=True), seeds=seeds)
     print((Path(args.out) / "traffic.md").read_text())
     return 0
 

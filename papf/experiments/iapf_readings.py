@@ -34,6 +34,8 @@ READINGS = [
     ("no safety cut-off (D_S huge)", "iapf", ["s_m=1000"]),
     ("no slow-leader lane change (Sec. 2.1 rule off)", "iapf", ["follow_min_frac=0"]),
     ("temporary goal b3 = 25 (below the ridge k2 d_w / sin 45 deg)", "iapf", ["b3_temp=25"]),
+    ("stop law on (the planner node's 0.5)", "iapf", ["stop_decel_frac=0.5"]),
+    ("slow tracks keep their own heading (eq. 10 phi as given)", "iapf", ["heading_min_speed=0"]),
     ("no prediction", "iapf-np", []),
     ("traditional APF k = 200", "apf", ["k_trad=200"]),
     ("traditional APF k = 1000", "apf", ["k_trad=1000"]),

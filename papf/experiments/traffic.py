@@ -80,22 +80,27 @@ def table(rows: Sequence[dict]) -> str:
 
 def run_traffic(out: str | Path, worlds: Sequence[str] = ROAD_WORLDS,
                 cases: Sequence[tuple[str, str]] = CASES, seed: int = 0,
-                timeout_s: float = 150.0, echo=print) -> list[dict]:
-    """Run every (world, case) through the stack; write ``traffic.csv`` and ``traffic.md``."""
+                timeout_s: float = 150.0, echo=print,
+                seeds: Sequence[int] | None = None) -> list[dict]:
+    """Run every (seed, world, case) through the stack (``seeds``: default ``(seed,)``);
+    write ``traffic.csv`` and ``traffic.md``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()
     rows = []
-    for name in worlds:
-        for planner, objects in cases:
-            mcap = out / "recordings" / f"{name}-{planner}-{objects}.mcap"
-            trial = run_stack(world_path(name), planner, seed, timeout_s, record=mcap,
-                              objects=objects, startup_timeout_s=STARTUP_S)
-            rows.append(road_row(name, planner, objects, trial, mcap))
-            r = rows[-1]
-            echo(f"{name:>17} {planner:<6} {objects:<8} {r['outcome']:<9} "
-                 f"{r['duration_s']:7.2f} s  collisions {r['collisions']}  "
-                 f"left road {r['left_road']}  {r['reason']}")
+    seeds = tuple(seeds) if seeds else (seed,)
+    for s in seeds:
+        for name in worlds:
+            for planner, objects in cases:
+                tag = f"-s{s}" if len(seeds) > 1 else ""
+                mcap = out / "recordings" / f"{name}-{planner}-{objects}{tag}.mcap"
+                trial = run_stack(world_path(name), planner, s, timeout_s, record=mcap,
+                                  objects=objects, startup_timeout_s=STARTUP_S)
+                rows.append(road_row(name, planner, objects, trial, mcap))
+                r = rows[-1]
+                echo(f"{name:>17} {planner:<6} {objects:<8} seed {s} {r['outcome']:<9} "
+                     f"{r['duration_s']:7.2f} s  collisions {r['collisions']}  "
+                     f"left road {r['left_road']}  {r['reason']}")
     write_csv(rows, out / "traffic.csv")
     (out / "traffic.md").write_text(table(rows))
     return rows

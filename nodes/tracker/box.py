@@ -1,0 +1,48 @@
+"""The tracker's box model: a cluster measured as its track's box (pure maths, no state).
+
+A LiDAR sees the faces of a car that turn towards it: one face from behind, two from an
+angle. The centre of the visible points' box lies up to half a car off the car's centre,
+and it moves as the robot drives past and new faces come into view — a velocity the car
+does not have. So a matched cluster is measured in its track's frame (along / across the
+track's heading): the points' extents there, and the centre of a box of the track's size
+(the largest extents seen so far) whose faces nearest the sensor lie on the seen points
+(:func:`fit`). A rigid box keeps its size; a new heading only re-labels its sides
+(:func:`turned`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def anchor(lo: float, hi: float, size: float, sensor: float) -> float:
+    """Centre of an extent ``size`` [m] long that holds the seen ``[lo, hi]`` with its face
+    nearest ``sensor`` on the seen one. The seen extent's middle when it is the whole, or
+    when the sensor faces it (then both ends are in view; it is shorter than ``size`` only
+    by the spacing of the beams)."""
+    if hi - lo >= size or lo <= sensor <= hi:
+        return 0.5 * (lo + hi)
+    return lo + 0.5 * size if sensor < 0.5 * (lo + hi) else hi - 0.5 * size
+
+
+def fit(points: np.ndarray, yaw: float, size: tuple[float, float],
+        origin: tuple[float, float]) -> tuple[float, float, float, float]:
+    """``(x, y, along, across)``: the box centre [m] (world frame) of ``points`` (m, 2) for a
+    box of ``size`` = (length along ``yaw``, width across) [m] seen from the sensor at
+    ``origin``, and the points' own extents along / across ``yaw`` [m]."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    u = points[:, 0] * c + points[:, 1] * s
+    v = points[:, 1] * c - points[:, 0] * s
+    ulo, uhi, vlo, vhi = float(u.min()), float(u.max()), float(v.min()), float(v.max())
+    mu = anchor(ulo, uhi, size[0], origin[0] * c + origin[1] * s)
+    mv = anchor(vlo, vhi, size[1], origin[1] * c - origin[0] * s)
+    return mu * c - mv * s, mu * s + mv * c, uhi - ulo, vhi - vlo
+
+
+def turned(size: tuple[float, float], turn: float) -> tuple[float, float]:
+    """A rigid box's (length, width) in a frame turned by ``turn`` [rad]: swapped when the
+    turn is nearer a quarter turn than none (a new heading re-labels the box's sides; a
+    projection of the box would inflate it with every small turn)."""
+    return (size[1], size[0]) if abs(math.sin(turn)) > abs(math.cos(turn)) else size
