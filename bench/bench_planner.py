@@ -16,17 +16,27 @@ on every scene. Scenes:
   (a slow leader, one in the other lane, one behind), handed over as obstacle tracks; IAPF
   (which needs the road and the tracks) runs only here, with its F_step = 20 prediction.
 
-PAPF is also timed with the numpy fallback (``use_numba=false``). Speed is reported,
-never asserted (tests/ do not time anything).
+PAPF is also timed with the numpy fallback (``use_numba=false``). Each row carries the
+1-minute load average at its start and end: CPU time (the ``cpu_`` figures) is far less
+disturbed than wall time when other jobs share the cores, but not immune. Speed is
+reported, never asserted (tests/ do not time anything).
+
+``--cases``/``--scenes`` keep some rows (``--cases papf_worst_numba --scenes trap``: the
+PAPF worst case alone); ``--csv FILE`` writes the rows as CSV (``docs/data/bench-planner.csv``;
+``make docs`` renders the table of docs/performance.md from it).
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
+import os
 import platform
+import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -64,7 +74,13 @@ def road_tracks(x: float) -> list:
     return [Track(x + dx, y, 0.0, vx, 0.0, 0.5, 0.3, i) for i, (dx, y, vx) in enumerate(ROAD_VEHICLES)]
 
 
+CSV_FIELDS = ("date", "code", "case", "planner", "scene", "cycles", "max_top_quarks", "cmd_cpu_p50_us",
+              "cmd_cpu_p99_us", "cpu_p50_us", "cpu_p99_us", "cmd_p50_us", "cmd_p99_us", "p50_us",
+              "p99_us", "load_start", "load_end")
+
+
 def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
+    load_start = os.getloadavg()[0]
     world, (x0, x1), goal = SCENES[scene]
     planner = make_planner(planner_name, sets=sets)
     xs = np.linspace(x0, x1, cycles)
@@ -89,7 +105,8 @@ def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
         cmd_cpu.append(c1 - c0)
         quarks = max(quarks, len(state.top_quarks))
     out = {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
-           "beams": int(scans[0].ranges.size), "max_top_quarks": quarks}
+           "beams": int(scans[0].ranges.size), "max_top_quarks": quarks,
+           "load_start": round(load_start, 1), "load_end": round(os.getloadavg()[0], 1)}
     for prefix, wall, thread in (("", times, cpu), ("cmd_", cmd_times, cmd_cpu)):
         us, cpu_us = np.array(wall) / 1e3, np.array(thread) / 1e3
         out.update({f"{prefix}p50_us": _r(np.percentile(us, 50)),
@@ -105,14 +122,59 @@ def _r(x) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(prog="papf bench planner", description=plain(__doc__.split("\n")[0]))
-    ap.add_argument("--cycles", type=int, default=300)
+    ap.add_argument("--cycles", type=int, default=300, help="cycles per row (300; numpy rows a tenth)")
+    ap.add_argument("--cases", help="comma-separated case labels to keep (default: all): "
+                    + ", ".join(label for label, _n, _s in CASES))
+    ap.add_argument("--scenes", help="comma-separated scenes to keep (default: all): " + ", ".join(SCENES))
+    ap.add_argument("--csv", type=Path, help="also write the rows to this CSV file")
+    ap.add_argument("--append", action="store_true", help="add the rows to --csv instead of replacing it")
+    ap.add_argument("--label", default=None,
+                    help="the 'code' column (default: the git commit of this tree, if any)")
     args = ap.parse_args()
+    cases = _pick(ap, "--cases", args.cases, [label for label, _n, _s in CASES])
+    scenes = _pick(ap, "--scenes", args.scenes, list(SCENES))
+    if args.cycles < 1:
+        ap.error("--cycles must be >= 1")
     print(json.dumps({"machine": platform.processor() or platform.machine(),
                       "python": platform.python_version()}))
+    rows = []
     for label, name, sets in CASES:
         for scene in ONLY.get(name, SCENES):
+            if label not in cases or scene not in scenes:
+                continue
             cycles = args.cycles if "numpy" not in label else max(20, args.cycles // 10)
-            print(json.dumps({"case": label, **bench(name, sets, scene, cycles)}), flush=True)
+            rows.append({"case": label, **bench(name, sets, scene, cycles)})
+            print(json.dumps(rows[-1]), flush=True)
+    if args.csv:
+        code = _commit() if args.label is None else args.label
+        date = time.strftime("%Y-%m-%dT%H:%M", time.gmtime())
+        new = not (args.append and args.csv.exists() and args.csv.stat().st_size)
+        args.csv.parent.mkdir(parents=True, exist_ok=True)
+        with args.csv.open("w" if new else "a", newline="") as fh:
+            out = csv.DictWriter(fh, CSV_FIELDS, extrasaction="ignore")
+            if new:
+                out.writeheader()
+            out.writerows({"date": date, "code": code, **row} for row in rows)
+
+
+def _commit() -> str:
+    """Short git commit of the tree this bench runs from ("" outside a git checkout)."""
+    try:
+        done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, cwd=Path(__file__).parent, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return done.stdout.strip() if done.returncode == 0 else ""
+
+
+def _pick(ap: argparse.ArgumentParser, option: str, text: str | None, valid: list[str]) -> list[str]:
+    if text is None:
+        return valid
+    picked = [x.strip() for x in text.split(",") if x.strip()]
+    bad = [x for x in picked if x not in valid]
+    if bad or not picked:
+        ap.error(f"{option} {text!r}: valid values are {', '.join(valid)}")
+    return picked
 
 
 if __name__ == "__main__":

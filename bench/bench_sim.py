@@ -9,15 +9,23 @@ each N times; every run is printed, then one ``sim_stack_min`` line per planner:
 minimum over the runs of the wall time and of each process's CPU seconds (and whether
 every run gave the same figures). ``--csv FILE --label L`` also writes those minima as
 rows labelled ``L`` (rows of other labels in FILE are kept: a before/after table).
-``--timeout 0.2`` measures start-up and shut-down alone.
+``--timeout 0.2`` measures start-up and shut-down alone. ``--summarize FILE`` takes the
+run lines of earlier invocations from FILE instead of running (e.g. runs alternated with
+another checkout, so both see the same load) and prints and writes their minima.
+
+``--floor``: the same lockstep chain in one process without the bus (``bench/sim_floor.py``):
+CPU microseconds per 100 ms cycle of physics, ray cast, planner, meter, encoding and
+decoding, and one Zenoh hop between two processes — what a run costs before any
+transport; ``--csv FILE`` writes those parts (one row per planner and part).
 
 ``--loop``: the lockstep loop alone — ``nodes.base_driver`` (sim) and ``nodes.lidar_sim``
 as processes, every scan answered here with a constant Twist of the same stamp (a
 trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
 
     papf bench sim [--planners apf,papf] [--world energy] [--seed 1] [--repeat 1]
-                   [--timeout 300] [--csv FILE --label L]
+                   [--timeout 300] [--csv FILE --label L] [--summarize RUNS.jsonl]
     papf bench sim --loop [--sim-s 30] [--world energy] [--beams 300]
+    papf bench sim --floor [--planners apf,papf] [--csv FILE]
 """
 
 from __future__ import annotations
@@ -154,9 +162,49 @@ def write_csv(path: Path, label: str, summaries: list[dict]) -> None:
         w.writerows(kept + rows)
 
 
+def summarize(runs_file: Path, csv_path: Path | None, label: str | None) -> None:
+    try:
+        lines = runs_file.read_text().splitlines()
+    except OSError as exc:
+        sys.exit(f"bench sim: cannot read {runs_file}: {exc}")
+    runs = [r for r in (json.loads(x) for x in lines if x.startswith("{"))
+            if r.get("bench") == "sim_stack"]
+    summaries = [minimum([r for r in runs if r["planner"] == p])
+                 for p in dict.fromkeys(r["planner"] for r in runs)]
+    for s in summaries:
+        print(json.dumps(s))
+    if csv_path:
+        write_csv(csv_path, label, summaries)
+
+
+def floor(planners: list[str], world: str, seed: int, csv_path: Path | None) -> None:
+    from bench.sim_floor import chain, hop_latency
+
+    rows = []
+    for planner in planners:
+        res = {"bench": "sim_floor", "world": world, "planner": planner, "seed": seed,
+               **chain(world, planner, seed), "cpus": os.cpu_count()}
+        print(json.dumps(res), flush=True)
+        rows += [{"planner": planner, "part": part, "cpu_s": f"{res['cpu_s'][part]:.3f}",
+                  "us_per_cycle": f"{us:.0f}"} for part, us in res["us_per_cycle"].items()]
+        rows.append({"planner": planner, "part": "chain (physics, outputs, cast, planner)",
+                     "cpu_s": "", "us_per_cycle": f"{res['chain_us_per_cycle']:.0f}"})
+    hop = {"bench": "zenoh_hop", **hop_latency(root=str(ROOT))}
+    print(json.dumps(hop), flush=True)
+    rows.append({"planner": "", "part": "one Zenoh hop (p50), 3 per cycle on the chain",
+                 "cpu_s": "", "us_per_cycle": f"{hop['hop_us_p50']:.0f}"})
+    if csv_path:
+        with csv_path.open("w", newline="") as fh:
+            w = csv.DictWriter(fh, ("planner", "part", "cpu_s", "us_per_cycle"))
+            w.writeheader()
+            w.writerows(rows)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--loop", action="store_true", help="the driver + LiDAR loop alone")
+    parser.add_argument("--floor", action="store_true",
+                        help="the lockstep chain in one process, no bus (CPU per cycle per part)")
     parser.add_argument("--sim-s", type=float, default=30.0, help="--loop: sim seconds to run (30)")
     parser.add_argument("--world", default="energy")
     parser.add_argument("--beams", type=int, default=300, help="--loop: LiDAR beams (300)")
@@ -169,12 +217,20 @@ def main() -> None:
                         help="full stack: sim seconds at most (0.2: start-up and shut-down alone)")
     parser.add_argument("--csv", type=Path, help="full stack: write the minima here (with --label)")
     parser.add_argument("--label", help="full stack: the rows' label in --csv (e.g. before, after)")
+    parser.add_argument("--summarize", type=Path, metavar="RUNS",
+                        help="full stack: minima of the run lines in RUNS (JSON lines) instead of running")
     a = parser.parse_args()
     if a.loop:
         print(json.dumps(bench(a.sim_s, a.world, a.beams)))
         return
+    if a.floor:
+        floor(a.planners.split(","), a.world, a.seed, a.csv)
+        return
     if a.repeat < 1 or not a.timeout > 0 or bool(a.csv) != bool(a.label):
         parser.error("--repeat must be >= 1, --timeout > 0, and --csv and --label go together")
+    if a.summarize:
+        summarize(a.summarize, a.csv, a.label)
+        return
     logging.getLogger("papf.run").setLevel(logging.WARNING)
     summaries = []
     for planner in a.planners.split(","):

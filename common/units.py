@@ -10,6 +10,13 @@ from __future__ import annotations
 
 NS_PER_S = 1_000_000_000       # [ns/s]
 MAX_STAMP_NS = 2**62           # [ns] largest stamp any node accepts (see module doc)
+# [s] wall time a lockstep scan waits for its partners (odometry, pose, objects) in the
+# planner and the tracker. Longer than the driver's lockstep timeout (2 s): on a slow or
+# overloaded machine a late partner is waited for, so an answer never depends on the
+# machine's speed (with 0.25 s, a run at load 30 answered a scan with the odometry 40 ms
+# older); a lost partner shows first as the driver's `node_fault` in the run's figures,
+# and the fallback after this timeout then keeps the node answering.
+LOCKSTEP_PAIR_TIMEOUT_S = 3.0
 
 
 def s_to_ns(seconds: float) -> int:

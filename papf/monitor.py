@@ -110,8 +110,12 @@ class RunMonitor:
 
     # -- inputs ---------------------------------------------------------------
     def on_clock(self, msg: Clock) -> None:
-        self.clock_ns = max(self.clock_ns, msg.stamp_ns)
-        if self.outcome is None and msg.stamp_ns >= self.timeout_ns:
+        self.on_time(msg.stamp_ns)
+
+    def on_time(self, stamp_ns: int) -> None:
+        """Sim time has reached ``stamp_ns`` (a clock message, or in sim a pose sample)."""
+        self.clock_ns = max(self.clock_ns, stamp_ns)
+        if self.outcome is None and stamp_ns >= self.timeout_ns:
             self._decide("timeout", self.timeout_ns, f"no outcome within {self.timeout_ns / NS:g} s")
 
     def on_status(self, msg: PlannerStatus) -> None:

@@ -33,6 +33,7 @@ import msgpack
 import numpy as np
 
 from common.errors import SchemaError
+from schemas.json_schema import json_type as _json_type
 
 Floats = tuple[float, ...]
 Points = tuple[tuple[float, float], ...]
@@ -90,25 +91,40 @@ class Message:
             out[name] = value
         return out
 
-    def to_wire(self) -> dict:
-        """The msgpack map, ``_type`` first."""
+    def to_wire(self, lists: bool = True) -> dict:
+        """The msgpack map, ``_type`` first (``lists=False``: points and paths stay tuples,
+        which msgpack packs as the same arrays — what :meth:`to_bytes` packs)."""
         out: dict[str, Any] = {"_type": self.TYPE}
         for name, kind, _ in self._FIELDS:
             value = getattr(self, name)
             if kind == "f32array":
                 value = np.ascontiguousarray(value, dtype=_F32).tobytes()
-            elif kind == "points":
+            elif kind == "points" and lists:
                 value = [list(p) for p in value]
-            elif kind == "paths":
+            elif kind == "paths" and lists:
                 value = [[list(p) for p in path] for path in value]
             elif kind == "items":
-                value = [m.to_wire() for m in value]
+                value = [m.to_wire(lists) for m in value]
             out[name] = value
         return out
 
     def to_bytes(self) -> bytes:
-        """msgpack bytes of this message."""
-        return msgpack.packb(self.to_wire(), use_bin_type=True)
+        """msgpack bytes of this message (those of :meth:`to_wire`, byte for byte)."""
+        return msgpack.packb(self.to_wire(lists=False), use_bin_type=True)
+
+    @classmethod
+    def from_normal(cls, **values: Any):
+        """The message from values already in the form the constructor makes (Python floats;
+        ``Floats``/``Points``/``Paths`` as tuples of them): no copy, no normalisation — for hot
+        paths that build them so (the planner's debug state). Unknown/missing fields: TypeError."""
+        bad = (values.keys() - cls._DEFAULTS.keys()) | (cls._REQUIRED - values.keys())
+        if bad:
+            raise TypeError(f"{cls.__name__}: unknown or missing fields {sorted(bad)}")
+        if not cls._PLAIN:
+            return cls(**values)
+        obj = object.__new__(cls)
+        obj.__dict__.update(cls._DEFAULTS, **values)
+        return obj
 
     # -- decoding ---------------------------------------------------------
     @classmethod
@@ -222,6 +238,8 @@ def message(name: str, version: int):
         )
         cls.TYPE = f"papf/{name}/v{version}"
         cls._PLAIN = cls.__post_init__ is Message.__post_init__
+        cls._DEFAULTS = {f.name: f.default for f in dataclasses.fields(cls)}  # MISSING: required
+        cls._REQUIRED = {k for k, v in cls._DEFAULTS.items() if v is dataclasses.MISSING}
         return cls
 
     return wrap
@@ -344,31 +362,3 @@ def _len(value: Any) -> str:
         return str(len(value))
     except TypeError:
         return "n/a"
-
-
-def _json_type(kind: str, md: dict) -> dict:
-    if kind == "items":
-        item = {k: v for k, v in md["item"].json_schema().items() if k != "$schema"}
-        return {"type": "array", "items": item}
-    number = {"type": "number"}
-    pair = {"type": "array", "items": number, "minItems": 2, "maxItems": 2}
-    out: dict[str, Any] = {
-        "int": {"type": "integer"},
-        "float": dict(number),
-        "str": {"type": "string"},
-        "bool": {"type": "boolean"},
-        "floats": {"type": "array", "items": number},
-        "strs": {"type": "array", "items": {"type": "string"}},
-        "points": {"type": "array", "items": pair},
-        "paths": {"type": "array", "items": {"type": "array", "items": pair}},
-        "f32array": {"type": "string", "contentEncoding": "binary",
-                     "description": "little-endian float32 array"},
-    }[kind]
-    if md.get("choices"):
-        out["enum"] = list(md["choices"])
-    if md.get("length") is not None:
-        out["minItems"] = out["maxItems"] = md["length"]
-    text = " ".join(x for x in (md.get("doc", ""), f"[{md['unit']}]" if md.get("unit") else "") if x)
-    if text:
-        out["description"] = (out.get("description", "") + " " + text).strip()
-    return out

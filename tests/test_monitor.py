@@ -1,9 +1,11 @@
 """Run outcome and figures are decided at an exact sim time (papf.monitor)."""
 
 import math
+from unittest.mock import MagicMock
 
 from papf.monitor import NS, RunMonitor
-from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist
+from papf.run_sequence import RunSequence
+from schemas import BatteryState, Clock, Event, Keys, Odometry, PlannerStatus, Twist
 
 
 def pose(t_s, x, v=0.2):
@@ -47,6 +49,23 @@ def test_timeout_at_exact_sim_time():
     m.on_clock(Clock(stamp_ns=3 * NS + 20_000_000))
     assert m.outcome == "timeout" and m.t_end_ns == 3 * NS
     assert m.result("apf", "w", 0, 0).exit_code == 5
+
+
+def test_sim_pose_stamps_stand_for_the_clock_in_sim():
+    """In sim the launcher takes sim time from sim/pose (put just before clock at every
+    instant): the same timeout, t_end and clock as from the clock messages."""
+    session = MagicMock()
+    seq = RunSequence(session, Keys("rosbot"), MagicMock(), RunMonitor(timeout_s=3))
+    assert "clock" not in seq._handlers and "sim/pose" in seq._handlers
+    for t in (2 * NS, 3 * NS + 20_000_000):
+        seq._handlers["sim/pose"](Odometry(stamp_ns=t, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    by_clock = RunMonitor(timeout_s=3)
+    for t in (2 * NS, 3 * NS + 20_000_000):
+        by_clock.on_clock(Clock(stamp_ns=t))
+    assert (seq.monitor.outcome, seq.monitor.t_end_ns, seq.monitor.clock_ns) == (
+        by_clock.outcome, by_clock.t_end_ns, by_clock.clock_ns) == ("timeout", 3 * NS, 3 * NS + 20_000_000)
+    on_robot = RunSequence(session, Keys("rosbot"), MagicMock(), RunMonitor(timeout_s=3), "odom")
+    assert "clock" in on_robot._handlers
 
 
 def test_collision_ends_run_and_is_counted():

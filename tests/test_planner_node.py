@@ -167,3 +167,23 @@ def test_bad_setting_exits_2():
     r = subprocess.run([sys.executable, "-m", "nodes.planner", "--set", "d_o=far"],
                        capture_output=True, text=True, timeout=60, start_new_session=True)
     assert r.returncode == 2 and "d_o" in r.stderr
+
+
+def test_lockstep_pair_timeout_outlasts_the_drivers_lockstep_timeout():
+    """A slow machine must not change an answer: the planner and the tracker wait for a
+    scan's partners longer than the driver waits for the planner's command, in the node
+    defaults and in the `sim` profile papf run starts."""
+    from pathlib import Path
+
+    import tomllib
+
+    from common.units import LOCKSTEP_PAIR_TIMEOUT_S
+    from nodes.base_driver.__main__ import build_parser
+    from nodes.tracker.core import Tracker, TrackerParams
+    from nodes.tracker.loop import TrackerLoop
+
+    driver_default = build_parser().parse_args([]).lockstep_timeout
+    profile = tomllib.loads((Path(__file__).resolve().parents[1] / "papf" / "profiles" / "sim.toml").read_text())
+    assert LOCKSTEP_PAIR_TIMEOUT_S > max(driver_default, float(profile["defaults"]["lockstep_timeout"]))
+    assert loop().pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
+    assert TrackerLoop(Tracker(TrackerParams())).pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S

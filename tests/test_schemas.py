@@ -43,6 +43,28 @@ def test_round_trip(msg):
 
 
 @pytest.mark.parametrize("msg", samples(), ids=lambda m: m.TYPE)
+def test_bytes_are_those_of_the_wire_map(msg):
+    """to_bytes packs tuples where to_wire has lists: the same msgpack bytes."""
+    assert msg.to_bytes() == msgpack.packb(msg.to_wire(), use_bin_type=True)
+
+
+@pytest.mark.parametrize("msg", samples(), ids=lambda m: m.TYPE)
+def test_from_normal_builds_the_same_message(msg):
+    values = {name: getattr(msg, name) for name, _k, _m in msg._FIELDS}
+    fast = type(msg).from_normal(**values)
+    assert fast == msg and fast.to_bytes() == msg.to_bytes()
+    required = {name: values[name] for name in type(msg)._REQUIRED}
+    assert type(msg).from_normal(**required) == type(msg)(**required)
+
+
+def test_from_normal_names_unknown_and_missing_fields():
+    with pytest.raises(TypeError, match="speed"):
+        s.Twist.from_normal(stamp_ns=1, speed=2.0)
+    with pytest.raises(TypeError, match="stamp_ns"):
+        s.Twist.from_normal(v=1.0)
+
+
+@pytest.mark.parametrize("msg", samples(), ids=lambda m: m.TYPE)
 def test_decoding_without_init_equals_the_constructor(msg):
     """from_wire fills a checked instance without __init__: the same fields, values and
     types as building it with the constructor (and so __post_init__'s normal form)."""

@@ -158,7 +158,7 @@ def test_loop_pairs_scan_with_the_pose_of_its_stamp():
     assert topic == "objects" and objects.stamp_ns == 100 * MS
     assert objects.tracks[0].x == pytest.approx(3.0, abs=0.01)     # seen from x = 1
     lp.on_message("scan", face_scan(2.0, t=200 * MS), 1.0)
-    assert lp.poll(1.1) == [] and lp.poll(1.3)[0][1].stamp_ns == 200 * MS   # pair timeout
+    assert lp.poll(3.9) == [] and lp.poll(4.1)[0][1].stamp_ns == 200 * MS   # pair timeout (3 s)
     assert lp.unpaired == 1
 
 
@@ -225,3 +225,11 @@ def test_a_standing_object_keeps_its_heading_under_measurement_noise():
     assert abs(math.cos(track.yaw)) < 0.05                           # the face's axis
     assert (track.length, track.width) == pytest.approx((0.3, 0.0), abs=0.08)
     assert box.turned((0.5, 0.3), 0.3) == (0.5, 0.3) and box.turned((0.5, 0.3), 1.2) == (0.3, 0.5)
+
+
+def test_box_extents_compiled_and_numpy_agree():
+    pts = np.random.default_rng(2).normal(size=(17, 2))
+    for yaw in (0.0, 0.7, -2.0):
+        slow = box.fit(pts, yaw, (3.0, 2.0), (5.0, 1.0), compiled=False)
+        fast = box.fit(pts, yaw, (3.0, 2.0), (5.0, 1.0), compiled=True)
+        assert fast == pytest.approx(slow, abs=1e-12)

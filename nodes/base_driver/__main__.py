@@ -24,7 +24,7 @@ import time
 from common.errors import PapfError
 from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
 from nodes.base_driver.limits import OPTIONS
 from nodes.base_driver.loop import DriverLoop
 from nodes.base_driver.ports import PORTS, VARIANTS
@@ -146,4 +146,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown

@@ -27,7 +27,7 @@ import sys
 from common.errors import PapfError
 from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import add_zenoh_args, open_node, setup_logging
+from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from nodes.lidar_sim.options import OPTIONS
 from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
 from worlds import load_world
@@ -142,4 +142,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown

@@ -15,14 +15,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 
 from common import runauth
 from common.errors import ConfigError
 from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import add_zenoh_args, open_node, setup_logging
+from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
+from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
@@ -49,8 +49,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                     default=0.5, metavar="S",
                     help="inputs older than this -> zero command [s] (default 0.5)")
     ap.add_argument("--pair-timeout", type=arg_type("--pair-timeout", NODE["pair_timeout"]),
-                    default=0.25, metavar="S",
-                    help="lockstep: wall time a scan waits for its odometry [s] (default 0.25)")
+                    default=LOCKSTEP_PAIR_TIMEOUT_S, metavar="S",
+                    help="lockstep: wall time a scan waits for its odometry [s] (default "
+                         f"{LOCKSTEP_PAIR_TIMEOUT_S:g}, longer than the driver's --lockstep-timeout)")
     ap.add_argument("--objects", action="store_true",
                     help="subscribe to <ns>/objects and pair each scan with its obstacle tracks")
     ap.add_argument("--log-level", default="INFO")
@@ -110,10 +111,9 @@ def _answer_params(node, name: str, planner, query, stamp_ns: int) -> None:
 
 
 def warm_up(planner) -> None:
-    """Run one throw-away cycle on a copy so JIT kernels compile before ``ready``."""
-    warm = getattr(planner.strategy, "warm_up", None)
-    if warm is not None:
-        warm(planner.apf)
+    """Compile (or load) the JIT kernels before ``ready``: the scan view every planner uses
+    and the strategy's own, so the first lockstep cycle is not late."""
+    planner.warm_up()
 
 
 def main(argv=None) -> int:
@@ -121,4 +121,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown

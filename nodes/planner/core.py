@@ -20,6 +20,7 @@ Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -31,6 +32,7 @@ import numpy as np
 from common.units import NS_PER_S
 from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
 from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.scan_kernel import scan_points
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
@@ -54,13 +56,21 @@ def scan_view(scan: Scan, odom: Odometry) -> ScanView:
     origin = np.array([odom.x + c * scan.sensor_x - s * scan.sensor_y,
                        odom.y + s * scan.sensor_x + c * scan.sensor_y])
     ranges = np.asarray(scan.ranges, dtype=float)
-    angles = odom.yaw + scan.sensor_yaw + scan.angle_min + scan.angle_increment * np.arange(ranges.size)
-    with np.errstate(invalid="ignore"):
-        valid = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
-    ranges = np.where(valid, ranges, np.inf)
-    r, a = ranges[valid], angles[valid]
-    points = origin + np.column_stack([r * np.cos(a), r * np.sin(a)])
-    return ScanView(origin, angles, ranges, points.reshape(-1, 2), valid)
+    angles = odom.yaw + scan.sensor_yaw + scan.angle_min + _beam_offsets(
+        scan.angle_increment, ranges.size, math.copysign(1.0, scan.angle_increment))
+    # numpy's cos/sin of every beam (elementwise: the same values as of the valid ones alone)
+    ranges, points, valid = scan_points(ranges, np.cos(angles), np.sin(angles), scan.range_min,
+                                        scan.range_max, origin)
+    return ScanView(origin, angles, ranges, points, valid)
+
+
+@functools.lru_cache(maxsize=8)
+def _beam_offsets(increment: float, beams: int, _sign: float) -> np.ndarray:
+    """``increment * arange(beams)`` (read-only; the same few scan layouts every cycle;
+    ``_sign`` keeps -0.0 and 0.0 apart in the cache)."""
+    out = increment * np.arange(beams)
+    out.flags.writeable = False
+    return out
 
 
 @dataclass
@@ -97,12 +107,25 @@ class Strategy(Protocol):
         """The force at ``pos`` (world frame) and the debug geometry."""
 
 
-def _points(a) -> list:
-    """(K, >=2) array-like -> list of (x, y) (the first two coordinates)."""
+def _points(a) -> tuple:
+    """(K, >=2) array-like -> tuple of (x, y) Python floats (the first two coordinates)."""
     arr = np.asarray(a, dtype=float)
     if arr.size == 0:
-        return []
-    return list(map(tuple, arr.reshape(arr.shape[0] if arr.ndim > 1 else 1, -1)[:, :2].tolist()))
+        return ()
+    return tuple(map(tuple, arr.reshape(arr.shape[0] if arr.ndim > 1 else 1, -1)[:, :2].tolist()))
+
+
+def _norm(v) -> float:
+    """``np.linalg.norm(v)`` of a vector, without its checks (the same ``sqrt(v . v)``)."""
+    a = np.asarray(v, dtype=float).ravel()
+    return math.sqrt(a.dot(a))
+
+
+def _paths(paths) -> tuple:
+    """Sequence of (K, >=2) arrays (or one (N, K, >=2) array) -> tuple of :func:`_points`."""
+    if isinstance(paths, np.ndarray) and paths.ndim == 3:   # one conversion for all of them
+        return tuple(tuple(map(tuple, p)) for p in np.asarray(paths[:, :, :2], dtype=float).tolist())
+    return tuple(map(_points, paths))
 
 
 class Planner:
@@ -181,7 +204,7 @@ class Planner:
             return self._stop(t, "idle", "no goal", math.nan, t0)
         pos = np.array([odom.x, odom.y])
         goal = np.array([self.goal.x, self.goal.y])
-        dist = float(np.hypot(*(goal - pos)))
+        dist = float(np.hypot(self.goal.x - odom.x, self.goal.y - odom.y))
         if self.state in ("reached", "stagnated", "failed"):
             return self._stop(t, self.state, self.reason, dist, t0)
         if dist <= self.goal.tolerance:
@@ -198,7 +221,7 @@ class Planner:
         theta_ref = heading_ref(plan.force) if plan.heading is None else plan.heading
         err = wrap_angle(theta_ref - odom.yaw)
         if plan.v_ref is None:
-            v = speed_ref(float(np.linalg.norm(plan.force)), err, apf)
+            v = speed_ref(_norm(plan.force), err, apf)
         else:  # the planned velocity's component along the robot's heading (ours)
             v = max(0.0, plan.v_ref * math.cos(err))
         w = turn_rate(theta_ref, odom.yaw, apf)
@@ -207,6 +230,15 @@ class Planner:
         return Twist(stamp_ns=t, v=v, w=w), lambda: (
             self._state(t, plan, view, theta_ref, v, w, compute_ns),
             PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
+
+    def warm_up(self) -> None:
+        """Compile the JIT kernels (the scan view; the strategy's ``warm_up(apf)`` if any)."""
+        scan_view(Scan(stamp_ns=0, angle_min=0.0, angle_increment=0.5, range_min=0.1,
+                       range_max=5.0, ranges=np.array([1.0, np.inf, 2.0], np.float32)),
+                  Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+        warm = getattr(self.strategy, "warm_up", None)
+        if warm is not None:
+            warm(self.apf)
 
     # -- helpers ------------------------------------------------------------
     def _params_for(self, beams: int) -> APFParams:
@@ -248,17 +280,19 @@ class Planner:
 
     def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
         force = np.asarray(plan.force, dtype=float)
-        return PlannerState(
-            stamp_ns=t, algorithm=self.strategy.name, mode=plan.mode,
+        # every value below is already in the message's own form (Python floats, tuples):
+        # from_normal skips the constructor's second pass over the paths
+        return PlannerState.from_normal(
+            stamp_ns=int(t), algorithm=self.strategy.name, mode=str(plan.mode),
             force=(float(force[0]), float(force[1])), heading_ref=float(theta_ref),
             v_ref=float(v), w_ref=float(w),
             temporary_goal=tuple(float(x) for x in plan.temporary_goal),
             predicted_path=_points(plan.predicted_path),
-            abandoned_paths=tuple(_points(p) for p in plan.abandoned_paths),
+            abandoned_paths=_paths(plan.abandoned_paths),
             top_quarks=_points(plan.top_quarks),
-            virtual_walls=tuple(_points(p) for p in plan.virtual_walls),
+            virtual_walls=_paths(plan.virtual_walls),
             virtual_obstacles=_points(plan.virtual_obstacles),
-            obstacle_count=(plan.obstacles_used if plan.v_ref is not None else
+            obstacle_count=(int(plan.obstacles_used) if plan.v_ref is not None else
                             0 if view is None else int(view.points.shape[0])),
             local_minimum_count=int(plan.local_count), lane_goal_y=float(plan.lane_goal_y),
             v_target=float(plan.v_ref) if plan.v_ref is not None else float(v),

@@ -27,6 +27,7 @@ from collections.abc import Callable
 
 from common import runauth
 from common.params import check_value
+from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner.core import NS_PER_S, Planner
 from nodes.planner.settings import NODE
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
@@ -38,7 +39,7 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
-                 pair_timeout_s: float = 0.25, log=None, run_key: bytes | None = None,
+                 pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S, log=None, run_key: bytes | None = None,
                  objects: bool = False, send_command: Callable[[Twist], None] | None = None):
         check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
         check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])

@@ -40,7 +40,8 @@ import numpy as np
 
 from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
-from nodes.planner.kernels import field_force, predict_paths, rollout, tail_stagnation
+from nodes.planner.kernels import HAVE_NUMBA, field_force, predict_paths, rollout, tail_stagnation
+from nodes.planner.papf_kernel import plan_compiled
 
 
 @dataclass(frozen=True)
@@ -221,6 +222,10 @@ class PAPFStrategy:
     def warm_up(self, apf: APFParams) -> None:
         """Compile the kernels (numba) before the node declares itself ready."""
         predict(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf, self.params)
+        if self.params.use_numba and HAVE_NUMBA:   # the compiled cycle, with and without quarks
+            for quarks in (None, np.array([[0.4, 0.3]])):
+                plan_compiled(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
+                              self.params, quarks)
         field_force(np.zeros(2), np.array([1.0, 0.0]), 1.0, np.array([[0.5, 0.1]]), 1.0, 0.5,
                     self.params.use_numba)
 
@@ -229,6 +234,8 @@ class PAPFStrategy:
         pp = self.params
         obstacles = view.points
         kept = self.quarks if pp.persist_quarks else None
+        if pp.use_numba and HAVE_NUMBA and pp.stop_at_goal and len(pos) == 2:
+            return self._plan_compiled(pos, goal, obstacles, apf, kept)
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
         g_goal, g_obs = apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o
@@ -244,3 +251,17 @@ class PAPFStrategy:
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
                     top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)
+
+    def _plan_compiled(self, pos, goal, obstacles, apf: APFParams, kept) -> Plan:
+        """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf_kernel.plan_compiled`)."""
+        pp = self.params
+        out = plan_compiled(pos, goal, obstacles, apf, pp, kept)
+        path, quarks, abandoned, resolved, target, force = out
+        self.quarks = quarks
+        if resolved:
+            mode = "bypass" if quarks.shape[0] else "drive"
+        else:
+            mode = "unresolved"
+        return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
+                    predicted_path=path, abandoned_paths=abandoned, top_quarks=quarks,
+                    searching=len(abandoned) > 0 and pp.quark_restarts_watch)

@@ -20,8 +20,10 @@ import sys
 import time
 
 from common.errors import ConfigError
+from common.params import arg_type, pos
 from common.ports import describe
-from common.transport import add_zenoh_args, open_node, setup_logging
+from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
+from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.tracker.core import Tracker, TrackerParams
 from nodes.tracker.loop import TrackerLoop
 from nodes.tracker.ports import PORTS, VARIANTS
@@ -79,8 +81,11 @@ def main(argv: list[str] | None = None) -> int:
                                      + describe(PORTS, VARIANTS))
     parser.add_argument("--realtime", action="store_true",
                         help="pair each scan with the latest pose (robot / HIL)")
-    parser.add_argument("--pair-timeout", type=float, default=0.25, metavar="S",
-                        help="lockstep: wall time a scan waits for its pose [s] (default 0.25)")
+    parser.add_argument("--pair-timeout", type=arg_type("--pair-timeout", pos(10.0, "s")),
+                        default=LOCKSTEP_PAIR_TIMEOUT_S, metavar="S",
+                        help="lockstep: wall time a scan waits for its pose [s] (default "
+                             f"{LOCKSTEP_PAIR_TIMEOUT_S:g}, longer than the driver's "
+                             "--lockstep-timeout)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override a tracker setting, repeatable")
     parser.add_argument("--log-level", default="INFO")
@@ -95,4 +100,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    exit_fast(main())   # the session is closed: skip the interpreter's slow teardown

@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from nodes.tracker import kernels
+
 
 def anchor(lo: float, hi: float, size: float, sensor: float) -> float:
     """Centre of an extent ``size`` [m] long that holds the seen ``[lo, hi]`` with its face
@@ -28,14 +30,17 @@ def anchor(lo: float, hi: float, size: float, sensor: float) -> float:
 
 
 def fit(points: np.ndarray, yaw: float, size: tuple[float, float],
-        origin: tuple[float, float]) -> tuple[float, float, float, float]:
+        origin: tuple[float, float], compiled: bool = True) -> tuple[float, float, float, float]:
     """``(x, y, along, across)``: the box centre [m] (world frame) of ``points`` (m, 2) for a
     box of ``size`` = (length along ``yaw``, width across) [m] seen from the sensor at
-    ``origin``, and the points' own extents along / across ``yaw`` [m]."""
+    ``origin``, and the points' own extents along / across ``yaw`` [m]. ``compiled``: the
+    extents from the numba kernel when numba is installed (else numpy)."""
     c, s = math.cos(yaw), math.sin(yaw)
-    u = points[:, 0] * c + points[:, 1] * s
-    v = points[:, 1] * c - points[:, 0] * s
-    ulo, uhi, vlo, vhi = float(u.min()), float(u.max()), float(v.min()), float(v.max())
+    if compiled and kernels.extents is not None:
+        ulo, vlo, uhi, vhi = kernels.extents(points, c, s)
+    else:
+        uv = points @ np.array(((c, -s), (s, c)))        # columns: along, across
+        (ulo, vlo), (uhi, vhi) = uv.min(axis=0).tolist(), uv.max(axis=0).tolist()
     mu = anchor(ulo, uhi, size[0], origin[0] * c + origin[1] * s)
     mv = anchor(vlo, vhi, size[1], origin[1] * c - origin[0] * s)
     return mu * c - mv * s, mu * s + mv * c, uhi - ulo, vhi - vlo

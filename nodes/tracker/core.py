@@ -242,6 +242,7 @@ class Tracker:
             xy = np.array([[1.0, 0.0], [1.0, 0.01], [1.0, 0.02]])
             sp = ScanPoints(xy, np.ones(3), np.arange(3), 360, math.radians(1.0))
             cluster_points(sp, self.params)
+            box.fit(xy, 0.0, (0.1, 0.1), (0.0, 0.0))
 
     def update(self, scan: Scan, odom: Odometry) -> Objects:
         """One cycle on ``scan`` taken at pose ``odom``; the confirmed tracks, scan-stamped."""
@@ -303,7 +304,8 @@ class Tracker:
     def _box(self, i: int, c: Cluster, origin: tuple[float, float]) -> Cluster:
         """Cluster ``c`` measured as track ``i``'s box (:func:`nodes.tracker.box.fit`)."""
         pts = c.points if c.points is not None else np.array([(c.x, c.y)])
-        x, y, along, across = box.fit(pts, self.tracks.yaw[i], self.tracks.size[i], origin)
+        x, y, along, across = box.fit(pts, self.tracks.yaw[i], self.tracks.size[i], origin,
+                                      self.params.use_numba)
         return Cluster(x, y, self.tracks.yaw[i], along, across)
 
     def _correct(self, rows: list[int], clusters: list[Cluster]) -> None:

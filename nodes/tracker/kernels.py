@@ -89,8 +89,22 @@ def _box(xy, first, k, m, n, out):
     out[2], out[3], out[4] = axis, umax - umin, vmax - vmin
 
 
+def _extents(points, c, s):
+    """(min along, min across, max along, max across) [m] of ``points`` (m, 2) in the frame
+    turned by (cos, sin) = (c, s): the box model's measurement (:func:`nodes.tracker.box.fit`)."""
+    ulo = vlo = math.inf
+    uhi = vhi = -math.inf
+    for q in range(points.shape[0]):
+        u = points[q, 0] * c + points[q, 1] * s
+        v = points[q, 1] * c - points[q, 0] * s
+        ulo, uhi = min(ulo, u), max(uhi, u)
+        vlo, vhi = min(vlo, v), max(vhi, v)
+    return ulo, vlo, uhi, vhi
+
+
 if HAVE_NUMBA:
     _box = numba.njit(cache=True)(_box)
     segment_boxes = numba.njit(cache=True)(_segment_boxes)
+    extents = numba.njit(cache=True)(_extents)
 else:
-    segment_boxes = None
+    segment_boxes = extents = None

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 
+from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.tracker.core import Tracker
 from schemas.messages import Odometry, Scan
 
@@ -21,7 +22,7 @@ ODOM_BUFFER = 64          # odometry messages kept for pairing (1.28 s at 50 Hz)
 
 
 class TrackerLoop:
-    def __init__(self, tracker: Tracker, realtime: bool = False, pair_timeout_s: float = 0.25):
+    def __init__(self, tracker: Tracker, realtime: bool = False, pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S):
         self.tracker, self.realtime, self.pair_timeout_s = tracker, realtime, pair_timeout_s
         self.odoms: OrderedDict[int, Odometry] = OrderedDict()
         self.pending: list[tuple[Scan, float]] = []

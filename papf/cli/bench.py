@@ -15,6 +15,7 @@ import bench
 
 BENCHES = {
     "planner": "planner cycle time p50/p99 per planner, incl. the PAPF worst case (M = 10)",
+    "planner_ab": "one planner case, this code against another checkout's, in alternating turns",
     "sim": "sim-time / wall-time of papf run (full stack, CPU per process); --loop: driver + LiDAR",
     "sweep": "full-stack runs per hour of a sweep at --workers 1 and 2 (Dask)",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
@@ -27,7 +28,7 @@ BENCHES = {
 def register(subparsers) -> None:
     p = subparsers.add_parser("bench", help="run a benchmark (prints JSON)",
                               description=__doc__.splitlines()[0] + "\n\n" + "\n".join(
-                                  f"  {k:9} {v}" for k, v in BENCHES.items()),
+                                  f"  {k:10} {v}" for k, v in BENCHES.items()),
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("name", choices=sorted(BENCHES))
     p.add_argument("args", nargs=argparse.REMAINDER, help="options of that benchmark (--help)")

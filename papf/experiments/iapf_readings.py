@@ -31,7 +31,7 @@ READINGS = [
     ("heading unlimited (eq. 21 as printed)", "iapf", ["heading_max_deg=90", "yaw_rate_max_deg=0"]),
     ("rotation as printed (eq. 10)", "iapf", ["literal_rotation=true"]),
     ("prediction step 0.02 s (= t)", "iapf", ["predict_step_s=0.02"]),
-    ("no safety cut-off (D_S huge)", "iapf", ["s_m=1000"]),
+    ("no safety cut-off (D_S >= 100 m, the largest S_m)", "iapf", ["s_m=100"]),
     ("no slow-leader lane change (Sec. 2.1 rule off)", "iapf", ["follow_min_frac=0"]),
     ("temporary goal b3 = 25 (below the ridge k2 d_w / sin 45 deg)", "iapf", ["b3_temp=25"]),
     ("stop law on (the planner node's 0.5)", "iapf", ["stop_decel_frac=0.5"]),

@@ -24,6 +24,7 @@ broker for the latter.
 
 from __future__ import annotations
 
+import logging
 import re
 import sys
 import time
@@ -89,6 +90,9 @@ def map_runs(fn: Callable[[J], R], jobs: Sequence[J], opts: SweepOptions,
 
 def _map_dask(fn, jobs, opts: SweepOptions, label, progress: SweepProgress) -> list:
     from distributed import Client, LocalCluster, as_completed  # only when a sweep spreads
+
+    # the scheduler of a LocalCluster runs here: its INFO lines would bury the progress bar
+    logging.getLogger("distributed").setLevel(logging.WARNING)
 
     if opts.scheduler:
         cluster = None

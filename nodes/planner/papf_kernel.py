@@ -1,0 +1,158 @@
+"""One PAPF cycle in two compiled calls (numba) — bit for bit the numpy steps of :mod:`papf`.
+
+:meth:`nodes.planner.papf.PAPFStrategy.plan` with numba (2-D, the prediction stopping at
+the goal) runs:
+
+1. :func:`_front`: the prediction with its top-quark loop (Algorithm 1, Sec. III-B;
+   :func:`nodes.planner.kernels._predict_numba`), eq. 2 at the robot (the direction line
+   of eq. 8) and each quark's distance from the robot (eq. 7, motion law);
+2. in numpy, the operations whose rounding is numpy's own and that a kernel cannot
+   reproduce: the norms and the projection of eq. 8 (BLAS ``dot``/``gemv``, fused
+   multiply-adds) and the quarks' ``|r|^3`` (numpy's ``power``, SIMD on some CPUs);
+3. :func:`_back`: the rest of eq. 8 (normal distances, the tie rule, the farthest point)
+   and the motion force, eq. 2 at the temporary goal plus the quark term of eq. 7.
+
+Every operation is the one :func:`nodes.planner.papf.temporary_goal`,
+:func:`nodes.planner.papf.quark_force` and :func:`nodes.planner.kernels.field_force` do,
+in the same order (sums of two terms commute exactly; numpy's sum over the quarks is
+sequential from 0.0): the results are identical (tests/test_papf_kernel.py), only the
+Python and numpy call overhead around the kernel is gone.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from nodes.planner.apf import EPS_M
+from nodes.planner.kernels import HAVE_NUMBA, numba
+
+if HAVE_NUMBA:
+    from nodes.planner.kernels import _field_numba, _predict_numba
+
+    _jit = numba.njit(cache=True, error_model="numpy")
+
+    @_jit
+    def _front(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max, n_stag,
+               stag_radius, max_quarks, goal_range):  # pragma: no cover - compiled
+        """The prediction, eq. 2 at the robot and the distance of each quark in use."""
+        paths, n_paths, length, qbuf, lo, hi, resolved, reached = _predict_numba(
+            start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max, n_stag,
+            stag_radius, max_quarks, goal_range)
+        f_apf = _field_numba(start, goal, g_goal, obstacles, g_obs, d_o)
+        qdist = np.empty(hi - lo)
+        for k in range(hi - lo):
+            rx, ry = qbuf[lo + k, 0] - start[0], qbuf[lo + k, 1] - start[1]
+            qdist[k] = math.sqrt(rx * rx + ry * ry)
+        return paths, n_paths, length, qbuf, lo, hi, resolved, reached, f_apf, qdist
+
+    @_jit
+    def _back(pos, pts, proj, u, tie_tol, eq8, target, g_goal, obstacles, g_obs, d_o, quarks,
+              qdist, cube, q_lim, g_quark):  # pragma: no cover - compiled
+        """Eq. 8's point (when ``eq8``; else ``target`` stays) and the motion force at ``pos``.
+
+        ``proj`` = ``(pts - pos) @ u`` and ``cube`` = the quarks' softened distance cubed,
+        both from numpy; ``qdist`` from :func:`_front`.
+        """
+        if eq8:
+            n = pts.shape[0]
+            dist = np.empty(n)
+            top = -np.inf
+            for k in range(n):
+                nx = (pts[k, 0] - pos[0]) - proj[k] * u[0]
+                ny = (pts[k, 1] - pos[1]) - proj[k] * u[1]
+                dist[k] = math.sqrt(nx * nx + ny * ny)
+                if dist[k] > top or dist[k] != dist[k]:
+                    top = dist[k]
+            best = -1
+            for k in range(n):
+                if dist[k] >= top - tie_tol:
+                    best = k
+            target = pts[best].copy()
+        f = _field_numba(pos, target, g_goal, obstacles, g_obs, d_o)
+        if quarks.shape[0]:
+            sx = sy = 0.0
+            for k in range(quarks.shape[0]):
+                if qdist[k] > EPS_M and qdist[k] <= q_lim:
+                    sx = sx + (quarks[k, 0] - pos[0]) / cube[k]
+                    sy = sy + (quarks[k, 1] - pos[1]) / cube[k]
+            f[0] = f[0] + (0.0 - g_quark * sx)
+            f[1] = f[1] + (0.0 - g_quark * sy)
+        else:
+            f[0] = f[0] + 0.0
+            f[1] = f[1] + 0.0
+        return target, f
+
+
+def plan_compiled(pos, goal, obstacles, apf, pp, quarks=None):
+    """One PAPF cycle (2-D, ``pp.stop_at_goal``, numba): ``(path, quarks, abandoned,
+    resolved, target, force)`` — what :func:`nodes.planner.papf.predict`, eq. 8
+    (:func:`nodes.planner.papf.temporary_goal`) and the motion force give, bit for bit.
+
+    ``apf``/``pp``: :class:`~nodes.planner.apf.APFParams` and
+    :class:`~nodes.planner.papf.PAPFParams`; ``quarks``: the ones already placed (or None).
+    ``abandoned`` is one ``(n, i_max + 1, 2)`` array (a sequence of the abandoned paths).
+    """
+    last = _LAST   # one read: another thread may replace it meanwhile
+    c = last[2] if (apf is last[0] and pp is last[1]) else _remember(apf, pp)
+    pos = np.ascontiguousarray(pos, dtype=float)
+    goal = np.ascontiguousarray(goal, dtype=float)
+    obstacles = np.ascontiguousarray(obstacles, dtype=float).reshape(-1, 2)
+    quarks = (_NO_QUARKS if quarks is None else
+              np.ascontiguousarray(quarks, dtype=float).reshape(-1, 2))
+    paths, n_paths, length, qbuf, lo, hi, resolved, reached, f_apf, qdist = _front(
+        pos, goal, c.g_goal, obstacles, c.g_obs, c.d_o, quarks, c.g_q, c.d_q, c.step, c.i_max,
+        c.n_stag, c.stag_radius, c.max_quarks, c.pull_range)
+    path = paths[n_paths - 1, :length]
+    eq8 = resolved or not pp.unresolved_global_goal
+    if eq8:   # numpy's own rounding (BLAS) as in temporary_goal; norm(v) is sqrt(v . v)
+        direction = f_apf if math.sqrt(f_apf.dot(f_apf)) > 0 else goal - pos
+        pts = path[1:] if path.shape[0] > 1 else path
+        u = direction / math.sqrt(direction.dot(direction))
+        proj = (pts - pos) @ u
+    else:     # no stagnation-free path after M repetitions: eq. 7 with the global goal
+        pts, proj, u = path, _EMPTY, _EMPTY
+    cube = np.maximum(qdist, c.ball) ** 3     # numpy's power, as quark_force
+    target, force = _back(pos, pts, proj, u, c.tie_tol, eq8, goal, c.g_goal, obstacles, c.g_obs,
+                          c.d_o, qbuf[lo:hi], qdist, cube, c.q_lim, c.g_q)
+    return path, qbuf[lo:hi], paths[: n_paths - 1, : c.i_max + 1], bool(resolved), target, force
+
+
+class _Constants(NamedTuple):
+    g_goal: float
+    g_obs: float
+    g_q: float
+    d_o: float
+    d_q: float
+    step: float
+    i_max: int
+    n_stag: int
+    stag_radius: float
+    max_quarks: int
+    pull_range: float
+    ball: float
+    tie_tol: float
+    q_lim: float
+
+
+def _remember(apf, pp) -> _Constants:
+    """The gains and derived numbers of one (APFParams, PAPFParams) pair, kept for the next
+    cycles (the planner passes the same two objects until its settings change)."""
+    global _LAST
+    c = _Constants(
+        apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o,
+        pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q, float(apf.d_o), float(pp.d_q),
+        float(pp.step_m), int(pp.i_max), int(pp.n_stag), float(pp.stag_radius),
+        int(pp.max_quarks), float(pp.pull_range), float(pp.quark_ball_m), float(pp.tie_tol_m),
+        float(apf.d_o if pp.motion_quarks_within_d_o else pp.d_q))
+    _LAST = (apf, pp, c)
+    return c
+
+
+_LAST: tuple = (None, None, None)
+
+
+_EMPTY = np.zeros(0)
+_NO_QUARKS = np.zeros((0, 2))

@@ -1,0 +1,62 @@
+"""Scan beams -> world-frame points (the non-trigonometric part of :func:`nodes.planner.core.scan_view`).
+
+:func:`scan_points` takes each beam's range and the cosine and sine of its world-frame
+angle (numpy's own ``cos``/``sin``: their rounding is numpy's) and returns the ranges with
+invalid returns as ``inf``, the points ``origin + r (cos, sin)`` of the valid beams in
+scan order, and the valid mask. With numba it is one compiled loop; without, the numpy
+expressions it replaces. Both give the same values bit for bit (a product and a sum per
+coordinate; tests/test_papf_kernel.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodes.planner.kernels import HAVE_NUMBA, numba
+
+
+def _scan_points_numpy(ranges, cos_a, sin_a, range_min, range_max, finite_limits, origin):
+    with np.errstate(invalid="ignore"):  # nan compares False; finite limits also drop +-inf
+        valid = (ranges >= range_min) & (ranges <= range_max)
+        if not finite_limits:
+            valid &= np.isfinite(ranges)
+    r = ranges[valid]
+    points = origin + np.column_stack([r * cos_a[valid], r * sin_a[valid]])
+    return np.where(valid, ranges, np.inf), points.reshape(-1, 2), valid
+
+
+if HAVE_NUMBA:
+    @numba.njit(cache=True, error_model="numpy")
+    def _scan_points_numba(ranges, cos_a, sin_a, range_min, range_max, finite_limits,
+                           origin):  # pragma: no cover - compiled
+        n = ranges.shape[0]
+        out = np.empty(n)
+        points = np.empty((n, 2))
+        valid = np.empty(n, np.bool_)
+        k = 0
+        for i in range(n):
+            r = ranges[i]
+            ok = r >= range_min and r <= range_max and (finite_limits or np.isfinite(r))
+            valid[i] = ok
+            if ok:
+                out[i] = r
+                points[k, 0] = origin[0] + r * cos_a[i]
+                points[k, 1] = origin[1] + r * sin_a[i]
+                k += 1
+            else:
+                out[i] = np.inf
+        return out, points[:k], valid
+
+
+def scan_points(ranges: np.ndarray, cos_a: np.ndarray, sin_a: np.ndarray, range_min: float,
+                range_max: float, origin: np.ndarray, use_numba: bool = True):
+    """``(ranges with inf where invalid, (K, 2) points of the valid beams, valid mask)``.
+
+    A return is valid when finite and within [range_min, range_max]; ``ranges``, ``cos_a``,
+    ``sin_a`` are float64 arrays of one length, ``origin`` the sensor position (2,).
+    """
+    finite = bool(np.isfinite(range_min) and np.isfinite(range_max))
+    if use_numba and HAVE_NUMBA:
+        return _scan_points_numba(ranges, cos_a, sin_a, float(range_min), float(range_max),
+                                  finite, origin)
+    return _scan_points_numpy(ranges, cos_a, sin_a, range_min, range_max, finite, origin)
