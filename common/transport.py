@@ -267,26 +267,11 @@ class Node:
         if n <= 5 or n % 100 == 0:
             self.log.warning("dropped bad message #%d on %s: %s", n, self.keys.key(topic), exc)
 
-    def messages(self, tick_s: float = 0.1,
-                 coalesce_s: float = 0.0) -> Iterator[tuple[str | None, Message | None]]:
-        """Yield inbox items until stop; ``(None, None)`` every ``tick_s`` of silence.
-
-        ``coalesce_s`` > 0 (a node off the lockstep chain, e.g. the energy meter): once the
-        inbox is empty, sleep that long before waiting again, so a busy stream wakes the
-        thread once per batch instead of once per message; each message is at most that
-        much later, none is dropped, the order stays.
-        """
-        inbox = self.inbox
+    def messages(self, tick_s: float = 0.1) -> Iterator[tuple[str | None, Message | None]]:
+        """Yield inbox items until stop; ``(None, None)`` every ``tick_s`` of silence."""
         while not self.stop:
             try:
-                yield inbox.get_nowait()
-                continue
-            except queue.Empty:
-                pass
-            if coalesce_s > 0:
-                self.stop.event.wait(coalesce_s)
-            try:
-                yield inbox.get(timeout=tick_s)
+                yield self.inbox.get(timeout=tick_s)
             except queue.Empty:
                 yield None, None
 

@@ -101,7 +101,8 @@ class RunMonitor:
         self.batteries: deque[BatteryState] = deque(maxlen=BATTERY_WINDOW)
         self._poses: deque[_Pose] = deque(maxlen=POSE_WINDOW)
         self._motion_start_ns: int | None = None
-        self._claim: PlannerStatus | None = None   # a "reached" waiting for its pose sample
+        self._claims: deque[PlannerStatus] = deque(maxlen=BATTERY_WINDOW)  # "reached" claims
+        # waiting for their pose sample, each judged on its own (whatever arrives first)
         self.refuted_claims = 0               # "reached" claims the ground truth denied
         self.last_cmd_ns: int | None = None
         self.watchdog_stop_ns: int | None = None
@@ -121,7 +122,7 @@ class RunMonitor:
     def on_status(self, msg: PlannerStatus) -> None:
         self.status = msg
         if msg.state == "reached" and self.goal is not None:
-            self._claim = msg
+            self._claims.append(msg)
             self._check_claim()
         elif msg.state in ("reached", "stagnated", "failed"):
             self._decide(msg.state, msg.stamp_ns, msg.reason)
@@ -151,7 +152,7 @@ class RunMonitor:
         self._poses.append(_Pose(msg, path))
         if self._motion_start_ns is None and abs(msg.v) > MOVING_SPEED:
             self._motion_start_ns = msg.stamp_ns
-        if self._claim is not None:
+        if self._claims:
             self._check_claim()
 
     def on_goal(self, msg: Goal) -> None:
@@ -174,17 +175,21 @@ class RunMonitor:
             self.outcome, self.t_end_ns, self.reason = outcome, t_ns, reason
 
     def _check_claim(self) -> None:
-        """Judge a ``reached`` claim by the pose sample at its stamp (once that arrived)."""
-        claim = self._claim
-        if not self._poses or self._poses[-1].stamp_ns < claim.stamp_ns:
-            return                                    # the pose of that instant is not here yet
-        self._claim = None
-        pose = self._pose_at(claim.stamp_ns)
-        x, y, tol = self.goal
-        if pose is not None and math.hypot(pose.x - x, pose.y - y) <= tol + GOAL_SLACK_M:
-            self._decide("reached", claim.stamp_ns, claim.reason)
-        else:
-            self.refuted_claims += 1
+        """Judge each waiting ``reached`` claim by the pose sample at its stamp, once that
+        arrived. Every claim is judged, even when a later one came first (statuses and poses
+        travel on different links), and the earliest accepted one decides (``_decide``)."""
+        if not self._poses:
+            return
+        newest = self._poses[-1].stamp_ns
+        waiting = [c for c in self._claims if c.stamp_ns > newest]
+        for claim in [c for c in self._claims if c.stamp_ns <= newest]:
+            pose = self._pose_at(claim.stamp_ns)
+            x, y, tol = self.goal
+            if pose is not None and math.hypot(pose.x - x, pose.y - y) <= tol + GOAL_SLACK_M:
+                self._decide("reached", claim.stamp_ns, claim.reason)
+            else:
+                self.refuted_claims += 1
+        self._claims = deque(waiting, maxlen=BATTERY_WINDOW)
 
     def _pose_at(self, t_ns: int) -> _Pose | None:
         """The last pose sample with ``stamp <= t_ns`` still in the window, or None."""

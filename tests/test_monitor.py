@@ -116,3 +116,16 @@ def test_stop_latency_ignores_an_outage_the_run_recovered_from():
     m.on_cmd(Twist(stamp_ns=9 * NS, v=0.2, w=0))  # commands resumed after the outage
     m.on_status(PlannerStatus(stamp_ns=20 * NS, state="reached"))
     assert m.result("p", "w", 0, 0).stop_latency_s is None
+
+
+def test_every_reached_claim_is_judged_even_when_a_later_one_came_first():
+    """Statuses and poses travel on different links: two claims may both arrive before the
+    pose of the first. Each is judged by its own pose; the earliest accepted decides."""
+    m = RunMonitor(timeout_s=60, goal=(1.0, 0.0, 0.1))
+    for t in (9 * NS, 9 * NS + 100_000_000):
+        m.on_status(PlannerStatus(stamp_ns=t, state="reached", reason="near"))
+    assert not m.done
+    for k in range(10):
+        t = 9 * NS + k * 20_000_000
+        m.on_pose(Odometry(stamp_ns=t, x=0.95, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    assert m.outcome == "reached" and m.t_end_ns == 9 * NS

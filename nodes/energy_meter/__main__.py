@@ -25,7 +25,6 @@ from .core import EnergyMeter
 from .models import MODELS
 
 NODE_NAME = "energy_meter"
-COALESCE_S = 0.01   # [s wall] inbox batching (Node.messages); the launcher waits for the last battery
 
 
 def parse_settings(items: list[str]) -> dict[str, str]:
@@ -48,8 +47,7 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
         node.subscribe("battery/measured")  # the real robot's voltage replaces the model's
         node.declare_publishers("battery")
         node.ready()
-        # off the lockstep chain: take the 50 Hz pairs in batches (one wake per ~10 ms)
-        for topic, msg in node.messages(coalesce_s=COALESCE_S):
+        for topic, msg in node.messages():
             if msg is None:
                 continue
             if topic == "battery/measured":
