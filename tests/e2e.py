@@ -30,10 +30,10 @@ def papf_run(*args: str, port: int | None = None, timeout: float = RUN_TIMEOUT_S
     return proc.returncode, result, err
 
 
-def start_papf_run(*args: str, port: int) -> subprocess.Popen:
+def start_papf_run(*args: str, port: int, **popen) -> subprocess.Popen:
     cmd = [sys.executable, "-m", "papf", "run", *args, "--json", "--port", str(port)]
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, **popen)
 
 
 def pids_of(module: str, port: int) -> list[int]:

@@ -9,7 +9,7 @@ import pytest
 from common.errors import ConfigError
 from nodes.planner.wang import WangAPFParams, traditional_force
 from papf.experiments.energy import EnergyExperiment, plan, validate
-from papf.experiments.paper_study import DEVIATIONS, _turning, _variants
+from papf.experiments.paper_study import DEVIATIONS, READINGS, _turning, _variants
 from papf.pointsim import PointParams, fixed_step
 from papf.pointsim import traditional_force as point_force
 from worlds import parse_world
@@ -63,8 +63,10 @@ def test_energy_experiment_runs_a_paper_variant_only_where_it_differs(tmp_path):
 
 def test_deviation_variants_switch_one_setting_each():
     v = dict(_variants(both=True))
-    assert len(_variants()) == 2 + len(DEVIATIONS)
+    assert len(_variants()) == 2 + len(READINGS) + len(DEVIATIONS)
     assert v["paper"] == ["preset=paper"] and v["default"] == []
+    for name, value, _what in READINGS:
+        assert v[f"paper with {name}={value}"] == ["preset=paper", f"{name}={value}"]
     for name, on, off, _what in DEVIATIONS:
         assert v[f"paper + {name}"] == ["preset=paper", f"{name}={on}"]
         assert v[f"default - {name}"] == [f"{name}={off}"]
@@ -80,3 +82,21 @@ def test_new_worlds_load():
     assert len(load_world("wang-table1-fig5").obstacles) == 20
     assert not load_world("energy-empty").obstacles
     assert Path(__file__).parent.joinpath("..", "worlds", "energy-blocking.toml").exists()
+
+
+def test_cases_study_writes_a_summary_row_per_case_and_world(tmp_path, monkeypatch):
+    import csv
+
+    from papf.experiments import doc_cases
+
+    monkeypatch.setitem(doc_cases.STUDIES, "tiny", [
+        doc_cases.Case("apf", "apf", ("papf-test-4",)),
+        doc_cases.Case("two", "papf", ("papf-test-4", "papf-test-4"), ("d_q=1.0",), group_by_world=False)])
+    doc_cases.run_cases(tmp_path, ["tiny"])
+    rows = list(csv.DictReader((tmp_path / "tiny.csv").open()))
+    assert [(r["case"], r["world"], r["mode"]) for r in rows] == [
+        ("apf", "papf-test-4", "offline"), ("two", "papf-test-4 papf-test-4", "offline")]
+    assert rows[0]["reached"] == "0/1" and rows[0]["outcomes"] == "stagnated"   # APF fails Test IV
+    assert rows[1]["reached"] == "2/2" and "-" not in rows[1]["duration_s"]       # deterministic: one value
+    assert len(list(csv.DictReader((tmp_path / "cases-runs.csv").open()))) == 3
+    assert doc_cases._span([1.0, float("nan"), 2.04], 1) == "1.0-2.0" and doc_cases._span([], 1) == ""

@@ -26,8 +26,10 @@ def test_default_preset_changes_nothing_and_paper_switches_every_deviation_off()
     assert papf == PAPER
     assert (papf.pull_range_fraction, papf.quark_ball_m, papf.tie_tol_m) == (0.0, 0.0, 0.0)
     assert not (papf.motion_quarks_within_d_o or papf.unresolved_global_goal or papf.stop_at_goal
-                or papf.quark_restarts_watch or papf.persist_quarks)
-    assert papf.d_q == APF.d_o                      # one quark range, prediction and motion
+                or papf.quark_restarts_watch or papf.replace_oldest_quark)
+    # quarks are placed obstacles (kept); d_q, like d_o, has no value in the paper: ours in both,
+    # one range for prediction and motion (motion_quarks_within_d_o off)
+    assert papf.persist_quarks and papf.d_q == PAPFParams().d_q
     _apf, ar = load_params("arapf", sets=["preset=paper"])
     assert not (ar.range_limited or ar.wall_range_limited or ar.follow)
     assert load_params("wang", sets=["preset=paper"])[1].control_offset_m == 0.0
@@ -98,3 +100,22 @@ def test_fallback_after_m_repetitions_switches_alone():
     assert plan.mode == "unresolved" and plan.temporary_goal != (3.0, 0.0)   # eq. 8 on the last path
     assert np.linalg.norm(plan.temporary_goal) < 0.6                          # inside the ring
     assert not plan.searching                    # the watch is not told about the search
+
+
+def test_quarks_capped_at_m_per_goal_switches_alone():
+    goal, ring, m = np.array([3.0, 0.0]), _ring_view().points, PAPFParams().max_quarks
+    kept = np.column_stack([np.full(9, -5.0), np.arange(9.0)])   # nine placed earlier, out of range
+    ours = predict(np.zeros(2), goal, ring, APF, PAPFParams(), kept)    # the ring traps every path
+    assert len(ours.abandoned) == m and ours.quarks.shape[0] == m and not ours.resolved
+    assert not np.isin(ours.quarks[:, 0], -5.0).any()               # the oldest gave way
+    cap = dataclasses.replace(PAPFParams(), replace_oldest_quark=False)
+    capped = predict(np.zeros(2), goal, ring, APF, cap, kept)
+    assert len(capped.abandoned) == 1 and capped.quarks.shape[0] == m and not capped.resolved
+    np.testing.assert_array_equal(capped.quarks[:9], kept)        # none given up
+    full = predict(np.zeros(2), goal, ring, APF, cap, capped.quarks)
+    assert not full.abandoned and not full.resolved
+    np.testing.assert_array_equal(full.quarks, capped.quarks)
+    # with room for all M, the loop (replace_oldest_quark off) gives the kernel's result
+    loop, kern = predict(np.zeros(2), goal, ring, APF, cap), predict(np.zeros(2), goal, ring, APF, PAPFParams())
+    np.testing.assert_array_equal(loop.path, kern.path)
+    np.testing.assert_array_equal(loop.quarks, kern.quarks)

@@ -18,8 +18,10 @@ One cycle (:meth:`PAPFStrategy.plan`):
 4. **Motion** (Sec. III-D): the eq. 7 force with the temporary goal in place of the global
    one (obstacles + quarks); the planner core turns it into (v, w) by eqs. 3, 5.
 
-Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda; quarks
-persist in the world frame, the oldest giving way when a new one needs a place beyond M;
+Quarks are placed obstacles: they persist in the world frame until the goal changes (the
+paper never removes one; ``persist_quarks=false`` recomputes them every cycle instead).
+Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda (eq. 7 names
+d_q, Table 1 gives no value); beyond M quarks the oldest gives way (the paper: at most M);
 after M repetitions without a stagnation-free path the motion uses eq. 7 with the global
 goal (mode ``unresolved``); in the motion law a quark acts as a charged ball of radius
 lambda_stag (no singular push when the robot stands on it) acting within d_o (eq. 7's
@@ -57,12 +59,13 @@ class PAPFParams:
     quark_ball_m: float = 0.25      # [m] motion law: quark as a charged ball of this radius (ours: lambda_stag)
     tie_tol_m: float = 1e-3         # [m] eq. 8 ties: prefer the farther point along the path (ours)
     use_numba: bool = True          # numba kernel if installed (identical results to numpy)
-    persist_quarks: bool = True     # keep quarks (world frame) across cycles (ours)
+    persist_quarks: bool = True     # keep quarks (world frame) across cycles (the paper never removes one)
     pull_range_fraction: float = 1.0  # prediction: goal pull as if the goal were <= this * lambda away (ours; 0: literal)
     motion_quarks_within_d_o: bool = True  # motion law: quarks act within d_o (ours; false: within d_q, as the prediction)
     unresolved_global_goal: bool = True    # after M repetitions: eq. 7 with the global goal (ours; false: eq. 8 on the last path)
     stop_at_goal: bool = True       # the prediction stops within Delta of the goal (ours; false: always i_max + n_stag steps)
     quark_restarts_watch: bool = True      # a cycle that places a quark restarts the stagnation watch (ours)
+    replace_oldest_quark: bool = True      # beyond M quarks in use the oldest gives way (ours; false: at most M per goal)
 
     @property
     def i_max(self) -> int:
@@ -113,37 +116,47 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
         reach = (pp.i_max + pp.n_stag) * pp.step_m + apf.d_o + 1e-6
         rel = obstacles - pos
         obstacles = obstacles[np.sum(rel * rel, axis=1) <= reach * reach]
-    if not pp.stop_at_goal:
-        return _predict_past_goal(pos, goal, obstacles, apf, pp, quarks)
+    if not (pp.stop_at_goal and pp.replace_oldest_quark):
+        return _predict_loop(pos, goal, obstacles, apf, pp, quarks)
     path, quarks, abandoned, resolved, reached = predict_paths(
         pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q, pp.step_m, pp.i_max,
         pp.n_stag, pp.stag_radius, pp.max_quarks, pp.pull_range, pp.use_numba)
     return Prediction(path, quarks, abandoned, resolved, reached)
 
 
-def _predict_past_goal(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks) -> Prediction:
-    """:func:`predict` with ``stop_at_goal = False`` (Algorithm 1 as written: always
-    ``i_max + n_stag`` steps, so a path that reaches the goal oscillates about it and the
-    stagnation check runs there too). The same loop as the kernel's, on :func:`rollout` with
-    a stop radius of 0 (no stop unless a point lands exactly on the goal)."""
+def _predict_loop(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks) -> Prediction:
+    """:func:`predict` for the literal switches, the kernel's loop on :func:`rollout`.
+
+    ``stop_at_goal = False`` (Algorithm 1 as written): always ``i_max + n_stag`` steps (stop
+    radius 0), so a path that reaches the goal oscillates about it and the stagnation check
+    runs there too. ``replace_oldest_quark = False`` (eq. 7's ``0 <= M_curr <= M`` with
+    quarks that persist): the quarks already placed all stay and only ``M - M_curr`` more
+    may be placed, so once M quarks exist for this goal no repetition is left.
+    """
     g_goal = apf.k_vg * apf.q_v * apf.q_g
     g_obs = apf.k_vo * apf.q_v * apf.q_o
     g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
-    quarks = quarks[max(0, quarks.shape[0] - pp.max_quarks):]
+    stop = pp.step_m if pp.stop_at_goal else 0.0
+    if pp.replace_oldest_quark:
+        quarks = quarks[max(0, quarks.shape[0] - pp.max_quarks):]
+        budget = pp.max_quarks
+    else:
+        budget = pp.max_quarks - quarks.shape[0]
     abandoned = []
     while True:
         path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
-                                pp.step_m, pp.i_max + pp.n_stag, 0.0, pp.use_numba, pp.pull_range)
+                                pp.step_m, pp.i_max + pp.n_stag, stop, pp.use_numba, pp.pull_range)
         if reached:
             return Prediction(path, quarks, abandoned, True, True)
         main = path[: pp.i_max + 1]
         stuck, mean = tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
         if not stuck:
             return Prediction(main, quarks, abandoned, True, False)
-        if len(abandoned) >= pp.max_quarks or pp.max_quarks <= 0:
+        if len(abandoned) >= budget:
             return Prediction(main, quarks, abandoned, False, False)
         abandoned.append(main)
-        quarks = np.vstack([quarks[max(0, quarks.shape[0] - pp.max_quarks + 1):], mean])
+        kept = quarks[max(0, quarks.shape[0] - pp.max_quarks + 1):] if pp.replace_oldest_quark else quarks
+        quarks = np.vstack([kept, mean])
 
 
 def temporary_goal(pos, direction, path: np.ndarray, tie_tol: float) -> np.ndarray:
@@ -184,12 +197,12 @@ def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.n
     return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
 
 
-#: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off, one
-#: quark range d_q = d_o for prediction and motion (eq. 7's where-clause defines d_o only).
+#: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off: quarks
+#: kept, at most M per goal (eq. 7: 0 <= M_curr <= M), one quark field (range d_q) for
+#: prediction and motion. d_q keeps its value (no value in the paper, like d_o).
 PAPER_PRESET = {"pull_range_fraction": 0.0, "motion_quarks_within_d_o": False, "quark_ball_m": 0.0,
                 "unresolved_global_goal": False, "stop_at_goal": False,
-                "quark_restarts_watch": False, "persist_quarks": False, "tie_tol_m": 0.0,
-                "d_q": 0.5}
+                "quark_restarts_watch": False, "replace_oldest_quark": False, "tie_tol_m": 0.0}
 
 
 class PAPFStrategy:

@@ -62,6 +62,7 @@ PAPF: dict[str, Spec] = {
     "unresolved_global_goal": FLAG,
     "stop_at_goal": FLAG,
     "quark_restarts_watch": FLAG,
+    "replace_oldest_quark": FLAG,
 }
 
 ARAPF: dict[str, Spec] = {

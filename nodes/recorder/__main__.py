@@ -9,7 +9,8 @@ receive thread) and drained in batches by the main thread into
 :class:`papf.recording.RunWriter`, which flushes at least every ``--flush-interval``
 seconds. SIGINT/SIGTERM: drain the queue, write the summary and footer, exit 0.
 With ``--close-on-run-ended`` (the launch profiles that drive a run): the launcher's
-``run_ended`` closes the file the same way, and a ``recording_closed`` event (detail: the
+``run_ended`` closes the file the same way (once the samples of its instant still on
+their way are in: :mod:`nodes.recorder.tail`), and a ``recording_closed`` event (detail: the
 file) tells the launcher it may stop the processes — no fixed wait, no lost tail.
 """
 
@@ -25,6 +26,7 @@ from common.errors import ConfigError, PapfError, RecordingError
 from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.recorder.ports import PORTS, VARIANTS
+from nodes.recorder.tail import TAIL_MAX_S, RunEndWatch
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
 from schemas.messages import Event
 
@@ -36,26 +38,13 @@ FINAL_DRAIN_S = 2.0         # [s] at most spent draining the queue after a stop 
 STATUS_EVERY_S = 10.0       # [s] wall time between progress log lines
 
 
-class RunEndWatch:
-    """Notices the launcher's ``run_ended`` among the recorded samples of ``events_key``."""
-
-    def __init__(self, events_key: str):
-        self.key, self.seen = events_key, False
-
-    def check(self, payload: bytes) -> None:
-        try:
-            self.seen |= Event.from_bytes(payload).kind == "run_ended"
-        except PapfError:  # a bad event is recorded all the same; it ends nothing
-            pass
-
-
 def drain(subscriber, writer: RunWriter, max_samples: int, watch: RunEndWatch | None = None) -> int:
     """Write up to ``max_samples`` queued samples; returns how many were taken.
 
     The hot loop of the recorder: locals only, one ``try_recv`` per sample.
     """
     recv, write, now, put = subscriber.try_recv, writer.write, time.time_ns, zenoh.SampleKind.PUT
-    end_key = watch.key if watch is not None else None
+    arrived = watch.arrived if watch is not None else None
     n = 0
     while n < max_samples:
         sample = recv()
@@ -64,9 +53,10 @@ def drain(subscriber, writer: RunWriter, max_samples: int, watch: RunEndWatch | 
         n += 1
         if sample.kind == put:  # a DELETE has no payload to record
             key, payload = str(sample.key_expr), sample.payload.to_bytes()
-            write(key, payload, now())
-            if key == end_key:
-                watch.check(payload)  # type: ignore[union-attr]
+            t = now()
+            write(key, payload, t)
+            if arrived is not None:
+                arrived(key, payload, t)
     return n
 
 
@@ -83,6 +73,8 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
             node.ready()
             node.log.info("recording %s into %s", keys_expr, out)
             _loop(node, sub, writer, watch)
+            if watch is not None and watch.seen:
+                _tail(node, sub, writer, watch)
             deadline = time.monotonic() + FINAL_DRAIN_S
             while drain(sub, writer, BATCH, watch) and time.monotonic() < deadline:
                 pass
@@ -98,6 +90,17 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
     node.log.info("closed %s: %d messages, %d bytes, %d channels", out, writer.stats.messages,
                   writer.stats.bytes, writer.stats.channels)
     return writer.stats
+
+
+def _tail(node: Node, sub, writer: RunWriter, watch: RunEndWatch) -> None:
+    """After run_ended: the samples of its instant still on other links (nodes.recorder.tail)."""
+    deadline = time.monotonic() + TAIL_MAX_S
+    while not watch.complete and not node.stop and time.monotonic() < deadline:
+        if drain(sub, writer, BATCH, watch) == 0:
+            node.stop.event.wait(IDLE_WAIT_S)
+    if not watch.complete:
+        node.log.warning("run_ended: closing without a sample of its instant on %s",
+                         ", ".join(sorted(watch.waiting)))
 
 
 def _loop(node: Node, sub, writer: RunWriter, watch: RunEndWatch | None) -> None:

@@ -68,6 +68,9 @@ def _sigterm_as_interrupt(*_) -> None:
 def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    # a command started in the background by a script inherits SIGINT ignored (the shell's
+    # rule for `cmd &`); `kill -INT` must still stop every child process cleanly
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

@@ -1,8 +1,9 @@
-"""``papf experiment wang | horizon | deviations``: the paper-fidelity studies (issue 14).
+"""``papf experiment wang | horizon | deviations | cases``: the paper-fidelity studies (issue 14).
 
 ``wang`` Wang's Figs. 5-12 as published and on the ROSbot (:mod:`papf.experiments.wang_figs`);
 ``horizon`` PAPF's lambda study of Fig. 7 and ``deviations`` each of our PAPF deviations
-switched alone (:mod:`papf.experiments.paper_study`). Offline; exit code 0 done, 2 usage.
+switched alone (:mod:`papf.experiments.paper_study`), offline; ``cases`` the studies behind
+the older planner tables (:mod:`papf.experiments.doc_cases`). Exit code 0 done, 2 usage.
 """
 
 from __future__ import annotations
@@ -52,6 +53,16 @@ def add_paper_studies(exp) -> None:
     d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
     d.set_defaults(func=cmd_deviations)
 
+    c = exp.add_parser("cases", help="the small studies behind the older planner tables of the docs",
+                       description="Named studies (AR-APF and Wang ablations and results, the energy "
+                                   "world through the stack with every planner and smaller d_o): each "
+                                   "case's runs offline and/or through the stack; writes "
+                                   "<study>.csv (one summary row per case) and cases-runs.csv into --out.")
+    c.add_argument("--out", default="cases", metavar="DIR", help="output directory")
+    c.add_argument("--studies", default="all", metavar="S1,S2",
+                   help="comma-separated studies, or all (default)")
+    c.set_defaults(func=cmd_cases)
+
 
 def cmd_wang(args) -> int:
     from papf.experiments.wang_figs import run_wang
@@ -76,4 +87,16 @@ def cmd_deviations(args) -> int:
         raise ConfigError(f"--n {args.n}: need at least 1 world")
     run_deviations(args.out, args.n, args.seed, both=args.both)
     print((Path(args.out) / "deviations.md").read_text())
+    return 0
+
+
+def cmd_cases(args) -> int:
+    from papf.experiments.doc_cases import STUDIES, run_cases
+
+    names = list(STUDIES) if args.studies == "all" else [n.strip() for n in args.studies.split(",") if n.strip()]
+    bad = [n for n in names if n not in STUDIES]
+    if bad or not names:
+        raise ConfigError(f"--studies {args.studies!r}: unknown {bad}; valid: {list(STUDIES)} or all")
+    run_cases(args.out, names)
+    print(f"wrote {', '.join(n + '.csv' for n in names)} and cases-runs.csv into {args.out}")
     return 0

@@ -30,8 +30,14 @@ DEVIATIONS = (
     ("unresolved_global_goal", "true", "false", "after M repetitions: eq. 7 with the global goal"),
     ("stop_at_goal", "true", "false", "the prediction stops at the goal"),
     ("quark_restarts_watch", "true", "false", "a placed quark restarts the stagnation watch"),
-    ("persist_quarks", "true", "false", "quarks persist in the world frame across cycles"),
-    ("d_q", "2.0", "0.5", "quark range 2 lambda (paper: eq. 7's range, read as d_o)"),
+    ("replace_oldest_quark", "true", "false", "beyond M quarks the oldest gives way (paper: at most M per goal)"),
+)
+
+#: (setting, value, what it is): other readings of the paper's text, each tried on top of
+#: ``--preset paper`` (the text allows them; the preset takes the other one, docs/planners.md)
+READINGS = (
+    ("persist_quarks", "false", "quarks recomputed every cycle (none kept from the last one)"),
+    ("d_q", "0.5", "d_q = d_o = 0.5 m (eq. 7's where-clause names d_o)"),
 )
 
 
@@ -70,14 +76,25 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
 
 
 def _variants(both: bool = False) -> list[tuple[str, list[str]]]:
-    """default, paper, and each deviation switched on alone over the paper preset; with
+    """default, paper, the paper preset with each other reading of :data:`READINGS`, and
+    each deviation switched on alone over the paper preset; with
     ``both`` also each deviation switched off alone from the default."""
     out = [("default", []), ("paper", ["preset=paper"])]
+    out += [(f"paper with {name}={value}", ["preset=paper", f"{name}={value}"]) for name, value, _w in READINGS]
     for name, on, off, _what in DEVIATIONS:
         out.append((f"paper + {name}", ["preset=paper", f"{name}={on}"]))
         if both:
             out.append((f"default - {name}", [f"{name}={off}"]))
     return out
+
+
+def _group(label: str) -> str:
+    """The deviation study's row group: preset, reading, paper + deviation, default - deviation."""
+    if label in ("default", "paper"):
+        return "preset"
+    if label.startswith("paper with "):
+        return "reading"
+    return "paper + deviation" if label.startswith("paper + ") else "default - deviation"
 
 
 def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float = 300.0,
@@ -110,14 +127,16 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
                 paper.append(t)
                 bar.advance(task)
             _reached, dur, path = table2_check(paper, "papf (paper)")
-            rows.append({"variant": label,
+            rows.append({"variant": label, "group": _group(label),
                          "random_reached_pct": round(100.0 * sum(t.outcome == "reached" for t in rand) / len(rand), 1),
                          "random_collisions": sum(t.collisions for t in rand),
                          "tests_I_VI_reached": f"{sum(t.outcome == 'reached' for t in paper)}/{len(paper)}",
                          "tests_I_VI_duration_within_15pct": f"{dur}/{len(PAPF_WORLDS)}",
                          "tests_I_VI_path_within_10pct": f"{path}/{len(PAPF_WORLDS)}",
                          "tests_I_VI_duration_s": " ".join(f"{t.duration_s:.1f}" if t.outcome == "reached"
-                                                           else t.outcome for t in paper)})
+                                                           else t.outcome for t in paper),
+                         "tests_I_VI_path_m": " ".join(f"{t.path_length_m:.2f}" if t.outcome == "reached"
+                                                       else "-" for t in paper)})
     write_csv(rows, out / ("deviations.csv" if parts == 1 else f"deviations-{k}.csv"))
     (out / "deviations.md").write_text(
         f"# PAPF deviations, each alone (offline; random set {seed}, {len(worlds)} worlds; PAPF "
