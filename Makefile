@@ -13,6 +13,10 @@ $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev,fast]'
+	@echo "compiling the numba kernels once (cached; the first run would do it otherwise)"
+	$(PY) -c "from nodes.planner.registry import PLANNERS, make_planner; \
+	from nodes.tracker.core import Tracker, TrackerParams; \
+	[make_planner(n).warm_up() for n in PLANNERS]; Tracker(TrackerParams()).warm_up()"
 	touch $@
 
 VIEW   ?=
