@@ -130,6 +130,14 @@ def control_point(pos, yaw: float, goal, wp: WangParams) -> np.ndarray:
     return pos + offset * np.array([math.cos(yaw), math.sin(yaw)])
 
 
+def scaled_to_scan(wp, apf: APFParams):
+    """``wp`` with its ``lidar_points`` set to the scan's when the gains scale to the scan
+    (``apf.scale_to_scan``): Wang's per-obstacle gains spread over the beams actually seen."""
+    if apf.scale_to_scan and apf.lidar_points != wp.lidar_points:
+        return dataclasses.replace(wp, lidar_points=apf.lidar_points)
+    return wp
+
+
 class WangStrategy:
     """Wang's improved APF (registered as ``wang``)."""
 
@@ -146,9 +154,7 @@ class WangStrategy:
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
-        wp = self.params
-        if apf.scale_to_scan and apf.lidar_points != wp.lidar_points:
-            wp = dataclasses.replace(wp, lidar_points=apf.lidar_points)
+        wp = scaled_to_scan(self.params, apf)
         at = control_point(pos, yaw, goal, wp)
         return Plan(force=wang_force(at, goal, view.points, wp))
 
@@ -193,7 +199,4 @@ class WangAPFStrategy:
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
-        wp = self.params
-        if apf.scale_to_scan and apf.lidar_points != wp.lidar_points:
-            wp = dataclasses.replace(wp, lidar_points=apf.lidar_points)
-        return Plan(force=traditional_force(pos, goal, view.points, wp))
+        return Plan(force=traditional_force(pos, goal, view.points, scaled_to_scan(self.params, apf)))

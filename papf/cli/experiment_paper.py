@@ -24,44 +24,44 @@ def preset_list(text: str) -> list[str]:
     return list(dict.fromkeys(names))
 
 
+def _study(exp, name: str, summary: str, description: str, func):
+    """A study's subcommand with its ``--out DIR`` (default: the study's name)."""
+    parser = exp.add_parser(name, help=summary, description=description)
+    parser.add_argument("--out", default=name, metavar="DIR", help="output directory")
+    parser.set_defaults(func=func)
+    return parser
+
+
 def add_paper_studies(exp) -> None:
-    w = exp.add_parser("wang", help="Wang's Figs. 5-12: the published point simulation and the ROSbot",
-                       description="Each of Wang's figures as published (a point stepping 0.5 along "
-                                   "the force, J = 200, Table 1 gains) and with the wang-apf / wang "
-                                   "planners offline; writes wang.md and wang.csv into --out.")
-    w.add_argument("--out", default="wang-figs", metavar="DIR", help="output directory")
+    w = _study(exp, "wang", "Wang's Figs. 5-12: the published point simulation and the ROSbot",
+               "Each of Wang's figures as published (a point stepping 0.5 along the force, J = 200, "
+               "Table 1 gains) and with the wang-apf / wang planners offline; writes wang.md and "
+               "wang.csv into --out.", cmd_wang)
+    w.set_defaults(out="wang-figs")
     w.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
-    w.set_defaults(func=cmd_wang)
 
-    h = exp.add_parser("horizon", help="PAPF's horizon of prediction (paper Fig. 7), offline",
-                       description="PAPF with lambda in {0.5, 1, 1.5, 2} m (both presets) and APF on "
-                                   "the Fig. 7-like world papf-horizon: path, duration, turning, cycle "
-                                   "time; writes horizon.md and horizon.csv into --out.")
-    h.add_argument("--out", default="horizon", metavar="DIR", help="output directory")
+    h = _study(exp, "horizon", "PAPF's horizon of prediction (paper Fig. 7), offline",
+               "PAPF with lambda in {0.5, 1, 1.5, 2} m (both presets) and APF on the Fig. 7-like "
+               "world papf-horizon: path, duration, turning, cycle time; writes horizon.md and "
+               "horizon.csv into --out.", cmd_horizon)
     h.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
-    h.set_defaults(func=cmd_horizon)
 
-    d = exp.add_parser("deviations", help="each PAPF deviation from the paper switched alone, offline",
-                       description="PAPF default and paper presets, and each deviation switched on "
-                                   "alone over the paper preset (--both: and off alone from the "
-                                   "default), on N "
-                                   "random worlds and PAPF Tests I-VI; writes deviations.md/.csv.")
-    d.add_argument("--out", default="deviations", metavar="DIR", help="output directory")
+    d = _study(exp, "deviations", "each PAPF deviation from the paper switched alone, offline",
+               "PAPF default and paper presets, and each deviation switched on alone over the paper "
+               "preset (--both: and off alone from the default), on N random worlds and PAPF Tests "
+               "I-VI; writes deviations.md/.csv.", cmd_deviations)
     d.add_argument("--n", type=int, default=3, help="random worlds (default 3: a field, a dead end, a gap)")
     d.add_argument("--both", action="store_true",
                    help="also switch each deviation off alone from the default preset")
     d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
-    d.set_defaults(func=cmd_deviations)
 
-    c = exp.add_parser("cases", help="the small studies behind the older planner tables of the docs",
-                       description="Named studies (AR-APF and Wang ablations and results, the energy "
-                                   "world through the stack with every planner and smaller d_o): each "
-                                   "case's runs offline and/or through the stack; writes "
-                                   "<study>.csv (one summary row per case) and cases-runs.csv into --out.")
-    c.add_argument("--out", default="cases", metavar="DIR", help="output directory")
+    c = _study(exp, "cases", "the small studies behind the older planner tables of the docs",
+               "Named studies (AR-APF and Wang ablations and results, the energy world through the "
+               "stack with every planner and smaller d_o): each case's runs offline and/or through "
+               "the stack; writes <study>.csv (one summary row per case) and cases-runs.csv into "
+               "--out.", cmd_cases)
     c.add_argument("--studies", default="all", metavar="S1,S2",
                    help="comma-separated studies, or all (default)")
-    c.set_defaults(func=cmd_cases)
 
 
 def cmd_wang(args) -> int:
