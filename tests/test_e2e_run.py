@@ -117,6 +117,7 @@ def test_garbage_on_cmd_vel_and_scan_crashes_nothing():
         out, err = proc.communicate(timeout=200)
     finally:
         stop.set()
+        t.join(30)          # its session closed before the next test
         if proc.poll() is None:
             proc.kill()
     res = json.loads(out.strip().splitlines()[-1])
