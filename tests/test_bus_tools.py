@@ -153,7 +153,7 @@ def test_teleop_in_a_pty_publishes_the_keys_on_cmd_vel_with_the_clock_stamp(sess
     finally:
         if th.is_alive():     # a failed check: let the teleop quit before its terminal closes
             os.write(master, b"q")
-            th.join(5.0)
+            th.join(30.0)
         sub.undeclare()
         os.close(master)
         os.close(slave)
