@@ -315,11 +315,12 @@ def open_node(name: str, args: argparse.Namespace, log: logging.Logger | None = 
                 log.info("bad messages dropped: %s", dict(node.bad_messages))
 
 
-def alive_nodes(session: zenoh.Session, keys: Keys) -> set[str]:
-    """Names of the nodes whose liveliness tokens exist now."""
+def alive_nodes(session: zenoh.Session, keys: Keys, timeout_s: float = 1.0) -> set[str]:
+    """Names of the nodes whose liveliness tokens exist now (the query's replies within
+    ``timeout_s``; the router answers at once unless the machine is very busy)."""
     prefix = keys.alive("")
     names = set()
-    for reply in session.liveliness().get(keys.alive("*"), timeout=1.0):
+    for reply in session.liveliness().get(keys.alive("*"), timeout=timeout_s):
         if reply.ok is not None:
             names.add(str(reply.ok.key_expr)[len(prefix):])
     return names

@@ -82,10 +82,11 @@ class Supervisor:
         if not dead:
             return ""
         c = dead[0]
-        errors = [line.split(" ERROR ", 1)[-1].strip() for line in c.tail if " ERROR " in line]
+        tail = list(c.tail)    # a copy: its log thread may still be appending the last lines
+        errors = [line.split(" ERROR ", 1)[-1].strip() for line in tail if " ERROR " in line]
         if errors:   # a node that says why it stops: that line, not its last six
             return f"{c.name} exited with code {c.returncode}: {errors[-1]}"
-        return f"{c.name} exited with code {c.returncode}: " + " | ".join(list(c.tail)[-6:])
+        return f"{c.name} exited with code {c.returncode}: " + " | ".join(tail[-6:])
 
     def stop(self, grace_s: float = 3.0, last: tuple[str, ...] = ()) -> None:
         """Stop every child: SIGTERM, then SIGKILL after ``grace_s``.

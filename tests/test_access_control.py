@@ -65,7 +65,9 @@ def secure_robot(tmp_path_factory):
 
 
 def _commands(trace) -> list[dict]:
-    return [json.loads(line) for line in trace.read_text().splitlines()] if trace.exists() else []
+    """The emulator's trace so far: its complete lines (it may be writing the last one)."""
+    text = trace.read_text() if trace.exists() else ""
+    return [json.loads(line) for line in text.split("\n")[:-1] if line]
 
 
 def test_peer_without_credentials_cannot_connect(secure_robot):
@@ -97,6 +99,9 @@ def test_valid_credentials_but_not_the_planner_cannot_move_the_robot(secure_robo
             s.put(f"{BRIDGE}/cmd_vel", twist_to_cdr(0.5, -1.0))
             time.sleep(0.1)
         time.sleep(0.5)
+        deadline = time.monotonic() + 30      # the odometry may come late on a busy machine
+        while not seen and time.monotonic() < deadline:
+            time.sleep(0.05)
         sub.undeclare()
     assert seen, "the observer may read the robot's odometry"
     assert not [c for c in _commands(trace) if c["w"] < 0], "an observer's command got through"
@@ -131,7 +136,7 @@ def test_the_planner_identity_moves_the_robot(secure_robot):
     bundle, _, tls, trace = secure_robot
     keys = Keys(NS)
     with zenoh.open(zenoh_config("client", [tls], config_file=str(bundle.laptop))) as s:
-        deadline = time.monotonic() + 10.0
+        deadline = time.monotonic() + 30.0
         while time.monotonic() < deadline and not any(c["v"] > 0 for c in _commands(trace)):
             s.put(keys.cmd_vel, Twist(stamp_ns=0, v=0.3, w=0.0).to_bytes())
             time.sleep(0.1)

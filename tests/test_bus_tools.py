@@ -146,7 +146,7 @@ def test_teleop_in_a_pty_publishes_the_keys_on_cmd_vel_with_the_clock_stamp(sess
         _wait(lambda: got and (got[-1].v, got[-1].w) == (0.1, 0.2), "v 0.1, w 0.2")
         assert got[-1].stamp_ns == 4_200_000_000
         os.write(master, b"q")
-        th.join(5.0)
+        th.join(30.0)
         assert not th.is_alive()
         _wait(lambda: (got[-1].v, got[-1].w) == (0.0, 0.0), "zero on quit")
         assert "v +0.10 m/s  w +0.20 rad/s" in out.getvalue()
@@ -159,7 +159,7 @@ def test_teleop_in_a_pty_publishes_the_keys_on_cmd_vel_with_the_clock_stamp(sess
         os.close(slave)
 
 
-def _wait(cond, what: str, timeout_s: float = 10.0) -> None:
+def _wait(cond, what: str, timeout_s: float = 30.0) -> None:
     deadline = time.monotonic() + timeout_s
     while not cond():
         assert time.monotonic() < deadline, f"timed out waiting for {what}"
@@ -188,11 +188,11 @@ def test_topic_list_echo_hz_over_the_router(router, session):
     from common.transport import zenoh_config
 
     stop = threading.Event()
-    th = _publish_for(session, 20.0, stop)
+    th = _publish_for(session, 120.0, stop)   # until stopped; the time only bounds it
     try:
         with zenoh.open(zenoh_config("client", [router])) as s2:
             lines: list[str] = []
-            assert topics.topic_list(s2, KEYS, 1.0, lines.append) == 2
+            assert topics.topic_list(s2, KEYS, 2.0, lines.append) == 2
             scan_row = next(x for x in lines if x.startswith("rosbot/scan "))
             assert "papf/Scan/v1" in scan_row and "Hz" in scan_row
             assert any(x.startswith("odometry/filtered ") and "nav_msgs/msg/Odometry" in x
@@ -203,7 +203,9 @@ def test_topic_list_echo_hz_over_the_router(router, session):
             assert "[nav_msgs/msg/Odometry, cdr]" in echoed[0] and "frame_id: odom" in echoed[0]
             rates = topics.hz(s2, "rosbot/scan", [].append, duration_s=1.5)
             r = rates["rosbot/scan"].rate()
-            assert 5.0 < r.hz < 40.0 and r.stamp_hz == pytest.approx(10.0)
+            # arrivals: about the 20 Hz it is published at (a busy machine delays or bunches
+            # them, so only the order of magnitude); stamps: exactly 10 Hz
+            assert 2.0 < r.hz < 200.0 and r.stamp_hz == pytest.approx(10.0)
     finally:
         stop.set()
         th.join()
@@ -211,7 +213,7 @@ def test_topic_list_echo_hz_over_the_router(router, session):
 
 def test_topic_cli_echo_once_and_timeout(router, session):
     stop = threading.Event()
-    th = _publish_for(session, 30.0, stop)
+    th = _publish_for(session, 120.0, stop)   # until stopped: three CLI start-ups under load
     cmd = [sys.executable, "-m", "papf", "topic"]
     try:
         r = subprocess.run([*cmd, "echo", "scan", "--once", "--connect", router],
@@ -263,6 +265,8 @@ def test_goal_cli_handshake_start_run_and_outcome(router, session):
         assert r.returncode == 0, r.stderr
         assert "acknowledged" in r.stdout and r.stdout.rstrip().endswith("reached")
         assert (goals[0].x, goals[0].y, goals[0].tolerance) == (3.0, -1.5, 0.2)
+        # run_started comes from the CLI's session, the statuses from ours: no order between them
+        _wait(lambda: events, "run_started")
         assert [e.kind for e in events] == ["run_started"]
         assert r.stderr.count("to the goal:") == 11        # piped: one line per 10 %
     finally:

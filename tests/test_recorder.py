@@ -279,9 +279,9 @@ def test_recorder_closes_its_file_at_run_ended_and_says_so(tmp_path):
 
     import zenoh
 
-    from common.transport import zenoh_config
+    from common.transport import wait_alive, zenoh_config
     from papf.supervisor import Supervisor, free_port, wait_port
-    from schemas import Event
+    from schemas import Event, Keys
 
     port, out = free_port(), tmp_path / "run.mcap"
     ep = f"tcp/127.0.0.1:{port}"
@@ -294,9 +294,10 @@ def test_recorder_closes_its_file_at_run_ended_and_says_so(tmp_path):
         with zenoh.open(zenoh_config("client", [ep])) as s:
             s.declare_subscriber("tack/events", lambda smp: closed.append(
                 Event.from_bytes(smp.payload.to_bytes())))
+            # alive: its subscriptions reached the router before its token reached us
+            assert not wait_alive(s, Keys("tack"), ["recorder"], 30.0,
+                                  abort=lambda: rec.returncode is not None), list(rec.tail)
             deadline = time.monotonic() + 30
-            while not any("ready" in line for line in rec.tail) and time.monotonic() < deadline:
-                time.sleep(0.05)
             for k in range(200):
                 s.put("tack/odom", sample(Odometry, 1_000_000 * (k + 1)).to_bytes())
             s.put("tack/events", Event(stamp_ns=300_000_000, kind="run_ended",

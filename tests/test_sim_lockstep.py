@@ -31,11 +31,14 @@ ODOM_NS = 20_000_000
 
 
 @contextmanager
-def stack(seed: int = 3, world: str = "energy", driver_args: tuple[str, ...] = ()):
-    """Router + driver + lidar on a free port; yields (session, supervisor)."""
+def stack(seed: int = 3, world: str = "energy", driver_args: tuple[str, ...] = (),
+          lines: list[tuple[str, str]] | None = None):
+    """Router + driver + lidar on a free port; yields (session, supervisor). ``lines``
+    collects every (node, log line)."""
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    with Supervisor(show=lambda *_: False) as sup:
+    keep = (lambda name, line: lines.append((name, line))) if lines is not None else None
+    with Supervisor(show=lambda name, line: bool(keep and keep(name, line))) as sup:
         sup.start("router", [PY, "-m", "papf.router", "--listen", endpoint])
         assert wait_port(port, 15.0), "router did not start: " + tails(sup)
         common = ["--connect", endpoint, "--world", world, "--seed", str(seed)]
@@ -64,6 +67,7 @@ class FakePlanner:
         self.clock: list[int] = []
         self.events: list[Event] = []
         self.paused = False
+        self.unanswered: list[int] = []  # scans that came while paused
         self.closed = False
         self.cmd = session.declare_publisher(KEYS.cmd_vel)
         self.subs = [
@@ -91,6 +95,7 @@ class FakePlanner:
         with self.lock:
             self.scans.append(scan.stamp_ns)
             if self.paused:
+                self.unanswered.append(scan.stamp_ns)
                 return
         self.answer(scan.stamp_ns)
 
@@ -99,16 +104,44 @@ class FakePlanner:
             if not self.closed:
                 self.cmd.put(Twist(stamp_ns=stamp_ns, v=self.v, w=self.w).to_bytes())
 
+    def pause(self) -> None:
+        """Stop answering: every scan from now on is left unanswered."""
+        with self.lock:
+            self.paused, self.unanswered = True, []
+
     def latest(self, what: str) -> int:
         with self.lock:
             return getattr(self, what)[-1]
 
-    def wait_clock(self, t_ns: int, timeout_s: float) -> bool:
+    def wait_for(self, cond, timeout_s: float) -> bool:
+        """Wait until ``cond()`` (called under the lock) is true; False after ``timeout_s``."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             with self.lock:
-                if self.clock and self.clock[-1] >= t_ns:
+                if cond():
                     return True
+            time.sleep(0.02)
+        return False
+
+    def wait_clock(self, t_ns: int, timeout_s: float) -> bool:
+        return self.wait_for(lambda: self.clock and self.clock[-1] >= t_ns, timeout_s)
+
+    def kinds(self) -> list[str]:
+        with self.lock:
+            return [e.kind for e in self.events]
+
+    def wait_quiet(self, what: str, quiet_s: float, timeout_s: float) -> bool:
+        """Wait until nothing new came on ``what`` for ``quiet_s``; False after ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        n, since = -1, time.monotonic()
+        while time.monotonic() < deadline:
+            with self.lock:
+                m = len(getattr(self, what))
+            now = time.monotonic()
+            if m != n:
+                n, since = m, now
+            elif now - since >= quiet_s:
+                return True
             time.sleep(0.02)
         return False
 
@@ -178,32 +211,50 @@ def test_same_seed_same_trajectory_across_processes():
     assert a == b
 
 
+LOCKSTEP_TIMEOUT_S = 4.0   # [s wall] the driver's wait for an answer in the test below
+HOLD_S = 0.5               # [s wall] how long the test leaves a scan unanswered (< the timeout)
+
+
+def _holds_at_the_first_unanswered_scan(planner: FakePlanner, sup: Supervisor) -> int:
+    """Pause the planner; the driver must stop at the first scan left unanswered: its clock
+    reaches that scan's instant and, while the test holds the answer back, goes no further."""
+    planner.pause()
+    assert planner.wait_for(lambda: planner.unanswered, 30), "no scan after the pause: " + tails(sup)
+    t_wait = planner.unanswered[0]
+    assert t_wait % SCAN_NS == 0
+    assert planner.wait_clock(t_wait, 30), tails(sup)
+    faults = planner.kinds().count("node_fault")
+    time.sleep(HOLD_S)                     # the answer held back (far below the timeout)
+    with planner.lock:
+        assert max(planner.clock) == t_wait, "the driver did not wait for the scan's answer"
+    # a fault here means the test thread stalled past the lockstep timeout, not a driver bug
+    assert planner.kinds().count("node_fault") == faults, "held back past the lockstep timeout"
+    return t_wait
+
+
 def test_driver_waits_for_the_scan_answer_then_times_out_and_resumes():
-    with stack(driver_args=("--lockstep-timeout", "1.0")) as (session, sup):
+    lines: list[tuple[str, str]] = []
+    with stack(driver_args=("--lockstep-timeout", str(LOCKSTEP_TIMEOUT_S)), lines=lines) as (
+            session, sup):
         planner = FakePlanner(session)
         try:
             start_run(session)
             assert planner.wait_clock(500_000_000, 60), tails(sup)
-            planner.paused = True                      # stop answering: the driver must wait
-            time.sleep(0.4)
-            t_wait = planner.latest("clock")
-            time.sleep(0.3)                            # both sleeps < the 1.0 s timeout
-            assert planner.latest("clock") == t_wait and t_wait % SCAN_NS == 0
-            assert planner.latest("scans") == t_wait
+            t_wait = _holds_at_the_first_unanswered_scan(planner, sup)
             planner.answer(t_wait)                     # the late answer releases it
-            assert planner.wait_clock(t_wait + ODOM_NS, 10)
-            time.sleep(2.0)                            # now past the timeout: fault, free running
+            assert planner.wait_clock(t_wait + ODOM_NS, 30)
+            # the next scan stays unanswered: after the timeout a fault, then free running
+            assert planner.wait_for(lambda: {"node_fault", "watchdog_stop"} <= {
+                e.kind for e in planner.events}, 30), planner.kinds()
             with planner.lock:
-                kinds = [e.kind for e in planner.events]
-            assert "node_fault" in kinds, kinds
-            assert "watchdog_stop" in kinds, kinds     # 0.5 s of sim time without a command
+                fault = next(e for e in planner.events if e.kind == "node_fault")
+            assert fault.stamp_ns == t_wait + SCAN_NS, fault   # the scan it waited for
             planner.paused = False                     # answers again: back to lockstep
-            assert planner.wait_clock(planner.latest("clock") + 3 * SCAN_NS, 10)
-            planner.paused = True
-            time.sleep(0.5)
-            t_wait = planner.latest("clock")
-            time.sleep(0.3)
-            assert planner.latest("clock") == t_wait, "did not return to lockstep"
+            assert planner.wait_for(lambda: any(
+                name == "base_driver" and "back to lockstep" in line for name, line in lines), 30), \
+                tails(sup)
+            _holds_at_the_first_unanswered_scan(planner, sup)   # waits again: lockstep
+            assert planner.kinds().count("node_fault") == 1
             assert not sup.dead(), tails(sup)
         finally:
             planner.close()
@@ -217,24 +268,21 @@ def test_realtime_never_waits_and_a_new_run_restarts_the_clock():
             start_run(session)
             assert planner.wait_clock(300_000_000, 20), tails(sup)
             planner.answer(planner.latest("scans"))    # the latest command is applied
-            assert planner.wait_clock(planner.latest("clock") + 300_000_000, 20)
-            with planner.lock:
-                assert max(o.v for o in planner.odom) > 0.1
-            assert planner.wait_clock(planner.latest("clock") + 600_000_000, 20)
-            with planner.lock:
-                kinds = [e.kind for e in planner.events]
-            assert "node_fault" not in kinds and "watchdog_stop" in kinds, kinds
+            assert planner.wait_for(lambda: any(o.v > 0.1 for o in planner.odom), 30), tails(sup)
+            # no more commands: the watchdog stops it, and no lockstep fault (it never waits)
+            assert planner.wait_for(lambda: any(e.kind == "watchdog_stop" for e in planner.events),
+                                    30), planner.kinds()
+            assert "node_fault" not in planner.kinds()
             session.put(KEYS.events, Event(stamp_ns=0, kind="run_ended", source="test").to_bytes())
-            time.sleep(0.3)
-            stopped_at = planner.latest("clock")
-            time.sleep(0.3)
-            assert planner.latest("clock") == stopped_at      # run_ended stops the clock
+            # run_ended stops the clock (the clock ticks every 20 ms while it runs)
+            assert planner.wait_quiet("clock", 1.0, 30), "the clock did not stop at run_ended"
             with planner.lock:
                 planner.clock.clear()
             start_run(session)                                # a new run from t = 0
             assert planner.wait_clock(100_000_000, 20)
             with planner.lock:
                 assert planner.clock[0] == 0
+            assert "node_fault" not in planner.kinds()
             assert not sup.dead(), tails(sup)
         finally:
             planner.close()

@@ -156,9 +156,9 @@ def run(session: zenoh.Session, keys: Keys, state: TeleopState, *, period_s: flo
         if start_run:
             session.put(keys.events, Event(stamp_ns=0, kind="run_started", source="papf-teleop",
                                            detail="teleop").to_bytes())
-        out.write(f"papf teleop on {keys.cmd_vel}: {HELP}\r\n")
-        out.flush()
-        with cbreak(fd):
+        with cbreak(fd):   # discards keys typed before it: the banner says it is listening
+            out.write(f"papf teleop on {keys.cmd_vel}: {HELP}\r\n")
+            out.flush()
             _loop(bus, state, fd, period_s, out, stop)
     except KeyboardInterrupt:
         state.press("q")
