@@ -76,3 +76,42 @@ assert again is m and again.rollout is m.rollout
 def test_lazy_module_of_an_unknown_name_fails():
     with pytest.raises(ImportError):
         lazy.lazy_module("nodes.planner.no_such_module")
+
+
+_COMMANDS = """
+import json, math, sys
+import numpy as np
+{prelude}
+from nodes.planner.registry import PLANNERS, make_planner
+from papf.toysim import cast_scan, toy_world
+from schemas.messages import Goal, Odometry
+world = toy_world(circles=((1.5, 0.2, 0.3), (2.5, -0.4, 0.25)))
+out = {{}}
+for name in PLANNERS:
+    p = make_planner(name)
+    p.warm_up()
+    p.set_goal(Goal(stamp_ns=0, x=4.0, y=0.0, tolerance=0.1))
+    x, y, yaw, cmds = 0.0, 0.0, 0.0, []
+    for k in range(1, 30):   # a short drive on the commands (unicycle), each command kept
+        t = k * 100_000_000
+        odom = Odometry(stamp_ns=t, x=x, y=y, yaw=yaw, v=0.0, w=0.0)
+        twist, _ = p.command(cast_scan(world, x, y, yaw, stamp_ns=t), odom)
+        cmds.append([twist.v.hex(), twist.w.hex()])
+        x, y, yaw = x + 0.1 * twist.v * math.cos(yaw), y + 0.1 * twist.v * math.sin(yaw), yaw + 0.1 * twist.w
+    out[name] = cmds
+print(json.dumps({{"scipy": "scipy" in sys.modules and sys.modules["scipy"] is not None, "out": out}}))
+"""
+
+
+@pytest.mark.skipif(not lazy.HAVE_NUMBA, reason="numba not installed")
+def test_planners_without_scipy_give_the_same_commands():
+    def run(prelude):
+        out = subprocess.run([sys.executable, "-c", _COMMANDS.format(prelude=prelude)],
+                             capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr[-2000:]
+        return json.loads(out.stdout.strip().splitlines()[-1])
+    hidden = run("from nodes.planner import lazy\nlazy.numba_without_scipy()")
+    plain = run("import scipy.linalg")
+    assert hidden["scipy"] is False and plain["scipy"] is True
+    assert hidden["out"] == plain["out"]
+    assert len({tuple(c) for c in hidden["out"]["papf"]}) > 10   # PAPF's kernels at work

@@ -43,3 +43,18 @@ def lazy_module(name: str) -> ModuleType:
 def numba_module() -> ModuleType:
     """numba itself (imported now, if not yet); ImportError when it is not installed."""
     return importlib.import_module("numba")
+
+
+def numba_without_scipy() -> None:
+    """Keep numba from importing scipy in this process (a planner node's, before its planner is built).
+
+    numba's first compiled call imports ``numba.np.arraymath``, which imports ``scipy.linalg``
+    (about 0.3 s of CPU) only to learn whether BLAS is there for ``np.dot`` and
+    ``np.linalg`` inside compiled code. No planner kernel uses them (the numpy steps that
+    must keep BLAS's rounding run outside the kernels, nodes/planner/papf_kernel.py), so in
+    a process that has not imported scipy yet, scipy is marked missing: numba then leaves
+    its BLAS functions out. ``tests/test_lazy_numba.py`` builds every planner this way and
+    checks its commands against a process with scipy.
+    """
+    if "scipy" not in sys.modules:
+        sys.modules["scipy"] = None   # `import scipy` raises ImportError, numba's BLAS check says no
