@@ -24,7 +24,7 @@ def _modules_after(code: str) -> dict:
 
 
 def test_launcher_imports_no_numba():
-    assert _modules_after("import papf.runner, papf.checks, nodes.planner.registry, "
+    assert _modules_after("import papf.cli, papf.runner, papf.checks, nodes.planner.registry, "
                           "nodes.planner.settings") == {"numba": False, "scipy": False}
 
 
