@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -127,8 +128,37 @@ def _signal_group(proc: subprocess.Popen, sig: int) -> None:
         os.killpg(proc.pid, sig)
 
 
+_PORTS = random.Random()   # its own generator: a seeded global one would repeat ports
+FREE_PORT_SPAN = 12_000    # ports tried just below the kernel's ephemeral range
+
+
+def _ephemeral_low() -> int:
+    """The first port of the kernel's range for outgoing connections (Linux; else 32768)."""
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
+            return int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return 32768
+
+
 def free_port() -> int:
-    """A TCP port on 127.0.0.1 that is free right now."""
+    """A TCP port on 127.0.0.1 that is free right now, for a router to listen on.
+
+    Picked at random below the kernel's ephemeral range when there is room: a port of that
+    range can be taken as the local end of any outgoing connection (every Zenoh session
+    makes some) between this check and the router's bind, which then fails.
+    """
+    low = _ephemeral_low()
+    if low - FREE_PORT_SPAN >= 1024:
+        for _ in range(100):
+            port = _PORTS.randrange(low - FREE_PORT_SPAN, low)
+            with socket.socket() as s:
+                try:
+                    s.bind(("127.0.0.1", port))
+                except OSError:
+                    continue
+            if not port_in_use(port):
+                return port
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]

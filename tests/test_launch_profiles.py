@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -129,8 +130,7 @@ def test_papf_run_and_launch_sim_dry_runs_print_the_same_processes(tmp_path):
 
 
 # -- processes ----------------------------------------------------------------------------------
-def _leftovers(tag: str) -> list[str]:
-    """Processes still running whose command line contains ``tag`` (our unique namespace)."""
+def _running(tag: str) -> list[str]:
     found = []
     for pid in filter(str.isdigit, os.listdir("/proc")):
         try:
@@ -139,6 +139,15 @@ def _leftovers(tag: str) -> list[str]:
             continue
         if tag in cmd and int(pid) != os.getpid():
             found.append(cmd)
+    return found
+
+
+def _leftovers(tag: str, timeout_s: float = 30.0) -> list[str]:
+    """Processes whose command line contains ``tag`` (our unique namespace) still running
+    after ``timeout_s`` (a process being stopped may take a moment to go)."""
+    deadline = time.monotonic() + timeout_s
+    while (found := _running(tag)) and time.monotonic() < deadline:
+        time.sleep(0.1)
     return found
 
 
@@ -174,6 +183,9 @@ def split_run(robot_profile: str, laptop_profile: str, world: str, ns: str, emul
             for proc in (emulator, robot):
                 if proc is not None and proc.poll() is None:
                     os.killpg(proc.pid, signal.SIGKILL)
+            for proc in (emulator, robot):   # gone before the test looks for leftovers
+                if proc is not None:
+                    proc.wait(timeout=30)
 
 
 @pytest.mark.e2e

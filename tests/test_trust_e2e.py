@@ -109,13 +109,20 @@ def test_a_dead_energy_meter_freezes_the_figures_and_is_named():
     try:
         assert wait_port(port, 60)
         with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as s:
-            moving = threading.Event()
-            sub = s.declare_subscriber(Keys().clock, lambda smp: Clock.from_bytes(
-                smp.payload.to_bytes()).stamp_ns > 3e9 and moving.set())
+            started, moving = threading.Event(), threading.Event()
+
+            def on_clock(smp) -> None:
+                started.set()
+                if Clock.from_bytes(smp.payload.to_bytes()).stamp_ns > 3e9:
+                    moving.set()
+            sub = s.declare_subscriber(Keys().clock, on_clock)
+            assert started.wait(120), "the run never started"
+            meter = pids_of("nodes.energy_meter", port)   # looked up before: killed at once
+            assert meter, "no energy meter process"
             assert moving.wait(120), "the run never got to 3 s of sim time"
-            sub.undeclare()
-            for pid in pids_of("nodes.energy_meter", port):
+            for pid in meter:
                 os.kill(pid, signal.SIGKILL)
+            sub.undeclare()
         out, err = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 
 import jsonschema
 import numpy as np
@@ -82,8 +83,9 @@ def test_channels_advertised_subscribed_and_valid(router, spawn, session):
             assert json.loads(ch["schema"]) == schema_json(want[topic])
         client.subscribe(set(want))
         client.pump(0.5)
-        t = 0
-        while not client.wait_for(lambda: set(want) <= set(client.messages), 0.2) and t < 60:
+        t, deadline = 0, time.monotonic() + 60      # until every channel has a message
+        while not client.wait_for(lambda: set(want) <= set(client.messages), 0.2) and \
+                time.monotonic() < deadline:
             t += 1
             for topic, msg in _stack_messages(t * 100_000_000):
                 session.put(KEYS.key(topic), msg.to_bytes())
@@ -122,7 +124,7 @@ def test_goal_from_the_3d_panel_is_published(router, spawn, session):
         client.advertise(3, "/clicked_point", "geometry_msgs/msg/PointStamped")
         client.pump(0.3)
         client.publish(3, {"header": {"frame_id": "world"}, "point": {"x": 2.5, "y": 1.5, "z": 0}})
-        client.wait_for(lambda: bool(got), 10.0)
+        client.wait_for(lambda: bool(got), 30.0)
         assert [(g.x, g.y) for g in got] == [(2.5, 1.5)]
     finally:
         client.close()
@@ -194,8 +196,8 @@ def test_replay_view_serves_a_recording(router, tmp_path):
     from nodes.recorder.writer import RunWriter
 
     rec = tmp_path / "r.mcap"
-    with RunWriter(rec, {"world": "papf-test-4"}) as w:
-        for k in range(100):
+    with RunWriter(rec, {"world": "papf-test-4"}) as w:   # 30 s: it outlasts the client's start
+        for k in range(1500):
             w.write_message("rosbot/odom", Odometry(stamp_ns=k * 20_000_000, x=0.01 * k, y=0.0,
                                                     yaw=0.0, v=0.5, w=0.0))
     port = free_port()
@@ -207,7 +209,7 @@ def test_replay_view_serves_a_recording(router, tmp_path):
         assert client.wait_for(lambda: "/odom" in client.topics(), 30.0)
         client.subscribe({"/odom", "/robot/pose", "/world"})
         assert client.wait_for(lambda: len(client.messages["/odom"]) >= 10, 30.0)
-        assert client.wait_for(lambda: bool(client.messages["/world"]), 10.0)   # sent every second
+        assert client.wait_for(lambda: bool(client.messages["/world"]), 30.0)   # sent every second
         client.close()
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=30)

@@ -227,6 +227,9 @@ class PAPFStrategy:
     def warm_up(self, apf: APFParams) -> None:
         """Compile the kernels (numba) before the node declares itself ready."""
         predict(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf, self.params)
+        if self.params.use_numba and kernels.HAVE_NUMBA:   # the literal switches' loop (rollout, tail)
+            _predict_loop(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
+                          self.params, np.zeros((0, 2)))
         if self.params.use_numba and kernels.HAVE_NUMBA:   # the compiled cycle, with and without quarks
             for quarks in (None, np.array([[0.4, 0.3]])):
                 papf_kernel.plan_compiled(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
