@@ -177,7 +177,14 @@ def summarize(runs_file: Path, csv_path: Path | None, label: str | None) -> None
         write_csv(csv_path, label, summaries)
 
 
-def floor(planners: list[str], world: str, seed: int, csv_path: Path | None) -> None:
+FLOOR_FIELDS = ("label", "planner", "part", "cpu_s", "us_per_cycle")
+CHAIN_PART = "chain: physics + outputs + cast + planner"
+
+
+def floor(planners: list[str], world: str, seed: int, csv_path: Path | None,
+          label: str | None = None) -> None:
+    """The chain in one process; with ``csv_path``, its rows (labelled ``label``) replace
+    that label's rows in the CSV, other labels' stay (e.g. alternated before/after rounds)."""
     from bench.sim_floor import chain, hop_latency
 
     rows = []
@@ -187,17 +194,21 @@ def floor(planners: list[str], world: str, seed: int, csv_path: Path | None) -> 
         print(json.dumps(res), flush=True)
         rows += [{"planner": planner, "part": part, "cpu_s": f"{res['cpu_s'][part]:.3f}",
                   "us_per_cycle": f"{us:.0f}"} for part, us in res["us_per_cycle"].items()]
-        rows.append({"planner": planner, "part": "chain (physics, outputs, cast, planner)",
+        rows.append({"planner": planner, "part": CHAIN_PART,
                      "cpu_s": "", "us_per_cycle": f"{res['chain_us_per_cycle']:.0f}"})
     hop = {"bench": "zenoh_hop", **hop_latency(root=str(ROOT))}
     print(json.dumps(hop), flush=True)
     rows.append({"planner": "", "part": "one Zenoh hop (p50), 3 per cycle on the chain",
                  "cpu_s": "", "us_per_cycle": f"{hop['hop_us_p50']:.0f}"})
     if csv_path:
+        kept = []
+        if csv_path.exists():
+            with csv_path.open(newline="") as fh:
+                kept = [r for r in csv.DictReader(fh) if r.get("label", "") != (label or "")]
         with csv_path.open("w", newline="") as fh:
-            w = csv.DictWriter(fh, ("planner", "part", "cpu_s", "us_per_cycle"))
+            w = csv.DictWriter(fh, FLOOR_FIELDS, restval="", extrasaction="ignore")
             w.writeheader()
-            w.writerows(rows)
+            w.writerows(kept + [{"label": label or "", **r} for r in rows])
 
 
 def main() -> None:
@@ -216,7 +227,8 @@ def main() -> None:
     parser.add_argument("--timeout", type=float, default=300.0,
                         help="full stack: sim seconds at most (0.2: start-up and shut-down alone)")
     parser.add_argument("--csv", type=Path, help="full stack: write the minima here (with --label)")
-    parser.add_argument("--label", help="full stack: the rows' label in --csv (e.g. before, after)")
+    parser.add_argument("--label", help="the rows' label in --csv (e.g. before, after); with "
+                        "--floor, rows of other labels in the CSV are kept")
     parser.add_argument("--summarize", type=Path, metavar="RUNS",
                         help="full stack: minima of the run lines in RUNS (JSON lines) instead of running")
     a = parser.parse_args()
@@ -224,7 +236,7 @@ def main() -> None:
         print(json.dumps(bench(a.sim_s, a.world, a.beams)))
         return
     if a.floor:
-        floor(a.planners.split(","), a.world, a.seed, a.csv)
+        floor(a.planners.split(","), a.world, a.seed, a.csv, a.label)
         return
     if a.repeat < 1 or not a.timeout > 0 or bool(a.csv) != bool(a.label):
         parser.error("--repeat must be >= 1, --timeout > 0, and --csv and --label go together")

@@ -56,8 +56,14 @@ def add_zenoh_args(parser: argparse.ArgumentParser) -> None:
 
 
 def zenoh_config(mode: str = "client", connect: Iterable[str] = (), listen: Iterable[str] = (),
-                 multicast: bool = False, config_file: str | None = None) -> zenoh.Config:
-    """Build a ``zenoh.Config``; a client with no ``connect`` goes to the embedded router."""
+                 multicast: bool = False, config_file: str | None = None,
+                 scout_delay_ms: int | None = None) -> zenoh.Config:
+    """Build a ``zenoh.Config``; a client with no ``connect`` goes to the embedded router.
+
+    ``scout_delay_ms``: Zenoh's ``scouting/delay``, how long ``zenoh.open`` of a peer or
+    router waits for other peers before it returns (500 ms by default). A router with no
+    multicast scouting and nothing to connect to has no one to wait for: give it 0.
+    """
     if mode not in MODES:
         raise ConfigError(f"Zenoh mode {mode!r} is not one of {MODES}")
     try:
@@ -73,6 +79,8 @@ def zenoh_config(mode: str = "client", connect: Iterable[str] = (), listen: Iter
     if listen:
         conf.insert_json5("listen/endpoints", json.dumps(listen))
     conf.insert_json5("scouting/multicast/enabled", json.dumps(bool(multicast)))
+    if scout_delay_ms is not None:
+        conf.insert_json5("scouting/delay", json.dumps(int(scout_delay_ms)))
     return conf
 
 

@@ -16,7 +16,9 @@ from common.transport import DEFAULT_ENDPOINT, StopRequested, setup_logging, zen
 def main(listen: list[str], config_file: str | None = None) -> None:
     log = setup_logging("router")
     stop = StopRequested()
-    conf = zenoh_config("router", listen=listen, config_file=config_file)
+    # without a config file (no multicast, no connect): no one to scout for, no 0.5 s delay
+    conf = zenoh_config("router", listen=listen, config_file=config_file,
+                        scout_delay_ms=None if config_file else 0)
     with zenoh.open(conf) as session:
         log.info("Zenoh router %s listening on %s", session.zid(), ", ".join(listen))
         while not stop.event.wait(0.2):

@@ -99,7 +99,8 @@ def run(cfg: RunConfig) -> RunResult:
     # subscriptions are served without a hop. The nodes are stopped before it closes. A
     # port someone else listens on (another stack's router) fails here: nothing published.
     try:
-        router = zenoh.open(zenoh_config("router", listen=[f"tcp/127.0.0.1:{port}"]))
+        # no multicast, nothing to connect to: no scouting delay (Zenoh waits 0.5 s by default)
+        router = zenoh.open(zenoh_config("router", listen=[f"tcp/127.0.0.1:{port}"], scout_delay_ms=0))
     except Exception as exc:  # zenoh raises ZError (e.g. the port was taken meanwhile)
         monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
         return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)

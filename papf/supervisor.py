@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import TextIO
 
 _PR_SET_PDEATHSIG = 1
+PUMP_JOIN_S = 5.0   # [s wall] at most, after stop(), for the children's last output lines
 
 
 def _die_with_parent() -> None:  # runs in the child between fork and exec
@@ -34,6 +35,7 @@ class Child:
     name: str
     proc: subprocess.Popen
     tail: deque = field(default_factory=lambda: deque(maxlen=40))
+    pump: threading.Thread | None = None   # copies its output to the log stream until EOF
 
     @property
     def returncode(self) -> int | None:
@@ -61,8 +63,9 @@ class Supervisor:
         )
         child = Child(name, proc)
         self.children.append(child)
-        threading.Thread(target=self._pump, args=(child,), daemon=True,
-                         name=f"log-{name}").start()
+        child.pump = threading.Thread(target=self._pump, args=(child,), daemon=True,
+                                      name=f"log-{name}")
+        child.pump.start()
         return child
 
     def _pump(self, child: Child) -> None:
@@ -103,6 +106,10 @@ class Supervisor:
             _stop_stage(stage, grace_s)
         for child in self.children:  # a group may outlive its leader
             _signal_group(child.proc, signal.SIGKILL)
+        deadline = time.monotonic() + PUMP_JOIN_S   # every last line printed before we return
+        for child in self.children:
+            if child.pump is not None:
+                child.pump.join(max(0.0, deadline - time.monotonic()))
 
     def __enter__(self) -> Supervisor:
         return self

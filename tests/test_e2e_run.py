@@ -61,6 +61,16 @@ def test_timeout_outcome_and_exit_code():
     assert (code, res["outcome"], res["sim_time_s"]) == (5, "timeout", 3.0), err
 
 
+def test_every_nodes_last_line_comes_before_the_launcher_exits():
+    # python -m papf run skips the interpreter's teardown (exit_fast) once the supervisor has
+    # printed every child's output to its end: the nodes' closing lines are all there
+    code, res, err = papf_run("--world", "energy", "--planner", "apf", "--timeout", "0.3", "--verbose")
+    assert (code, res["outcome"]) == (5, "timeout"), err
+    for node, last in (("lidar_sim", "published"), ("energy_meter", "stopped:"),
+                       ("base_driver", "run stopped"), ("planner", "stopping after")):
+        assert any(line.startswith(f"[{node}]") and last in line for line in err.splitlines()), err
+
+
 def test_broken_world_file_is_a_clear_usage_error(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("[goal]\nposition = [1]\n")

@@ -67,3 +67,28 @@ def test_children_die_with_a_killed_supervisor(tmp_path):
     while alive(child_pid) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not alive(child_pid), "the child outlived its SIGKILLed supervisor"
+
+
+def test_stop_returns_after_every_childs_last_line_is_printed():
+    import io
+
+    out = io.StringIO()
+    burst = [sys.executable, "-c",
+             "import signal, sys, time\n"
+             "def bye(*_):\n"
+             "    for i in range(150): print('last', i, flush=True)\n"
+             "    sys.exit(0)\n"
+             "signal.signal(signal.SIGTERM, bye)\n"
+             "print('up', flush=True)\n"
+             "time.sleep(60)"]
+    def slow_show(name, line):   # a log stream slower than the children: the pipe holds the rest
+        time.sleep(0.001)
+        return True
+    sup = Supervisor(log_stream=out, show=slow_show)
+    kids = [sup.start(name, burst) for name in ("a", "b")]
+    for c in kids:
+        wait_lines(c, 1)
+    sup.stop()
+    text = out.getvalue()
+    for name in ("a", "b"):   # the lines written just before exiting, all of them, already
+        assert f"[{name}] last 149" in text and text.count(f"[{name}] last ") == 150

@@ -19,6 +19,21 @@ def test_config_defaults_to_embedded_router_client():
     assert conf.get_json("scouting/multicast/enabled") == "false"
 
 
+def test_router_without_scouting_delay_opens_and_serves_a_client():
+    conf = zenoh_config("router", listen=["tcp/127.0.0.1:17461"], scout_delay_ms=0)
+    assert conf.get_json("scouting/delay") == "0"
+    assert zenoh_config("router").get_json("scouting/delay") != "0"   # Zenoh's default kept
+    got = []
+    with zenoh.open(conf) as router, zenoh.open(zenoh_config("client", ["tcp/127.0.0.1:17461"])) as c:
+        sub = router.declare_subscriber("t/x", lambda s: got.append(bytes(s.payload)))
+        deadline = time.monotonic() + 10
+        while not got and time.monotonic() < deadline:   # until the subscription reached it
+            c.put("t/x", b"1")
+            time.sleep(0.05)
+        sub.undeclare()
+    assert got and got[0] == b"1"
+
+
 def test_config_from_cli_args():
     p = argparse.ArgumentParser()
     add_zenoh_args(p)

@@ -104,12 +104,14 @@ class CommandGate:
 
     def output(self, t_ns: int, dt_s: float) -> GateOutput:
         """The rate-limited command for the control step of ``dt_s`` seconds starting at ``t_ns``."""
-        stopped = self.stopped_by_watchdog(t_ns)
+        lim = self.limits
+        last = self._last_cmd_ns   # stopped_by_watchdog(t_ns), inline: called every physics step
+        stopped = last is not None and t_ns - last > lim.watchdog_ns
         v_t, w_t = (0.0, 0.0) if stopped else self._target
         v0, w0 = self._out
-        lim = self.limits
-        v = v0 + _clamp(v_t - v0, lim.a_max * dt_s)
-        w = w0 + _clamp(w_t - w0, lim.alpha_max * dt_s)
+        dv, dw = lim.a_max * dt_s, lim.alpha_max * dt_s
+        v = v0 + max(-dv, min(dv, v_t - v0))      # _clamp, inline
+        w = w0 + max(-dw, min(dw, w_t - w0))
         self._out = (v, w)
         return GateOutput(v, w, stopped)
 

@@ -52,6 +52,10 @@ from worlds import World
 from worlds.bullet import MovingBodies, add_ground, build_world
 
 p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
+# the calls made every physics step, looked up once
+_base_pose, _base_velocity = p.getBasePositionAndOrientation, p.getBaseVelocity
+_joint_states, _external_force, _WORLD_FRAME = p.getJointStates, p.applyExternalForce, p.WORLD_FRAME
+_contact_points = p.getContactPoints
 
 GRAVITY = 9.81                 # [m/s^2]
 STEP_NS = 4_000_000            # [ns] physics step, 250 Hz (docs/architecture.md "Time")
@@ -144,6 +148,13 @@ class SimBase:
         self._wx = (a, a, -a, -a)                                     # [m] WHEEL_NAMES order
         self._wy = (b, -b, b, -b)
         self._joints = [0, 1, 2, 3]
+        # Per-wheel constants of the tyre model, computed once: (index, x, y, rolling radius,
+        # -mu N). ``-mu * N / d`` is evaluated as ``(-mu * N) / d``, so the product can be
+        # kept: the same operations in the same order, bit for bit (tests/test_driver_sim.py).
+        self._tyres = tuple((i, self._wx[i], self._wy[i], self._r_eff[i], -self._mu[i] * self._load)
+                            for i in range(4))
+        self._eps2 = prm.slip_eps ** 2                                # [m^2/s^2]
+        self._track_eff = prm.effective_track                         # [m]
         self.t_ns = 0
         self.cid = p.connect(p.DIRECT)
         try:
@@ -199,11 +210,11 @@ class SimBase:
     def set_twist(self, v: float, w: float) -> tuple[float, float]:
         """Command body velocities [m/s, rad/s]; returns the (left, right) wheel targets [rad/s]."""
         prm = self.params
-        half = w * prm.effective_track / 2
+        half = w * self._track_eff / 2
         lim = prm.wheel_speed_limit
         left = max(-lim, min(lim, (v - half) / prm.wheel_radius))
         right = max(-lim, min(lim, (v + half) / prm.wheel_radius))
-        if (left, right) != self._targets:  # motor settings persist across steps
+        if left != self._targets[0] or right != self._targets[1]:  # motor settings persist
             p.setJointMotorControlArray(self.robot, self._joints, p.VELOCITY_CONTROL,
                                         targetVelocities=[left, right, left, right],
                                         forces=[prm.motor_torque_limit] * 4, physicsClientId=self.cid)
@@ -226,24 +237,28 @@ class SimBase:
         p.stepSimulation(physicsClientId=self.cid)
 
     def _apply_tyre_forces(self) -> None:
-        # Plain floats, not numpy: 4-element arrays cost more in overhead than they save.
+        """The Coulomb tyre force of every wheel (module doc), applied at its contact point.
+
+        Plain floats, not numpy: 4-element arrays cost more in overhead than they save. Three
+        state reads and four force calls per step (pybullet has no batched form of either);
+        the per-wheel constants are precomputed (``_tyres``) and the bound functions looked
+        up once. Same operations, same order as the formula: bit for bit.
+        """
         cid, robot = self.cid, self.robot
-        (px, py, _), quat = p.getBasePositionAndOrientation(robot, physicsClientId=cid)
-        (vx, vy, _), (_, _, w) = p.getBaseVelocity(robot, physicsClientId=cid)
-        yaw = _yaw(quat)
+        (px, py, _), (qx, qy, qz, qw) = _base_pose(robot, physicsClientId=cid)
+        (vx, vy, _), (_, _, w) = _base_velocity(robot, physicsClientId=cid)
+        yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))   # _yaw(quat)
         c, s = math.cos(yaw), math.sin(yaw)
         vbx, vby = c * vx + s * vy, -s * vx + c * vy                  # body-frame velocity
-        states = p.getJointStates(robot, self._joints, physicsClientId=cid)
-        eps2 = self.params.slip_eps ** 2
-        for i in range(4):
-            wx, wy = self._wx[i], self._wy[i]
-            slip_x = vbx - w * wy - states[i][1] * self._r_eff[i]
+        states = _joint_states(robot, self._joints, physicsClientId=cid)
+        eps2, sqrt, force = self._eps2, math.sqrt, _external_force
+        for i, wx, wy, r_eff, k_n in self._tyres:
+            slip_x = vbx - w * wy - states[i][1] * r_eff
             slip_y = vby + w * wx
-            k = -self._mu[i] * self._load / math.sqrt(slip_x * slip_x + slip_y * slip_y + eps2)
+            k = k_n / sqrt(slip_x * slip_x + slip_y * slip_y + eps2)
             fx, fy = k * slip_x, k * slip_y
-            p.applyExternalForce(robot, i, [c * fx - s * fy, s * fx + c * fy, 0.0],
-                                 [px + c * wx - s * wy, py + s * wx + c * wy, 0.0], p.WORLD_FRAME,
-                                 physicsClientId=cid)
+            force(robot, i, (c * fx - s * fy, s * fx + c * fy, 0.0),
+                  (px + c * wx - s * wy, py + s * wx + c * wy, 0.0), _WORLD_FRAME, physicsClientId=cid)
 
     # -- state ------------------------------------------------------------------
     def pose(self) -> tuple[float, float, float]:
@@ -270,8 +285,11 @@ class SimBase:
         Only the chassis is checked: its box covers the wheels' footprint, so an obstacle
         reaches it first (unless lower than the 2.5 cm ground clearance).
         """
+        points = _contact_points(bodyA=self.robot, linkIndexA=-1, physicsClientId=self.cid)
+        if not points:   # the common case, every step of a run without contact
+            return []
         seen: dict[int, Contact] = {}
-        for cp in p.getContactPoints(bodyA=self.robot, linkIndexA=-1, physicsClientId=self.cid):
+        for cp in points:
             index = self._obstacle_index.get(cp[2])
             if index is not None and index not in seen:
                 seen[index] = Contact(index, float(cp[6][0]), float(cp[6][1]))

@@ -23,6 +23,7 @@ from common.params import arg_type
 from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
+from nodes.planner import lazy
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
@@ -61,6 +62,7 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 def run(args: argparse.Namespace) -> int:
     log = setup_logging(NODE_NAME, args.log_level)
+    lazy.numba_without_scipy()   # numba would import scipy.linalg for nothing (nodes/planner/lazy.py)
     try:
         planner = make_planner(args.planner, args.params, [*preset_sets(args.preset), *args.set])
     except ConfigError as exc:

@@ -47,10 +47,11 @@ class ScanView:
     valid: np.ndarray       # (B,) bool
 
 
-def scan_view(scan: Scan, odom: Odometry) -> ScanView:
+def scan_view(scan: Scan, odom: Odometry, use_numba: bool = True) -> ScanView:
     """Beams -> world frame using the robot pose and the sensor offset; drop invalid returns.
 
-    A return is valid when finite and within [range_min, range_max].
+    A return is valid when finite and within [range_min, range_max]. ``use_numba``: the
+    compiled loop (if numba is installed) or numpy; the same values bit for bit.
     """
     c, s = math.cos(odom.yaw), math.sin(odom.yaw)
     origin = np.array([odom.x + c * scan.sensor_x - s * scan.sensor_y,
@@ -60,7 +61,7 @@ def scan_view(scan: Scan, odom: Odometry) -> ScanView:
         scan.angle_increment, ranges.size, math.copysign(1.0, scan.angle_increment))
     # numpy's cos/sin of every beam (elementwise: the same values as of the valid ones alone)
     ranges, points, valid = scan_points(ranges, np.cos(angles), np.sin(angles), scan.range_min,
-                                        scan.range_max, origin)
+                                        scan.range_max, origin, use_numba)
     return ScanView(origin, angles, ranges, points, valid)
 
 
@@ -133,6 +134,9 @@ class Planner:
 
     def __init__(self, strategy: Strategy, apf: APFParams | None = None):
         self.strategy = strategy
+        # the scan view compiled only where the strategy runs numba anyway (PAPF, IAPF): a
+        # planner without kernels never imports numba (nodes/planner/lazy.py); same values
+        self.jit_scan = bool(getattr(strategy, "uses_numba", False))
         self.apf = apf or APFParams()
         self.goal: Goal | None = None
         self.state = "idle"
@@ -210,7 +214,7 @@ class Planner:
         if dist <= self.goal.tolerance:
             return self._stop(t, "reached", f"within {self.goal.tolerance} m of the goal", dist, t0)
         apf = self._params_for(len(scan.ranges))
-        view = scan_view(scan, odom)
+        view = scan_view(scan, odom, self.jit_scan)
         observe = getattr(self.strategy, "observe", None)
         if observe is not None:
             observe(self.objects, self.road, t / NS_PER_S, odom.v)
@@ -235,7 +239,7 @@ class Planner:
         """Compile the JIT kernels (the scan view; the strategy's ``warm_up(apf)`` if any)."""
         scan_view(Scan(stamp_ns=0, angle_min=0.0, angle_increment=0.5, range_min=0.1,
                        range_max=5.0, ranges=np.array([1.0, np.inf, 2.0], np.float32)),
-                  Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+                  Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0), self.jit_scan)
         warm = getattr(self.strategy, "warm_up", None)
         if warm is not None:
             warm(self.apf)

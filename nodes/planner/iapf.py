@@ -39,7 +39,10 @@ from nodes.planner.iapf_fields import (
     stop_deceleration,
     traditional_gradient,
 )
-from nodes.planner.iapf_kernel import HALF, pack_obstacles, pack_params, rollout
+from nodes.planner.lazy import lazy_module
+
+# the rollout kernel (and numba) loads when an IAPF core is built, not with the registry
+iapf_kernel = lazy_module("nodes.planner.iapf_kernel")
 
 
 @dataclass(frozen=True)
@@ -181,7 +184,7 @@ class IAPFCore:
 
     def __init__(self, params: IAPFParams | None = None, use_numba: bool = True):
         self.p = params or IAPFParams()
-        self.use_numba = use_numba
+        self.use_numba = use_numba and iapf_kernel.HAVE_NUMBA   # loads the kernel (numba) now
         self.temp_goal_y: float | None = None
         self.t_goal = -math.inf
         self._prm = None       # the kernel's params vector (packed once)
@@ -251,9 +254,10 @@ class IAPFCore:
         drive into). Runs :func:`nodes.planner.iapf_kernel.rollout` (numba when available)."""
         p = self.p
         if self._prm is None:
-            self._prm = pack_params(p)
-        self._prm[HALF] = p.goal_half_period_lanes * lanes.width
-        return rollout((s.x, s.y, s.v, s.yaw), pack_obstacles(tracks), self._prm,
+            self._prm = iapf_kernel.pack_params(p)
+        self._prm[iapf_kernel.HALF] = p.goal_half_period_lanes * lanes.width
+        k = iapf_kernel
+        return k.rollout((s.x, s.y, s.v, s.yaw), k.pack_obstacles(tracks), self._prm,
                        (lanes.y_min, lanes.width, lanes.count), y_goal, p.b3, p.predict_step_s,
                        p.f_step, self.use_numba)
 

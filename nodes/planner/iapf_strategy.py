@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
+from nodes.planner import lazy
 from nodes.planner.apf import APFParams
 from nodes.planner.core import Plan, ScanView
 from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
@@ -38,6 +39,7 @@ class IAPFStrategy:
 
     def __init__(self, params: IAPFParams | None = None):
         self.params = params or IAPFParams()
+        self.uses_numba = lazy.HAVE_NUMBA   # its rollout kernel; the scan view compiled too
         self.tracks: tuple[Track, ...] = ()
         self.lanes: Lanes | None = None
         self.t_s = 0.0

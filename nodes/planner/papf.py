@@ -40,8 +40,11 @@ import numpy as np
 
 from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
-from nodes.planner.kernels import HAVE_NUMBA, field_force, predict_paths, rollout, tail_stagnation
-from nodes.planner.papf_kernel import plan_compiled
+from nodes.planner.lazy import lazy_module
+
+# the kernels (and numba) load when a PAPF planner is built, not with the registry
+kernels = lazy_module("nodes.planner.kernels")
+papf_kernel = lazy_module("nodes.planner.papf_kernel")
 
 
 @dataclass(frozen=True)
@@ -118,7 +121,7 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
         obstacles = obstacles[np.sum(rel * rel, axis=1) <= reach * reach]
     if not (pp.stop_at_goal and pp.replace_oldest_quark):
         return _predict_loop(pos, goal, obstacles, apf, pp, quarks)
-    path, quarks, abandoned, resolved, reached = predict_paths(
+    path, quarks, abandoned, resolved, reached = kernels.predict_paths(
         pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q, pp.step_m, pp.i_max,
         pp.n_stag, pp.stag_radius, pp.max_quarks, pp.pull_range, pp.use_numba)
     return Prediction(path, quarks, abandoned, resolved, reached)
@@ -144,12 +147,12 @@ def _predict_loop(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks) 
         budget = pp.max_quarks - quarks.shape[0]
     abandoned = []
     while True:
-        path, reached = rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
+        path, reached = kernels.rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
                                 pp.step_m, pp.i_max + pp.n_stag, stop, pp.use_numba, pp.pull_range)
         if reached:
             return Prediction(path, quarks, abandoned, True, True)
         main = path[: pp.i_max + 1]
-        stuck, mean = tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
+        stuck, mean = kernels.tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
         if not stuck:
             return Prediction(main, quarks, abandoned, True, False)
         if len(abandoned) >= budget:
@@ -215,6 +218,8 @@ class PAPFStrategy:
     def __init__(self, params: PAPFParams | None = None):
         self.params = params or PAPFParams()
         self.quarks = None
+        # loads the kernels now (numba with them), in the thread that builds the planner
+        self.uses_numba = self.params.use_numba and kernels.HAVE_NUMBA
 
     def reset(self) -> None:
         self.quarks = None
@@ -222,14 +227,14 @@ class PAPFStrategy:
     def warm_up(self, apf: APFParams) -> None:
         """Compile the kernels (numba) before the node declares itself ready."""
         predict(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf, self.params)
-        if self.params.use_numba and HAVE_NUMBA:   # the literal switches' loop (rollout, tail)
+        if self.params.use_numba and kernels.HAVE_NUMBA:   # the literal switches' loop (rollout, tail)
             _predict_loop(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
                           self.params, np.zeros((0, 2)))
-        if self.params.use_numba and HAVE_NUMBA:   # the compiled cycle, with and without quarks
+        if self.params.use_numba and kernels.HAVE_NUMBA:   # the compiled cycle, with and without quarks
             for quarks in (None, np.array([[0.4, 0.3]])):
-                plan_compiled(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
+                papf_kernel.plan_compiled(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
                               self.params, quarks)
-        field_force(np.zeros(2), np.array([1.0, 0.0]), 1.0, np.array([[0.5, 0.1]]), 1.0, 0.5,
+        kernels.field_force(np.zeros(2), np.array([1.0, 0.0]), 1.0, np.array([[0.5, 0.1]]), 1.0, 0.5,
                     self.params.use_numba)
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
@@ -237,19 +242,19 @@ class PAPFStrategy:
         pp = self.params
         obstacles = view.points
         kept = self.quarks if pp.persist_quarks else None
-        if pp.use_numba and HAVE_NUMBA and pp.stop_at_goal and len(pos) == 2:
+        if pp.use_numba and kernels.HAVE_NUMBA and pp.stop_at_goal and len(pos) == 2:
             return self._plan_compiled(pos, goal, obstacles, apf, kept)
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
         g_goal, g_obs = apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o
         if pred.resolved or not pp.unresolved_global_goal:       # eq. 2: the direction line
-            f_apf = field_force(pos, goal, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
+            f_apf = kernels.field_force(pos, goal, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
             direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
             target = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
             mode = ("bypass" if pred.quarks.shape[0] else "drive") if pred.resolved else "unresolved"
         else:   # no stagnation-free path after M repetitions: eq. 7 with the global goal
             target, mode = goal, "unresolved"
-        force = (field_force(pos, target, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
+        force = (kernels.field_force(pos, target, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
                  + quark_force(pos, pred.quarks, apf, pp))
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
@@ -258,7 +263,7 @@ class PAPFStrategy:
     def _plan_compiled(self, pos, goal, obstacles, apf: APFParams, kept) -> Plan:
         """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf_kernel.plan_compiled`)."""
         pp = self.params
-        out = plan_compiled(pos, goal, obstacles, apf, pp, kept)
+        out = papf_kernel.plan_compiled(pos, goal, obstacles, apf, pp, kept)
         path, quarks, abandoned, resolved, target, force = out
         self.quarks = quarks
         if resolved:

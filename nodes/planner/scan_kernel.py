@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.planner.kernels import HAVE_NUMBA, numba
+from nodes.planner.lazy import HAVE_NUMBA, numba_module
 
 
 def _scan_points_numpy(ranges, cos_a, sin_a, range_min, range_max, finite_limits, origin):
@@ -25,27 +25,37 @@ def _scan_points_numpy(ranges, cos_a, sin_a, range_min, range_max, finite_limits
     return np.where(valid, ranges, np.inf), points.reshape(-1, 2), valid
 
 
-if HAVE_NUMBA:
-    @numba.njit(cache=True, error_model="numpy")
-    def _scan_points_numba(ranges, cos_a, sin_a, range_min, range_max, finite_limits,
-                           origin):  # pragma: no cover - compiled
-        n = ranges.shape[0]
-        out = np.empty(n)
-        points = np.empty((n, 2))
-        valid = np.empty(n, np.bool_)
-        k = 0
-        for i in range(n):
-            r = ranges[i]
-            ok = r >= range_min and r <= range_max and (finite_limits or np.isfinite(r))
-            valid[i] = ok
-            if ok:
-                out[i] = r
-                points[k, 0] = origin[0] + r * cos_a[i]
-                points[k, 1] = origin[1] + r * sin_a[i]
-                k += 1
-            else:
-                out[i] = np.inf
-        return out, points[:k], valid
+def _scan_points_loop(ranges, cos_a, sin_a, range_min, range_max, finite_limits,
+                       origin):  # pragma: no cover - compiled
+    """The compiled form's source (numba.njit of this, built by :func:`_compiled`)."""
+    n = ranges.shape[0]
+    out = np.empty(n)
+    points = np.empty((n, 2))
+    valid = np.empty(n, np.bool_)
+    k = 0
+    for i in range(n):
+        r = ranges[i]
+        ok = r >= range_min and r <= range_max and (finite_limits or np.isfinite(r))
+        valid[i] = ok
+        if ok:
+            out[i] = r
+            points[k, 0] = origin[0] + r * cos_a[i]
+            points[k, 1] = origin[1] + r * sin_a[i]
+            k += 1
+        else:
+            out[i] = np.inf
+    return out, points[:k], valid
+
+
+_COMPILED = []   # the numba dispatcher, once built
+
+
+def _compiled():
+    """The compiled loop, built at the first call that wants it: numba is imported only by
+    a planner that runs compiled code (:mod:`nodes.planner.lazy`)."""
+    if not _COMPILED:
+        _COMPILED.append(numba_module().njit(cache=True, error_model="numpy")(_scan_points_loop))
+    return _COMPILED[0]
 
 
 def scan_points(ranges: np.ndarray, cos_a: np.ndarray, sin_a: np.ndarray, range_min: float,
@@ -57,6 +67,5 @@ def scan_points(ranges: np.ndarray, cos_a: np.ndarray, sin_a: np.ndarray, range_
     """
     finite = bool(np.isfinite(range_min) and np.isfinite(range_max))
     if use_numba and HAVE_NUMBA:
-        return _scan_points_numba(ranges, cos_a, sin_a, float(range_min), float(range_max),
-                                  finite, origin)
+        return _compiled()(ranges, cos_a, sin_a, float(range_min), float(range_max), finite, origin)
     return _scan_points_numpy(ranges, cos_a, sin_a, range_min, range_max, finite, origin)

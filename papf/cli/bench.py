@@ -16,6 +16,7 @@ import bench
 BENCHES = {
     "planner": "planner cycle time p50/p99 per planner, incl. the PAPF worst case (M = 10)",
     "planner_ab": "one planner case, this code against another checkout's, in alternating turns",
+    "run_ab": "papf run, this code against another checkout's, alternated (wall, CPU, start-up)",
     "sim": "sim-time / wall-time of papf run (full stack, CPU per process); --loop: driver + LiDAR",
     "sweep": "full-stack runs per hour of a sweep at --workers 1 and 2 (Dask)",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",

@@ -1,0 +1,115 @@
+"""Before/after ``papf run``, alternated: ``papf bench run_ab --before DIR [options]``.
+
+Runs the whole command ``python -m papf run --world W --planner P --seed S --json`` with
+this tree's code and with another checkout's (``--before DIR``, e.g. ``git worktree add
+/tmp/old COMMIT``), one after the other in turns (before, after, before, …), so the load
+of other jobs on a shared machine falls on both sides alike. Per run: the command's wall
+time from start to exit (interpreter start-up, imports, start-up and shut-down of every
+process included), the run's own ``wall_time_s`` from its JSON, and the CPU seconds of the
+command and every process it started (``RUSAGE_CHILDREN``). ``--timeout 0.2`` times
+start-up and shut-down alone. Prints one JSON line per run and one summary per side and
+planner (medians and minima; whether every run gave the same figures) and writes the
+summaries with ``--csv``. Speed is reported, never asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+FIELDS = ("date", "code", "planner", "timeout_s", "runs", "command_wall_med_s", "command_wall_min_s",
+          "run_wall_med_s", "run_wall_min_s", "cpu_med_s", "cpu_min_s", "sim_s", "sim_over_wall_med",
+          "same_figures", "load_min", "load_max")
+
+
+def one_run(tree: Path, planner: str, world: str, seed: int, timeout_s: float, port: int) -> dict:
+    """One ``papf run`` of ``tree``'s code; wall and CPU of the command and its processes."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    cmd = [sys.executable, "-m", "papf", "run", "--world", world, "--planner", planner,
+           "--seed", str(seed), "--json", "--port", str(port), "--timeout", f"{timeout_s:g}"]
+    load = os.getloadavg()[0]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    out = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    lines = [x for x in out.stdout.splitlines() if x.startswith("{")]
+    if not lines:
+        raise SystemExit(f"bench run_ab: {tree}: no JSON from papf run (exit {out.returncode}): "
+                         f"{out.stderr.strip().splitlines()[-1:]}")
+    res = json.loads(lines[-1])
+    return {"bench": "run_ab_run", "tree": str(tree), "planner": planner, "timeout_s": timeout_s,
+            "command_wall_s": round(wall, 3), "run_wall_s": res.pop("wall_time_s"),
+            "cpu_s": round(cpu, 3), "load_1min": load, "figures": res}
+
+
+def summary(label: str, runs: list[dict]) -> dict:
+    med, low = statistics.median, min
+    walls, inner, cpus = ([r[k] for r in runs] for k in ("command_wall_s", "run_wall_s", "cpu_s"))
+    sim = runs[0]["figures"]["sim_time_s"]
+    return {"date": time.strftime("%Y-%m-%dT%H:%M"), "code": label, "planner": runs[0]["planner"],
+            "timeout_s": runs[0]["timeout_s"], "runs": len(runs),
+            "command_wall_med_s": round(med(walls), 2), "command_wall_min_s": round(low(walls), 2),
+            "run_wall_med_s": round(med(inner), 2), "run_wall_min_s": round(low(inner), 2),
+            "cpu_med_s": round(med(cpus), 2), "cpu_min_s": round(low(cpus), 2), "sim_s": sim,
+            "sim_over_wall_med": round(sim / med(walls), 1),
+            "same_figures": all(r["figures"] == runs[0]["figures"] for r in runs),
+            "load_min": round(min(r["load_1min"] for r in runs), 1),
+            "load_max": round(max(r["load_1min"] for r in runs), 1)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(prog="papf bench run_ab", description=__doc__.splitlines()[0])
+    parser.add_argument("--before", type=Path, required=True, help="the other checkout (its root)")
+    parser.add_argument("--labels", default="before,after", help="the two sides' names (before,after)")
+    parser.add_argument("--planners", default="apf,papf")
+    parser.add_argument("--world", default="energy")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--rounds", type=int, default=3, help="runs per side and planner (3)")
+    parser.add_argument("--timeout", type=float, default=300.0,
+                        help="sim seconds at most (0.2: start-up and shut-down alone)")
+    parser.add_argument("--port", type=int, default=17447, help="the runs' router port (17447)")
+    parser.add_argument("--csv", type=Path, help="append the summaries to this CSV")
+    parser.add_argument("--jsonl", type=Path, help="append every run's JSON line to this file")
+    a = parser.parse_args()
+    labels = a.labels.split(",")
+    root = HERE.parent
+    if not (a.before / "papf" / "__main__.py").is_file() or len(labels) != 2 or a.rounds < 1:
+        parser.error("--before must be a checkout (with papf/__main__.py), --labels two names, "
+                     "--rounds >= 1")
+    sides = ((labels[0], a.before.resolve()), (labels[1], root))
+    runs: dict[tuple[str, str], list[dict]] = {}
+    for _ in range(a.rounds):
+        for planner in a.planners.split(","):
+            for label, tree in sides:
+                r = one_run(tree, planner, a.world, a.seed, a.timeout, a.port)
+                r["code"] = label
+                runs.setdefault((label, planner), []).append(r)
+                print(json.dumps(r), flush=True)
+                if a.jsonl:
+                    with a.jsonl.open("a") as fh:
+                        fh.write(json.dumps(r) + "\n")
+    rows = [summary(label, rs) for (label, _), rs in runs.items()]
+    for row in rows:
+        print(json.dumps({"bench": "run_ab", **row}), flush=True)
+    if a.csv:
+        new = not a.csv.exists()
+        with a.csv.open("a", newline="") as fh:
+            w = csv.DictWriter(fh, FIELDS)
+            if new:
+                w.writeheader()
+            w.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()
