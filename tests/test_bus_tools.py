@@ -153,7 +153,7 @@ def test_teleop_in_a_pty_publishes_the_keys_on_cmd_vel_with_the_clock_stamp(sess
     finally:
         if th.is_alive():     # a failed check: let the teleop quit before its terminal closes
             os.write(master, b"q")
-            th.join(5.0)
+            th.join(30.0)
         sub.undeclare()
         os.close(master)
         os.close(slave)
@@ -231,8 +231,9 @@ def test_topic_cli_echo_once_and_timeout(router, session):
         th.join()
 
 
-def _fake_planner(session, reached_after: int):
-    """Answers a goal with ready, then counts down the distance and reports reached."""
+def _fake_planner(session, reached_after: int, threads: list[threading.Thread]):
+    """Answers a goal with ready, then counts down the distance and reports reached (on a
+    thread added to ``threads``: to be joined before the session closes)."""
     goals: list[Goal] = []
 
     def on_goal(sample) -> None:
@@ -240,7 +241,8 @@ def _fake_planner(session, reached_after: int):
         goals.append(g)
         session.put(KEYS.planner_status, PlannerStatus(stamp_ns=0, state="ready").to_bytes())
         if len(goals) == 1:
-            threading.Thread(target=drive, daemon=True).start()
+            threads.append(threading.Thread(target=drive, daemon=True))
+            threads[-1].start()
 
     def drive() -> None:
         for i in range(reached_after + 1):
@@ -257,7 +259,8 @@ def test_goal_cli_handshake_start_run_and_outcome(router, session):
     events: list[Event] = []
     ev_sub = session.declare_subscriber(KEYS.events,
                                         lambda s: events.append(Event.from_bytes(s.payload.to_bytes())))
-    sub, goals = _fake_planner(session, reached_after=20)
+    threads: list[threading.Thread] = []
+    sub, goals = _fake_planner(session, reached_after=20, threads=threads)
     try:
         r = subprocess.run([sys.executable, "-m", "papf", "goal", "3", "-1.5", "--tolerance", "0.2",
                             "--start-run", "--connect", router],
@@ -272,6 +275,8 @@ def test_goal_cli_handshake_start_run_and_outcome(router, session):
     finally:
         sub.undeclare()
         ev_sub.undeclare()
+        for th in threads:   # done putting before the session closes ("Already borrowed")
+            th.join(30)
 
 
 def test_goal_superseded_by_another_goal_exits_6(router, session):
@@ -279,12 +284,15 @@ def test_goal_superseded_by_another_goal_exits_6(router, session):
 
     from common.transport import zenoh_config
 
+    timers: list[threading.Timer] = []
+
     def on_goal(sample) -> None:
         g = Goal.from_bytes(sample.payload.to_bytes())
         session.put(KEYS.planner_status, PlannerStatus(stamp_ns=0, state="ready").to_bytes())
         if g.x == 1.0:   # someone else re-targets the planner right after
-            threading.Timer(0.3, lambda: session.put(KEYS.goal, Goal(
-                stamp_ns=0, x=5.0, y=0.0).to_bytes())).start()
+            timers.append(threading.Timer(0.3, lambda: session.put(KEYS.goal, Goal(
+                stamp_ns=0, x=5.0, y=0.0).to_bytes())))
+            timers[-1].start()
 
     sub = session.declare_subscriber(KEYS.goal, on_goal)
     try:
@@ -293,6 +301,8 @@ def test_goal_superseded_by_another_goal_exits_6(router, session):
         assert res.outcome == "superseded" and res.exit_code == 6 and "(5, 0)" in res.reason
     finally:
         sub.undeclare()
+        for t in list(timers):   # done putting before the session closes ("Already borrowed")
+            t.join(30)
 
 
 def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypatch, router):

@@ -132,6 +132,7 @@ def test_split_over_netns_survives_a_link_cut(netns, tmp_path):
             time.sleep(0.05)
         cut_ns, cut_wall = time.monotonic_ns(), time.time_ns()
         netns.link(up=False)
+        down_ns = time.monotonic_ns()   # the link went down while `ip` ran: down by now
         time.sleep(CUT_S)
         restore_ns, restore_wall = time.monotonic_ns(), time.time_ns()
         netns.link(up=True)
@@ -158,7 +159,9 @@ def test_split_over_netns_survives_a_link_cut(netns, tmp_path):
     v_cut = before[-1]["v"]
     braking = next(c for c in during if c["v"] < v_cut - 1e-9 and c["v"] < 0.3 - 1e-9)
     standstill = next(c for c in during if c["v"] == 0.0 and c["w"] == 0.0)
-    stop_s, still_s = (braking["t_ns"] - cut_ns) / 1e9, (standstill["t_ns"] - cut_ns) / 1e9
+    # from the end of the `ip` command: its own start-up on a busy machine (often longer than
+    # the slack) is not the watchdog's; a slow or missing watchdog still fails
+    stop_s, still_s = (braking["t_ns"] - down_ns) / 1e9, (standstill["t_ns"] - down_ns) / 1e9
     print(f"\nlink cut: stop command after {stop_s:.3f} s, standstill after {still_s:.3f} s")
     assert stop_s <= WATCHDOG_S + SLACK_S
     assert any(c["v"] > 0.0 for c in cmds if c["t_ns"] > restore_ns), "did not drive on"

@@ -137,11 +137,11 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
             for k in ("cmd_vel", "planner/state", "planner/status")]
     try:
         session.put(keys.goal, Goal(stamp_ns=5, x=2.0, y=0.0).to_bytes())
-        k, data = inbox.get(timeout=10)
+        k, data = inbox.get(timeout=30)
         assert k == "planner/status" and PlannerStatus.from_bytes(data).state == "ready"
         session.put(keys.scan, scan(100 * MS).to_bytes())
         session.put(keys.odom, odom(100 * MS).to_bytes())
-        got = dict(inbox.get(timeout=10) for _ in range(3))   # keys may interleave
+        got = dict(inbox.get(timeout=30) for _ in range(3))   # keys may interleave
         cmd = Twist.from_bytes(got["cmd_vel"])
         assert cmd.stamp_ns == 100 * MS and cmd.v == pytest.approx(0.2)
         state = PlannerState.from_bytes(got["planner/state"])
@@ -150,7 +150,7 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
         session.put(keys.scan, b"garbage")                            # dropped, node lives on
         session.put(keys.scan, scan(200 * MS).to_bytes())
         session.put(keys.odom, odom(200 * MS, x=1.95).to_bytes())
-        got = dict(inbox.get(timeout=10) for _ in range(3))
+        got = dict(inbox.get(timeout=30) for _ in range(3))
         assert PlannerStatus.from_bytes(got["planner/status"]).state == "reached"
     finally:
         for s in subs:

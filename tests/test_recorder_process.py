@@ -87,7 +87,7 @@ def test_sigterm_closes_a_complete_file_with_every_message(router, spawn, sessio
         session.put(key, data)
     assert wait_until(lambda: recovered_count(out, tmp_path) == len(sent), 20)
     os.killpg(child.proc.pid, signal.SIGTERM)
-    assert child.proc.wait(timeout=10) == 0
+    assert child.proc.wait(timeout=30) == 0
 
     with Recording(out) as rec:  # complete: opens without recover
         got = [(m.key, m.data) for m in rec.raw(log_time_order=False)]

@@ -98,7 +98,7 @@ def test_record_then_replay_over_zenoh(router, spawn, session, tmp_path):
         session.put(f"live/{topic}", data)
     assert wait_until(lambda: recovered_count(out, tmp_path) == len(sent), 20)
     os.killpg(child.proc.pid, signal.SIGTERM)
-    assert child.proc.wait(timeout=10) == 0
+    assert child.proc.wait(timeout=30) == 0
 
     got, done = [], threading.Event()
 
@@ -113,7 +113,7 @@ def test_record_then_replay_over_zenoh(router, spawn, session, tmp_path):
         assert wait_until(lambda: probe.matching_status.matching), "subscription not seen"
         probe.undeclare()
         stats = replay(out, session, rate=10.0, namespace="replayed")
-        assert done.wait(10), f"received {len(got)} of {len(sent)}"
+        assert done.wait(30), f"received {len(got)} of {len(sent)}"
         sub.undeclare()
     assert stats.messages == len(sent)
     assert got == [(f"replayed/{t}", d) for t, d in sent]
