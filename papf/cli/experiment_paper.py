@@ -1,8 +1,9 @@
-"""``papf experiment wang | horizon | deviations | cases``: the paper-fidelity studies (issue 14).
+"""``papf experiment wang | horizon | deviations | test1-sweep | cases``: the paper-fidelity studies (issue 14).
 
 ``wang`` Wang's Figs. 5-12 as published and on the ROSbot (:mod:`papf.experiments.wang_figs`);
 ``horizon`` PAPF's lambda study of Fig. 7 and ``deviations`` each of our PAPF deviations
-switched alone (:mod:`papf.experiments.paper_study`), offline; ``cases`` the studies behind
+switched alone (:mod:`papf.experiments.paper_study`), offline; ``test1-sweep`` the APF-only
+calibration of papf-test-1's box (:mod:`papf.experiments.test1_sweep`); ``cases`` the studies behind
 the older planner tables (:mod:`papf.experiments.doc_cases`). Exit code 0 done, 2 usage.
 """
 
@@ -55,6 +56,13 @@ def add_paper_studies(exp) -> None:
                    help="also switch each deviation off alone from the default preset")
     d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
 
+    t = _study(exp, "test1-sweep", "papf-test-1's box sized and placed by APF alone, offline",
+               "APF (offline, seeds 0-2) on papf-test-1 with its box's side, distance along the "
+               "start-goal line and offset to its right swept; picks the box whose mean APF path is "
+               "nearest the paper's 4.50 m (Table 2); writes test1-sweep.md/.csv and "
+               "test1-sweep-runs.csv into --out.", cmd_test1_sweep)
+    t.add_argument("--seeds", default="0,1,2", metavar="S1,S2", help="LiDAR noise seeds (default 0,1,2)")
+
     c = _study(exp, "cases", "the small studies behind the older planner tables of the docs",
                "Named studies (AR-APF and Wang ablations and results, the energy world through the "
                "stack with every planner and smaller d_o): each case's runs offline and/or through "
@@ -87,6 +95,20 @@ def cmd_deviations(args) -> int:
         raise ConfigError(f"--n {args.n}: need at least 1 world")
     run_deviations(args.out, args.n, args.seed, both=args.both)
     print((Path(args.out) / "deviations.md").read_text())
+    return 0
+
+
+def cmd_test1_sweep(args) -> int:
+    from papf.experiments.test1_sweep import run_sweep
+
+    try:
+        seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
+    except ValueError:
+        seeds = []
+    if not seeds:
+        raise ConfigError(f"--seeds {args.seeds!r}: give comma-separated integers, e.g. 0,1,2")
+    run_sweep(args.out, seeds=seeds)
+    print((Path(args.out) / "test1-sweep.md").read_text())
     return 0
 
 
