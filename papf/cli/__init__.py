@@ -83,3 +83,19 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:   # `papf … | head`: the reader has what it wanted
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+
+
+def entry() -> None:
+    """The ``papf`` console script and ``python -m papf``: :func:`main`, then the exit.
+
+    After ``papf run`` — every process it started stopped and their last output lines printed
+    (:meth:`papf.supervisor.Supervisor.stop`), its Zenoh session closed, the result printed —
+    the interpreter's teardown of numpy, Zenoh and rich is skipped
+    (:func:`common.transport.exit_fast`: logs and streams flushed, then ``os._exit``).
+    """
+    code = main()
+    if sys.argv[1:2] == ["run"]:
+        from common.transport import exit_fast  # loaded by the run already: no import cost
+
+        exit_fast(code)
+    sys.exit(code)
