@@ -100,14 +100,15 @@ def main() -> None:
     ap.add_argument("--before", type=Path, help="root of the other checkout (the 'before' code)")
     ap.add_argument("--labels", default="before,after", help="names of the two sides (before,after)")
     ap.add_argument("--planner", default="papf")
-    ap.add_argument("--set", action="append", default=None, help="planner setting (persist_quarks=false)")
+    ap.add_argument("--set", action="append", default=None, help="planner setting, repeatable (default for papf: persist_quarks=false, the worst case; none for the others)")
     ap.add_argument("--scene", default="trap")
     ap.add_argument("--rounds", type=int, default=30, help="turns per side (30)")
     ap.add_argument("--chunk", type=int, default=50, help="cycles per turn (50)")
     ap.add_argument("--csv", type=Path, help="write the two rows to this CSV")
     ap.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    args.set = ["persist_quarks=false"] if args.set is None else args.set
+    if args.set is None:
+        args.set = ["persist_quarks=false"] if args.planner == "papf" else []
     if args.serve:
         worker(args.scene, args.planner, args.set, args.chunk)
         return

@@ -42,5 +42,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     try:
         runpy.run_path(str(script), run_name="__main__")
     except SystemExit as exc:
+        if isinstance(exc.code, str):    # a benchmark's own one-line error
+            print(f"papf bench {args.name}: {exc.code}", file=sys.stderr)
+            return 2
         return int(exc.code or 0)
     return 0
