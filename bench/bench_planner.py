@@ -29,7 +29,6 @@ PAPF worst case alone); ``--csv FILE`` writes the rows as CSV (``docs/data/bench
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -40,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.csvrows import write_rows
 from common.ports import plain
 from nodes.planner.iapf_fields import Track
 from nodes.planner.registry import PLANNERS, make_planner
@@ -148,13 +148,8 @@ def main() -> None:
     if args.csv:
         code = _commit() if args.label is None else args.label
         date = time.strftime("%Y-%m-%dT%H:%M", time.gmtime())
-        new = not (args.append and args.csv.exists() and args.csv.stat().st_size)
-        args.csv.parent.mkdir(parents=True, exist_ok=True)
-        with args.csv.open("w" if new else "a", newline="") as fh:
-            out = csv.DictWriter(fh, CSV_FIELDS, extrasaction="ignore")
-            if new:
-                out.writeheader()
-            out.writerows({"date": date, "code": code, **row} for row in rows)
+        write_rows(args.csv, CSV_FIELDS, ({"date": date, "code": code, **row} for row in rows),
+                   append=args.append)
 
 
 def _commit() -> str:

@@ -13,7 +13,6 @@ worker thread to the command and for the whole step, p50 / p99 over every cycle,
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import subprocess
@@ -22,6 +21,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from bench.csvrows import write_rows
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ("date", "code", "planner", "settings", "scene", "cycles", "cmd_cpu_p50_us",
@@ -100,7 +101,9 @@ def main() -> None:
     ap.add_argument("--before", type=Path, help="root of the other checkout (the 'before' code)")
     ap.add_argument("--labels", default="before,after", help="names of the two sides (before,after)")
     ap.add_argument("--planner", default="papf")
-    ap.add_argument("--set", action="append", default=None, help="planner setting, repeatable (default for papf: persist_quarks=false, the worst case; none for the others)")
+    ap.add_argument("--set", action="append", default=None,
+                    help="planner setting, repeatable (default for papf: persist_quarks=false, "
+                         "the worst case; none for the others)")
     ap.add_argument("--scene", default="trap")
     ap.add_argument("--rounds", type=int, default=30, help="turns per side (30)")
     ap.add_argument("--chunk", type=int, default=50, help="cycles per turn (50)")
@@ -123,11 +126,7 @@ def main() -> None:
     for row in rows:
         print(json.dumps(row))
     if args.csv:
-        args.csv.parent.mkdir(parents=True, exist_ok=True)
-        with args.csv.open("w", newline="") as fh:
-            out = csv.DictWriter(fh, FIELDS)
-            out.writeheader()
-            out.writerows(rows)
+        write_rows(args.csv, FIELDS, rows)
 
 
 if __name__ == "__main__":

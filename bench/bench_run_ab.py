@@ -15,7 +15,6 @@ summaries with ``--csv``. Speed is reported, never asserted.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import resource
@@ -24,6 +23,8 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+from bench.csvrows import write_rows
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ("date", "code", "planner", "timeout_s", "runs", "command_wall_med_s", "command_wall_min_s",
@@ -103,12 +104,7 @@ def main() -> None:
     for row in rows:
         print(json.dumps({"bench": "run_ab", **row}), flush=True)
     if a.csv:
-        new = not a.csv.exists()
-        with a.csv.open("a", newline="") as fh:
-            w = csv.DictWriter(fh, FIELDS)
-            if new:
-                w.writeheader()
-            w.writerows(rows)
+        write_rows(a.csv, FIELDS, rows, append=True)
 
 
 if __name__ == "__main__":

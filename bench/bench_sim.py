@@ -31,7 +31,6 @@ trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import logging
 import os
@@ -45,6 +44,7 @@ sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
+from bench.csvrows import replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.supervisor import Supervisor, free_port, wait_port  # noqa: E402
@@ -144,10 +144,6 @@ CSV_FIELDS = ("label", "planner", "world", "seed", "runs", "process", "cpu_s", "
 def write_csv(path: Path, label: str, summaries: list[dict]) -> None:
     """Rows of ``label`` (one per process, then ``all`` with the wall time) replace that
     label's rows in ``path``; other labels' rows stay."""
-    kept = []
-    if path.exists():
-        with path.open(newline="") as fh:
-            kept = [r for r in csv.DictReader(fh) if r["label"] != label]
     rows = []
     for s in summaries:
         base = {"label": label, "planner": s["planner"], "world": s["world"], "seed": s["seed"],
@@ -156,10 +152,7 @@ def write_csv(path: Path, label: str, summaries: list[dict]) -> None:
                  for n, c in s["processes"].items()]
         rows.append({**base, "process": "all", "cpu_s": f"{s['cpu_s']:.2f}",
                      "wall_s": f"{s['wall_s']:.2f}", "sim_over_wall": f"{s['sim_over_wall']:.1f}"})
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, CSV_FIELDS, restval="")
-        w.writeheader()
-        w.writerows(kept + rows)
+    replace_label(path, CSV_FIELDS, label, rows)
 
 
 def summarize(runs_file: Path, csv_path: Path | None, label: str | None) -> None:
@@ -201,14 +194,7 @@ def floor(planners: list[str], world: str, seed: int, csv_path: Path | None,
     rows.append({"planner": "", "part": "one Zenoh hop (p50), 3 per cycle on the chain",
                  "cpu_s": "", "us_per_cycle": f"{hop['hop_us_p50']:.0f}"})
     if csv_path:
-        kept = []
-        if csv_path.exists():
-            with csv_path.open(newline="") as fh:
-                kept = [r for r in csv.DictReader(fh) if r.get("label", "") != (label or "")]
-        with csv_path.open("w", newline="") as fh:
-            w = csv.DictWriter(fh, FLOOR_FIELDS, restval="", extrasaction="ignore")
-            w.writeheader()
-            w.writerows(kept + [{"label": label or "", **r} for r in rows])
+        replace_label(csv_path, FLOOR_FIELDS, label or "", rows)
 
 
 def main() -> None:

@@ -17,7 +17,6 @@ asserted.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import platform
@@ -27,6 +26,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.csvrows import write_rows  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
 from papf.experiments.sweep import SweepOptions, map_runs  # noqa: E402
 from papf.experiments.trials import quiet_runner_logs, run_job, trial_job  # noqa: E402
@@ -61,17 +61,6 @@ def bench(runs: int, timeout_s: float, workers: int) -> dict:
             "durations_s": [round(t.duration_s, 2) for t in trials]}   # JSON only, per run
 
 
-def write_rows(path: Path, rows: list[dict], append: bool = False) -> None:
-    """Write ``rows`` to the CSV at ``path`` (``append``: after its rows, if any)."""
-    new = not (append and path.exists() and path.stat().st_size)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w" if new else "a", newline="") as fh:
-        out = csv.DictWriter(fh, FIELDS, extrasaction="ignore")
-        if new:
-            out.writeheader()
-        out.writerows(rows)
-
-
 def _workers(text: str) -> list[int]:
     try:
         out = [int(x) for x in text.split(",")]
@@ -100,7 +89,7 @@ def main() -> None:
         rows.append(bench(a.runs, a.timeout, w))
         print(json.dumps(rows[-1]), flush=True)
     if a.csv:
-        write_rows(a.csv, rows, a.append)
+        write_rows(a.csv, FIELDS, rows, a.append)
 
 
 if __name__ == "__main__":

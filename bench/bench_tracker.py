@@ -29,7 +29,6 @@ time anything).
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -39,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.csvrows import write_rows
 from common.ports import plain
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.tracker.core import Tracker, TrackerParams
@@ -126,12 +126,7 @@ def main() -> None:
         row = run_world(name, args.seconds, args.match, args.seed, not args.no_numba)
         print(json.dumps({"bench": "tracker", **row}), flush=True)
         if args.csv is not None:
-            new = not args.csv.exists() or args.csv.stat().st_size == 0
-            with args.csv.open("a", newline="") as fh:
-                writer = csv.DictWriter(fh, fieldnames=list(row))
-                if new:
-                    writer.writeheader()
-                writer.writerow(row)
+            write_rows(args.csv, list(row), [row], append=True)
 
 
 if __name__ == "__main__":
