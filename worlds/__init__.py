@@ -127,13 +127,18 @@ def world_path(name_or_path: str | Path) -> Path:
 def load_world(name_or_path: str | Path) -> World:
     """Load and validate a world by packaged name or path."""
     path = world_path(name_or_path)
+    return parse_world(world_data(path), source=str(path))
+
+
+def world_data(name_or_path: str | Path) -> dict:
+    """A world file's decoded TOML, not yet validated (to derive variants: :func:`parse_world`)."""
+    path = world_path(name_or_path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"cannot read world file {str(path)!r}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise WorldError(f"world file {str(path)!r} is not valid TOML: {exc}") from None
-    return parse_world(data, source=str(path))
 
 
 def parse_world(data: dict, source: str = "<dict>") -> World:

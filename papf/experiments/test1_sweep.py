@@ -28,11 +28,6 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
-
 WORLD = "papf-test-1"
 GOAL = (2.2, 2.7)                 # [m] PAPF Table 1; the start is the odometry origin
 APF_PATH_M = 4.50                 # PAPF Table 2, Test (I), APF path length
@@ -66,9 +61,9 @@ def box_clearance(side: float, along: float, offset: float) -> float:
 
 def sweep_world(side: float, along: float, offset: float):
     """``papf-test-1`` with its box replaced: ``side`` [m] square, ``along``/``offset`` [m]."""
-    from worlds import parse_world, world_path
+    from worlds import parse_world, world_data
 
-    data = tomllib.loads(world_path(WORLD).read_text())
+    data = world_data(WORLD)
     obstacles = list(data["obstacles"])
     if obstacles[0].get("kind") != "box":
         raise ValueError(f"{WORLD}: the first obstacle is not the test's box")
