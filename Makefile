@@ -42,10 +42,10 @@ coverage: setup   # in-process coverage of the unit and pub/sub tiers (node proc
 	$(VENV)/bin/coverage report
 
 docs: setup        # regenerate the tables and numbers of README.md and docs/ from docs/data/*.csv
-	$(PY) -m papf.docs_tables render
+	$(PY) -m papf.doctools.tables render
 
 docs-check: setup  # fail when a table or number in README.md or docs/ differs from its CSV
-	$(PY) -m papf.docs_tables check
+	$(PY) -m papf.doctools.tables check
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache build *.egg-info

@@ -134,7 +134,7 @@ def main() -> int:
             [*robot_pre, PY, "-m", "papf", "launch", "hil-robot", "--listen", endpoint,
              "--namespace", NS], start_new_session=True, env=env, stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL))
-        subprocess.run([*robot_pre, PY, "-c", f"from papf.supervisor import wait_port; "
+        subprocess.run([*robot_pre, PY, "-c", f"from papf.launch.supervisor import wait_port; "
                         f"assert wait_port({port}, 30, '{host}')"], check=True, env=env, timeout=60)
         procs.append(subprocess.Popen(
             [*robot_pre, PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint, "--namespace", NS,
@@ -166,7 +166,7 @@ def main() -> int:
 
 def _free_port() -> int:
     sys.path.insert(0, str(ROOT))
-    from papf.supervisor import free_port
+    from papf.launch.supervisor import free_port
 
     return free_port()
 

@@ -43,8 +43,8 @@ from bench.csvrows import write_rows
 from common.ports import plain
 from nodes.planner.iapf_fields import Track
 from nodes.planner.registry import PLANNERS, make_planner
-from papf.toysim import box_segments, cast_scan, toy_world
 from schemas.messages import Goal, Odometry
+from worlds.toy import box_segments, cast_scan, toy_world
 
 RING = toy_world(segments=tuple(
     (0.8 * math.cos(a0), 0.8 * math.sin(a0), 0.8 * math.cos(a1), 0.8 * math.sin(a1))

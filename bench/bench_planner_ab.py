@@ -35,8 +35,8 @@ def worker(scene: str, planner: str, sets: list[str], chunk: int) -> None:
     from bench_planner import SCENES
 
     from nodes.planner.registry import make_planner
-    from papf.toysim import cast_scan
     from schemas.messages import Goal, Odometry
+    from worlds.toy import cast_scan
 
     world, (x0, x1), goal = SCENES[scene]
     pl = make_planner(planner, sets=sets)

@@ -31,8 +31,8 @@ import zenoh
 
 from common.ports import plain
 from common.transport import wait_alive, zenoh_config
+from papf.launch.supervisor import free_port, wait_port
 from papf.recording import open_recording
-from papf.supervisor import free_port, wait_port
 from schemas import Keys, Twist
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -137,7 +137,7 @@ def run_rate(session, endpoint: str, ns: str, rate: float, duration: float, out:
 def main(rates: list[float], duration: float, baseline: bool = False) -> dict:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    router = spawn("papf.router", "--listen", endpoint)
+    router = spawn("papf.launch.router", "--listen", endpoint)
     results = []
     try:
         if not wait_port(port, 20.0):

@@ -47,7 +47,7 @@ import zenoh  # noqa: E402
 from bench.csvrows import replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
-from papf.supervisor import Supervisor, free_port, wait_port  # noqa: E402
+from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
 from schemas import Keys  # noqa: E402
 from schemas.messages import Clock, Event, Scan, Twist  # noqa: E402
 
@@ -58,7 +58,7 @@ def bench(sim_s: float, world: str, beams: int) -> dict:
     endpoint = f"tcp/127.0.0.1:{port}"
     py = sys.executable
     with Supervisor(show=lambda *_: False) as sup:
-        sup.start("router", [py, "-m", "papf.router", "--listen", endpoint])
+        sup.start("router", [py, "-m", "papf.launch.router", "--listen", endpoint])
         if not wait_port(port, 20):
             raise RuntimeError(f"router did not start on {endpoint}")
         common = ["--connect", endpoint, "--world", world]
@@ -105,7 +105,7 @@ def bench(sim_s: float, world: str, beams: int) -> dict:
 def bench_stack(world: str, planner: str, seed: int, zenoh_mode: str,
                 timeout_s: float = 300.0) -> dict:
     from bench.proc_cpu import TreeCPU
-    from papf.runner import RunConfig, run
+    from papf.launch.run import RunConfig, run
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     with TreeCPU() as cpu:

@@ -36,7 +36,7 @@ import zenoh
 from bench.foxglove_ws import FoxgloveClient
 from common.transport import wait_alive, zenoh_config
 from nodes.viewer.core import CHANNELS
-from papf.supervisor import Supervisor, free_port, wait_port
+from papf.launch.supervisor import Supervisor, free_port, wait_port
 from schemas import Keys
 from schemas.messages import BatteryState, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
@@ -87,7 +87,7 @@ def bench_node(duration_s: float) -> dict:
     port, ws_port = free_port(), free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     with Supervisor(show=lambda n, line: "ERROR" in line) as sup:
-        sup.start("router", [sys.executable, "-m", "papf.router", "--listen", endpoint])
+        sup.start("router", [sys.executable, "-m", "papf.launch.router", "--listen", endpoint])
         assert wait_port(port, 15.0)
         viewer = sup.start("viewer", [sys.executable, "-m", "nodes.viewer", "--connect", endpoint,
                                       "--port", str(ws_port), "--world", "papf-test-4"])

@@ -122,7 +122,7 @@ def hop_latency(n: int = 300, root: str = ".") -> dict:
     import zenoh
 
     from common.transport import direct, zenoh_config
-    from papf.supervisor import free_port
+    from papf.launch.supervisor import free_port
 
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     inbox: queue.SimpleQueue = queue.SimpleQueue()

@@ -15,7 +15,7 @@ A node whose ports depend on an option declares ``VARIANTS``: ``{(option, value)
 (they replace ``PORTS``), and ``EXTRAS``: ``{option: ports}`` for flags that add ports to
 whichever set applies (e.g. ``--truth-objects`` adds the ``objects`` output).
 ``python -m nodes.<node> --help`` prints them (:func:`describe`), and the launch profiles
-are checked against them (tests/test_node_graph.py).
+are checked against them (tests/unit/test_node_graph.py).
 """
 
 from __future__ import annotations

@@ -128,7 +128,7 @@ def open_session(args: argparse.Namespace, where: str = ""):
     except zenoh.ZError as exc:
         first = str(exc).split(" at /")[0].strip()
         raise ConfigError(f"cannot reach a Zenoh router at {where or args.connect}: {first}; "
-                          "start the stack (or python -m papf.router) or give --connect") from None
+                          "start the stack (or python -m papf.launch.router) or give --connect") from None
     with session:
         yield session
 

@@ -12,16 +12,16 @@ import pytest
 import zenoh
 
 from common.transport import zenoh_config
-from papf.supervisor import Supervisor, free_port, wait_port
+from papf.launch.supervisor import Supervisor, free_port, wait_port
 
 
 @pytest.fixture
 def router():
-    """Start `python -m papf.router` on a free loopback port; yield its endpoint."""
+    """Start `python -m papf.launch.router` on a free loopback port; yield its endpoint."""
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     with Supervisor(show=lambda *_: False) as sup:
-        sup.start("router", [sys.executable, "-m", "papf.router", "--listen", endpoint])
+        sup.start("router", [sys.executable, "-m", "papf.launch.router", "--listen", endpoint])
         assert wait_port(port, 15.0), "router did not start: " + " | ".join(sup.children[0].tail)
         yield endpoint
 
@@ -58,3 +58,14 @@ def tiny_disk(tmp_path):
         yield disk
     finally:
         subprocess.run(["umount", "-l", str(disk)], capture_output=True)
+
+
+TIERS = ("unit", "bus", "e2e")
+
+
+def pytest_collection_modifyitems(items):
+    """Markers follow the folders: a test in ``tests/<tier>/`` carries the marker ``<tier>``."""
+    for item in items:
+        tier = item.path.parent.name
+        if tier in TIERS:
+            item.add_marker(getattr(pytest.mark, tier))

@@ -53,7 +53,7 @@ def numba_without_scipy() -> None:
     ``np.linalg`` inside compiled code. No planner kernel uses them (the numpy steps that
     must keep BLAS's rounding run outside the kernels, nodes/planner/papf_kernel.py), so in
     a process that has not imported scipy yet, scipy is marked missing: numba then leaves
-    its BLAS functions out. ``tests/test_lazy_numba.py`` builds every planner this way and
+    its BLAS functions out. ``tests/unit/test_lazy_numba.py`` builds every planner this way and
     checks its commands against a process with scipy.
     """
     if "scipy" not in sys.modules:

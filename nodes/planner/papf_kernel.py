@@ -15,7 +15,7 @@ the goal) runs:
 Every operation is the one :func:`nodes.planner.papf.temporary_goal`,
 :func:`nodes.planner.papf.quark_force` and :func:`nodes.planner.kernels.field_force` do,
 in the same order (sums of two terms commute exactly; numpy's sum over the quarks is
-sequential from 0.0): the results are identical (tests/test_papf_kernel.py), only the
+sequential from 0.0): the results are identical (tests/unit/test_papf_kernel.py), only the
 Python and numpy call overhead around the kernel is gone.
 """
 

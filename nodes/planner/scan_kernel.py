@@ -5,7 +5,7 @@ angle (numpy's own ``cos``/``sin``: their rounding is numpy's) and returns the r
 invalid returns as ``inf``, the points ``origin + r (cos, sin)`` of the valid beams in
 scan order, and the valid mask. With numba it is one compiled loop; without, the numpy
 expressions it replaces. Both give the same values bit for bit (a product and a sum per
-coordinate; tests/test_papf_kernel.py).
+coordinate; tests/unit/test_papf_kernel.py).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ available, the numpy version in :mod:`nodes.tracker.core` otherwise.
 One pass over the scan's returns: breakpoints (the adaptive breakpoint detector), then
 per segment the box of its points in their principal axes. The numba kernel does the
 operations of the numpy path one return at a time (so results agree to rounding:
-tests/test_tracker.py compares them); it saves the ~40 numpy calls of the vectorised
+tests/unit/test_tracker.py compares them); it saves the ~40 numpy calls of the vectorised
 version, which dominate a cycle on a scan of a few hundred returns.
 """
 

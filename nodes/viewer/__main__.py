@@ -172,7 +172,7 @@ def serve(args: argparse.Namespace, log: logging.Logger) -> int:
             return _serve(node, args, world, log)
     except zenoh.ZError as exc:
         raise PapfError(f"cannot reach the Zenoh network ({exc}); is a router running? "
-                        "(papf run/launch start one; or python -m papf.router)") from None
+                        "(papf run/launch start one; or python -m papf.launch.router)") from None
 
 
 def _serve(node: Node, args: argparse.Namespace, world, log: logging.Logger) -> int:

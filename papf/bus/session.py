@@ -21,5 +21,5 @@ def open_session(args: argparse.Namespace) -> zenoh.Session:
                                             f"{args.zenoh_config}") or DEFAULT_ENDPOINT
         reason = str(exc).split(" at /")[0].split("\n")[0]
         raise ConfigError(f"cannot reach the bus at {where} ({reason}); is a stack running "
-                          "(papf run, papf launch, python -m papf.router)? Else give "
+                          "(papf run, papf launch, python -m papf.launch.router)? Else give "
                           "--connect ENDPOINT") from None

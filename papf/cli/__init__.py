@@ -5,7 +5,7 @@ One module per subcommand (or family of subcommands), each exposing
 import what they run when they run (the stack, pybullet, matplotlib, rosbags), so
 building the parser — ``papf --help``, and ``papf run`` before its first process — loads
 none of it. Nothing imports ``papf.cli``: it is the top of the house, and those imports
-cannot hide a cycle (``tests/test_layers.py`` checks).
+cannot hide a cycle (``tests/unit/test_layers.py`` checks).
 
 Exit codes: 0 done / reached, 2 usage or configuration error (one line, no traceback),
 3 stagnated, 4 collision, 5 timeout, 6 failed, 130 interrupted.
@@ -89,7 +89,7 @@ def entry() -> None:
     """The ``papf`` console script and ``python -m papf``: :func:`main`, then the exit.
 
     After ``papf run`` — every process it started stopped and their last output lines printed
-    (:meth:`papf.supervisor.Supervisor.stop`), its Zenoh session closed, the result printed —
+    (:meth:`papf.launch.supervisor.Supervisor.stop`), its Zenoh session closed, the result printed —
     the interpreter's teardown of numpy, Zenoh and rich is skipped
     (:func:`common.transport.exit_fast`: logs and streams flushed, then ``os._exit``).
     """

@@ -1,5 +1,5 @@
 """``papf animate FILE.mcap OUT.gif|OUT.mp4``: a recorded run as a moving picture
-(:mod:`papf.animate`)."""
+(:mod:`papf.report.animation`)."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ def register(sub) -> None:
 
 
 def cmd_animate(args: argparse.Namespace) -> int:
-    from papf.animate import animate
+    from papf.report.animation import animate
 
     n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi)
     print(f"{args.out}: {n} frames at {args.fps:g} fps ({args.speed:g}x)")

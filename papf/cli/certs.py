@@ -23,7 +23,7 @@ def register(sub) -> None:
 
 def cmd_make_certs(args) -> int:
     from nodes.base_driver.rosbot import BridgeTopics  # rosbags: only when writing configs
-    from papf.security import where_files_go, write_bundle
+    from papf.robot.certs import where_files_go, write_bundle
 
     b = write_bundle(args.dir, args.robot_host, args.namespace, BridgeTopics(args.bridge_namespace),
                      force=args.force)

@@ -1,4 +1,4 @@
-"""``papf rosbot-emulator``: the ROSbot as seen through zenoh-bridge-ros2dds (:mod:`papf.emulator`)."""
+"""``papf rosbot-emulator``: the ROSbot as seen through zenoh-bridge-ros2dds (:mod:`papf.robot.emulator`)."""
 
 from __future__ import annotations
 
@@ -28,6 +28,6 @@ def register(sub) -> None:
 
 
 def cmd_emulator(args) -> int:
-    from papf.emulator import run  # rosbags (the CDR codec): only when emulating
+    from papf.robot.emulator import run  # rosbags (the CDR codec): only when emulating
 
     return run(args)

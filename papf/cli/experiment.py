@@ -139,7 +139,7 @@ def _add_iapf(exp) -> None:
 
 def cmd_iapf(args) -> int:
     from papf.experiments.iapf import CASES, run_iapf_experiment  # matplotlib: when run
-    from papf.plan_road import CAR_PLANNERS
+    from papf.offline.road import CAR_PLANNERS
 
     planners = [p.strip() for p in args.planners.split(",") if p.strip()]
     bad = [p for p in planners if p not in CAR_PLANNERS]

@@ -1,5 +1,5 @@
 """``papf launch PROFILE``: this host's share of the stack, as a launch profile says
-(:mod:`papf.launch`; profiles in ``papf/profiles/``, format in docs/robot.md)."""
+(:mod:`papf.launch.host`; profiles in ``papf/launch/profiles/``, format in docs/robot.md)."""
 
 from __future__ import annotations
 
@@ -48,8 +48,8 @@ def register(sub) -> None:
 
 
 def cmd_launch(args) -> int:
-    from papf.graph import LaunchOptions
-    from papf.launch import launch  # zenoh: only when launching
+    from papf.launch.host import launch  # zenoh: only when launching
+    from papf.launch.profile import LaunchOptions
 
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,

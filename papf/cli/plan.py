@@ -1,4 +1,4 @@
-"""``papf plan``: a planner on a world offline, no processes (:mod:`papf.plan`)."""
+"""``papf plan``: a planner on a world offline, no processes (:mod:`papf.offline.plan`)."""
 
 from __future__ import annotations
 
@@ -41,8 +41,8 @@ def register(sub) -> None:
 
 def cmd_plan(args) -> int:
     from nodes.planner.registry import preset_sets
-    from papf.monitor import EXIT_CODES
-    from papf.plan import plan, write_path  # pybullet: only when planning
+    from papf.launch.outcome import EXIT_CODES
+    from papf.offline.plan import plan, write_path  # pybullet: only when planning
     from worlds import load_world
     from worlds.checks import check_runnable
 
@@ -52,7 +52,7 @@ def cmd_plan(args) -> int:
         return _fixed_step(world, args)
     sets = [*preset_sets(args.preset), *args.set]
     if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
-        from papf.plan_road import plan_car
+        from papf.offline.road import plan_car
 
         result = plan_car(world, args.planner, sets, args.params, max_time_s=args.timeout)
     else:
@@ -64,11 +64,11 @@ def cmd_plan(args) -> int:
     if args.plot:  # matplotlib: only with --plot
         title = f"{world.name}: {args.planner} (offline, seed {args.seed})"
         if world.dims == 2 and world.vehicle != "car":  # with the mind and the ROSbot's footprint
-            from papf.mind_plots import plot_plan
+            from papf.plots.mind import plot_plan
 
             plot_plan(world, result, args.plot, title)
         else:
-            from papf.path_plot import plot_paths
+            from papf.plots.paths import plot_paths
 
             label = f"{args.planner} ({result.outcome})"
             plot_paths(world, {label: result.path}, args.plot, title,
@@ -87,16 +87,16 @@ def cmd_plan(args) -> int:
 
 
 def _fixed_step(world, args) -> int:
-    """Wang's published simulation (:func:`papf.pointsim.fixed_step`)."""
+    """Wang's published simulation (:func:`papf.offline.wang_step.fixed_step`)."""
     from common.errors import ConfigError
-    from papf.pointsim import fixed_step
+    from papf.offline.wang_step import fixed_step
 
     methods = {"wang-apf": "traditional", "wang": "improved"}
     if args.planner not in methods:
         raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
     r = fixed_step(world, methods[args.planner])
     if args.plot:
-        from papf.plots import plot_paths
+        from papf.plots.world import plot_paths
 
         plot_paths(world, {f"{args.planner} ({r.outcome})": r.path}, args.plot,
                    f"{world.name}: {args.planner}, fixed step (Wang's simulation)")

@@ -36,7 +36,7 @@ def register(sub) -> None:
 
 def cmd_replay(args) -> int:
     if args.view is not None:
-        from papf.replay_view import replay_with_view
+        from papf.launch.replay_view import replay_with_view
 
         return replay_with_view(args, _replay)
     return _replay(args, StopRequested())
@@ -44,7 +44,7 @@ def cmd_replay(args) -> int:
 
 def _replay(args, stop: StopRequested) -> int:
     """Check the file, the rate and where it would publish before publishing anything."""
-    from papf.progress import DecileProgress
+    from papf.console.progress import DecileProgress
     from papf.recording.reader import Recording  # mcap: only when replaying
     from papf.recording.replay import check_rate, replay, target_namespaces
 
@@ -89,7 +89,7 @@ def _refuse_live(session, namespaces: set[str], into_live: bool) -> None:
 
 
 def _progress_printer(bar):
-    """``progress(done, total)`` feeding a :class:`papf.progress.DecileProgress`: a live bar
+    """``progress(done, total)`` feeding a :class:`papf.console.progress.DecileProgress`: a live bar
     on a terminal, else one line per 10 % of the messages."""
     def show(done: int, total: int) -> None:
         bar.fraction(done / total if total else 1.0, f"{done}/{total} messages")

@@ -1,4 +1,4 @@
-"""``papf run``: the whole simulated stack once, to an outcome (:mod:`papf.runner`)."""
+"""``papf run``: the whole simulated stack once, to an outcome (:mod:`papf.launch.run`)."""
 
 from __future__ import annotations
 
@@ -48,9 +48,9 @@ def register(sub) -> None:
 
 
 def run_config(args):
-    """The :class:`papf.runner.RunConfig` of parsed ``papf run`` options."""
+    """The :class:`papf.launch.run.RunConfig` of parsed ``papf run`` options."""
     from nodes.planner.registry import preset_sets
-    from papf.runner import RunConfig  # zenoh: only when a run is made
+    from papf.launch.run import RunConfig  # zenoh: only when a run is made
 
     planner_args = [x for kv in (*preset_sets(args.preset), *args.set) for x in ("--set", kv)]
     if args.params:
@@ -65,7 +65,7 @@ def run_config(args):
 
 
 def cmd_run(args) -> int:
-    from papf.runner import resolve_run, run
+    from papf.launch.run import resolve_run, run
 
     if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447)
         print(resolve_run(run_config(args)).to_json())

@@ -1,10 +1,10 @@
 """``papf experiment cases``: the small studies behind the older tables of docs/planners.md.
 
 Each study (:data:`STUDIES`) is a list of cases: a label, a planner, its settings, the worlds
-and seeds, offline (:mod:`papf.plan`) and/or through the stack (:func:`run_stack`). Every
+and seeds, offline (:mod:`papf.offline.plan`) and/or through the stack (:func:`run_stack`). Every
 run goes into ``OUT/cases-runs.csv``; each case's summary (reached k/n, ranges of duration,
 path, clearance and charge over its runs) into ``OUT/<study>.csv``, the file a docs table
-is generated from (``papf/docs_tables.py``).
+is generated from (``papf/doctools/tables.py``).
 """
 
 from __future__ import annotations
@@ -82,8 +82,8 @@ def gap_push_rows(k_vo: float = 10.0 / 300, step: float = 0.005) -> list[dict]:
     import numpy as np
 
     from nodes.planner.core import scan_view
-    from papf.toysim import box_segments, cast_scan, toy_world
     from schemas.messages import Odometry
+    from worlds.toy import box_segments, cast_scan, toy_world
 
     rows = []
     for g in GAP_WIDTHS:

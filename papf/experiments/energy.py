@@ -3,7 +3,7 @@
 World ``energy`` (goal (10, 0) m, three obstacles); each planner × ``runs``; run k
 (1-based) of every planner uses seed ``seed + k`` (the same noise for the k-th run of
 each planner: paired runs); each run goes through the full process stack
-(:func:`papf.runner.run`) recorded to ``OUT/<planner>-<k>.mcap``; then the report
+(:func:`papf.launch.run.run`) recorded to ``OUT/<planner>-<k>.mcap``; then the report
 (:func:`papf.report.report.build_report`) from those files alone, in ``OUT``.
 
 While a run goes, a progress bar over the runs shows its live figures (sim time,
@@ -31,9 +31,9 @@ if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `
     from rich.console import Console
     from rich.progress import Progress
 
-    from papf.monitor import RunResult
+    from papf.launch.outcome import RunResult
+    from papf.launch.run import RunConfig
     from papf.report.report import Report
-    from papf.runner import RunConfig
 
 WORLD = "energy"
 TIMEOUT_S = 300.0        # [s sim] per run; the sim's APF needs ~160 s for the 10 m course
@@ -118,7 +118,7 @@ def plan(exp: EnergyExperiment) -> list[RunSpec]:
 
 def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
     from nodes.planner.registry import preset_sets
-    from papf.runner import RunConfig
+    from papf.launch.run import RunConfig
 
     return RunConfig(world=exp.world, planner=spec.planner, seed=spec.seed,
                      planner_args=[a for kv in preset_sets(spec.preset) for a in ("--set", kv)],
@@ -141,7 +141,7 @@ class LiveFigures:
         import zenoh
 
         from common.transport import zenoh_config
-        from papf.supervisor import wait_port
+        from papf.launch.supervisor import wait_port
         from schemas import BatteryState, Clock, Odometry
 
         if not wait_port(self.port, 60.0, abort=abort):
@@ -184,7 +184,7 @@ def _decoding(msg_type, store):
 
 def _one_run(exp: EnergyExperiment, spec: RunSpec, progress: Progress, task,
              goal: tuple[float, float], run_fn: Callable[[RunConfig], RunResult]) -> RunResult:
-    from papf.supervisor import free_port
+    from papf.launch.supervisor import free_port
 
     port = free_port()
     box: dict[str, object] = {}
@@ -214,13 +214,13 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
                    run_fn: Callable[[RunConfig], RunResult] | None = None) -> ExperimentResult:
     """Run every planner × runs through the stack, recorded, then write the report.
 
-    ``run_fn``: how one run is made (default :func:`papf.runner.run`; tests substitute).
+    ``run_fn``: how one run is made (default :func:`papf.launch.run.run`; tests substitute).
     """
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from papf.launch.run import run
     from papf.report.report import build_report
-    from papf.runner import run
     from worlds import load_world
 
     run_fn = run_fn or run
@@ -283,8 +283,8 @@ def energy_job(job: tuple[EnergyExperiment, RunSpec, int]) -> tuple[RunResult, b
     import tempfile
 
     from papf.experiments.sweep import run_namespace
-    from papf.runner import run
-    from papf.supervisor import free_port
+    from papf.launch.run import run
+    from papf.launch.supervisor import free_port
 
     exp, spec, index = job
     with tempfile.TemporaryDirectory(prefix="papf-energy-") as tmp:

@@ -2,7 +2,7 @@
 
 Each case world runs for the paper's case time (Table 2: 5, 5, 6, 10 s) with IAPF, IAPF
 without prediction and the traditional APF baseline, in the paper's vehicle model
-(:mod:`papf.plan_road`). Writes into ``OUT``:
+(:mod:`papf.offline.road`). Writes into ``OUT``:
 
 - ``iapf.md`` — a table like Table 2 (case time, computation) with what each planner did
   (collisions, clearance, off the road, lane changes, speeds) and the paper's figures;
@@ -27,7 +27,7 @@ import numpy as np
 
 from nodes.planner.iapf import HostState, IAPFCore
 from nodes.planner.iapf_fields import Track
-from papf.plan_road import CAR_PLANNERS, car_params, lanes_of, mover, run_car
+from papf.offline.road import CAR_PLANNERS, car_params, lanes_of, mover, run_car
 from worlds import load_world
 
 CASES = {"iapf-case-a": 5.0, "iapf-case-b": 5.0, "iapf-case-c": 6.0, "iapf-case-d": 10.0}
@@ -163,7 +163,7 @@ def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), 
                          f"{run.lane_changes} lane changes")
         write_vehicles(out, case, world, CASES[case], car_params("iapf", params).step_s)
         if plots:
-            from papf.iapf_plots import plot_case  # matplotlib: only with plots
+            from papf.plots.iapf_cases import plot_case  # matplotlib: only with plots
 
             plot_case(out / f"{case}.png", case, out)
     with open(out / "iapf.csv", "w", newline="") as f:

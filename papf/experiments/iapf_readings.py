@@ -13,7 +13,7 @@ from pathlib import Path
 
 from nodes.planner.iapf import PAPER_PRESET
 from papf.experiments.iapf import CASES
-from papf.plan_road import run_car
+from papf.offline.road import run_car
 from worlds import load_world
 
 LEADER_C_KMH = 28.8      # case C's leader (Table 1 v_obs1.3)

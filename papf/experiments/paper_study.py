@@ -1,4 +1,4 @@
-"""Two studies of PAPF against its paper (offline, :func:`papf.plan.plan`):
+"""Two studies of PAPF against its paper (offline, :func:`papf.offline.plan.plan`):
 
 - ``papf experiment horizon`` (:func:`run_horizon`): PAPF IV-A / Fig. 7 — lambda in
   {0.5, 1, 1.5, 2} m on the Fig. 7-like world ``papf-horizon`` (goal 7 m straight ahead,
@@ -52,7 +52,7 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
                 world: str = HORIZON_WORLD) -> list[dict]:
     """PAPF with each horizon (both presets) and APF on ``world``; write horizon.csv/.md."""
     from papf.experiments.trials import markdown_table, write_csv
-    from papf.plan import plan
+    from papf.offline.plan import plan
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -105,7 +105,7 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
     ``deviations-<k>.csv`` (split a long study over processes; concatenate the CSVs)."""
     from papf.experiments.paper_tests import PAPF_WORLDS, table2_check
     from papf.experiments.trials import markdown_table, progress_bar, run_offline, write_csv
-    from papf.randworlds import generate_solvable
+    from papf.offline.world_gen import generate_solvable
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -155,7 +155,7 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one);
     ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
-    from papf.path_plot import plot_paths  # matplotlib: only when the experiment runs
+    from papf.plots.paths import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")

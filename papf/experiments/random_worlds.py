@@ -1,12 +1,12 @@
 """``papf experiment random``: success and collision rates of each planner on random worlds.
 
-The first ``n`` *solvable* worlds of the seeded set (:func:`papf.randworlds.generate_solvable`:
+The first ``n`` *solvable* worlds of the seeded set (:func:`papf.offline.world_gen.generate_solvable`:
 obstacle fields, dead ends, narrow gaps, in turn) are run with every planner — offline by
-default (:mod:`papf.plan`, fast), or through the whole stack (``mode="stack"``). Writes
+default (:mod:`papf.offline.plan`, fast), or through the whole stack (``mode="stack"``). Writes
 
 - ``OUT/random.md`` — per planner: reached / collision / stagnated / timeout / failed rates
   over the solvable worlds, the success rate per world kind, and split by the world's
-  bottleneck (:func:`papf.randworlds.bottleneck_width`) at :data:`WIDE_M`;
+  bottleneck (:func:`papf.offline.world_gen.bottleneck_width`) at :data:`WIDE_M`;
 - ``OUT/random.csv`` — one row per run;
 - ``OUT/worlds/<name>.toml`` — every world (so a run can be repeated with ``papf plan`` or
   ``papf run``), and with ``plots=True`` ``OUT/plots/<name>.png`` (all planners' paths).
@@ -29,7 +29,7 @@ from papf.experiments.trials import (
     variants,
     write_csv,
 )
-from papf.randworlds import KINDS, bottleneck_width, generate_solvable, world_to_toml
+from papf.offline.world_gen import KINDS, bottleneck_width, generate_solvable, world_to_toml
 
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
 WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
@@ -91,7 +91,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one);
     ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
     """
-    from papf.path_plot import plot_paths  # matplotlib: only when the experiment runs
+    from papf.plots.paths import plot_paths  # matplotlib: only when the experiment runs
 
     if mode not in ("stack", "offline"):
         raise ConfigError(f"mode {mode!r} is not stack or offline")

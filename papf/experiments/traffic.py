@@ -7,7 +7,7 @@ recorded to ``OUT/recordings/<world>-<planner>-<objects>.mcap``. From the record
 ground-truth poses (``sim/pose``): ``left_road`` (a corner of the ROSbot's footprint
 ever beyond a solid line), ``lane_changes`` (the centre crossed a broken line),
 ``min_speed_mps`` / ``max_speed_mps`` after the first motion
-(:func:`papf.road_sim.road_figures`). Writes ``OUT/traffic.csv`` (one row per run) and
+(:func:`papf.offline.car.road_figures`). Writes ``OUT/traffic.csv`` (one row per run) and
 ``OUT/traffic.md`` (the table).
 """
 
@@ -23,7 +23,7 @@ from common import robot
 from common.errors import RecordingError
 from nodes.planner.iapf_fields import Lanes
 from papf.experiments.trials import markdown_table, quiet_runner_logs, run_stack, write_csv
-from papf.road_sim import road_figures
+from papf.offline.car import road_figures
 from worlds import load_world, packaged_worlds, world_path
 
 ROAD_WORLDS = tuple(w for w in packaged_worlds() if w.startswith("road-"))

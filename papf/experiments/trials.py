@@ -1,8 +1,8 @@
 """One run of a planner on a world as a :class:`Trial` — offline or through the stack.
 
 One :class:`Trial` per (world, planner, seed), run either offline (:func:`run_offline`,
-:mod:`papf.plan`) or through the full process stack (:func:`run_stack`,
-:func:`papf.runner.run` on a free port, recorded to MCAP so the ground-truth path can be
+:mod:`papf.offline.plan`) or through the full process stack (:func:`run_stack`,
+:func:`papf.launch.run.run` on a free port, recorded to MCAP so the ground-truth path can be
 drawn); plus the CSV / Markdown writers and the progress bar the experiments share.
 """
 
@@ -23,7 +23,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from common.errors import RecordingError
 from papf.experiments.sweep import SweepOptions, map_runs
-from papf.supervisor import free_port
+from papf.launch.supervisor import free_port
 from worlds import World, load_world
 
 MODES = ("offline", "stack")
@@ -90,9 +90,9 @@ def variants(planners: Sequence[str], presets: Sequence[str] = ("default",)) -> 
 
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
                 params=None, preset: str = "default") -> Trial:
-    """One offline run (:func:`papf.plan.plan`) with the planner's ``preset``."""
+    """One offline run (:func:`papf.offline.plan.plan`) with the planner's ``preset``."""
     from nodes.planner.registry import preset_sets
-    from papf.plan import param_sets, plan  # pybullet: only for offline runs
+    from papf.offline.plan import param_sets, plan  # pybullet: only for offline runs
 
     t0 = time.monotonic()
     r = plan(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
@@ -108,7 +108,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
               startup_timeout_s: float = 60.0, preset: str = "default") -> Trial:
     """One run of the whole process stack on a free port; the path from the recording if any."""
     from nodes.planner.registry import preset_sets
-    from papf.runner import RunConfig, run  # zenoh: only for stack runs
+    from papf.launch.run import RunConfig, run  # zenoh: only for stack runs
 
     planner_args = [*(a for kv in preset_sets(preset) for a in ("--set", kv)), *planner_args]
     if record is not None:

@@ -2,11 +2,11 @@
 
 Each figure is run twice:
 
-- **as published** — :func:`papf.pointsim.fixed_step`: a point stepping 0.5 along the
+- **as published** — :func:`papf.offline.wang_step.fixed_step`: a point stepping 0.5 along the
   force for at most J = 200 iterations, Table 1 gains, the obstacles' centres known
   (Wang's MATLAB simulation);
-- **on the ROSbot** — :func:`papf.plan.plan` (offline; 2-D: simulated LiDAR and the
-  ROSbot's motion law; 3-D: the point robot of :mod:`papf.plan3d`) with the registry's
+- **on the ROSbot** — :func:`papf.offline.plan.plan` (offline; 2-D: simulated LiDAR and the
+  ROSbot's motion law; 3-D: the point robot of :mod:`papf.offline.point3d`) with the registry's
   ``wang-apf`` (traditional, eqs. 1-5) or ``wang`` (improved, eqs. 6-8) planner.
 
 Writes ``OUT/wang.md`` and ``OUT/wang.csv``.
@@ -40,8 +40,8 @@ HEADER = ["figure", "world", "method", "paper", "fixed step (as published)", "it
 
 def run_wang(out: str | Path, seed: int = 0, timeout_s: float = 300.0) -> list[dict]:
     """Run every figure both ways; write ``wang.md`` and ``wang.csv`` into ``out``."""
-    from papf.plan import plan
-    from papf.pointsim import fixed_step
+    from papf.offline.plan import plan
+    from papf.offline.wang_step import fixed_step
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from papf.plots import (  # noqa: E402
+from papf.plots.world import (  # noqa: E402
     LINESTYLES,
     MARKERS,
     draw_footprints,

@@ -1,7 +1,7 @@
 """Per-run figures of a recorded run, from its MCAP file alone (docs/recording.md, docs/experiments-energy.md).
 
 Outcome, ``t_end``, duration, path length and the live battery at ``t_end`` are decided
-by feeding the recording to :class:`papf.monitor.RunMonitor` — the very object
+by feeding the recording to :class:`papf.launch.outcome.RunMonitor` — the very object
 ``papf run`` uses live — so a report and the run's own summary agree by construction.
 Charge and energy are re-metered from the recorded ``odom`` + ``wheels``
 (:mod:`papf.report.remeter`). Smoothness and heading oscillations are computed here
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import RecordingError
-from papf.monitor import NS, RunMonitor
+from papf.launch.outcome import NS, RunMonitor
 from papf.recording.reader import Recording
 from papf.report.remeter import Remeter, battery_at
 from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist, WheelStates
@@ -54,7 +54,7 @@ class RunMetrics:
     outcome: str
     reason: str
     t_end_s: float              # [s] sim time of the outcome
-    duration_s: float           # [s] first motion -> outcome (papf.monitor definition)
+    duration_s: float           # [s] first motion -> outcome (papf.launch.outcome definition)
     path_length_m: float        # [m] ground-truth path up to t_end
     charge_mAh: float           # [mAh] re-metered with ``energy_model`` at t_end
     energy_J: float             # [J] re-metered
@@ -268,7 +268,7 @@ def _series(poses: list[Odometry], odom: list[Odometry], t_end: int) -> Series:
 
 def differences_from_live(name: str, live, m: RunMetrics,
                           rel_tol: float = REPRODUCE_TOL) -> list[str]:
-    """Figures of a run's file that differ from its live summary (:class:`papf.monitor.RunResult`).
+    """Figures of a run's file that differ from its live summary (:class:`papf.launch.outcome.RunResult`).
 
     Empty when the recording holds the whole run: the monitor and the meter then see the
     same messages as they did live (charge/energy compared for the same energy model).

@@ -3,7 +3,7 @@
 :class:`nodes.energy_meter.core.EnergyMeter` is a pure function of the message
 sequence, so feeding the recorded messages in recorded (log-time) order with the model
 and settings the live meter ran gives bit-identical
-:class:`~schemas.BatteryState` figures (tests/test_report.py checks it on a real run);
+:class:`~schemas.BatteryState` figures (tests/e2e/test_report.py checks it on a real run);
 another model or other settings re-meter the same motion (docs/energy.md).
 """
 

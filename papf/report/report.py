@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from common.errors import ConfigError, PapfError, RecordingError
-from papf.mind_plots import mind_png
+from papf.plots.mind import mind_png
 from papf.report import figures, tables
 from papf.report.markdown import markdown
 from papf.report.metrics import RunMetrics, run_metrics

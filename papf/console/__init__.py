@@ -1,0 +1,1 @@
+"""The terminal: progress lines of long work (used by every room above)."""

@@ -1,0 +1,1 @@
+"""Doc tooling: the tables and numbers of README.md and docs/ rendered from committed CSVs."""

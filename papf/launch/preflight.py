@@ -1,0 +1,100 @@
+"""Every check of a run's options that can be made before anything starts.
+
+``papf run`` (and ``papf plan`` for what applies) call :func:`check_run` first: a wrong
+planner name (with a "did you mean"), a planner setting out of its range, a seed,
+timeout or port out of range, a port someone else listens on (another stack's router
+would receive our messages), a namespace that is not a plain key, a recording path in
+a directory that does not exist, a 3-D world, or a world that cannot give a run
+(:func:`worlds.checks.check_runnable`) — each is a ConfigError/WorldError: exit 2, one
+line, and no process was started. The same specs serve as argparse ``type=`` checks
+(:data:`SEED`, :data:`TIMEOUT`, :data:`PORT`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import os
+from pathlib import Path
+
+from common.errors import ConfigError
+from common.params import PORT, SEED, TIMEOUT, Spec, check_value
+from nodes.planner.registry import PLANNERS, load_params
+from papf.launch.supervisor import port_in_use
+from schemas import Keys
+from worlds import World
+from worlds.checks import check_runnable
+
+__all__ = ["SEED", "TIMEOUT", "PORT", "check_run", "planner_name", "namespace", "record_path"]
+
+
+def planner_name(name: str) -> str:
+    """``name`` if it is a planner; ConfigError with a "did you mean" (case too) otherwise."""
+    if name in PLANNERS:
+        return name
+    lower = {p.lower(): p for p in PLANNERS}
+    close = [lower[m] for m in difflib.get_close_matches(name.lower(), lower, n=1, cutoff=0.6)]
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    raise ConfigError(f"unknown planner {name!r}{hint} (valid: {', '.join(sorted(PLANNERS))})")
+
+
+def namespace(ns: str) -> str:
+    """A namespace that makes valid Zenoh keys (``rosbot``, ``lab/r1``)."""
+    try:
+        Keys(ns)
+    except ValueError as exc:
+        raise ConfigError(f"--namespace: {exc}") from None
+    return ns
+
+
+def record_path(path: str | None) -> None:
+    """A recording can be created at ``path``: its directory exists and is writable."""
+    if path is None:
+        return
+    p = Path(path)
+    if p.is_dir():
+        raise ConfigError(f"--record {path!r} is a directory; give a file name (F.mcap)")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise ConfigError(f"--record {path!r}: directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ConfigError(f"--record {path!r}: directory {str(parent)!r} is not writable")
+
+
+def port_free(port: int | None) -> None:
+    """An explicit port must be free: whatever listens there is not this run's router."""
+    if port is None:
+        return
+    check_value("--port", port, PORT)
+    if port_in_use(port):
+        raise ConfigError(f"--port {port}: something already listens on 127.0.0.1:{port} "
+                          "(another stack's Zenoh router, or another program); publishing "
+                          "there would reach it. Give a free --port, or none to pick one")
+
+
+def planner_settings(planner: str, planner_args: list[str]) -> None:
+    """``--set``/``--params`` items (as passed to the planner node) in their ranges."""
+    sets, params, it = [], None, iter(planner_args)
+    for flag in it:
+        value = next(it, None)
+        if flag == "--set" and value is not None:
+            sets.append(value)
+        elif flag == "--params" and value is not None:
+            params = value
+    load_params(planner, params, sets)
+
+
+def check_run(world: World, planner: str, seed: int, timeout_s: float, port: int | None,
+              ns: str, record: str | None, planner_args: list[str],
+              spec_timeout: Spec = TIMEOUT) -> None:
+    """Every pre-start check of ``papf run`` (module doc)."""
+    planner_name(planner)
+    check_value("--seed", seed, SEED)
+    check_value("--timeout", timeout_s, spec_timeout)
+    planner_settings(planner, planner_args)
+    namespace(ns)
+    record_path(record)
+    if world.dims != 2:
+        raise ConfigError(f"world {world.name!r} is 3-D: papf run simulates the ROSbot on 2-D "
+                          "worlds; plan 3-D worlds offline with papf plan")
+    check_runnable(world)
+    port_free(port)

@@ -1,0 +1,250 @@
+"""The node graph as data: launch profiles (TOML) resolved into the processes of one host.
+
+A profile (``papf/launch/profiles/<name>.toml``, or any path; format in docs/architecture.md
+"Launch profiles") names the host it runs on, the nodes there and their arguments
+(``{variable}`` templates), whether that host runs the Zenoh router, whether it drives a
+run, and the profile of the other host (``partner``) when the stack is split. ``papf run``
+is the ``sim`` profile plus the run sequence; ``papf launch PROFILE`` any profile.
+:func:`resolve` gives the process list both start (and ``--dry-run`` prints, as JSON).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import re
+import sys
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from common.errors import ConfigError
+from common.ports import Port, select
+from schemas.keys import TOPICS
+from worlds import load_world, world_path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
+             "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
+             "view")
+ROUTER_MODULE = "papf.launch.router"
+OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
+OBJECT_PLANNERS = ("iapf",)              # planners that use tracks: their default is truth
+
+
+def objects_for(planner: str | None, objects: str | None,
+                allowed: tuple[str, ...] = OBJECTS) -> str:
+    """``--objects`` as given, else for a planner that uses tracks the first of ``truth``,
+    ``tracker`` the profile offers (``allowed``), else ``none``."""
+    if objects is not None:
+        return objects
+    if planner in OBJECT_PLANNERS:
+        return next((o for o in ("truth", "tracker") if o in allowed), "none")
+    return "none"
+# What the launcher of a run subscribes to and publishes (papf.launch.sequence), besides the
+# profile's pose topic: it is a process of the graph too.
+LAUNCHER_PORTS: tuple[Port, ...] = (
+    ("out", "goal", "Goal"), ("out", "events", "Event"),
+    ("in", "clock", "Clock"), ("in", "planner/status", "PlannerStatus"),
+    ("in", "battery", "BatteryState"), ("in?", "events", "Event"), ("in?", "cmd_vel", "Twist"),
+)
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    name: str                               # liveliness name (``<ns>/alive/<name>``)
+    module: str                             # ``python -m <module>``
+    args: tuple[str, ...] = ()              # may use {variables}
+    needs: str | None = None                # start only when this variable is set ("var=value":
+                                            # only when it has that value)
+    if_set: dict = field(default_factory=dict)   # variable (or "var=value") -> extra args
+
+
+@dataclass(frozen=True)
+class Profile:
+    name: str
+    description: str
+    nodes: tuple[NodeSpec, ...]
+    host: str = "local"                     # where this profile's processes run
+    partner: str | None = None              # the other host's profile of a split stack
+    router: bool = False                    # run the embedded router on this host
+    listen: tuple[str, ...] = ()            # the router's endpoints
+    connect: tuple[str, ...] = ()           # where this host's nodes connect (no router here)
+    run: bool = False                       # drive a run from this host
+    remote_nodes: tuple[str, ...] = ()      # nodes on the other host that a run waits for
+    pose_topic: str = "odom"                # pose samples of the run summary
+    defaults: dict = field(default_factory=dict)
+    objects: tuple[str, ...] = OBJECTS      # the --objects sources this host can serve
+    zenoh_mode: str = "client"              # nodes' mode: client (via the router) or peer (direct too)
+
+
+@dataclass(frozen=True)
+class Process:
+    name: str
+    host: str
+    argv: tuple[str, ...]
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "host": self.host, "argv": list(self.argv)}
+
+
+@dataclass
+class Resolved:
+    """The processes of one host, router first, in start order; where the nodes connect."""
+
+    profile: Profile
+    processes: list[Process]
+    connect: list[str]
+    listen: list[str]
+
+    @property
+    def nodes(self) -> dict[str, list[str]]:
+        return {p.name: list(p.argv) for p in self.processes if p.name != "router"}
+
+    def to_json(self) -> str:
+        return json.dumps({"profile": self.profile.name,
+                           "processes": [p.to_json() for p in self.processes]}, indent=1)
+
+
+def packaged_profiles() -> list[str]:
+    root = resources.files("papf.launch") / "profiles"
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def load_profile(name_or_path: str) -> Profile:
+    """A packaged profile by name, or a TOML file by path; ConfigError says what is wrong."""
+    path = Path(name_or_path)
+    if not (path.suffix == ".toml" or "/" in name_or_path):
+        path = Path(str(resources.files("papf.launch") / "profiles" / f"{name_or_path}.toml"))
+    if not path.is_file():
+        raise ConfigError(f"no launch profile {name_or_path!r}; packaged: "
+                          f"{', '.join(packaged_profiles())} (or a path to a .toml file)")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        nodes = tuple(NodeSpec(n["name"], n["module"], tuple(n.get("args", ())), n.get("needs"),
+                               dict(n.get("if_set", {}))) for n in data.get("nodes", ()))
+        prof = Profile(data.get("name", path.stem), data.get("description", ""), nodes,
+                       data.get("host", "local"), data.get("partner"),
+                       bool(data.get("router", False)), tuple(data.get("listen", ())),
+                       tuple(data.get("connect", ())), bool(data.get("run", False)),
+                       tuple(data.get("remote_nodes", ())), data.get("pose_topic", "odom"),
+                       dict(data.get("defaults", {})), tuple(data.get("objects", OBJECTS)),
+                       str(data.get("zenoh_mode", "client")))
+        if prof.zenoh_mode not in ("client", "peer"):
+            raise ConfigError(f"launch profile {str(path)!r}: zenoh_mode = {prof.zenoh_mode!r}; "
+                              "valid: client, peer")
+    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError) as exc:
+        raise ConfigError(f"launch profile {str(path)!r} is invalid: {type(exc).__name__}: "
+                          f"{exc} (see docs/architecture.md for the format)") from None
+    if prof.pose_topic not in TOPICS:
+        raise ConfigError(f"profile {prof.name}: pose_topic {prof.pose_topic!r} is not one of "
+                          f"{sorted(TOPICS)}")
+    if prof.router and not prof.listen:
+        raise ConfigError(f"profile {prof.name}: router = true needs listen endpoints")
+    return prof
+
+
+@dataclass
+class LaunchOptions:
+    """What the command line adds to a profile (``papf launch``; ``papf run`` fills it too)."""
+
+    profile: str
+    connect: list[str] = field(default_factory=list)
+    listen: list[str] = field(default_factory=list)
+    namespace: str = "rosbot"
+    zenoh_config: str | None = None          # nodes' (and the launcher's) Zenoh config
+    router_config: str | None = None         # the router's (TLS, auth, access control)
+    values: dict = field(default_factory=dict)   # template variables given on the command line
+    planner_args: list[str] = field(default_factory=list)
+    timeout_s: float = 300.0                 # [s run time]
+    zenoh_mode: str | None = None            # client | peer; None: the profile's zenoh_mode
+    extra_node_args: dict[str, list[str]] = field(default_factory=dict)
+    startup_timeout_s: float = 60.0          # [s wall] for every node to become alive
+    stall_s: float | None = None             # [s wall] no clock progress: stuck (None: default)
+    verbose: bool = False
+    dry_run: bool = False
+
+
+def local_endpoint(listen: str) -> str:
+    """The loopback endpoint for nodes on the router's host: tcp/0.0.0.0:7447 -> tcp/127.0.0.1:7447."""
+    return re.sub(r"^(\w+)/(0\.0\.0\.0|\[::\])(:\d+)", r"\1/127.0.0.1\3", listen)
+
+
+def template_values(prof: Profile, opt: LaunchOptions) -> dict[str, str]:
+    values = {**{k: str(v) for k, v in prof.defaults.items()},
+              **{k: str(v) for k, v in opt.values.items() if v is not None}}
+    values["planner_args"] = " ".join(opt.planner_args)
+    values["timeout_s"] = f"{opt.timeout_s:g}"
+    values["objects"] = objects_for(values.get("planner"), values.get("objects"), prof.objects)
+    if values["objects"] not in prof.objects:
+        raise ConfigError(f"profile {prof.name}: --objects {values['objects']} is not available "
+                          f"here; valid: {', '.join(prof.objects)}")
+    if "world" in values:
+        values["world_file"] = str(world_path(values["world"]))
+        load_world(values["world"])                 # WorldError before anything starts
+    return values
+
+
+def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
+    """The profile's processes on this host with every argument filled in, router first."""
+    values = template_values(prof, opt)
+    listen = opt.listen or list(prof.listen)
+    if prof.router:
+        connect = opt.connect or [local_endpoint(next((e for e in listen if e.startswith("tcp/")),
+                                                      listen[0]))]
+    else:
+        connect = opt.connect or list(prof.connect)
+        if not connect and not opt.zenoh_config:
+            raise ConfigError(f"profile {prof.name} runs no router: give --connect "
+                              "tcp/<robot>:7447 (or a --zenoh-config that has connect endpoints)")
+    common = [a for ep in connect for a in ("--connect", ep)] + ["--namespace", opt.namespace]
+    if opt.zenoh_config:
+        common += ["--zenoh-config", opt.zenoh_config]
+    if (opt.zenoh_mode or prof.zenoh_mode) == "peer":  # peers also talk directly: one loopback hop, not two
+        common += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
+    procs = []
+    if prof.router:
+        argv = [sys.executable, "-m", ROUTER_MODULE, *[a for ep in listen for a in ("--listen", ep)]]
+        procs.append(Process("router", prof.host, tuple(argv + (
+            ["--zenoh-config", opt.router_config] if opt.router_config else []))))
+    for spec in prof.nodes:
+        if spec.needs and not _holds(spec.needs, values):
+            continue
+        args = list(spec.args)
+        for cond, extra in spec.if_set.items():
+            if _holds(cond, values):
+                args += list(extra)
+        if spec.name == "planner":
+            args += opt.planner_args
+        argv = [sys.executable, "-m", spec.module, *_fill(args, values, prof, spec), *common,
+                *opt.extra_node_args.get(spec.name, ())]
+        procs.append(Process(spec.name, prof.host, tuple(argv)))
+    return Resolved(prof, procs, connect, listen)
+
+
+def _holds(cond: str, values: dict) -> bool:
+    """``"var"``: the variable is set; ``"var=value"``: it is set to that value."""
+    var, sep, value = cond.partition("=")
+    return var in values and (not sep or values[var] == value)
+
+
+def _fill(args: list[str], values: dict, prof: Profile, spec: NodeSpec) -> list[str]:
+    out = []
+    for a in args:
+        for var in re.findall(r"{(\w+)}", a):
+            if var not in values:
+                raise ConfigError(f"profile {prof.name}, node {spec.name}: argument {a!r} needs "
+                                  f"--{var.replace('_', '-')} (variables: {', '.join(VARIABLES)})")
+            a = a.replace("{" + var + "}", values[var])
+        out.append(a)
+    return out
+
+
+def node_ports(module: str, argv: list[str] | tuple[str, ...]) -> tuple[Port, ...]:
+    """The declared ports (``<module>.ports``) of a node started with ``argv``."""
+    ports = importlib.import_module(f"{module}.ports")
+    return select(ports.PORTS, ports.VARIANTS, argv, getattr(ports, "EXTRAS", {}))

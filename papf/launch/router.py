@@ -1,0 +1,35 @@
+"""The embedded Zenoh router (docs/architecture.md "Transport"): ``python -m papf.launch.router``.
+
+Runs a Zenoh session in ``router`` mode listening on ``tcp/127.0.0.1:7447`` (by
+default) until SIGINT/SIGTERM, so no external ``zenohd`` is needed.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import zenoh
+
+from common.transport import DEFAULT_ENDPOINT, StopRequested, setup_logging, zenoh_config
+
+
+def main(listen: list[str], config_file: str | None = None) -> None:
+    log = setup_logging("router")
+    stop = StopRequested()
+    # without a config file (no multicast, no connect): no one to scout for, no 0.5 s delay
+    conf = zenoh_config("router", listen=listen, config_file=config_file,
+                        scout_delay_ms=None if config_file else 0)
+    with zenoh.open(conf) as session:
+        log.info("Zenoh router %s listening on %s", session.zid(), ", ".join(listen))
+        while not stop.event.wait(0.2):
+            pass
+    log.info("router stopped")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
+                        help=f"endpoint to listen on (default {DEFAULT_ENDPOINT})")
+    parser.add_argument("--zenoh-config", metavar="FILE", help="Zenoh JSON5 config (TLS, ACL)")
+    a = parser.parse_args()
+    main(a.listen or [DEFAULT_ENDPOINT], a.zenoh_config)

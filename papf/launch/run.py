@@ -1,0 +1,134 @@
+"""`papf run`: start the whole stack as processes, drive to an outcome, stop everything.
+
+The processes are the ``sim`` launch profile's (:mod:`papf.launch.profile`; ``papf launch sim``
+starts the same list), but the router is the launcher's own Zenoh session (no router
+process). Sequence (docs/architecture.md): router -> nodes -> liveliness -> then
+:class:`papf.launch.sequence.RunSequence` (goal handshake -> run_started -> outcome ->
+figures at ``t_end`` -> run_ended) -> stop the nodes, the recorder, the router.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import zenoh
+
+from common import runauth
+from common.transport import wait_alive, zenoh_config
+from papf.console.progress import RunProgress
+from papf.launch.outcome import RunMonitor, RunResult
+from papf.launch.preflight import check_run
+from papf.launch.profile import LaunchOptions, Resolved, load_profile, resolve
+from papf.launch.sequence import RunSequence
+from papf.launch.supervisor import Supervisor, free_port, port_in_use
+from schemas import Keys
+from worlds import World, load_world
+
+log = logging.getLogger("papf.run")
+
+DEFAULT_PORT = 7447
+PROFILE = "sim"   # papf run = this launch profile + the run sequence
+
+
+@dataclass
+class RunConfig:
+    world: str
+    planner: str = "apf"
+    seed: int = 0
+    timeout_s: float = 300.0           # [s sim time]
+    realtime: bool = False
+    record: str | None = None
+    port: int | None = None            # None: 7447, or a free port if 7447 is taken
+    namespace: str = "rosbot"
+    planner_args: list[str] = field(default_factory=list)   # e.g. ["--set", "v_max=0.3"]
+    energy_model: str = "motor"
+    stop_on_collision: bool = True
+    verbose: bool = False
+    progress: bool | None = None       # None: when stderr is a terminal
+    startup_timeout_s: float = 60.0    # [s wall] for every node to become alive
+    lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
+    extra_node_args: dict[str, list[str]] = field(default_factory=dict)
+    zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
+    view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
+    objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
+
+
+def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
+    """The ``sim`` profile's options for this run (``papf launch sim`` takes the same)."""
+    values = {"world": cfg.world, "planner": cfg.planner, "seed": cfg.seed,
+              "energy_model": cfg.energy_model, "record": cfg.record,
+              "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
+              "realtime": "1" if cfg.realtime else None,
+              "objects": cfg.objects, "view": cfg.view}
+    return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,
+                         values={k: v for k, v in values.items() if v is not None},
+                         planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,
+                         zenoh_mode=cfg.zenoh_mode, extra_node_args=cfg.extra_node_args,
+                         startup_timeout_s=cfg.startup_timeout_s, verbose=cfg.verbose)
+
+
+def resolve_run(cfg: RunConfig, port: int | None = None) -> Resolved:
+    """The processes of this run: the ``sim`` profile resolved with its options."""
+    return resolve(load_profile(PROFILE), launch_options(cfg, port or cfg.port or DEFAULT_PORT))
+
+
+def _show_line(verbose: bool):
+    keys = ("WARNING", "ERROR", "CRITICAL", "Traceback", "Error", "error:")
+    return lambda name, line: verbose or any(k in line for k in keys)
+
+
+def run(cfg: RunConfig) -> RunResult:
+    """Run the whole stack once; always stops every process it started."""
+    world = load_world(cfg.world)  # WorldError before anything starts
+    check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
+              cfg.planner_args)   # ConfigError/WorldError before anything starts
+    port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
+    if cfg.port is None and port != DEFAULT_PORT:
+        log.warning("port %d is in use; the embedded router listens on %d instead",
+                    DEFAULT_PORT, port)
+    graph = resolve_run(cfg, port)
+    endpoint = graph.connect[0]
+    wall0 = time.monotonic()
+    monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision,
+                         goal=(world.goal[0], world.goal[1], world.tolerance))
+    keys = Keys(cfg.namespace)
+    # The launcher's own session is the embedded router (a Python process, as the profile
+    # says, but this one): no router process to start and wait for, and the launcher's
+    # subscriptions are served without a hop. The nodes are stopped before it closes. A
+    # port someone else listens on (another stack's router) fails here: nothing published.
+    try:
+        # no multicast, nothing to connect to: no scouting delay (Zenoh waits 0.5 s by default)
+        router = zenoh.open(zenoh_config("router", listen=[f"tcp/127.0.0.1:{port}"], scout_delay_ms=0))
+    except Exception as exc:  # zenoh raises ZError (e.g. the port was taken meanwhile)
+        monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
+        return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+    run_key = runauth.new_key()    # to the nodes through their environment only
+    with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
+                                       env={runauth.ENV: run_key}) as sup:
+        seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key))
+        try:
+            _drive(cfg, world, graph.nodes, sup, session, keys, seq)
+        finally:
+            result = monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+            seq.end(result)  # before the nodes stop: the recorder keeps the result
+    result.wall_time_s = time.monotonic() - wall0
+    return result
+
+
+def _drive(cfg: RunConfig, world: World, commands: dict[str, list[str]], sup: Supervisor,
+           session: zenoh.Session, keys: Keys, seq: RunSequence) -> None:
+    for name, argv in commands.items():
+        sup.start(name, argv)
+    missing = wait_alive(session, keys, commands, cfg.startup_timeout_s,
+                         abort=lambda: bool(sup.dead()))
+    if missing or sup.dead():
+        seq.monitor.fail(sup.death_reason() or f"nodes not alive after "
+                         f"{cfg.startup_timeout_s:g} s: {', '.join(sorted(missing))}")
+        return
+    if not seq.handshake(world):
+        return
+    seq.start(f"world={world.name} planner={cfg.planner} seed={cfg.seed}")
+    with RunProgress(cfg.progress, cfg.timeout_s, world.name, cfg.planner) as progress:
+        seq.until_outcome(progress, world.goal[:2])

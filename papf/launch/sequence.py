@@ -1,0 +1,196 @@
+"""The launcher's side of a run over its Zenoh session (docs/architecture.md, "Start and
+end of a run"), shared by `papf run` and `papf launch`:
+
+goal handshake -> ``run_started`` -> watch messages until an outcome -> figures at
+``t_end`` -> ``run_ended`` (carrying the result as JSON, so recordings hold it).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import queue
+import time
+from collections.abc import Callable
+
+import zenoh
+
+from common import runauth
+from common.errors import SchemaError
+from common.transport import direct
+from common.units import StampGuard
+from papf.launch.outcome import NS, RunMonitor, RunResult
+from papf.launch.supervisor import Supervisor
+from schemas import Event, Keys, PlannerStatus
+from schemas.keys import STAMP_ORDERED, TOPICS
+from worlds import World
+from worlds.messages import goal_message
+
+log = logging.getLogger("papf.run")
+
+GOAL_HANDSHAKE_S = 15.0  # [s wall] for the planner to acknowledge the goal
+STALL_S = 20.0           # [s wall] no sim-clock progress for this long = the stack is stuck
+FIGURES_S = 10.0         # [s wall] for battery/pose samples to reach t_end
+CHECK_S = 0.05           # [s wall] period of the watch (node deaths, stall, progress, stop)
+RECORDER_ACK_S = 15.0    # [s wall] for the recorder to close its file after run_ended
+COALESCE_S = 0.01        # [s wall] the watch takes the message stream in batches this far apart
+
+
+class RunSequence:
+    """One run driven over ``session``: subscriptions feed ``monitor`` on the caller's thread."""
+
+    def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
+                 pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
+                 stall_s: float = STALL_S, run_key: bytes | None = None):
+        self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
+        self.stop, self.stall_s = stop, stall_s
+        self.run_key = run_key               # goals signed, statuses verified (common.runauth)
+        self._q: queue.SimpleQueue = queue.SimpleQueue()   # C-level: no Python lock per message
+        self.stamps = StampGuard(STAMP_ORDERED, restart_at_zero=False)
+        self.dropped = 0                     # bad payloads, stamps and tags: not acted on
+        self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
+                          "events": monitor.on_event, "battery": monitor.on_battery,
+                          "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose,
+                          "goal": monitor.on_goal}
+        if pose_topic == "sim/pose":
+            # the sim driver puts sim/pose(t) just before clock(t), at every instant: the pose
+            # samples carry the sim time, and the launcher is not woken for clock as well
+            del self._handlers["clock"]
+            self._handlers[pose_topic] = lambda msg: (monitor.on_pose(msg),
+                                                      monitor.on_time(msg.stamp_ns))
+        self._subs = [session.declare_subscriber(keys.key(t), direct(self._callback(t)))
+                      for t in self._handlers]
+
+    def _callback(self, topic: str):
+        msg_type = TOPICS[topic]
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                msg = msg_type.from_bytes(sample.payload.to_bytes())
+            except SchemaError:
+                self.dropped += 1
+                return
+            if self.stamps.check(topic, msg) or (
+                    topic in ("planner/status", "goal") and not runauth.verify(msg, self.run_key)):
+                self.dropped += 1
+                return
+            self._q.put((topic, msg))
+        return on_sample
+
+    def drain(self, timeout_s: float) -> list[tuple[str, object]]:
+        """Feed queued messages to the monitor (waiting up to ``timeout_s`` for the first)."""
+        got = []
+        try:
+            item = self._q.get(timeout=timeout_s)
+            while True:
+                self._handlers[item[0]](item[1])
+                got.append(item)
+                item = self._q.get_nowait()
+        except queue.Empty:
+            return got
+
+    # -- the sequence ---------------------------------------------------------
+    def handshake(self, world: World) -> bool:
+        """Publish the goal every 0.5 s until the planner answers ``ready``."""
+        goal = runauth.sign(goal_message(world), self.run_key)
+        deadline = time.monotonic() + GOAL_HANDSHAKE_S
+        while time.monotonic() < deadline and not self.stop() and not self.sup.dead():
+            self.session.put(self.keys.goal, goal.to_bytes())
+            t_next = time.monotonic() + 0.5
+            while time.monotonic() < t_next:
+                if any(t == "planner/status" and isinstance(m, PlannerStatus) and m.state == "ready"
+                       for t, m in self.drain(0.05)):
+                    return True
+        self.monitor.fail("interrupted" if self.stop() else self.sup.death_reason() or
+                          f"the planner never acknowledged the goal within {GOAL_HANDSHAKE_S:g} s")
+        return False
+
+    def start(self, detail: str) -> None:
+        self.session.put(self.keys.events, Event(stamp_ns=0, kind="run_started",
+                                                 source="launcher", detail=detail).to_bytes())
+
+    def until_outcome(self, progress=None, goal_xy: tuple[float, float] | None = None) -> None:
+        """Watch until the monitor has an outcome; a dead node, a stall or a stop is one too."""
+        m = self.monitor
+        last_clock, last_change = m.clock_ns, time.monotonic()
+        next_check = last_change
+        while not m.done:
+            if self.drain(0.05) and not m.done:
+                time.sleep(COALESCE_S)   # let the next messages gather: one wake per batch
+            now = time.monotonic()
+            if now < next_check:  # the watch below at most every CHECK_S, not per message
+                continue
+            next_check = now + CHECK_S
+            if m.clock_ns != last_clock:
+                last_clock, last_change = m.clock_ns, now
+            if progress is not None and goal_xy is not None:
+                progress.update(m.clock_ns / NS, m.distance_to(*goal_xy),
+                                m.batteries[-1].charge_used_mAh if m.batteries else 0.0,
+                                m.status.state if m.status else "")
+            if self.stop():
+                m.fail("interrupted")
+            elif self.sup.dead():
+                self._on_node_death()
+            elif now - last_change > self.stall_s:
+                m.fail(f"sim time stuck at {m.clock_ns / NS:.2f} s for {self.stall_s:g} s "
+                       "(a node is hung, or the link to the base driver is lost)")
+        self._wait_for_figures()
+
+    def _on_node_death(self) -> None:
+        """A node died: the figures freeze at its last output (the meter's last battery, the
+        planner's last status, else the clock now), never past the timeout, and the reason
+        names it. After a planner's death the robot's stop is still watched (stop latency)."""
+        m = self.monitor
+        dead = self.sup.dead()[0].name
+        at = {"energy_meter": m.last_stamp("battery"), "planner": m.last_stamp("status")}.get(dead)
+        m.fail(self.sup.death_reason(), at)
+        m.reason += f" (figures frozen at {(m.t_end_ns or 0) / NS:.2f} s)"
+        if dead != "planner":
+            return
+        deadline = time.monotonic() + 10.0  # the driver's lockstep timeout + its watchdog
+        while time.monotonic() < deadline and not (m.watchdog_stop_ns and m.robot_stopped()):
+            self.drain(0.05)
+
+    def _wait_for_figures(self) -> None:
+        deadline = time.monotonic() + FIGURES_S
+        while not self.monitor.figures_complete() and time.monotonic() < deadline:
+            if self.stop() or any(c.name in ("energy_meter", "base_driver")
+                                  for c in self.sup.dead()):
+                break
+            self.drain(0.05)
+        if not self.monitor.figures_complete():
+            log.warning("figures at t_end=%.2f s incomplete (battery/pose samples missing)",
+                        (self.monitor.t_end_ns or 0) / NS)
+
+    def end(self, result: RunResult) -> bool:
+        """``run_ended`` with the result as JSON; then, if a recorder runs, wait (at most
+        :data:`RECORDER_ACK_S`) for its ``recording_closed``: its file is then complete.
+        Stop listening. False if a recorder runs and did not acknowledge. Nothing is
+        published when this run's router died: what the session reaches then is not ours."""
+        if any(c.name == "router" for c in self.sup.dead()):
+            for sub in self._subs:
+                sub.undeclare()
+            self._subs.clear()
+            return False
+        self.session.put(self.keys.events, Event(
+            stamp_ns=self.monitor.t_end_ns or max(self.monitor.clock_ns, 0), kind="run_ended",
+            source="launcher", detail=json.dumps(result.to_json())).to_bytes())
+        closed = self._wait_for_recorder()
+        for sub in self._subs:
+            sub.undeclare()
+        self._subs.clear()
+        return closed
+
+    def _wait_for_recorder(self) -> bool:
+        recorder = [c for c in self.sup.children if c.name == "recorder"]
+        if not recorder:
+            return True
+        deadline = time.monotonic() + RECORDER_ACK_S
+        while time.monotonic() < deadline and recorder[0].returncode is None:
+            if any(t == "events" and m.kind == "recording_closed" and m.source == "recorder"
+                   for t, m in self.drain(0.05)):
+                return True
+        log.warning("the recorder did not confirm its file closed within %g s%s", RECORDER_ACK_S,
+                    f" (it exited with code {recorder[0].returncode})"
+                    if recorder[0].returncode is not None else "")
+        return False

@@ -1,0 +1,68 @@
+"""The result of an offline run (:func:`papf.offline.plan.plan`, 2-D or 3-D) and its path file."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from common.errors import ConfigError
+
+
+@dataclass
+class PlanResult:
+    """One offline run. ``path`` rows are positions (x, y) or (x, y, z) [m] per control cycle."""
+
+    world: str
+    planner: str
+    seed: int
+    outcome: str                   # reached | stagnated | collision | timeout | failed
+    reason: str
+    path: np.ndarray               # (N, D) [m]
+    times: np.ndarray              # (N,) sim time of each row [s]
+    headings: np.ndarray           # (N,) yaw [rad] (2-D); empty in 3-D
+    duration_s: float              # first motion -> outcome [s] (as RunResult.duration_s)
+    sim_time_s: float              # sim time of the outcome [s]
+    min_clearance_m: float         # closest approach of the footprint / point to an obstacle [m]
+    collisions: int
+    states: list = field(default_factory=list)   # keep_states: PlannerState (2-D) or Plan (3-D) per cycle
+    road: dict = field(default_factory=dict)     # road worlds: left_road, lane_changes, min/max speed
+
+    @property
+    def length_m(self) -> float:
+        """Path length [m]."""
+        if self.path.shape[0] < 2:
+            return 0.0
+        return float(np.sum(np.linalg.norm(np.diff(self.path, axis=0), axis=1)))
+
+    def summary(self) -> dict:
+        """The `papf plan --json` object (no path)."""
+        return {"outcome": self.outcome, "planner": self.planner, "world": self.world,
+                "seed": self.seed, "duration_s": round(self.duration_s, 6),
+                "path_length_m": round(self.length_m, 6), "sim_time_s": round(self.sim_time_s, 6),
+                "collisions": self.collisions,
+                "min_clearance_m": round(self.min_clearance_m, 6), **self.road,
+                "reason": self.reason}
+
+
+def write_path(result: PlanResult, out: str | Path) -> None:
+    """The path as CSV (``t,x,y[,z],yaw``) or JSON (summary + ``path``), by file suffix."""
+    out = Path(out)
+    dims = result.path.shape[1]
+    cols = ["t", "x", "y", "z"][: dims + 1]
+    if out.suffix.lower() == ".json":
+        doc = {**result.summary(), "columns": cols,
+               "path": [[float(t), *map(float, row)] for t, row in zip(result.times, result.path, strict=True)]}
+        out.write_text(json.dumps(doc))
+        return
+    if out.suffix.lower() != ".csv":
+        raise ConfigError(f"path file {str(out)!r}: suffix must be .csv or .json")
+    lines = [",".join(cols + (["yaw"] if result.headings.size else []))]
+    for i, (t, row) in enumerate(zip(result.times, result.path, strict=True)):
+        vals = [f"{t:.3f}", *(f"{v:.5f}" for v in row)]
+        if result.headings.size:
+            vals.append(f"{result.headings[i]:.5f}")
+        lines.append(",".join(vals))
+    out.write_text("\n".join(lines) + "\n")

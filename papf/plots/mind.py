@@ -1,0 +1,208 @@
+"""The planner's mind on a matplotlib axes: what the PAPF paper drew in RViz.
+
+- :func:`draw_footprint` — the ROSbot's chassis rectangle at a pose (``common.robot``);
+- :func:`draw_mind` — one ``PlannerState``: predicted path, abandoned predictions, top
+  quarks, temporary goal, AR-APF's virtual walls and obstacles;
+- :func:`snapshot_index` — the most telling cycle of a run (most quarks and abandoned
+  predictions, then the longest prediction) for a still picture;
+- :func:`plot_plan` — ``papf plan --plot``: world, path, footprints along it, the mind at the
+  snapshot cycle.
+
+Colours are the live view's (:data:`nodes.viewer.scene.MIND_COLOURS`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle, Polygon  # noqa: E402
+
+from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
+from nodes.viewer.scene import MIND_COLOURS  # noqa: E402
+from papf.plots.world import colour_for, draw_world  # noqa: E402
+from schemas.messages import PlannerState  # noqa: E402
+from worlds import World  # noqa: E402
+
+FOOTPRINT_EVERY_S = 2.0   # [s] of sim time between footprint outlines along a path
+
+
+def rgba(name: str, alpha: float | None = None) -> tuple:
+    r, g, b, a = MIND_COLOURS[name]
+    return (r, g, b, a if alpha is None else alpha)
+
+
+def footprint_corners(x: float, y: float, yaw: float) -> np.ndarray:
+    """(4, 2) corners of the chassis rectangle at a pose [m]."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    hx, hy = BODY_LENGTH_M / 2, BODY_WIDTH_M / 2
+    local = np.array([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
+    return local @ np.array([[c, s], [-s, c]]) + (x, y)
+
+
+def draw_footprint(ax, x: float, y: float, yaw: float, filled: bool = True, label=None):
+    """The chassis at (x, y, yaw): filled (the robot now) or an outline (where it was)."""
+    style = ({"facecolor": rgba("robot"), "edgecolor": rgba("robot", 1.0), "lw": 1.0}
+             if filled else {"fill": False, "edgecolor": rgba("robot", 0.45), "lw": 0.6})
+    patch = Polygon(footprint_corners(x, y, yaw), closed=True, zorder=6, label=label, **style)
+    ax.add_patch(patch)
+    nose = ax.plot([x, x + 0.6 * BODY_LENGTH_M * math.cos(yaw)],
+                   [y, y + 0.6 * BODY_LENGTH_M * math.sin(yaw)], color=rgba("robot", 1.0),
+                   lw=1.0 if filled else 0.5, zorder=6)
+    return [patch, *nose]
+
+
+def draw_road(ax, world: World) -> list:
+    """The road's painted lines across the axes' x range: solid edges, dashed lane lines."""
+    if world.road is None:
+        return []
+    out = []
+    for rl in world.road.lines():
+        out.append(ax.axhline(rl.y, color=rgba("road"), lw=1.5, zorder=1,
+                              ls="-" if rl.kind == "solid" else (0, (6, 6))))
+    return out
+
+
+def draw_moving(ax, world: World, t_s: float) -> list:
+    """The moving obstacles where they are at sim time ``t_s`` [s]."""
+    out = []
+    for ob in world.obstacles:
+        if ob.motion is None:
+            continue
+        here = ob.at(t_s)
+        if here.shape == "box":
+            patch = Polygon(here.corners(), closed=True, color=rgba("moving"), lw=0, zorder=4)
+        else:
+            patch = Circle(here.center[:2], here.radius, color=rgba("moving"), lw=0, zorder=4)
+        ax.add_patch(patch)
+        out.append(patch)
+    return out
+
+
+def draw_mind(ax, state: PlannerState, labels: bool = True) -> list:
+    """Every piece of one planner cycle on ``ax``; returns the artists (to remove later)."""
+    out = []
+    lab = (lambda s: s) if labels else (lambda s: None)
+    for i, path in enumerate(state.abandoned_paths):
+        p = np.asarray(path)
+        if len(p) > 1:
+            out += ax.plot(p[:, 0], p[:, 1], color=rgba("abandoned"), lw=0.9, ls="--", zorder=4,
+                           label=lab("abandoned prediction") if i == 0 else None)
+    if len(state.predicted_path) > 1:
+        p = np.asarray(state.predicted_path)
+        out += ax.plot(p[:, 0], p[:, 1], color=rgba("prediction"), lw=2.0, zorder=5,
+                       label=lab("prediction"))
+    for i, wall in enumerate(state.virtual_walls):
+        p = np.asarray(wall)
+        if len(p) > 1:
+            out += ax.plot(p[:, 0], p[:, 1], color=rgba("virtual_wall"), lw=3.0, zorder=5,
+                           label=lab("virtual wall") if i == 0 else None)
+    if len(state.virtual_obstacles):
+        p = np.asarray(state.virtual_obstacles)
+        out += ax.plot(p[:, 0], p[:, 1], "s", color=rgba("virtual_obstacle"), ms=6, zorder=7,
+                       label=lab("virtual obstacle"))
+    if len(state.top_quarks):
+        p = np.asarray(state.top_quarks)
+        out += ax.plot(p[:, 0], p[:, 1], "o", color=rgba("quark"), ms=7, mec="k", mew=0.5,
+                       zorder=7, label=lab("top quark"))
+    if len(state.temporary_goal) >= 2:
+        tg = state.temporary_goal
+        out += ax.plot(tg[0], tg[1], "D", color=rgba("temporary_goal"), ms=8, mec="k", mew=0.5,
+                       zorder=7, label=lab("temporary goal"))
+    return out
+
+
+def snapshot_index(states: Sequence[PlannerState]) -> int | None:
+    """Index of the cycle showing most: quarks + abandoned predictions + virtual walls first,
+    then the longest prediction (the earliest of equals); None if no cycle shows anything."""
+    best, best_score = None, (0, 0)
+    for i, s in enumerate(states):
+        score = (len(s.top_quarks) + len(s.abandoned_paths) + len(s.virtual_walls),
+                 len(s.predicted_path) + (len(s.temporary_goal) >= 2))
+        if score > best_score:
+            best, best_score = i, score
+    return best
+
+
+def plot_plan(world: World, result, out_png: str | Path, title: str) -> Path:
+    """``papf plan --plot``: the path, footprints every :data:`FOOTPRINT_EVERY_S`, and the
+    mind and footprint at the snapshot cycle (named in the legend with its time)."""
+    fig, ax = plt.subplots(figsize=(9.0, 6.0))
+    try:
+        draw_world(ax, world)
+        path, t = result.path, result.times
+        ax.plot(path[:, 0], path[:, 1], color=colour_for(result.planner, 0), lw=1.6,
+                label=f"{result.planner} ({result.outcome})", zorder=3)
+        next_t = 0.0
+        for k in range(len(t)):
+            if t[k] >= next_t:
+                draw_footprint(ax, path[k, 0], path[k, 1], result.headings[k], filled=False)
+                next_t = t[k] + FOOTPRINT_EVERY_S
+        i = snapshot_index(result.states)
+        if i is not None:
+            state = result.states[i]
+            draw_mind(ax, state)
+            k = min(int(np.searchsorted(t, state.stamp_ns / 1e9)), len(t) - 1)
+            draw_footprint(ax, path[k, 0], path[k, 1], result.headings[k],
+                           label=f"robot at t = {state.stamp_ns / 1e9:.1f} s ({state.mode})")
+        ax.set_title(title)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+        ax.autoscale_view()
+        out = Path(out_png)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.tight_layout()
+        fig.savefig(out, dpi=110)
+    finally:
+        plt.close(fig)
+    return out
+
+
+def mind_png(runs, files: dict, world: World | None, out_png: str | Path) -> Path:
+    """The report's ``mind.png``: for the first run of each planner, its path, footprints and
+    the mind at its most telling cycle (from the recording's ``planner/state``)."""
+    from papf.recording.track import load_track
+
+    firsts: dict[str, object] = {}
+    for r in runs:
+        firsts.setdefault(r.planner, r)
+    fig, axes = plt.subplots(1, max(len(firsts), 1), figsize=(5.0 * max(len(firsts), 1), 4.6),
+                             squeeze=False)
+    try:
+        for ax, (planner, r) in zip(axes[0], firsts.items(), strict=False):
+            track = load_track(files[r.file])
+            if world is not None and world.dims == 2:
+                draw_world(ax, world)
+            xy, t = track.xyyaw, track.t
+            ax.plot(xy[:, 0], xy[:, 1], color=colour_for(planner, 0), lw=1.4, zorder=3)
+            next_t = t[0] if len(t) else 0.0
+            for k in range(len(t)):
+                if t[k] >= next_t:
+                    draw_footprint(ax, *xy[k], filled=False)
+                    next_t = t[k] + FOOTPRINT_EVERY_S
+            i = snapshot_index(track.states)
+            label = f"{planner} seed {r.seed} ({r.outcome})"
+            if i is not None:
+                s = track.states[i]
+                draw_mind(ax, s)
+                k = max(int(np.searchsorted(t, s.stamp_ns / 1e9, side="right")) - 1, 0)
+                draw_footprint(ax, *xy[k], label=f"robot at {s.stamp_ns / 1e9:.1f} s")
+                label += f", mind at {s.stamp_ns / 1e9:.1f} s ({s.mode})"
+            elif len(t):   # nothing to show of the mind (APF): the robot where it ended
+                draw_footprint(ax, *xy[-1], label=f"robot at {t[-1]:.1f} s")
+            ax.set_title(label, fontsize=9)
+            ax.set_aspect("equal")
+            ax.legend(loc="best", fontsize=6)
+        out = Path(out_png)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.tight_layout()
+        fig.savefig(out, dpi=110)
+    finally:
+        plt.close(fig)
+    return out

@@ -1,0 +1,140 @@
+"""``papf animate FILE.mcap OUT.gif|OUT.mp4``: a recorded run as a moving picture.
+
+Left: the top view — world, the path so far, the robot's footprint, and the planner's mind
+of the latest cycle (prediction, abandoned predictions, top quarks, temporary goal, virtual
+walls). Right: speed and charge over the run with a cursor at the frame's time. Title:
+time, speed, charge. One frame every ``speed / fps`` seconds of sim time.
+
+GIF through Pillow (always there with matplotlib); MP4 through ffmpeg where it is
+installed (``matplotlib.animation.FFMpegWriter``) — else a ConfigError says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib import animation  # noqa: E402
+
+from common.errors import ConfigError  # noqa: E402
+from papf.plots.mind import (  # noqa: E402
+    draw_footprint,
+    draw_mind,
+    draw_moving,
+    draw_road,
+    rgba,
+)
+from papf.plots.world import draw_world  # noqa: E402
+from papf.recording.track import RunTrack, load_track  # noqa: E402
+
+MAX_FRAMES = 1500
+
+
+def _at(times: np.ndarray, t: float) -> int:
+    """Index of the last sample at or before ``t`` (0 if none)."""
+    return max(int(np.searchsorted(times, t, side="right")) - 1, 0)
+
+
+def _value(times: np.ndarray, values: np.ndarray, t: float) -> float:
+    return float(values[_at(times, t)]) if len(values) else float("nan")
+
+
+class Animator:
+    def __init__(self, track: RunTrack, fps: float, speed: float):
+        self.track, self.step_s = track, speed / fps
+        self.fig = plt.figure(figsize=(11.0, 5.6))
+        grid = self.fig.add_gridspec(2, 2, width_ratios=(1.6, 1.0))
+        self.ax = self.fig.add_subplot(grid[:, 0])
+        self.ax_v = self.fig.add_subplot(grid[0, 1])
+        self.ax_q = self.fig.add_subplot(grid[1, 1], sharex=self.ax_v)
+        self.dynamic: list = []
+        self._static()
+
+    def _static(self) -> None:
+        tr, ax = self.track, self.ax
+        if tr.world is not None and tr.world.dims == 2:   # moving obstacles: in draw()
+            draw_world(ax, replace(tr.world, obstacles=tuple(
+                ob for ob in tr.world.obstacles if ob.motion is None)))
+            draw_road(ax, tr.world)
+        xy = tr.xyyaw[:, :2]
+        ax.plot(xy[:, 0], xy[:, 1], color="0.8", lw=0.8, zorder=2)   # the whole path, faint
+        lo, hi = xy.min(axis=0) - 0.6, xy.max(axis=0) + 0.6
+        if tr.world is not None:
+            ax.autoscale_view()
+            (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+            lo, hi = np.minimum(lo, (x0, y0)), np.maximum(hi, (x1, y1))
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_aspect("equal")
+        self.ax_v.plot(tr.v_t, tr.v, color="tab:blue", lw=1.0)
+        self.ax_v.set_ylabel("speed [m/s]")
+        self.ax_q.plot(tr.q_t, tr.q, color="tab:green", lw=1.2)
+        self.ax_q.set_ylabel("charge used [mAh]")
+        self.ax_q.set_xlabel("sim time [s]")
+        for a in (self.ax_v, self.ax_q):
+            a.grid(True, lw=0.3, alpha=0.5)
+
+    def frames(self) -> np.ndarray:
+        t0, t1 = float(self.track.t[0]), float(self.track.t[-1])
+        n = int((t1 - t0) / self.step_s) + 1
+        if n > MAX_FRAMES:
+            raise ConfigError(f"{n} frames at --speed/--fps = {self.step_s:g} s per frame; at "
+                              f"most {MAX_FRAMES}: raise --speed")
+        times = t0 + self.step_s * np.arange(n)
+        return times if times[-1] >= t1 - 1e-9 else np.append(times, t1)   # end on the last pose
+
+    def draw(self, t: float) -> list:
+        for artist in self.dynamic:
+            artist.remove()
+        tr, ax = self.track, self.ax
+        k = _at(tr.t, t)
+        out = ax.plot(tr.xyyaw[: k + 1, 0], tr.xyyaw[: k + 1, 1], color=rgba("robot", 1.0),
+                      lw=1.6, zorder=3)
+        if len(tr.states):
+            s = tr.states[_at(tr.state_t, t)]
+            if s.stamp_ns / 1e9 <= t + 1e-9:
+                out += draw_mind(ax, s, labels=False)
+        out += draw_footprint(ax, *tr.xyyaw[k])
+        if tr.world is not None and tr.world.dims == 2:
+            out += draw_moving(ax, tr.world, t)
+        v, q = _value(tr.v_t, tr.v, t), _value(tr.q_t, tr.q, t)
+        out += [self.ax_v.axvline(t, color="k", lw=0.8), self.ax_q.axvline(t, color="k", lw=0.8)]
+        charge = f"{q:5.2f} mAh" if q == q else "n/a"   # nan: no battery recorded
+        out.append(self.fig.suptitle(f"{tr.title}    t = {t:6.1f} s    v = {v:4.2f} m/s    "
+                                     f"charge = {charge}", fontsize=11))
+        self.dynamic = out
+        return out
+
+
+def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 4.0,
+            world: str | None = None, dpi: int = 80) -> int:
+    """Render ``src`` into ``out`` (.gif or .mp4); returns the number of frames."""
+    out = Path(out)
+    suffix = out.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ConfigError(f"{out}: the output must be a .gif or an .mp4")
+    if suffix == ".mp4" and not animation.writers.is_available("ffmpeg"):
+        raise ConfigError("an .mp4 needs ffmpeg on PATH (e.g. apt-get install ffmpeg); "
+                          "write a .gif instead")
+    if not (fps > 0 and speed > 0):
+        raise ConfigError(f"--fps {fps} and --speed {speed} must be > 0")
+    anim = Animator(load_track(src, world), fps, speed)
+    try:
+        frames = anim.frames()
+        writer = (animation.PillowWriter(fps=fps) if suffix == ".gif"
+                  else animation.FFMpegWriter(fps=fps))
+        out.parent.mkdir(parents=True, exist_ok=True)
+        anim.fig.tight_layout(rect=(0, 0, 1, 0.95))
+        with writer.saving(anim.fig, str(out), dpi):
+            for t in frames:
+                anim.draw(float(t))
+                writer.grab_frame()
+    finally:
+        plt.close(anim.fig)
+    return len(frames)

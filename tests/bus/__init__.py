@@ -1,0 +1,1 @@
+"""Tests: the bus tier (docs/architecture.md, "Tests")."""

@@ -1,0 +1,325 @@
+"""papf topic / goal / teleop: decoding, rates, progress, and the tools over a real router."""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+
+from common import ros2
+from common.errors import ConfigError
+from papf.bus import topics
+from papf.bus.decode import CDR, MSGPACK, RAW, as_text, decode, ros_type_for_key
+from papf.bus.goal import send_goal
+from papf.bus.stats import HzStats, stamp_rate
+from papf.bus.teleop import TeleopState, parse_keys
+from papf.bus.teleop import run as teleop_run
+from papf.console.progress import DecileProgress
+from schemas import Goal, Keys, PlannerStatus, Scan, Twist
+
+KEYS = Keys("rosbot")
+
+
+def _scan(stamp: int = 100) -> Scan:
+    return Scan(stamp_ns=stamp, angle_min=-math.pi, angle_increment=0.1, range_min=0.2,
+                range_max=25.0, ranges=[1.0] * 20)
+
+
+# -- decoding ---------------------------------------------------------------------------------
+def test_decode_our_msgpack_by_its_type():
+    d = decode("rosbot/scan", _scan(7).to_bytes())
+    assert (d.encoding, d.type_name, d.stamp_ns, d.error) == (MSGPACK, "papf/Scan/v1", 7, "")
+    text = as_text(d.value)
+    assert "ranges: [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, … (20 items" in text
+    assert "1.0, " * 19 in as_text(d.value, max_items=None)
+
+
+def test_decode_bridge_cdr_by_key_and_by_override():
+    data = ros2.encode(ros2.odometry(2_500_000_000, 1.5, -2.0, 0.3, 0.2, 0.1), ros2.ODOMETRY)
+    d = decode("odometry/filtered", data)
+    assert (d.encoding, d.type_name, d.stamp_ns) == (CDR, ros2.ODOMETRY, 2_500_000_000)
+    assert d.value["pose"]["pose"]["position"]["x"] == 1.5
+    assert ros_type_for_key("robot1/odometry/filtered") == ros2.ODOMETRY   # bridge namespace
+    unknown = decode("my/topic", data)
+    assert unknown.type_name == "" and "--ros-type" in unknown.value
+    forced = decode("my/topic", data, ros_type=ros2.ODOMETRY)
+    assert forced.value["twist"]["twist"]["linear"]["x"] == pytest.approx(0.2)
+    wrong = decode("cmd_vel", data, ros_type="no_pkg/msg/Nothing")
+    assert "not a ROS 2 Humble type" in wrong.error
+
+
+def test_decode_invalid_and_raw_payloads_are_shown_not_raised():
+    import msgpack
+
+    bad = msgpack.packb({"_type": "papf/Twist/v1", "stamp_ns": 1, "v": "fast", "w": 0.0})
+    d = decode("rosbot/cmd_vel", bad)
+    assert d.type_name == "papf/Twist/v1" and "expected a number" in d.error
+    assert decode("x", b"\x01\x02\x03").encoding == RAW
+
+
+def test_resolve_key_namespace_and_bridge_names():
+    assert topics.resolve_key("scan", KEYS) == "rosbot/scan"
+    assert topics.resolve_key("planner/state", Keys("lab/r1")) == "lab/r1/planner/state"
+    assert topics.resolve_key("/scan", KEYS) == "scan"
+    assert topics.resolve_key("rosbot/**", KEYS) == "rosbot/**"
+
+
+# -- rates, progress --------------------------------------------------------------------------
+def test_hz_stats_by_arrival_and_by_stamp():
+    st = HzStats(window=100)
+    for i in range(21):                       # 20 Hz arrivals, 10 Hz in stamps (lockstep 2x)
+        st.add(i * 0.05, i * 100_000_000)
+    r = st.rate()
+    assert r.hz == pytest.approx(20.0) and r.stamp_hz == pytest.approx(10.0)
+    assert r.window == 21 and r.sd_s == pytest.approx(0.0, abs=1e-9)
+    assert "20.000 Hz" in r.line("rosbot/scan")
+    assert math.isnan(HzStats().rate().hz)
+    assert stamp_rate([5, 6, 7, 0, 100_000_000, 200_000_000]) == pytest.approx(10.0)  # new run
+
+
+def test_decile_progress_piped_prints_one_line_per_ten_percent():
+    lines: list[str] = []
+    with DecileProgress("replay", enabled=None, out=lines.append) as p:
+        for i in range(1001):
+            p.fraction(i / 1000)
+    assert len(lines) == 11 and lines[0].startswith("replay:   0 %") and "100 %" in lines[-1]
+    dist: list[str] = []
+    with DecileProgress("goal", out=dist.append) as p:
+        for d in (10.0, 9.0, 9.5, 4.9, 0.0):   # going back does not print again
+            p.distance(d)
+    assert [x.split(":")[1].strip() for x in dist] == ["0 %", "10 %", "51 %", "100 %"]
+
+
+# -- teleop (pure, then through a pseudo-terminal) --------------------------------------------
+def test_teleop_keys_and_limits():
+    assert parse_keys("wW\x1b[A\x1b[Dq") == ["w", "w", "up", "left", "q"]
+    st = TeleopState(max_v=0.1, max_w=0.4)
+    for k in ("w", "up", "w", "left", "left", "left"):
+        st.press(k)
+    assert (st.v, st.w) == (0.1, 0.4)          # clamped at the teleop's own limits
+    st.press("right")
+    assert st.w == pytest.approx(0.2)
+    st.press(" ")
+    assert (st.v, st.w) == (0.0, 0.0)
+    assert not st.press("z") and not st.quit
+    st.press("down")
+    assert st.v == -0.05
+    st.press("q")
+    assert st.quit and (st.v, st.w) == (0.0, 0.0)
+    with pytest.raises(ConfigError, match="0.9"):
+        TeleopState(max_v=2.0)
+
+
+def test_teleop_needs_a_terminal(session):
+    r, w = os.pipe()
+    try:
+        with pytest.raises(ConfigError, match="terminal"):
+            teleop_run(session, KEYS, TeleopState(), fd=r, out=io.StringIO())
+    finally:
+        os.close(r)
+        os.close(w)
+
+
+def test_teleop_in_a_pty_publishes_the_keys_on_cmd_vel_with_the_clock_stamp(session):
+    from schemas import Clock
+
+    got: list[Twist] = []
+    sub = session.declare_subscriber(KEYS.cmd_vel,
+                                     lambda s: got.append(Twist.from_bytes(s.payload.to_bytes())))
+    master, slave = os.openpty()
+    out = io.StringIO()
+    th = threading.Thread(target=teleop_run, args=(session, KEYS, TeleopState()),
+                          kwargs={"fd": slave, "out": out, "period_s": 0.05}, daemon=True)
+    th.start()
+    try:
+        _wait(lambda: got, "first command")
+        session.put(KEYS.clock, Clock(stamp_ns=4_200_000_000).to_bytes())
+        # the clock arrives on its own callback: keys pressed before it would go out with stamp 0
+        _wait(lambda: got[-1].stamp_ns == 4_200_000_000, "a command with the clock's stamp")
+        os.write(master, b"ww\x1b[D")
+        _wait(lambda: got and (got[-1].v, got[-1].w) == (0.1, 0.2), "v 0.1, w 0.2")
+        assert got[-1].stamp_ns == 4_200_000_000
+        os.write(master, b"q")
+        th.join(30.0)
+        assert not th.is_alive()
+        _wait(lambda: (got[-1].v, got[-1].w) == (0.0, 0.0), "zero on quit")
+        assert "v +0.10 m/s  w +0.20 rad/s" in out.getvalue()
+    finally:
+        if th.is_alive():     # a failed check: let the teleop quit before its terminal closes
+            os.write(master, b"q")
+            th.join(30.0)
+        sub.undeclare()
+        os.close(master)
+        os.close(slave)
+
+
+def _wait(cond, what: str, timeout_s: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not cond():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.02)
+
+
+# -- topic and goal over a router ------------------------------------------------------------
+def _publish_for(session, seconds: float, stop: threading.Event) -> threading.Thread:
+    def loop() -> None:
+        i = 0
+        t_end = time.monotonic() + seconds
+        while not stop.is_set() and time.monotonic() < t_end:
+            session.put(KEYS.scan, _scan(i * 100_000_000).to_bytes())
+            session.put("odometry/filtered", ros2.encode(
+                ros2.odometry(i * 100_000_000, 0.1 * i, 0.0, 0.0, 0.1, 0.0), ros2.ODOMETRY))
+            i += 1
+            time.sleep(0.05)
+    th = threading.Thread(target=loop, daemon=True)
+    th.start()
+    return th
+
+
+def test_topic_list_echo_hz_over_the_router(router, session):
+    import zenoh
+
+    from common.transport import zenoh_config
+
+    stop = threading.Event()
+    th = _publish_for(session, 120.0, stop)   # until stopped; the time only bounds it
+    try:
+        with zenoh.open(zenoh_config("client", [router])) as s2:
+            lines: list[str] = []
+            assert topics.topic_list(s2, KEYS, 2.0, lines.append) == 2
+            scan_row = next(x for x in lines if x.startswith("rosbot/scan "))
+            assert "papf/Scan/v1" in scan_row and "Hz" in scan_row
+            assert any(x.startswith("odometry/filtered ") and "nav_msgs/msg/Odometry" in x
+                       and "cdr" in x for x in lines)
+            assert any(x.startswith("rosbot/goal ") and "silent" in x for x in lines)
+            echoed: list[str] = []
+            assert topics.echo(s2, "odometry/filtered", echoed.append, count=2) == 2
+            assert "[nav_msgs/msg/Odometry, cdr]" in echoed[0] and "frame_id: odom" in echoed[0]
+            rates = topics.hz(s2, "rosbot/scan", [].append, duration_s=1.5)
+            r = rates["rosbot/scan"].rate()
+            # arrivals: about the 20 Hz it is published at (a busy machine delays or bunches
+            # them, so only the order of magnitude); stamps: exactly 10 Hz
+            assert 2.0 < r.hz < 200.0 and r.stamp_hz == pytest.approx(10.0)
+    finally:
+        stop.set()
+        th.join()
+
+
+def test_topic_cli_echo_once_and_timeout(router, session):
+    stop = threading.Event()
+    th = _publish_for(session, 120.0, stop)   # until stopped: three CLI start-ups under load
+    cmd = [sys.executable, "-m", "papf", "topic"]
+    try:
+        r = subprocess.run([*cmd, "echo", "scan", "--once", "--connect", router],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.startswith("# rosbot/scan  [papf/Scan/v1, msgpack]")
+        r = subprocess.run([*cmd, "hz", "/odometry/filtered", "--duration", "1.5", "--connect",
+                            router], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0 and "odometry/filtered:" in r.stdout and " Hz (" in r.stdout
+        r = subprocess.run([*cmd, "echo", "nothing/here", "--timeout", "0.5", "--connect", router],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 5 and "no message on nothing/here" in r.stderr
+    finally:
+        stop.set()
+        th.join()
+
+
+def _fake_planner(session, reached_after: int, threads: list[threading.Thread]):
+    """Answers a goal with ready, then counts down the distance and reports reached (on a
+    thread added to ``threads``: to be joined before the session closes)."""
+    goals: list[Goal] = []
+
+    def on_goal(sample) -> None:
+        g = Goal.from_bytes(sample.payload.to_bytes())
+        goals.append(g)
+        session.put(KEYS.planner_status, PlannerStatus(stamp_ns=0, state="ready").to_bytes())
+        if len(goals) == 1:
+            threads.append(threading.Thread(target=drive, daemon=True))
+            threads[-1].start()
+
+    def drive() -> None:
+        for i in range(reached_after + 1):
+            time.sleep(0.05)
+            state = "reached" if i == reached_after else "driving"
+            session.put(KEYS.planner_status, PlannerStatus(
+                stamp_ns=i, state=state, distance_to_goal=float(reached_after - i)).to_bytes())
+    return session.declare_subscriber(KEYS.goal, on_goal), goals
+
+
+def test_goal_cli_handshake_start_run_and_outcome(router, session):
+    from schemas import Event
+
+    events: list[Event] = []
+    ev_sub = session.declare_subscriber(KEYS.events,
+                                        lambda s: events.append(Event.from_bytes(s.payload.to_bytes())))
+    threads: list[threading.Thread] = []
+    sub, goals = _fake_planner(session, reached_after=20, threads=threads)
+    try:
+        r = subprocess.run([sys.executable, "-m", "papf", "goal", "3", "-1.5", "--tolerance", "0.2",
+                            "--start-run", "--connect", router],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stderr
+        assert "acknowledged" in r.stdout and r.stdout.rstrip().endswith("reached")
+        assert (goals[0].x, goals[0].y, goals[0].tolerance) == (3.0, -1.5, 0.2)
+        # run_started comes from the CLI's session, the statuses from ours: no order between them
+        _wait(lambda: events, "run_started")
+        assert [e.kind for e in events] == ["run_started"]
+        assert r.stderr.count("to the goal:") == 11        # piped: one line per 10 %
+    finally:
+        sub.undeclare()
+        ev_sub.undeclare()
+        for th in threads:   # done putting before the session closes ("Already borrowed")
+            th.join(30)
+
+
+def test_goal_superseded_by_another_goal_exits_6(router, session):
+    import zenoh
+
+    from common.transport import zenoh_config
+
+    timers: list[threading.Timer] = []
+
+    def on_goal(sample) -> None:
+        g = Goal.from_bytes(sample.payload.to_bytes())
+        session.put(KEYS.planner_status, PlannerStatus(stamp_ns=0, state="ready").to_bytes())
+        if g.x == 1.0:   # someone else re-targets the planner right after
+            timers.append(threading.Timer(0.3, lambda: session.put(KEYS.goal, Goal(
+                stamp_ns=0, x=5.0, y=0.0).to_bytes())))
+            timers[-1].start()
+
+    sub = session.declare_subscriber(KEYS.goal, on_goal)
+    try:
+        with zenoh.open(zenoh_config("client", [router])) as s2:
+            res = send_goal(s2, KEYS, 1.0, 2.0, out=[].append, timeout_s=20.0)
+        assert res.outcome == "superseded" and res.exit_code == 6 and "(5, 0)" in res.reason
+    finally:
+        sub.undeclare()
+        for t in list(timers):   # done putting before the session closes ("Already borrowed")
+            t.join(30)
+
+
+def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypatch, router):
+    import papf.bus.goal as goal_mod
+
+    monkeypatch.setattr(goal_mod, "HANDSHAKE_S", 1.0)
+    res = send_goal(session, KEYS, 1.0, 2.0, out=[].append)
+    assert res.outcome == "no_planner" and res.exit_code == 6 and "nodes.planner" in res.reason
+    r = subprocess.run([sys.executable, "-m", "papf", "goal", "1", "--connect", router],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "X Y" in r.stderr and "Traceback" not in r.stderr
+    from papf.launch.supervisor import free_port
+
+    nobody = f"tcp/127.0.0.1:{free_port()}"
+    for cmd in (["goal", "1", "2"], ["topic", "list"], ["teleop"]):
+        r = subprocess.run([sys.executable, "-m", "papf", *cmd, "--connect", nobody],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and "cannot reach the bus" in r.stderr, (cmd, r.stderr)
+        assert "Traceback" not in r.stderr
+

@@ -1,0 +1,168 @@
+"""Issue "trust no input", end to end (real processes, router, physics): a bounded bus fuzz
+gives the clean run's figures; forged goals and statuses change nothing; a dead meter, a
+full disk and a foreign router each end honestly."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import msgpack
+import numpy as np
+import pytest
+import zenoh
+
+from common.transport import zenoh_config
+from papf.launch.supervisor import Supervisor, free_port, wait_port
+from schemas import Clock, Event, Goal, Keys, PlannerStatus
+from schemas.keys import TOPICS
+from schemas.messages import Odometry, Scan, Twist
+from tests.e2e.test_e2e_run import assert_no_orphans
+from tests.support.e2e import papf_run, pids_of, start_papf_run
+
+pytestmark = pytest.mark.e2e
+
+FIGURES = ("outcome", "duration_s", "path_length_m", "charge_mAh", "energy_J", "collisions",
+           "sim_time_s")
+BAD_STAMPS = (-1, -2**63, 2**62 + 1, 2**63, 2**64 - 1)
+
+
+def _valid_like(msg_type, stamp: int) -> bytes:
+    """A message of ``msg_type`` that is valid in every field but ``stamp_ns``."""
+    samples = {
+        Odometry: Odometry(stamp_ns=0, x=9.0, y=9.0, yaw=1.0, v=0.5, w=0.5),
+        Scan: Scan(stamp_ns=0, angle_min=0.0, angle_increment=0.1, range_min=0.1,
+                   range_max=10.0, ranges=np.full(63, 0.3, np.float32)),
+        Twist: Twist(stamp_ns=0, v=0.9, w=3.0),
+        Goal: Goal(stamp_ns=0, x=-5.0, y=3.0),
+        PlannerStatus: PlannerStatus(stamp_ns=0, state="reached"),
+        Clock: Clock(stamp_ns=0),
+        Event: Event(stamp_ns=0, kind="run_ended", source="fuzz"),
+    }
+    msg = samples.get(msg_type)
+    if msg is None:
+        return b"\x80"
+    wire = msg.to_wire()
+    wire["stamp_ns"] = stamp
+    return msgpack.packb(wire, use_bin_type=True)
+
+
+def _fuzz(endpoint: str, stop: threading.Event, counts: dict) -> None:
+    """Garbage, wrong types, out-of-range stamps on every topic; forged goal and reached."""
+    keys = Keys()
+    garbage = [b"", b"\xff\x00garbage", os.urandom(64), b"\x93\x01\x02\x03", b"\xc1" * 10]
+    wrong = Twist(stamp_ns=5, v=0.5, w=0.5).to_bytes()          # a Twist where it is not one
+    forged = [Goal(stamp_ns=0, x=-5.0, y=3.0).to_bytes(),       # in range, but not this run's
+              PlannerStatus(stamp_ns=20_000_000, state="reached").to_bytes()]
+    with zenoh.open(zenoh_config("client", [endpoint])) as s:
+        i = 0
+        while not stop.is_set() and i < 150:
+            for topic, msg_type in TOPICS.items():
+                key = keys.key(topic)
+                s.put(key, garbage[i % len(garbage)])
+                s.put(key, wrong if msg_type is not Twist else Odometry(
+                    stamp_ns=5, x=0, y=0, yaw=0, v=0, w=0).to_bytes())
+                s.put(key, _valid_like(msg_type, BAD_STAMPS[i % len(BAD_STAMPS)]))
+                counts["puts"] += 3
+            s.put(keys.goal, forged[0])
+            s.put(keys.planner_status, forged[1])
+            counts["puts"] += 2
+            i += 1
+            time.sleep(0.03)
+
+
+def test_bus_fuzz_gives_the_figures_of_the_clean_run():
+    """Items 2 and 3 end to end: nothing hostile on the bus changes a lockstep run."""
+    args = ("--world", "open", "--planner", "apf", "--timeout", "60")
+    code, clean, err = papf_run(*args)
+    assert code == 0 and clean["outcome"] == "reached", err[-2000:]
+    port = free_port()
+    proc = start_papf_run(*args, port=port)
+    stop, counts = threading.Event(), {"puts": 0}
+    assert wait_port(port, 60), "the run's router never came up"
+    fuzzer = threading.Thread(target=_fuzz, args=(f"tcp/127.0.0.1:{port}", stop, counts),
+                              daemon=True)
+    fuzzer.start()
+    try:
+        out, err = proc.communicate(timeout=240)
+    finally:
+        stop.set()
+        fuzzer.join(10)
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    fuzzed = json.loads(out.strip().splitlines()[-1])
+    assert counts["puts"] > 100
+    assert {k: fuzzed[k] for k in FIGURES} == {k: clean[k] for k in FIGURES}, err[-3000:]
+    assert "faults" not in fuzzed
+    assert_no_orphans(port)
+
+
+def test_a_dead_energy_meter_freezes_the_figures_and_is_named():
+    """Item 4: the run ends at the meter's death, within the timeout, naming it."""
+    port = free_port()
+    proc = start_papf_run("--world", "energy", "--planner", "apf", "--timeout", "60", port=port)
+    try:
+        assert wait_port(port, 60)
+        with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as s:
+            started, moving = threading.Event(), threading.Event()
+
+            def on_clock(smp) -> None:
+                started.set()
+                if Clock.from_bytes(smp.payload.to_bytes()).stamp_ns > 3e9:
+                    moving.set()
+            sub = s.declare_subscriber(Keys().clock, on_clock)
+            assert started.wait(120), "the run never started"
+            meter = pids_of("nodes.energy_meter", port)   # looked up before: killed at once
+            assert meter, "no energy meter process"
+            assert moving.wait(120), "the run never got to 3 s of sim time"
+            for pid in meter:
+                os.kill(pid, signal.SIGKILL)
+            sub.undeclare()
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    res = json.loads(out.strip().splitlines()[-1])
+    assert proc.returncode == 6 and res["outcome"] == "failed", err[-2000:]
+    assert res["reason"].startswith("energy_meter exited") and "figures frozen at" in res["reason"]
+    assert 3.0 <= res["sim_time_s"] < 20.0           # at the death, not ~10 s of wall later
+    assert res["charge_mAh"] > 0 and res["path_length_m"] > 0
+    assert_no_orphans(port)
+
+
+def test_a_full_disk_ends_the_run_in_one_line_and_the_recording_is_recoverable(tiny_disk):
+    """Item 5: no traceback, the run ends, the partial file is recoverable."""
+    from papf.recording.recover import recover
+
+    out = tiny_disk / "run.mcap"
+    code, res, err = papf_run("--world", "energy", "--planner", "apf", "--timeout", "60",
+                              "--record", str(out))
+    assert code == 6 and res["outcome"] == "failed", err[-2000:]
+    assert res["reason"].startswith("recorder exited with code 2: cannot write")
+    assert "No space left on device" in res["reason"] and "papf recover" in res["reason"]
+    assert "Traceback" not in err and res["sim_time_s"] < 60
+    (tiny_disk / "fixed").mkdir()
+    assert recover(out, tiny_disk.parent / "fixed.mcap").messages > 1000
+
+
+def test_a_foreign_router_is_refused_before_anything_is_published():
+    """Item 6: `papf run --port P` where another stack's router listens."""
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    with Supervisor(show=lambda *_: False) as sup:
+        sup.start("router", [sys.executable, "-m", "papf.launch.router", "--listen", endpoint])
+        assert wait_port(port, 15.0)
+        seen = []
+        with zenoh.open(zenoh_config("client", [endpoint])) as s:
+            sub = s.declare_subscriber("**", lambda smp: seen.append(str(smp.key_expr)))
+            p = subprocess.run([sys.executable, "-m", "papf", "run", "--world", "open", "--port",
+                                str(port), "--json"], capture_output=True, text=True, timeout=60)
+            time.sleep(0.5)
+            sub.undeclare()
+    assert p.returncode == 2 and p.stdout == "" and "already listens" in p.stderr
+    assert seen == [], seen

@@ -1,0 +1,124 @@
+"""The house plan (docs/architecture.md "Layers"): imports only point down, and no cycles.
+
+Bottom: ``schemas``, ``common``, ``worlds``. Middle: ``nodes``. Top: ``papf``, ``bench``.
+Every import counts — module-level and function-local alike — so a lazy import cannot
+hide an upward edge or a cycle. Read with :mod:`ast`, nothing is imported.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+LAYER = {"schemas": 0, "common": 0, "worlds": 0, "nodes": 1, "papf": 2, "bench": 2}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def project_modules() -> dict[str, Path]:
+    return {_module_name(p): p for top in LAYER for p in sorted((ROOT / top).rglob("*.py"))}
+
+
+def _targets(node: ast.AST, here: str, is_pkg: bool, modules: dict[str, Path]) -> list[str]:
+    """Project modules an ``import`` / ``from ... import`` statement loads."""
+    if isinstance(node, ast.Import):
+        names = [a.name for a in node.names]
+    else:
+        base = node.module or ""
+        if node.level:
+            pkg = here.split(".") if is_pkg else here.split(".")[:-1]
+            pkg = pkg[: len(pkg) - node.level + 1]
+            base = ".".join([*pkg, base] if base else pkg)
+        subs = [f"{base}.{a.name}" for a in node.names]
+        names = [s for s in subs if s in modules] or [base]
+    out = []
+    for name in names:
+        while name and name not in modules:  # `import a.b.c` of a name inside a module
+            name = name.rpartition(".")[0]
+        if name:
+            out.append(name)
+    return out
+
+
+def import_graph() -> dict[str, set[str]]:
+    modules = project_modules()
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        edges = set()
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                edges.update(_targets(node, name, path.name == "__init__.py", modules))
+        edges.discard(name)
+        graph[name] = edges
+    return graph
+
+
+def test_imports_only_point_down():
+    upward = [f"{a} -> {b}" for a, edges in import_graph().items() for b in sorted(edges)
+              if LAYER[b.split(".")[0]] > LAYER[a.split(".")[0]]]
+    assert not upward, "upward imports:\n" + "\n".join(upward)
+
+
+def find_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan, iterative)."""
+    index, low, stack, on_stack, out, counter = {}, {}, [], set(), [], [0]
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is None:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        x = stack.pop()
+                        on_stack.discard(x)
+                        comp.append(x)
+                        if x == v:
+                            break
+                    if len(comp) > 1:
+                        out.append(sorted(comp))
+            elif w not in index:
+                index[w] = low[w] = counter[0]
+                counter[0] += 1
+                stack.append(w)
+                on_stack.add(w)
+                work.append((w, iter(sorted(graph.get(w, ())))))
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+    return out
+
+
+def test_no_import_cycles():
+    cycles = find_cycles(import_graph())
+    assert not cycles, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in cycles)
+
+
+@pytest.mark.parametrize("graph, cyclic", [
+    ({"a": {"b"}, "b": {"c"}, "c": set()}, False),
+    ({"a": {"b"}, "b": {"c"}, "c": {"a"}}, True),
+])
+def test_the_cycle_finder_finds_cycles(graph, cyclic):
+    assert bool(find_cycles(graph)) == cyclic
+
+
+def test_the_graph_sees_function_local_imports():
+    graph = import_graph()
+    assert "papf.launch.run" in graph["papf.cli.run"]        # imported inside cmd_run
+    assert "nodes.base_driver.rosbot_node" in graph["nodes.base_driver.__main__"]  # lazy
