@@ -30,8 +30,8 @@ from typing import Protocol
 import numpy as np
 
 from common.units import NS_PER_S
-from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.field import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
+from nodes.planner.iapf.fields import Lanes, Track
 from nodes.planner.scan_kernel import scan_points
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
@@ -151,7 +151,7 @@ class Planner:
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
-        """The latest obstacle tracks (:class:`nodes.planner.iapf_fields.Track`)."""
+        """The latest obstacle tracks (:class:`nodes.planner.iapf.fields.Track`)."""
         self.objects = tuple(tracks)
 
     def set_road(self, road: Lanes | None) -> None:

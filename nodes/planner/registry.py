@@ -2,7 +2,7 @@
 
 Each algorithm is a strategy class with a frozen ``Params`` dataclass and
 ``__init__(self, params)``; :data:`PLANNERS` maps the ``--planner`` name to it.
-Settings: :class:`~nodes.planner.apf.APFParams` (shared field and motion law) plus the
+Settings: :class:`~nodes.planner.field.APFParams` (shared field and motion law) plus the
 algorithm's own ``Params``. A TOML file may give them at top level or in ``[apf]`` /
 ``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``. Every
 value is checked against its declared type and range (:mod:`nodes.planner.settings`)
@@ -12,20 +12,18 @@ by :func:`check_setting`, the one check for ``--set``, ``--params`` and live par
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
 
 from common.errors import ConfigError
 from common.params import Spec, check_all, check_value, unknown_name
-from nodes.planner.apf import APFParams, apf_force
-from nodes.planner.arapf import ARAPFStrategy
-from nodes.planner.core import Plan, Planner, ScanView
-from nodes.planner.iapf_strategy import IAPFStrategy
-from nodes.planner.papf import PAPFStrategy
+from nodes.planner.apf.strategy import APFStrategy
+from nodes.planner.arapf.strategy import ARAPFStrategy
+from nodes.planner.core import Planner
+from nodes.planner.field import APFParams
+from nodes.planner.iapf.strategy import IAPFStrategy
+from nodes.planner.papf.strategy import PAPFStrategy
 from nodes.planner.settings import specs_of
-from nodes.planner.wang import WangAPFStrategy, WangStrategy
+from nodes.planner.wang.strategy import WangAPFStrategy, WangStrategy
 
 try:
     import tomllib
@@ -34,27 +32,6 @@ except ModuleNotFoundError:  # Python 3.10
 
 
 PRESETS = ("default", "paper")
-
-
-class APFStrategy:
-    """Classic APF (PAPF paper eq. 2): steer by the resultant force towards the global goal."""
-
-    name = "apf"
-    PAPER_PRESET: dict = {}   # eq. 2 as written already: no deviation to switch off
-
-    @dataclass(frozen=True)
-    class Params:
-        """Classic APF has no settings beyond :class:`APFParams`."""
-
-    def __init__(self, params: Params | None = None):
-        self.params = params or self.Params()
-
-    def reset(self) -> None:
-        pass
-
-    def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
-             apf: APFParams) -> Plan:
-        return Plan(force=apf_force(pos, goal, view.points, apf))
 
 
 PLANNERS: dict[str, type] = {

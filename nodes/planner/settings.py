@@ -16,11 +16,11 @@ from __future__ import annotations
 
 from common.params import FLAG, Spec, choice, integer, num, pos
 from common.robot import LIDAR_RANGE_MAX_M, V_MAX_M_S, W_MAX_RAD_S
-from nodes.planner.apf import APFParams
-from nodes.planner.arapf import ARAPFParams
-from nodes.planner.iapf import IAPFParams
-from nodes.planner.papf import PAPFParams
-from nodes.planner.wang import WangAPFParams, WangParams
+from nodes.planner.arapf.strategy import ARAPFParams
+from nodes.planner.field import APFParams
+from nodes.planner.iapf.algorithm import IAPFParams
+from nodes.planner.papf.strategy import PAPFParams
+from nodes.planner.wang.strategy import WangAPFParams, WangParams
 
 MAX_BEAMS = 100_000      # [-] LiDAR points a planner is configured for
 MAX_GAIN = 1e4           # [-] largest force constant (defaults are 1 .. 10)
@@ -99,7 +99,7 @@ WANG_APF: dict[str, Spec] = {
     "rho_0": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
 }
 
-# IAPF (Yang et al.): car-scale road planner; Table 1 values and ours (nodes/planner/iapf.py).
+# IAPF (Yang et al.): car-scale road planner; Table 1 values and ours (nodes/planner/iapf/algorithm.py).
 # Its a_x, a_y are negative by the paper's eq. 11 (the obstacle field decays with them).
 IAPF: dict[str, Spec] = {
     "k1": pos(1e4), "k2": pos(1e4), "b1": num(0.0, 1e4), "b2": num(0.0, 1e4), "b3": num(0.0, 1e4),

@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nodes.planner.iapf import HostState, IAPFCore
-from nodes.planner.iapf_fields import Track
+from nodes.planner.iapf.algorithm import HostState, IAPFCore
+from nodes.planner.iapf.fields import Track
 from papf.offline.road import CAR_PLANNERS, car_params, lanes_of, mover, run_car
 from worlds import load_world
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from nodes.planner.iapf import PAPER_PRESET
+from nodes.planner.iapf.algorithm import PAPER_PRESET
 from papf.experiments.iapf import CASES
 from papf.offline.road import run_car
 from worlds import load_world

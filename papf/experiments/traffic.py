@@ -21,7 +21,7 @@ import numpy as np
 
 from common import robot
 from common.errors import RecordingError
-from nodes.planner.iapf_fields import Lanes
+from nodes.planner.iapf.fields import Lanes
 from papf.experiments.trials import markdown_table, quiet_runner_logs, run_stack, write_csv
 from papf.offline.car import road_figures
 from worlds import load_world, packaged_worlds, world_path

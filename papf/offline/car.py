@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nodes.planner.iapf import HostState, IAPFCore
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.iapf.algorithm import HostState, IAPFCore
+from nodes.planner.iapf.fields import Lanes, Track
 
 Mover = Callable[[float], Track]   # sim time [s] -> the vehicle's track at that time
 

@@ -25,7 +25,7 @@ from common.errors import ConfigError
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
-from nodes.planner.iapf_fields import Lanes
+from nodes.planner.iapf.fields import Lanes
 from nodes.planner.registry import make_planner
 from papf.offline.car import road_figures
 from papf.offline.point3d import plan_3d

@@ -26,8 +26,8 @@ import math
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
+from nodes.planner.field import APFParams
 from papf.offline.result import PlanResult
 from worlds import World
 

@@ -15,8 +15,8 @@ import dataclasses
 from pathlib import Path
 
 from common.errors import ConfigError
-from nodes.planner.iapf import HostState, IAPFCore, IAPFParams
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.iapf.algorithm import HostState, IAPFCore, IAPFParams
+from nodes.planner.iapf.fields import Lanes, Track
 from nodes.planner.registry import load_params
 from papf.offline.car import RoadRun, run_road
 from papf.offline.result import PlanResult

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from common.transport import wait_alive
-from nodes.planner.iapf_fields import Lanes
+from nodes.planner.iapf.fields import Lanes
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner
 from schemas import Keys

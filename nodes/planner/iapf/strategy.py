@@ -1,5 +1,5 @@
 """IAPF as a strategy of the planner node (``--planner iapf``): the core of
-:mod:`nodes.planner.iapf` on obstacle tracks and the road the run announced.
+:mod:`nodes.planner.iapf.algorithm` on obstacle tracks and the road the run announced.
 
 Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the latest obstacle tracks
 (``<ns>/objects``: ground truth or the LiDAR tracker, paired with the scan by the planner
@@ -8,7 +8,7 @@ built from tracked vehicles (Sec. 2.2.3), and the road is lines on the floor.
 
 Scale: :class:`IAPFParams` are the paper's car-scale values (lanes of ``lane_width_ref``
 = 4 m). On the run's road every length is scaled by ``d_w / lane_width_ref`` and time so
-that the cruise speed is ``cruise_speed`` (:func:`nodes.planner.iapf.scaled`); the
+that the cruise speed is ``cruise_speed`` (:func:`nodes.planner.iapf.algorithm.scaled`); the
 planning step is the control period. Output: the planned heading phi_E (eq. 21) and the
 updated speed v_c (eq. 26), which the planner's heading controller then tracks.
 """
@@ -22,10 +22,10 @@ import numpy as np
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.planner import lazy
-from nodes.planner.apf import APFParams
 from nodes.planner.core import Plan, ScanView
-from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.field import APFParams
+from nodes.planner.iapf.algorithm import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
+from nodes.planner.iapf.fields import Lanes, Track
 
 LANE_GOAL_AHEAD = 1.0  # [s] the temporary lane goal is drawn this far ahead at the cruise speed
 

@@ -38,13 +38,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
+from nodes.planner.field import EPS_M, APFParams
 from nodes.planner.lazy import lazy_module
 
 # the kernels (and numba) load when a PAPF planner is built, not with the registry
-kernels = lazy_module("nodes.planner.kernels")
-papf_kernel = lazy_module("nodes.planner.papf_kernel")
+kernels = lazy_module("nodes.planner.papf.kernels")
+papf_kernel = lazy_module("nodes.planner.papf.compiled")
 
 
 @dataclass(frozen=True)
@@ -105,7 +105,7 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
 
     At most ``M`` repetitions (new quarks) per call and at most ``M`` quarks in use: a new
     quark beyond ``M`` replaces the oldest one. The whole loop is one kernel call
-    (:func:`nodes.planner.kernels.predict_paths`).
+    (:func:`nodes.planner.papf.kernels.predict_paths`).
     """
     g_goal = apf.k_vg * apf.q_v * apf.q_g
     g_obs = apf.k_vo * apf.q_v * apf.q_o
@@ -261,7 +261,7 @@ class PAPFStrategy:
                     top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)
 
     def _plan_compiled(self, pos, goal, obstacles, apf: APFParams, kept) -> Plan:
-        """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf_kernel.plan_compiled`)."""
+        """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf.compiled.plan_compiled`)."""
         pp = self.params
         out = papf_kernel.plan_compiled(pos, goal, obstacles, apf, pp, kept)
         path, quarks, abandoned, resolved, target, force = out

@@ -14,7 +14,7 @@ The host is a particle with a speed (Sec. 3): each step of ``step_s`` it
 5. moves along the force direction (eqs. 21-22).
 
 :class:`IAPFCore` is that step, free of transport and of the stack's planner interface;
-:mod:`nodes.planner.iapf_strategy` adapts it to :class:`~nodes.planner.core.Planner`.
+:mod:`nodes.planner.iapf.strategy` adapts it to :class:`~nodes.planner.core.Planner`.
 Parameters: :class:`IAPFParams` (Table 1 where the paper gives a value, ours otherwise;
 docs/planners.md argues each). ``traditional=True`` is the paper's baseline: eq. 12 field,
 constant speed, no prediction.
@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nodes.planner.iapf_fields import (
+from nodes.planner.iapf.fields import (
     Lanes,
     attraction_gradient,
     gap,
@@ -42,7 +42,7 @@ from nodes.planner.iapf_fields import (
 from nodes.planner.lazy import lazy_module
 
 # the rollout kernel (and numba) loads when an IAPF core is built, not with the registry
-iapf_kernel = lazy_module("nodes.planner.iapf_kernel")
+iapf_kernel = lazy_module("nodes.planner.iapf.kernels")
 
 
 @dataclass(frozen=True)
@@ -251,7 +251,7 @@ class IAPFCore:
     def predict(self, s: HostState, tracks, lanes: Lanes, y_goal: float | None) -> np.ndarray:
         """Step 1: ``f_step`` states (x, y, v, yaw) ``predict_step_s`` apart, obstacles at
         constant velocity, the field without the temporary goal (the future the vehicle would
-        drive into). Runs :func:`nodes.planner.iapf_kernel.rollout` (numba when available)."""
+        drive into). Runs :func:`nodes.planner.iapf.kernels.rollout` (numba when available)."""
         p = self.p
         if self._prm is None:
             self._prm = iapf_kernel.pack_params(p)

@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
 from nodes.planner.core import Plan, ScanView
+from nodes.planner.field import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
 
 PASSAGE_WIDTHS = ("opening", "gap")
 

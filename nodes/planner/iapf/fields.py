@@ -208,7 +208,7 @@ def stop_deceleration(x: float, y: float, v: float, tracks, lanes: Lanes, host_l
     X than ``v``: ``(v - v_oX)^2 / (2 (gap - S_m))`` (infinite once inside ``S_m``); the largest.
     Eq. 9's safety distance is the braking distance at ``a_b`` plus ``S_m``; eq. 25's field
     alone cannot brake a host at speed to a stop within it (its return term beats the field),
-    so :meth:`nodes.planner.iapf.IAPFCore.advance` brakes with this once it exceeds
+    so :meth:`nodes.planner.iapf.algorithm.IAPFCore.advance` brakes with this once it exceeds
     ``stop_decel_frac a_b``.
     """
     lane = lanes.lane_of(y)

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.apf import EPS_M, APFParams
 from nodes.planner.core import Plan, ScanView
+from nodes.planner.field import EPS_M, APFParams
 
 
 @dataclass(frozen=True)

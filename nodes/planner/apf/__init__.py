@@ -1,0 +1,1 @@
+"""Classic APF (PAPF paper eq. 2)."""

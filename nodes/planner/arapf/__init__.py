@@ -1,0 +1,1 @@
+"""AR-APF (adaptive repulsion, virtual walls)."""

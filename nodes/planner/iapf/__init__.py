@@ -1,0 +1,1 @@
+"""IAPF (car-scale road planner on obstacle tracks)."""

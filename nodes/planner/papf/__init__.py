@@ -1,0 +1,1 @@
+"""Predictive APF (Szczepanski et al. 2022)."""

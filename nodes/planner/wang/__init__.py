@@ -1,0 +1,1 @@
+"""Wang's improved APF and his traditional APF baseline."""
