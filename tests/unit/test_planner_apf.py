@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
+from nodes.planner.apf.strategy import APFStrategy
 from nodes.planner.core import Planner, scan_view
 from nodes.planner.field import (
     APFParams,
@@ -17,7 +18,6 @@ from nodes.planner.field import (
     speed_ref,
     turn_rate,
 )
-from nodes.planner.apf.strategy import APFStrategy
 from nodes.planner.registry import load_params, make_planner
 from schemas.messages import Goal, Odometry, Scan
 from tests.support.toysim import simulate, toy_world
