@@ -27,7 +27,7 @@ from nodes.planner import lazy
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
-from nodes.planner.registry import PLANNERS, PRESETS, make_planner, preset_sets
+from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
 from nodes.planner.settings import NODE
 from schemas.messages import Event
 
@@ -38,7 +38,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS, EXTRAS))
-    ap.add_argument("--planner", default="apf", choices=sorted(PLANNERS), help="algorithm")
+    ap.add_argument("--planner", default=DEFAULT_PLANNER, choices=list(PLANNERS), help="algorithm")
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="override one setting, repeatable (e.g. --set d_o=0.8)")

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.arapf.settings import ARAPF
+from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
 
 PASSAGE_WIDTHS = ("opening", "gap")
@@ -187,11 +188,16 @@ def abandon(force: np.ndarray, f_goal: np.ndarray, delta_gamma_deg: float) -> bo
     return angle_deg(force, f_goal) <= delta_gamma_deg
 
 
-class ARAPFStrategy:
+class ARAPFStrategy(Strategy):
     """AR-APF on the shared APF core (registered as ``arapf``)."""
 
     name = "arapf"
+    rank = 2
+    roles = ("compared", "traffic", "arapf-proposed")
+    colour, colour_map = "tab:purple", "Purples"
+    planar_only = True   # reads the scan's beams (local minimum, object ends), not just points
     Params = ARAPFParams
+    SPECS = ARAPF
     #: ``--preset paper``: eqs. 2-4 without range limits, the obstacle placed once, the
     #: passage measured bound to bound (docs/planners.md, "Presets").
     PAPER_PRESET = {"range_limited": False, "wall_range_limited": False, "follow": False,

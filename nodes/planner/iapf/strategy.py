@@ -22,19 +22,30 @@ import numpy as np
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.planner import lazy
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import APFParams
 from nodes.planner.iapf.algorithm import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
-from nodes.planner.iapf.fields import Lanes, Track
+from nodes.planner.iapf.settings import IAPF
+from nodes.planner.road import Lanes, Track
 
 LANE_GOAL_AHEAD = 1.0  # [s] the temporary lane goal is drawn this far ahead at the cruise speed
 
 
-class IAPFStrategy:
+class IAPFStrategy(Strategy):
     """Jin 2024 IAPF on the shared planner core."""
 
     name = "iapf"
+    rank = 5
+    roles = ("car-proposed",)
+    colour_map = "Reds"
+    uses_objects = True   # its fields are built from tracked vehicles (Sec. 2.2.3)
+    #: the offline car-scale runs (papf/offline/road.py): name -> (label, settings changed,
+    #: colour); the first is IAPF itself, the paper's Table 2 rows are these names
+    car_variants = {"iapf": ("IAPF", {}, "tab:blue"),
+                    "iapf-np": ("IAPF without prediction", {"prediction": False}, "tab:green"),
+                    "apf": ("traditional APF", {"traditional": True, "prediction": False}, "tab:red")}
     Params = IAPFParams
+    SPECS = IAPF
     PAPER_PRESET = PAPER_PRESET
 
     def __init__(self, params: IAPFParams | None = None):

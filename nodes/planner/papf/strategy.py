@@ -38,9 +38,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import EPS_M, APFParams
 from nodes.planner.lazy import lazy_module
+from nodes.planner.papf.settings import PAPF
 
 # the kernels (and numba) load when a PAPF planner is built, not with the registry
 kernels = lazy_module("nodes.planner.papf.kernels")
@@ -208,11 +209,15 @@ PAPER_PRESET = {"pull_range_fraction": 0.0, "motion_quarks_within_d_o": False, "
                 "quark_restarts_watch": False, "replace_oldest_quark": False, "tie_tol_m": 0.0}
 
 
-class PAPFStrategy:
+class PAPFStrategy(Strategy):
     """PAPF on the shared APF core (registered as ``papf``)."""
 
     name = "papf"
+    rank = 1
+    roles = ("compared", "traffic", "papf-proposed")
+    colour, colour_map = "tab:orange", "Oranges"
     Params = PAPFParams
+    SPECS = PAPF
     PAPER_PRESET = PAPER_PRESET
 
     def __init__(self, params: PAPFParams | None = None):

@@ -34,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import EPS_M, APFParams
+from nodes.planner.wang.settings import WANG, WANG_APF
 
 
 @dataclass(frozen=True)
@@ -138,19 +139,17 @@ def scaled_to_scan(wp, apf: APFParams):
     return wp
 
 
-class WangStrategy:
+class WangStrategy(Strategy):
     """Wang's improved APF (registered as ``wang``)."""
 
     name = "wang"
+    rank = 3
+    roles = ("compared", "wang-proposed")
+    colour, colour_map = "tab:brown", "Greens"
     Params = WangParams
+    SPECS = WANG
     #: ``--preset paper``: the force at the robot itself (Wang moves a point along it).
     PAPER_PRESET = {"control_offset_m": 0.0}
-
-    def __init__(self, params: WangParams | None = None):
-        self.params = params or WangParams()
-
-    def reset(self) -> None:
-        pass
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
@@ -184,18 +183,15 @@ def traditional_force(pos, goal, obstacles, wp: WangAPFParams) -> np.ndarray:
     return force
 
 
-class WangAPFStrategy:
+class WangAPFStrategy(Strategy):
     """Wang's traditional APF baseline, eqs. 1-5 (registered as ``wang-apf``)."""
 
     name = "wang-apf"
+    rank = 4
+    roles = ("wang-baseline",)
     Params = WangAPFParams
+    SPECS = WANG_APF
     PAPER_PRESET: dict = {}   # eqs. 1-5 as written
-
-    def __init__(self, params: WangAPFParams | None = None):
-        self.params = params or WangAPFParams()
-
-    def reset(self) -> None:
-        pass
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
