@@ -35,6 +35,7 @@ NODE_NAME = "planner"
 
 
 def parse_args(argv=None) -> argparse.Namespace:
+    """The node's command line (``python -m nodes.planner --help``)."""
     ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS, EXTRAS))
@@ -61,6 +62,7 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Open the session, build the planner, serve scans until stopped; the exit code."""
     log = setup_logging(NODE_NAME, args.log_level)
     lazy.numba_without_scipy()   # numba would import scipy.linalg for nothing (nodes/planner/lazy.py)
     try:
@@ -119,6 +121,7 @@ def warm_up(planner) -> None:
 
 
 def main(argv=None) -> int:
+    """``python -m nodes.planner``: parse, run, exit code (2 on a bad option)."""
     return run(parse_args(argv))
 
 

@@ -1,23 +1,10 @@
-"""IAPF: Jin et al., "An Efficient Trajectory Planning Approach for Autonomous Ground Vehicles
-Using Improved Artificial Potential Field", Symmetry 16 (2024) 106 — the planning core.
+"""IAPF's planning core (Jin et al., Symmetry 16 (2024) 106): one step of the host particle.
 
-The host is a particle with a speed (Sec. 3): each step of ``step_s`` it
-
-1. drops the obstacles farther than the safety distance (eq. 9);
-2. predicts ``f_step`` low-resolution steps ahead (Algorithm 1, Step 1), counts the
-   predicted points beyond the middle between the lane centre and the nearest solid line
-   (eq. 24) and, above ``c_f``, sets a temporary lane goal in the neighbouring lane for
-   ``t_c`` seconds (Steps 3-6);
-3. sums the fields' negative gradients (eq. 13: road eqs. 4-5/18, attraction eqs. 6-8/19,
-   obstacles eqs. 10-11/15-16/20) into F;
-4. updates the speed from the obstacles' X force (eqs. 25-26) and
-5. moves along the force direction (eqs. 21-22).
-
-:class:`IAPFCore` is that step, free of transport and of the stack's planner interface;
-:mod:`nodes.planner.iapf.strategy` adapts it to :class:`~nodes.planner.core.Planner`.
-Parameters: :class:`IAPFParams` (Table 1 where the paper gives a value, ours otherwise;
-docs/planners.md argues each). ``traditional=True`` is the paper's baseline: eq. 12 field,
-constant speed, no prediction.
+Safety filter (eq. 9), prediction and temporary lane goal (Algorithm 1), fields (eq. 13),
+speed (eqs. 25-26), motion (eqs. 21-22). :class:`IAPFCore` is used by the planner's IAPF
+strategy (:mod:`nodes.planner.iapf.strategy`) and the offline car simulation
+(papf/offline/car.py); ``traditional=True`` is the paper's baseline. Step by step:
+docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations
@@ -190,6 +177,7 @@ class IAPFCore:
         self._prm = None       # the kernel's params vector (packed once)
 
     def reset(self) -> None:
+        """Forget the temporary lane goal and its timer (a new goal)."""
         self.temp_goal_y, self.t_goal = None, -math.inf
 
     # -- forces -------------------------------------------------------------------------

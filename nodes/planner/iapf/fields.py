@@ -1,20 +1,9 @@
-"""IAPF potential fields and their gradients (Jin et al., Symmetry 2024, Sec. 2.2 and 3.1).
+"""IAPF's potential fields and their exact gradients (Jin et al., Symmetry 2024, Sec. 2.2, 3.1).
 
-Pure scalar maths (``math``, no numpy: a cycle evaluates a handful of obstacles, where
-Python floats beat array overhead). Every function returns the *gradient* ``dU/dX, dU/dY``
-(the force is its negative, eq. 13) and, for tests and plots, the potential itself.
-Our reading of each ambiguous equation is stated where it is implemented and argued in
-docs/planners.md ("IAPF").
-
-- :func:`road_gradient` — eqs. 4, 5, 18: quartic boundary field outside the outer lane
-  centres (k1), quadratic lane-centre field between them (k2).
-- :func:`attraction_gradient` — eqs. 6-8, 19: cruise pull b1 along +x, goal pull b2 and the
-  lane-goal cosine b3 (half period ``D_g``).
-- :func:`safety_distance` — eq. 9.
-- :func:`obstacle_gradient` — eqs. 10, 11, 15, 16, 20: the rotated Gaussian field of one
-  obstacle; :func:`traditional_gradient` — eq. 12, the traditional APF's 1/d field.
-- ours: :func:`stop_deceleration` (the stop law with eq. 9's S_m) and :func:`road_headings`
-  (phi of eq. 10 for slow tracks).
+Pure scalar maths, used by :class:`nodes.planner.iapf.algorithm.IAPFCore` and its kernel
+tests: road (eqs. 4-5, 18), attraction (eqs. 6-8, 19), safety distance (eq. 9), obstacles
+(eqs. 10-12, 15-16, 20), our stop law. Each function returns the gradient and the
+potential; the equations by function: docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations

@@ -1,16 +1,9 @@
-"""IAPF as a strategy of the planner node (``--planner iapf``): the core of
-:mod:`nodes.planner.iapf.algorithm` on obstacle tracks and the road the run announced.
+"""IAPF as a planner strategy (``--planner iapf``): :class:`~nodes.planner.iapf.algorithm.IAPFCore`
+on the obstacle tracks and the road the run announced, scaled to the ROSbot.
 
-Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the latest obstacle tracks
-(``<ns>/objects``: ground truth or the LiDAR tracker, paired with the scan by the planner
-core) and the road (from the goal handshake) — the planner never reads a world file. The scan itself is not used: IAPF's fields are
-built from tracked vehicles (Sec. 2.2.3), and the road is lines on the floor.
-
-Scale: :class:`IAPFParams` are the paper's car-scale values (lanes of ``lane_width_ref``
-= 4 m). On the run's road every length is scaled by ``d_w / lane_width_ref`` and time so
-that the cruise speed is ``cruise_speed`` (:func:`nodes.planner.iapf.algorithm.scaled`); the
-planning step is the control period. Output: the planned heading phi_E (eq. 21) and the
-updated speed v_c (eq. 26), which the planner's heading controller then tracks.
+It reads tracks, not the scan (``observe``), and outputs a heading (eq. 21) and a speed
+(eq. 26) that the planner core tracks. Inputs and scale: docs/planners.md, "The algorithms
+in the code" and its IAPF section.
 """
 
 from __future__ import annotations
@@ -60,6 +53,7 @@ class IAPFStrategy(Strategy):
         self.v: float | None = None
 
     def reset(self) -> None:
+        """Forget the core's lane goal and the planned speed (a new goal)."""
         if self._core is not None:
             self._core.reset()
         self.v = None
@@ -95,6 +89,7 @@ class IAPFStrategy(Strategy):
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
+        """One IAPF step on the observed tracks and road: heading [rad] (eq. 21) and speed [m/s] (eq. 26)."""
         if self.lanes is None:
             return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw)
         core = self.core_for(self.lanes)

@@ -1,22 +1,8 @@
-"""One PAPF cycle in two compiled calls (numba) — bit for bit the numpy steps of :mod:`papf`.
+"""One PAPF cycle in two numba calls, bit for bit the numpy steps of :mod:`nodes.planner.papf.strategy`.
 
-:meth:`nodes.planner.papf.strategy.PAPFStrategy.plan` with numba (2-D, the prediction stopping at
-the goal) runs:
-
-1. :func:`_front`: the prediction with its top-quark loop (Algorithm 1, Sec. III-B;
-   :func:`nodes.planner.papf.kernels._predict_numba`), eq. 2 at the robot (the direction line
-   of eq. 8) and each quark's distance from the robot (eq. 7, motion law);
-2. in numpy, the operations whose rounding is numpy's own and that a kernel cannot
-   reproduce: the norms and the projection of eq. 8 (BLAS ``dot``/``gemv``, fused
-   multiply-adds) and the quarks' ``|r|^3`` (numpy's ``power``, SIMD on some CPUs);
-3. :func:`_back`: the rest of eq. 8 (normal distances, the tie rule, the farthest point)
-   and the motion force, eq. 2 at the temporary goal plus the quark term of eq. 7.
-
-Every operation is the one :func:`nodes.planner.papf.strategy.temporary_goal`,
-:func:`nodes.planner.papf.strategy.quark_force` and :func:`nodes.planner.papf.kernels.field_force` do,
-in the same order (sums of two terms commute exactly; numpy's sum over the quarks is
-sequential from 0.0): the results are identical (tests/unit/test_papf_kernel.py), only the
-Python and numpy call overhead around the kernel is gone.
+:meth:`~nodes.planner.papf.strategy.PAPFStrategy.plan` uses it when numba is installed (2-D,
+prediction stopping at the goal); tests/unit/test_papf_kernel.py checks the identity. How
+the cycle splits between kernels and numpy: docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations
