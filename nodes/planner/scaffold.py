@@ -118,8 +118,10 @@ def plan_files(name: str, source: str, root: Path) -> dict[Path, str]:
         f'"""{name}: a planner plug-in, scaffolded from {source} by ``papf new planner``.\n\n'
         ":data:`STRATEGIES` is what :mod:`nodes.planner.registry` finds here.\n\"\"\"\n\n"
         f"from nodes.planner.{name}.{module} import {new_cls}\n\nSTRATEGIES = ({new_cls},)\n")
-    files[root / "tests" / "unit" / f"test_planner_{name}.py"] = TEST.format(
-        name=name, source=source)
+    # a planner that reads tracks needs a road to drive on; the others reach a goal in the open
+    imports, drive = ((ROAD_IMPORTS, ROAD_TEST) if cls.uses_objects else (OPEN_IMPORTS, OPEN_TEST))
+    files[root / "tests" / "unit" / f"test_planner_{name}.py"] = (TEST + drive).format(
+        name=name, source=source, imports=imports)
     return files
 
 
@@ -144,13 +146,12 @@ def _sort_imports(files: list[Path]) -> None:
 
 
 TEST = '''"""{name} (scaffolded from {source} by ``papf new planner``): registered, its settings
-declared and in range, and it reaches a goal in the toy world. Extend it with your own."""
+declared and in range, and it drives. Extend it with your own."""
 
 import dataclasses
 
 from nodes.planner.registry import PLANNERS, check_setting, make_planner, settings_of
-from tests.support.toysim import simulate
-from worlds.toy import toy_world
+{imports}
 
 
 def test_registered_with_its_declarations():
@@ -163,9 +164,27 @@ def test_every_setting_declared_and_its_default_valid():
     assert fields <= set(PLANNERS["{name}"].SPECS)
     for setting, (table, _, default) in settings_of("{name}").items():
         assert check_setting("{name}", setting, default, table)[1] == default
+'''
 
+OPEN_IMPORTS = "from tests.support.toysim import simulate\nfrom worlds.toy import toy_world"
+ROAD_IMPORTS = "from schemas.messages import Goal, Odometry\nfrom worlds.toy import cast_scan, toy_world"
+
+OPEN_TEST = '''
 
 def test_reaches_the_goal_in_the_open():
     r = simulate(make_planner("{name}"), toy_world(), goal=(3.0, 1.0), max_time_s=120)
     assert r.status == "reached"
+'''
+
+ROAD_TEST = '''
+
+def test_drives_forward_on_a_road():
+    planner = make_planner("{name}")
+    planner.set_goal(Goal(stamp_ns=1, x=50.0, y=2.0, tolerance=0.5, road_y_min=0.0,
+                          road_lane_width=4.0, road_lanes=2))
+    for k in range(3):
+        t = k * 100_000_000
+        cmd, _, status = planner.step(cast_scan(toy_world(), 0.1 * k, 2.0, 0.0, t),
+                                      Odometry(stamp_ns=t, x=0.1 * k, y=2.0, yaw=0.0, v=0.3, w=0.0))
+        assert status.state == "driving" and cmd.v > 0
 '''
