@@ -39,7 +39,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS, EXTRAS))
-    ap.add_argument("--planner", default=DEFAULT_PLANNER, choices=list(PLANNERS), help="algorithm")
+    ap.add_argument("--planner", default=DEFAULT_PLANNER, choices=sorted(PLANNERS), help="algorithm")
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="override one setting, repeatable (e.g. --set d_o=0.8)")

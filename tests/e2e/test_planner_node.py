@@ -183,7 +183,7 @@ def test_lockstep_pair_timeout_outlasts_the_drivers_lockstep_timeout():
     from nodes.tracker.loop import TrackerLoop
 
     driver_default = build_parser().parse_args([]).lockstep_timeout
-    profile = tomllib.loads((Path(__file__).resolve().parents[2] / "papf" / "profiles" / "sim.toml").read_text())
+    profile = tomllib.loads((Path(__file__).resolve().parents[2] / "papf" / "launch" / "profiles" / "sim.toml").read_text())
     assert LOCKSTEP_PAIR_TIMEOUT_S > max(driver_default, float(profile["defaults"]["lockstep_timeout"]))
     assert loop().pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
     assert TrackerLoop(Tracker(TrackerParams())).pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
