@@ -41,8 +41,8 @@ import numpy as np
 
 from bench.csvrows import write_rows
 from common.ports import plain
-from nodes.planner.iapf_fields import Track
 from nodes.planner.registry import PLANNERS, make_planner
+from nodes.planner.road import Track
 from schemas.messages import Goal, Odometry
 from worlds.toy import box_segments, cast_scan, toy_world
 

@@ -27,7 +27,7 @@ from nodes.planner import lazy
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
-from nodes.planner.registry import PLANNERS, PRESETS, make_planner, preset_sets
+from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
 from nodes.planner.settings import NODE
 from schemas.messages import Event
 
@@ -35,10 +35,11 @@ NODE_NAME = "planner"
 
 
 def parse_args(argv=None) -> argparse.Namespace:
+    """The node's command line (``python -m nodes.planner --help``)."""
     ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS, EXTRAS))
-    ap.add_argument("--planner", default="apf", choices=sorted(PLANNERS), help="algorithm")
+    ap.add_argument("--planner", default=DEFAULT_PLANNER, choices=sorted(PLANNERS), help="algorithm")
     ap.add_argument("--params", metavar="FILE.toml", help="planner settings file")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="override one setting, repeatable (e.g. --set d_o=0.8)")
@@ -61,6 +62,7 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Open the session, build the planner, serve scans until stopped; the exit code."""
     log = setup_logging(NODE_NAME, args.log_level)
     lazy.numba_without_scipy()   # numba would import scipy.linalg for nothing (nodes/planner/lazy.py)
     try:
@@ -119,6 +121,7 @@ def warm_up(planner) -> None:
 
 
 def main(argv=None) -> int:
+    """``python -m nodes.planner``: parse, run, exit code (2 on a bad option)."""
     return run(parse_args(argv))
 
 

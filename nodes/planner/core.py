@@ -11,8 +11,7 @@ What the run tells the planner beyond scan and odometry: the **road** comes with
 goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
 never reads a world file) and the **obstacle tracks** of the cycle come as an optional
 ``Objects`` message paired with the scan (:meth:`Planner.step`), kept as
-:attr:`Planner.objects`. A strategy that wants them defines ``observe(objects, road, t, v)``;
-it is called before each ``plan``.
+:attr:`Planner.objects`; :meth:`Strategy.observe` receives them before each ``plan``.
 
 Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
 """
@@ -25,13 +24,13 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import ClassVar
 
 import numpy as np
 
 from common.units import NS_PER_S
-from nodes.planner.apf import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.field import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
+from nodes.planner.road import Lanes, Track
 from nodes.planner.scan_kernel import scan_points
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
@@ -95,17 +94,49 @@ class Plan:
     obstacles_used: int = 0       # obstacles (tracks) that shaped the field this cycle
 
 
-class Strategy(Protocol):
-    """An algorithm on the shared APF core."""
+@dataclass(frozen=True)
+class NoParams:
+    """A strategy with no settings beyond :class:`~nodes.planner.field.APFParams`."""
 
-    name: str
+
+class Strategy:
+    """An algorithm on the shared APF core: every hook and declaration, with its default.
+
+    A planner plug-in (``nodes/planner/<name>/``) subclasses this, sets ``name`` and
+    overrides :meth:`plan`; everything else is optional. The declarations below are what
+    the rest of the house derives from (CLI choices, colours, experiments' planner lists,
+    which runs need obstacle tracks, ...): see :mod:`nodes.planner.registry`.
+    """
+
+    name: ClassVar[str] = ""                 # the ``--planner`` name
+    rank: ClassVar[int] = 100                # order in lists (CLI, experiments' rows)
+    Params: ClassVar[type] = NoParams        # frozen dataclass of the algorithm's own settings
+    SPECS: ClassVar[dict] = {}               # Params field -> common.params.Spec (type, range)
+    PAPER_PRESET: ClassVar[dict] = {}        # ``--preset paper``: the paper read literally
+    roles: ClassVar[tuple[str, ...]] = ()    # parts it plays in comparisons (registry.ROLES)
+    colour: ClassVar[str] = ""               # matplotlib colour of its paths ("" = by index)
+    colour_map: ClassVar[str] = ""           # matplotlib colour map in report figures
+    uses_objects: ClassVar[bool] = False     # reads obstacle tracks (``observe``)
+    planar_only: ClassVar[bool] = False      # reads the planar scan's beams, not just points
+    car_variants: ClassVar[dict] = {}        # car-scale name -> (label, Params changes, colour)
+    uses_numba: bool = False                 # runs numba kernels (the scan view compiles too)
+
+    def __init__(self, params=None):
+        self.params = params if params is not None else self.Params()
 
     def reset(self) -> None:
         """Forget per-goal memory (called on a new goal)."""
 
+    def observe(self, objects: tuple, road: Lanes | None, t: float, v: float) -> None:
+        """The cycle's obstacle tracks, the road, time [s] and speed [m/s], before :meth:`plan`."""
+
+    def warm_up(self, apf: APFParams) -> None:
+        """Compile kernels before the node declares itself ready (none by default)."""
+
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
-        """The force at ``pos`` (world frame) and the debug geometry."""
+        """The force at ``pos`` [m] (world frame) and the debug geometry."""
+        raise NotImplementedError(f"{type(self).__name__}.plan")
 
 
 def _points(a) -> tuple:
@@ -136,7 +167,7 @@ class Planner:
         self.strategy = strategy
         # the scan view compiled only where the strategy runs numba anyway (PAPF, IAPF): a
         # planner without kernels never imports numba (nodes/planner/lazy.py); same values
-        self.jit_scan = bool(getattr(strategy, "uses_numba", False))
+        self.jit_scan = bool(strategy.uses_numba)
         self.apf = apf or APFParams()
         self.goal: Goal | None = None
         self.state = "idle"
@@ -151,7 +182,7 @@ class Planner:
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
-        """The latest obstacle tracks (:class:`nodes.planner.iapf_fields.Track`)."""
+        """The latest obstacle tracks (:class:`nodes.planner.iapf.fields.Track`)."""
         self.objects = tuple(tracks)
 
     def set_road(self, road: Lanes | None) -> None:
@@ -215,9 +246,7 @@ class Planner:
             return self._stop(t, "reached", f"within {self.goal.tolerance} m of the goal", dist, t0)
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom, self.jit_scan)
-        observe = getattr(self.strategy, "observe", None)
-        if observe is not None:
-            observe(self.objects, self.road, t / NS_PER_S, odom.v)
+        self.strategy.observe(self.objects, self.road, t / NS_PER_S, odom.v)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
         why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
         if why:
@@ -240,9 +269,7 @@ class Planner:
         scan_view(Scan(stamp_ns=0, angle_min=0.0, angle_increment=0.5, range_min=0.1,
                        range_max=5.0, ranges=np.array([1.0, np.inf, 2.0], np.float32)),
                   Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0), self.jit_scan)
-        warm = getattr(self.strategy, "warm_up", None)
-        if warm is not None:
-            warm(self.apf)
+        self.strategy.warm_up(self.apf)
 
     # -- helpers ------------------------------------------------------------
     def _params_for(self, beams: int) -> APFParams:

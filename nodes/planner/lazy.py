@@ -3,8 +3,8 @@
 Importing numba costs about half a second of CPU, and its first compiled call (even from
 the on-disk cache) about as much again. Classic APF, AR-APF and Wang's planners run no
 kernel, and neither does the launcher (``papf run`` checks planner names and settings
-through :mod:`nodes.planner.registry`). So :mod:`nodes.planner.papf` and
-:mod:`nodes.planner.iapf` bind their kernel modules with :func:`lazy_module`: the module
+through :mod:`nodes.planner.registry`). So :mod:`nodes.planner.papf.strategy` and
+:mod:`nodes.planner.iapf.algorithm` bind their kernel modules with :func:`lazy_module`: the module
 object is there at import, its code (and numba's import) runs at the first attribute
 read — when a PAPF or IAPF planner is built. :data:`HAVE_NUMBA` says whether numba is
 installed without importing it.
@@ -51,7 +51,7 @@ def numba_without_scipy() -> None:
     numba's first compiled call imports ``numba.np.arraymath``, which imports ``scipy.linalg``
     (about 0.3 s of CPU) only to learn whether BLAS is there for ``np.dot`` and
     ``np.linalg`` inside compiled code. No planner kernel uses them (the numpy steps that
-    must keep BLAS's rounding run outside the kernels, nodes/planner/papf_kernel.py), so in
+    must keep BLAS's rounding run outside the kernels, nodes/planner/papf/compiled.py), so in
     a process that has not imported scipy yet, scipy is marked missing: numba then leaves
     its BLAS functions out. ``tests/unit/test_lazy_numba.py`` builds every planner this way and
     checks its commands against a process with scipy.

@@ -38,6 +38,8 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 
 
 class PlannerLoop:
+    """Pairs scans with odometry (and tracks), drops stale input, runs the :class:`Planner` (pure; no zenoh)."""
+
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S, log=None, run_key: bytes | None = None,
                  objects: bool = False, send_command: Callable[[Twist], None] | None = None):
@@ -61,6 +63,7 @@ class PlannerLoop:
 
     # -- inputs ---------------------------------------------------------------
     def on_message(self, topic: str, msg, now: float) -> list:
+        """One message on ``topic`` at wall time ``now`` [s] -> the (topic, message) pairs to publish."""
         return self._sign(self._on_message(topic, msg, now))
 
     def poll(self, now: float) -> list:

@@ -2,7 +2,7 @@
 
 The planner node answers Zenoh queries on ``<ns>/planner/params`` with :func:`answer`
 (the viewer's Parameters panel uses it). Names are ``table.name`` as ``--set`` takes them:
-``apf.<field>`` for :class:`~nodes.planner.apf.APFParams`, ``<planner>.<field>`` for the
+``apf.<field>`` for :class:`~nodes.planner.field.APFParams`, ``<planner>.<field>`` for the
 algorithm's own. A change goes through :func:`nodes.planner.registry.load_params` — the
 same parsing and validation as ``--set`` — on top of the current values, and takes effect
 at the next cycle; a refused change leaves every value as it was.

@@ -1,31 +1,33 @@
-"""Planner algorithms by name, and their settings (TOML file + ``--set name=value``).
+"""Planner plug-ins by name, and their settings (TOML file + ``--set name=value``).
 
-Each algorithm is a strategy class with a frozen ``Params`` dataclass and
-``__init__(self, params)``; :data:`PLANNERS` maps the ``--planner`` name to it.
-Settings: :class:`~nodes.planner.apf.APFParams` (shared field and motion law) plus the
+The registry is the one list of planners: it finds every package under ``nodes/planner/``
+that exports ``STRATEGIES`` (classes of :class:`~nodes.planner.core.Strategy`), ordered by
+their declared ``rank``; :data:`PLANNERS` maps the ``--planner`` name to the class. Whatever
+the rest of the house needs to know about planners (CLI choices, colours, experiments'
+planner lists, which need obstacle tracks, ...) is derived here from the strategies'
+declarations (:func:`with_role`, :func:`declared`, :func:`car_variants`). Adding one:
+``papf new planner NAME`` (docs/architecture.md, "Extending").
+
+Settings: :class:`~nodes.planner.field.APFParams` (shared field and motion law) plus the
 algorithm's own ``Params``. A TOML file may give them at top level or in ``[apf]`` /
 ``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``. Every
-value is checked against its declared type and range (:mod:`nodes.planner.settings`)
-by :func:`check_setting`, the one check for ``--set``, ``--params`` and live parameters.
+value is checked against its declared type and range (the strategy's ``SPECS``) by
+:func:`check_setting`, the one check for ``--set``, ``--params`` and live parameters.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+import importlib
+import pkgutil
 from pathlib import Path
 
-import numpy as np
-
+import nodes.planner as planner_package
 from common.errors import ConfigError
 from common.params import Spec, check_all, check_value, unknown_name
-from nodes.planner.apf import APFParams, apf_force
-from nodes.planner.arapf import ARAPFStrategy
-from nodes.planner.core import Plan, Planner, ScanView
-from nodes.planner.iapf_strategy import IAPFStrategy
-from nodes.planner.papf import PAPFStrategy
-from nodes.planner.settings import specs_of
-from nodes.planner.wang import WangAPFStrategy, WangStrategy
+from nodes.planner.core import Planner, Strategy
+from nodes.planner.field import APFParams
+from nodes.planner.settings import APF as APF_SPECS
 
 try:
     import tomllib
@@ -36,35 +38,73 @@ except ModuleNotFoundError:  # Python 3.10
 PRESETS = ("default", "paper")
 
 
-class APFStrategy:
-    """Classic APF (PAPF paper eq. 2): steer by the resultant force towards the global goal."""
-
-    name = "apf"
-    PAPER_PRESET: dict = {}   # eq. 2 as written already: no deviation to switch off
-
-    @dataclass(frozen=True)
-    class Params:
-        """Classic APF has no settings beyond :class:`APFParams`."""
-
-    def __init__(self, params: Params | None = None):
-        self.params = params or self.Params()
-
-    def reset(self) -> None:
-        pass
-
-    def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
-             apf: APFParams) -> Plan:
-        return Plan(force=apf_force(pos, goal, view.points, apf))
+#: the parts a planner may declare it plays (``Strategy.roles``): ``compared`` puts it in the
+#: comparison experiments' default planner lists, ``traffic`` in the traffic experiment's
+#: (beside the planners that read tracks); ``<paper>-baseline`` / ``<paper>-proposed``
+#: name the planner a paper's own comparison is about (at most one planner each).
+ROLES = ("compared", "traffic", "papf-baseline", "papf-proposed", "arapf-proposed", "wang-proposed",
+         "wang-baseline", "car-proposed")
 
 
-PLANNERS: dict[str, type] = {
-    "apf": APFStrategy,
-    "papf": PAPFStrategy,
-    "arapf": ARAPFStrategy,
-    "wang": WangStrategy,
-    "wang-apf": WangAPFStrategy,
-    "iapf": IAPFStrategy,
-}
+def _discover() -> dict[str, type[Strategy]]:
+    """Every plug-in's strategies, by (rank, name): the packages of nodes/planner/ with ``STRATEGIES``."""
+    found: list[type[Strategy]] = []
+    for info in sorted(pkgutil.iter_modules(planner_package.__path__), key=lambda i: i.name):
+        if info.ispkg:
+            found += importlib.import_module(f"{planner_package.__name__}.{info.name}").__dict__.get(
+                "STRATEGIES", ())
+    found.sort(key=lambda c: (c.rank, c.name))
+    out: dict[str, type[Strategy]] = {}
+    for cls in found:
+        if not (isinstance(cls, type) and issubclass(cls, Strategy)) or not cls.name:
+            raise TypeError(f"{cls!r}: a planner must be a named nodes.planner.core.Strategy")
+        if cls.name in out:
+            raise TypeError(f"planner name {cls.name!r} declared twice ({out[cls.name]}, {cls})")
+        unknown = set(cls.roles) - set(ROLES)
+        if unknown:
+            raise TypeError(f"planner {cls.name!r}: unknown roles {sorted(unknown)}; valid: {ROLES}")
+        out[cls.name] = cls
+    return out
+
+
+PLANNERS: dict[str, type[Strategy]] = _discover()
+DEFAULT_PLANNER = next(iter(PLANNERS))   # the first by rank: classic APF
+
+
+def with_role(role: str) -> tuple[str, ...]:
+    """The planners that declare ``role`` (:data:`ROLES`), in registry order."""
+    if role not in ROLES:
+        raise ValueError(f"unknown role {role!r}; valid: {ROLES}")
+    return tuple(name for name, cls in PLANNERS.items() if role in cls.roles)
+
+
+def one_with_role(role: str) -> str:
+    """The one planner a paper's comparison is about (e.g. ``papf-proposed``)."""
+    names = with_role(role)
+    if len(names) != 1:
+        raise LookupError(f"role {role!r}: expected one planner, found {list(names)}")
+    return names[0]
+
+
+def declared(attr: str) -> dict[str, object]:
+    """``name -> value`` of one declaration (``colour``, ``uses_objects``, ...), where set."""
+    return {name: getattr(cls, attr) for name, cls in PLANNERS.items() if getattr(cls, attr)}
+
+
+def car_variants() -> dict[str, tuple[str, str, dict, str]]:
+    """Car-scale run name -> (planner, label, settings changed, colour) (``Strategy.car_variants``)."""
+    return {variant: (name, label, dict(changes), colour) for name, cls in PLANNERS.items()
+            for variant, (label, changes, colour) in cls.car_variants.items()}
+
+
+def specs_of(params_cls: type) -> dict[str, Spec]:
+    """The declared specs of a params class (the shared APF table or a strategy's ``SPECS``)."""
+    if params_cls is APFParams:
+        return APF_SPECS
+    for cls in PLANNERS.values():
+        if cls.Params is params_cls:
+            return cls.SPECS
+    return {}
 
 
 def settings_of(planner: str) -> dict[str, tuple[str, Spec, object]]:
@@ -128,7 +168,7 @@ def preset_settings(planner: str, preset: str) -> dict:
     (the paper read literally, every deviation of ours off; docs/planners.md, "Presets")."""
     if preset not in PRESETS:
         raise ConfigError(f"unknown preset {preset!r}; valid: {list(PRESETS)}")
-    return dict(getattr(PLANNERS[planner], "PAPER_PRESET", {})) if preset == "paper" else {}
+    return dict(_planner_class(planner).PAPER_PRESET) if preset == "paper" else {}
 
 
 def preset_sets(preset: str) -> list[str]:

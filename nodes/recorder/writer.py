@@ -126,7 +126,7 @@ class WriterStats:
 class RunWriter:
     """An MCAP recording being written. Use as a context manager or call :meth:`close`.
 
-    ``RunWriter(path, {"world": "energy", "planner": "papf", "seed": 1})`` then
+    ``RunWriter(path, {"world": "energy", "planner": planner, "seed": 1})`` then
     ``write(key, payload)`` for every received sample; ``maybe_flush()`` on idle ticks.
     """
 

@@ -30,6 +30,7 @@ from papf.cli import (
     goal,
     info,
     launch,
+    new,
     plan,
     record,
     recover,
@@ -43,7 +44,7 @@ from papf.cli import (
 )
 
 COMMANDS = (run, worlds, launch, topic, goal, teleop, plan, experiment, report, record, replay,
-            recover, info, view, export, animate, bench, emulator, certs)
+            recover, info, view, export, animate, bench, emulator, certs, new)
 
 
 class _Parser(argparse.ArgumentParser):

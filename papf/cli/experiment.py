@@ -13,8 +13,9 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
+from nodes.planner.registry import PLANNERS, car_variants, declared, with_role
 from papf.cli.experiment_paper import add_paper_studies, preset_list
-from papf.experiments.energy import TIMEOUT_S, WORLD
+from papf.experiments.energy import PAPER_PAIR, TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
 
 
@@ -38,7 +39,8 @@ def _add_energy(exp) -> None:
                     "to OUT/<planner>-<k>.mcap through the whole process stack; then the "
                     "report in OUT.")
     p.add_argument("--runs", type=int, default=3, help="runs per planner (default 3)")
-    p.add_argument("--planners", default="apf,papf", help="comma-separated (default apf,papf)")
+    p.add_argument("--planners", default=",".join(PAPER_PAIR),
+                   help=f"comma-separated (default {','.join(PAPER_PAIR)})")
     p.add_argument("--out", default="energy-experiment", metavar="DIR",
                    help="directory for the recordings and the report (default energy-experiment)")
     p.add_argument("--seed", type=int, default=0, help="base seed S: run k uses S+k (default 0)")
@@ -80,7 +82,7 @@ def sweep_options(args):
 
 
 def _add_common(p, default_out: str) -> None:
-    p.add_argument("--planners", default="apf,papf,arapf,wang", help="comma-separated")
+    p.add_argument("--planners", default=",".join(with_role("compared")), help="comma-separated")
     p.add_argument("--out", default=default_out, metavar="DIR", help="output directory")
     p.add_argument("--seed", type=int, default=0, help="noise (and world-set) seed (default 0)")
     p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
@@ -124,8 +126,8 @@ def _add_iapf(exp) -> None:
                                    "the paper's vehicle model (0.02 s steps); write iapf.md, "
                                    "iapf.csv, one CSV per run and one PNG per case into --out.")
     p.add_argument("--out", default="iapf-cases", metavar="DIR", help="output directory")
-    p.add_argument("--planners", default="iapf,iapf-np,apf",
-                   help="comma-separated: iapf, iapf-np, apf (default all three)")
+    p.add_argument("--planners", default=",".join(car_variants()),
+                   help=f"comma-separated: {', '.join(car_variants())} (default all)")
     p.add_argument("--cases", default="a,b,c,d", help="comma-separated subset of a,b,c,d")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="IAPF setting for every run, repeatable (e.g. --set t_c=0.4)")
@@ -174,7 +176,8 @@ def _add_traffic(exp) -> None:
                    help="sim-time limit per run (default 150)")
     p.add_argument("--worlds", help="comma-separated subset of the road-* worlds")
     p.add_argument("--seeds", help="comma-separated seeds, each a full round (instead of --seed)")
-    p.add_argument("--planners", help="comma-separated subset of iapf,apf,papf,arapf (default all)")
+    p.add_argument("--planners", help="comma-separated subset of "
+                   f"{','.join([*declared('uses_objects'), *with_role('traffic')])} (default all)")
     p.set_defaults(func=cmd_traffic)
 
 
@@ -209,9 +212,7 @@ def cmd_traffic(args) -> int:
 
 
 def planner_list(text: str) -> list[str]:
-    """``"apf,papf"`` -> ``["apf", "papf"]``; ConfigError names the unknown ones."""
-    from nodes.planner.registry import PLANNERS  # numba: not when building the parser
-
+    """``"a,b"`` (planner names) -> ``["a", "b"]``; ConfigError names the unknown ones."""
     names = [p.strip() for p in text.split(",") if p.strip()]
     bad = [p for p in names if p not in PLANNERS]
     if bad or not names:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+from nodes.planner.registry import PLANNERS
 from papf.cli.view import add_view_flag
 
 
@@ -23,7 +24,7 @@ def register(sub) -> None:
     p.add_argument("--zenoh-config", metavar="FILE", help="Zenoh config of the nodes (secure split)")
     p.add_argument("--router-config", metavar="FILE", help="Zenoh config of the router")
     p.add_argument("--world", help="world (runs; robot side: its start pose)")
-    p.add_argument("--planner", help="apf | papf | arapf | wang | iapf")
+    p.add_argument("--planner", help=" | ".join(PLANNERS))
     p.add_argument("--seed", type=int)
     p.add_argument("--objects", choices=("none", "truth", "tracker"),
                    help="obstacle tracks for the planner: sim ground truth (sim, HIL), the "

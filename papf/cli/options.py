@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
-PLANNER_HELP = "apf | papf | arapf | wang | iapf (default apf)"
+from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS
 
 
-def add_world_and_planner(p, planner_help: str = PLANNER_HELP) -> None:
-    """``--world`` (required) and ``--planner``."""
+def planner_help() -> str:
+    """``--planner``'s help: every registered planner (nodes/planner/registry.py) and the default."""
+    return f"{' | '.join(PLANNERS)} (default {DEFAULT_PLANNER})"
+
+
+def add_world_and_planner(p, planner_help: str = "") -> None:
+    """``--world`` (required) and ``--planner`` (help: :func:`planner_help` unless given)."""
     p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
-    p.add_argument("--planner", default="apf", help=planner_help)
+    p.add_argument("--planner", default=DEFAULT_PLANNER, help=planner_help or globals()["planner_help"]())
 
 
 def add_planner_settings(p) -> None:

@@ -7,7 +7,8 @@ import os
 import sys
 
 from common.params import SEED, TIMEOUT, arg_type
-from papf.cli.options import add_planner_settings, add_world_and_planner
+from nodes.planner.registry import car_variants, one_with_role
+from papf.cli.options import add_planner_settings, add_world_and_planner, planner_help
 
 
 def register(sub) -> None:
@@ -16,9 +17,8 @@ def register(sub) -> None:
                        "stack: 2-D worlds with the simulated LiDAR and a unicycle with the "
                        "ROSbot limits, 3-D worlds (spheres) with a point robot. Exit code: "
                        "0 reached, 3 stagnated, 4 collision, 5 timeout, 6 failed, 2 usage.")
-    add_world_and_planner(p, "apf | papf | arapf | wang | iapf (default apf); on car-scale "
-                             "worlds (iapf-case-*): iapf, iapf-np (no prediction), apf (the "
-                             "paper's baseline)")
+    cars = ", ".join(f"{name} ({v[1]})" for name, v in car_variants().items())
+    add_world_and_planner(p, f"{planner_help()}; on car-scale worlds (iapf-case-*): {cars}")
     p.add_argument("--seed", type=arg_type("--seed", SEED), default=0,
                    help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
@@ -29,7 +29,8 @@ def register(sub) -> None:
                    help="planner preset: default (our improvements) or paper (the paper literally)")
     p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
                    help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
-                        "the obstacles' centres known (planners wang-apf and wang only)")
+                        "the obstacles' centres known (planners "
+                        f"{one_with_role('wang-baseline')} and {one_with_role('wang-proposed')} only)")
     p.add_argument("--plot", metavar="OUT.png",
                    help="write a PNG: world, path, footprints, and the planner's prediction, "
                         "abandoned predictions, top quarks and temporary goal at its most "
@@ -91,7 +92,7 @@ def _fixed_step(world, args) -> int:
     from common.errors import ConfigError
     from papf.offline.wang_step import fixed_step
 
-    methods = {"wang-apf": "traditional", "wang": "improved"}
+    methods = {one_with_role("wang-baseline"): "traditional", one_with_role("wang-proposed"): "improved"}
     if args.planner not in methods:
         raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
     r = fixed_step(world, methods[args.planner])

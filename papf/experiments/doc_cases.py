@@ -14,6 +14,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from nodes.planner.registry import one_with_role
+
+# the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
+APF = one_with_role("papf-baseline")
+PAPF = one_with_role("papf-proposed")
+ARAPF = one_with_role("arapf-proposed")
+WANG = one_with_role("wang-proposed")
+
 DEAD_ENDS = ("arapf-test-1", "arapf-test-2", "arapf-test-3", "papf-test-4", "papf-test-5")
 WANG_WORLDS = ("wang-unreachable-goal", "wang-local-minimum")
 
@@ -39,28 +47,28 @@ def _arapf_ablation() -> list[Case]:
                ("follow=false", ("follow=false",)), ("passage_width=gap", ("passage_width=gap",))]
     changes += [(f"obstacle_offset_m={v}", (f"obstacle_offset_m={v}",))
                 for v in (0.15, 0.2, 0.35, 0.4, 0.45, 0.5)]
-    return [Case(label, "arapf", DEAD_ENDS, sets, group_by_world=False) for label, sets in changes]
+    return [Case(label, ARAPF, DEAD_ENDS, sets, group_by_world=False) for label, sets in changes]
 
 
 def _energy_stack() -> list[Case]:
     cases = [Case(p, p, ("energy",), offline=False, stack_seeds=(0,))
-             for p in ("apf", "papf", "arapf", "wang")]
+             for p in (APF, PAPF, ARAPF, WANG)]
     cases += [Case(f"{p} d_o={d}", p, ("energy",), (f"d_o={d}",), offline=False, stack_seeds=(0,))
-              for d in (0.4, 0.3, 0.25) for p in ("apf", "papf")]
+              for d in (0.4, 0.3, 0.25) for p in (APF, PAPF)]
     return cases
 
 
 STUDIES: dict[str, list[Case]] = {
     "arapf-ablation": _arapf_ablation(),
-    "arapf-results": [Case("arapf", "arapf", (*DEAD_ENDS, "energy"), stack_seeds=(0,))],
-    "wang-ablation": [Case(label, "wang", WANG_WORLDS, (label,) if label != "defaults" else (),
+    "arapf-results": [Case(ARAPF, ARAPF, (*DEAD_ENDS, "energy"), stack_seeds=(0,))],
+    "wang-ablation": [Case(label, WANG, WANG_WORLDS, (label,) if label != "defaults" else (),
                            seeds=tuple(range(8)))
                       for label in ("defaults", "control_offset_m=0", "control_offset_m=0.02",
                                     "control_offset_m=0.1", "control_offset_m=0.2",
                                     "control_offset_m=0.3", "k_rep_l=10")],
-    "wang-results": [Case("wang", "wang", WANG_WORLDS, seeds=tuple(range(8)), stack_seeds=(0,)),
-                     Case("wang", "wang", ("energy",), stack_seeds=(0,)),
-                     Case("apf", "apf", ("wang-unreachable-goal",), seeds=tuple(range(8)))],
+    "wang-results": [Case(WANG, WANG, WANG_WORLDS, seeds=tuple(range(8)), stack_seeds=(0,)),
+                     Case(WANG, WANG, ("energy",), stack_seeds=(0,)),
+                     Case(APF, APF, ("wang-unreachable-goal",), seeds=tuple(range(8)))],
     "energy-stack": _energy_stack(),
     "gap-push": [],       # a computation, no runs: gap_push_rows
 }

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from common.errors import ConfigError
+from nodes.planner.registry import PLANNERS, one_with_role
 from papf.experiments.sweep import SweepOptions
 
 if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `papf --help` stays fast
@@ -40,11 +41,15 @@ TIMEOUT_S = 300.0        # [s sim] per run; the sim's APF needs ~160 s for the 1
 POLL_S = 0.1             # [s wall] progress refresh period
 
 
+#: the PAPF paper's comparison (Sec. IV-C): its baseline and PAPF, by their declared roles
+PAPER_PAIR = (one_with_role("papf-baseline"), one_with_role("papf-proposed"))
+
+
 @dataclass(frozen=True)
 class EnergyExperiment:
     out: Path
     runs: int = 3
-    planners: tuple[str, ...] = ("apf", "papf")
+    planners: tuple[str, ...] = PAPER_PAIR
     seed: int = 0
     world: str = WORLD
     timeout_s: float = TIMEOUT_S
@@ -82,12 +87,10 @@ class ExperimentResult:
 
 def validate(exp: EnergyExperiment) -> None:
     """ConfigError naming the bad value (before any process starts)."""
-    from nodes.planner.registry import PLANNERS
-
     if exp.runs < 1:
         raise ConfigError(f"--runs {exp.runs}: need at least 1 run per planner")
     if not exp.planners:
-        raise ConfigError("--planners is empty; e.g. apf,papf")
+        raise ConfigError(f"--planners is empty; e.g. {','.join(PAPER_PAIR)}")
     unknown = [p for p in exp.planners if p not in PLANNERS]
     if unknown:
         raise ConfigError(f"unknown planner(s) {', '.join(unknown)}; valid: {', '.join(PLANNERS)}")
@@ -345,7 +348,7 @@ def print_summary(res, console=None) -> None:
                   st["energy_J"].text(".1f"), st["duration_s"].text(".2f"),
                   st["path_length_m"].text(".3f"))
     console.print(t)
-    apf, papf = res.report.summary("apf"), res.report.summary("papf")
+    apf, papf = (res.report.summary(name) for name in PAPER_PAIR)
     if apf and papf:
         for attr, label in (("charge_mAh", "charge"), ("duration_s", "duration"),
                             ("path_length_m", "path length")):

@@ -21,6 +21,11 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from nodes.planner.registry import one_with_role
+
+# the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
+APF = one_with_role("papf-baseline")
+
 WORLDS = ("energy", "energy-blocking", "energy-empty")
 HEADER = ["world", "planner", "reached", "charge [mAh]", "duration [s]", "path [m]",
           "charge vs APF", "max temporary-goal offset [m]", "quarks away from the goal"]
@@ -34,14 +39,14 @@ def world_rows(world: str, report) -> list[dict]:
     """CSV rows of one world's report (means over the runs that reached)."""
     from papf.report.activity import papf_activity
 
-    apf = report.summary("apf")
+    apf = report.summary(APF)
     rows = []
     for s in report.summaries:
         files = [report.out_dir / m.file for m in report.runs if m.planner == s.planner]
         acts = [papf_activity(f) for f in files]
         charge = s.stats["charge_mAh"].mean
         base = apf.stats["charge_mAh"].mean if apf and apf.reached else math.nan
-        change = 100.0 * (charge - base) / base if math.isfinite(base) and s.planner != "apf" else math.nan
+        change = 100.0 * (charge - base) / base if math.isfinite(base) and s.planner != APF else math.nan
         rows.append({"world": world, "planner": s.planner, "reached": f"{s.reached}/{s.runs}",
                      "charge_mAh": _num(charge, 2), "charge_sd_mAh": _num(s.stats["charge_mAh"].sd, 2),
                      "duration_s": _num(s.stats["duration_s"].mean, 2),
@@ -94,12 +99,12 @@ def decomposition(rows: list[dict], course: str = "energy", control: str = "ener
     (avoidance). Empty when a world or APF's figure is missing."""
     by = {(r["world"], r["planner"]): r for r in rows}
     try:
-        apf_c, apf_e = float(by[(course, "apf")]["charge_mAh"]), float(by[(control, "apf")]["charge_mAh"])
+        apf_c, apf_e = float(by[(course, APF)]["charge_mAh"]), float(by[(control, APF)]["charge_mAh"])
     except (KeyError, ValueError):
         return []
     out = []
     for (world, planner), r in by.items():
-        if world != course or planner == "apf" or (control, planner) not in by or not r["charge_mAh"]:
+        if world != course or planner == APF or (control, planner) not in by or not r["charge_mAh"]:
             continue
         total = apf_c - float(r["charge_mAh"])
         speed = apf_e - float(by[(control, planner)]["charge_mAh"])

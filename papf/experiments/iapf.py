@@ -25,28 +25,30 @@ from pathlib import Path
 
 import numpy as np
 
-from nodes.planner.iapf import HostState, IAPFCore
-from nodes.planner.iapf_fields import Track
+from nodes.planner.iapf.algorithm import HostState, IAPFCore
+from nodes.planner.registry import car_variants
+from nodes.planner.road import Track
 from papf.offline.road import CAR_PLANNERS, car_params, lanes_of, mover, run_car
 from worlds import load_world
 
 CASES = {"iapf-case-a": 5.0, "iapf-case-b": 5.0, "iapf-case-c": 6.0, "iapf-case-d": 10.0}
-PLANNERS = ("iapf", "iapf-np", "apf")
+# the IAPF paper's Table 2 rows, as the iapf plug-in declares them (Strategy.car_variants)
+IAPF, IAPF_NP, TRADITIONAL = PLANNERS = tuple(car_variants())
 PLAN_EVERY_S = 0.1      # Table 2: planning frequency 0.1 s
 # Table 2: case calculation time [s], single planning min-max [ms]
-PAPER_TABLE2 = {("iapf-case-a", "iapf"): (0.233, 4.130, 4.809),
-                ("iapf-case-a", "iapf-np"): (0.181, 3.589, 3.771),
-                ("iapf-case-a", "apf"): (0.167, 3.312, 3.397),
-                ("iapf-case-b", "iapf"): (0.225, 4.072, 4.629),
-                ("iapf-case-c", "iapf"): (0.233, 3.666, 4.129),
-                ("iapf-case-d", "iapf"): (0.476, 4.541, 4.969)}
+PAPER_TABLE2 = {("iapf-case-a", IAPF): (0.233, 4.130, 4.809),
+                ("iapf-case-a", IAPF_NP): (0.181, 3.589, 3.771),
+                ("iapf-case-a", TRADITIONAL): (0.167, 3.312, 3.397),
+                ("iapf-case-b", IAPF): (0.225, 4.072, 4.629),
+                ("iapf-case-c", IAPF): (0.233, 3.666, 4.129),
+                ("iapf-case-d", IAPF): (0.476, 4.541, 4.969)}
 # what Sec. 4.2 reports each planner doing
-PAPER_SAYS = {("iapf-case-a", "iapf"): "slows, then changes lanes",
-              ("iapf-case-b", "iapf"): "local minimum found, temporary goal, changes lanes",
-              ("iapf-case-b", "apf"): "crashes (Fig. 11d-f)",
-              ("iapf-case-c", "iapf"): "follows, slows to 30.8 km/h",
-              ("iapf-case-c", "apf"): "changes lanes (Fig. 12b-f)",
-              ("iapf-case-d", "iapf"): "changes lanes, slows for vehicle 4"}
+PAPER_SAYS = {("iapf-case-a", IAPF): "slows, then changes lanes",
+              ("iapf-case-b", IAPF): "local minimum found, temporary goal, changes lanes",
+              ("iapf-case-b", TRADITIONAL): "crashes (Fig. 11d-f)",
+              ("iapf-case-c", IAPF): "follows, slows to 30.8 km/h",
+              ("iapf-case-c", TRADITIONAL): "changes lanes (Fig. 12b-f)",
+              ("iapf-case-d", IAPF): "changes lanes, slows for vehicle 4"}
 COLUMNS = ["case", "planner", "case_time_s", "collisions", "min_clearance_m", "left_road",
            "lane_changes", "min_speed_kmh", "max_speed_kmh", "final_speed_kmh",
            "step_cpu_p50_ms", "step_cpu_p99_ms", "step_cpu_max_ms", "horizon_plans",
@@ -161,7 +163,7 @@ def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), 
             if progress:
                 progress(f"{case} {planner}: {run.collisions} collisions, "
                          f"{run.lane_changes} lane changes")
-        write_vehicles(out, case, world, CASES[case], car_params("iapf", params).step_s)
+        write_vehicles(out, case, world, CASES[case], car_params(IAPF, params).step_s)
         if plots:
             from papf.plots.iapf_cases import plot_case  # matplotlib: only with plots
 

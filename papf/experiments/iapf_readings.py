@@ -11,8 +11,8 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from nodes.planner.iapf import PAPER_PRESET
-from papf.experiments.iapf import CASES
+from nodes.planner.iapf.algorithm import PAPER_PRESET
+from papf.experiments.iapf import CASES, IAPF, IAPF_NP, TRADITIONAL
 from papf.offline.road import run_car
 from worlds import load_world
 
@@ -21,26 +21,26 @@ FOLLOW_TOL_KMH = 3.6     # case C passes when the host ends within 1 m/s of it
 
 # (label, planner, settings): one change against the defaults each
 READINGS = [
-    ("default (ours)", "iapf", []),
-    ("Table 1 literal (--preset paper)", "iapf", [f"{k}={v}" for k, v in PAPER_PRESET.items()]),
-    ("A_x = -0.15 (Table 1)", "iapf", ["a_x=-0.15"]),
-    ("obstacle gain 1 (eq. 11 as printed)", "iapf", ["obstacle_gain=1"]),
-    ("T_c = 0.4 s (Table 1)", "iapf", ["t_c=0.4"]),
-    ("lane-goal half period d_w (eq. 8 as printed)", "iapf", ["goal_half_period_lanes=1"]),
-    ("temporary goal b3 = 1.52 (Table 1 b3)", "iapf", ["b3_temp=1.52"]),
-    ("heading unlimited (eq. 21 as printed)", "iapf", ["heading_max_deg=90", "yaw_rate_max_deg=0"]),
-    ("rotation as printed (eq. 10)", "iapf", ["literal_rotation=true"]),
-    ("prediction step 0.02 s (= t)", "iapf", ["predict_step_s=0.02"]),
-    ("no safety cut-off (D_S >= 100 m, the largest S_m)", "iapf", ["s_m=100"]),
-    ("no slow-leader lane change (Sec. 2.1 rule off)", "iapf", ["follow_min_frac=0"]),
-    ("temporary goal b3 = 25 (below the ridge k2 d_w / sin 45 deg)", "iapf", ["b3_temp=25"]),
-    ("stop law on (the planner node's 0.5)", "iapf", ["stop_decel_frac=0.5"]),
-    ("slow tracks keep their own heading (eq. 10 phi as given)", "iapf", ["heading_min_speed=0"]),
-    ("no prediction", "iapf-np", []),
-    ("traditional APF k = 200", "apf", ["k_trad=200"]),
-    ("traditional APF k = 1000", "apf", ["k_trad=1000"]),
-    ("traditional APF k = 3000 (default)", "apf", []),
-    ("traditional APF k = 10000", "apf", ["k_trad=10000"]),
+    ("default (ours)", IAPF, []),
+    ("Table 1 literal (--preset paper)", IAPF, [f"{k}={v}" for k, v in PAPER_PRESET.items()]),
+    ("A_x = -0.15 (Table 1)", IAPF, ["a_x=-0.15"]),
+    ("obstacle gain 1 (eq. 11 as printed)", IAPF, ["obstacle_gain=1"]),
+    ("T_c = 0.4 s (Table 1)", IAPF, ["t_c=0.4"]),
+    ("lane-goal half period d_w (eq. 8 as printed)", IAPF, ["goal_half_period_lanes=1"]),
+    ("temporary goal b3 = 1.52 (Table 1 b3)", IAPF, ["b3_temp=1.52"]),
+    ("heading unlimited (eq. 21 as printed)", IAPF, ["heading_max_deg=90", "yaw_rate_max_deg=0"]),
+    ("rotation as printed (eq. 10)", IAPF, ["literal_rotation=true"]),
+    ("prediction step 0.02 s (= t)", IAPF, ["predict_step_s=0.02"]),
+    ("no safety cut-off (D_S >= 100 m, the largest S_m)", IAPF, ["s_m=100"]),
+    ("no slow-leader lane change (Sec. 2.1 rule off)", IAPF, ["follow_min_frac=0"]),
+    ("temporary goal b3 = 25 (below the ridge k2 d_w / sin 45 deg)", IAPF, ["b3_temp=25"]),
+    ("stop law on (the planner node's 0.5)", IAPF, ["stop_decel_frac=0.5"]),
+    ("slow tracks keep their own heading (eq. 10 phi as given)", IAPF, ["heading_min_speed=0"]),
+    ("no prediction", IAPF_NP, []),
+    ("traditional APF k = 200", TRADITIONAL, ["k_trad=200"]),
+    ("traditional APF k = 1000", TRADITIONAL, ["k_trad=1000"]),
+    ("traditional APF k = 3000 (default)", TRADITIONAL, []),
+    ("traditional APF k = 10000", TRADITIONAL, ["k_trad=10000"]),
 ]
 
 

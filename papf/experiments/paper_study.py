@@ -19,6 +19,12 @@ from pathlib import Path
 
 import numpy as np
 
+from nodes.planner.registry import one_with_role
+
+# the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
+APF = one_with_role("papf-baseline")
+PAPF = one_with_role("papf-proposed")
+
 HORIZONS = (0.5, 1.0, 1.5, 2.0)
 HORIZON_WORLD = "papf-horizon"
 
@@ -56,7 +62,7 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    runs = [("apf", "default", None)] + [("papf", pre, h) for pre in ("default", "paper")
+    runs = [(APF, "default", None)] + [(PAPF, pre, h) for pre in ("default", "paper")
                                          for h in horizons]
     rows = []
     for planner, preset, h in runs:
@@ -118,11 +124,11 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
         for label, sets in variants:
             rand = []
             for w in worlds:
-                rand.append(run_offline(w, "papf", seed, timeout_s, params=sets))
+                rand.append(run_offline(w, PAPF, seed, timeout_s, params=sets))
                 bar.advance(task)
             paper = []
             for w in PAPF_WORLDS:
-                t = run_offline(w, "papf", 0, timeout_s, params=sets)
+                t = run_offline(w, PAPF, 0, timeout_s, params=sets)
                 t.preset = "paper"   # table2_check looks rows up by label: give them one
                 paper.append(t)
                 bar.advance(task)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from common.errors import ConfigError
+from nodes.planner.registry import one_with_role, with_role
 from papf.experiments.sweep import SweepOptions
 from papf.experiments.trials import (
     markdown_table,
@@ -36,11 +37,17 @@ from papf.experiments.trials import (
 )
 from worlds import load_world, world_path
 
+# the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
+APF = one_with_role("papf-baseline")
+PAPF = one_with_role("papf-proposed")
+ARAPF = one_with_role("arapf-proposed")
+WANG = one_with_role("wang-proposed")
+
 PAPF_WORLDS = tuple(f"papf-test-{i}" for i in range(1, 7))
 ARAPF_WORLDS = tuple(f"arapf-test-{i}" for i in range(1, 4))
 WANG_WORLDS = ("wang-local-minimum", "wang-unreachable-goal")
 PAPER_WORLDS = PAPF_WORLDS + ARAPF_WORLDS + WANG_WORLDS
-DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
+DEFAULT_PLANNERS = with_role("compared")   # the planners that declare they are compared
 
 
 @dataclass(frozen=True)
@@ -53,14 +60,14 @@ class PaperResult:
 
 
 PAPER: dict[str, dict[str, PaperResult]] = {
-    "papf-test-1": {"apf": PaperResult("reached", 69.79, 4.50), "papf": PaperResult("reached", 41.71, 4.13)},
-    "papf-test-2": {"apf": PaperResult("reached", 52.12, 4.20), "papf": PaperResult("reached", 41.366, 4.16)},
-    "papf-test-3": {"apf": PaperResult("reached", 42.31, 3.99), "papf": PaperResult("reached", 37.89, 3.80)},
-    "papf-test-4": {"apf": PaperResult("fails"), "papf": PaperResult("reached", 38.424, 3.77)},
-    "papf-test-5": {"apf": PaperResult("fails"), "papf": PaperResult("reached", 39.426, 3.87)},
-    "papf-test-6": {"apf": PaperResult("reached", 49.15, 4.05), "papf": PaperResult("reached", 41.93, 3.76)},
-    **{w: {"apf": PaperResult("stagnated"), "arapf": PaperResult("reached")} for w in ARAPF_WORLDS},
-    **{w: {"apf": PaperResult("fails"), "wang": PaperResult("reached")} for w in WANG_WORLDS},
+    "papf-test-1": {APF: PaperResult("reached", 69.79, 4.50), PAPF: PaperResult("reached", 41.71, 4.13)},
+    "papf-test-2": {APF: PaperResult("reached", 52.12, 4.20), PAPF: PaperResult("reached", 41.366, 4.16)},
+    "papf-test-3": {APF: PaperResult("reached", 42.31, 3.99), PAPF: PaperResult("reached", 37.89, 3.80)},
+    "papf-test-4": {APF: PaperResult("fails"), PAPF: PaperResult("reached", 38.424, 3.77)},
+    "papf-test-5": {APF: PaperResult("fails"), PAPF: PaperResult("reached", 39.426, 3.87)},
+    "papf-test-6": {APF: PaperResult("reached", 49.15, 4.05), PAPF: PaperResult("reached", 41.93, 3.76)},
+    **{w: {APF: PaperResult("stagnated"), ARAPF: PaperResult("reached")} for w in ARAPF_WORLDS},
+    **{w: {APF: PaperResult("fails"), WANG: PaperResult("reached")} for w in WANG_WORLDS},
 }
 
 
@@ -80,8 +87,8 @@ def table_rows(trials) -> list[list[str]]:
     by = {(t.world, t.label): t for t in trials}
     rows = []
     for t in trials:
-        apf = by.get((t.world, "apf"))
-        both = apf is not None and apf.outcome == t.outcome == "reached" and t.planner != "apf"
+        apf = by.get((t.world, APF))
+        both = apf is not None and apf.outcome == t.outcome == "reached" and t.planner != APF
         ref = PAPER.get(t.world, {}).get(t.planner)
         rows.append([t.world, t.label, t.outcome, _num(t.duration_s, 1),
                      _pct(t.duration_s, apf.duration_s) if both else "",
@@ -103,7 +110,7 @@ def table2_check(trials, label: str) -> tuple[int, int, int]:
     mine = {t.world: t for t in trials if t.label == label and t.world in PAPF_WORLDS}
     reached = dur = path = 0
     for w, t in mine.items():
-        ref = PAPER[w]["papf"]
+        ref = PAPER[w][PAPF]
         if t.outcome != "reached":
             continue
         reached += 1
@@ -116,25 +123,25 @@ def acceptance(trials) -> list[str]:
     """Issue 3's and 14's checks on the PAPF-paper worlds, as sentences."""
     by = {(t.world, t.label): t for t in trials}
     lines = []
-    for label in dict.fromkeys(t.label for t in trials if t.planner == "papf"):
+    for label in dict.fromkeys(t.label for t in trials if t.planner == PAPF):
         papf = [by[(w, label)] for w in PAPF_WORLDS if (w, label) in by]
         reached, dur, path = table2_check(trials, label)
         coll = sum(t.collisions for t in papf)
         lines.append(f"{label}: reached {reached}/{len(papf)} PAPF-paper worlds, {coll} collision(s); "
                      f"duration within 15 % of Table 2 in {dur}/{len(papf)}, path within 10 % in "
                      f"{path}/{len(papf)}.")
-        pairs = [(by[(w, "apf")], by[(w, label)]) for w in PAPF_WORLDS
-                 if (w, "apf") in by and (w, label) in by
-                 and by[(w, "apf")].outcome == by[(w, label)].outcome == "reached"]
+        pairs = [(by[(w, APF)], by[(w, label)]) for w in PAPF_WORLDS
+                 if (w, APF) in by and (w, label) in by
+                 and by[(w, APF)].outcome == by[(w, label)].outcome == "reached"]
         if pairs:
             ok = sum(p.duration_s <= a.duration_s for a, p in pairs)
             lines.append(f"{label}: duration <= APF's in {ok}/{len(pairs)} worlds where both reached.")
-    apf_dead = [by[(w, "apf")] for w in ("papf-test-4", "papf-test-5", *ARAPF_WORLDS) if (w, "apf") in by]
+    apf_dead = [by[(w, APF)] for w in ("papf-test-4", "papf-test-5", *ARAPF_WORLDS) if (w, APF) in by]
     if apf_dead:
         st = sum(t.outcome == "stagnated" for t in apf_dead)
         lines.append(f"APF reported `stagnated` in {st}/{len(apf_dead)} dead-end worlds "
                      "(PAPF Tests IV-V, AR-APF Tests I-III).")
-    for planner, worlds, name in (("arapf", ARAPF_WORLDS, "AR-APF"), ("wang", WANG_WORLDS, "Wang")):
+    for planner, worlds, name in ((ARAPF, ARAPF_WORLDS, "AR-APF"), (WANG, WANG_WORLDS, "Wang")):
         for label in dict.fromkeys(t.label for t in trials if t.planner == planner):
             mine = [by[(w, label)] for w in worlds if (w, label) in by]
             if mine:

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from common.errors import ConfigError
+from nodes.planner.registry import with_role
 from papf.experiments.sweep import SweepOptions
 from papf.experiments.trials import (
     markdown_table,
@@ -33,7 +34,7 @@ from papf.offline.world_gen import KINDS, bottleneck_width, generate_solvable, w
 
 OUTCOMES = ("reached", "collision", "stagnated", "timeout", "failed")
 WIDE_M = 0.9   # [m] bottleneck from which APF-family fields (d_o = 0.5 m) pass (docs/experiments.md)
-DEFAULT_PLANNERS = ("apf", "papf", "arapf", "wang")
+DEFAULT_PLANNERS = with_role("compared")   # the planners that declare they are compared
 
 
 def kind_of(world_name: str) -> str:

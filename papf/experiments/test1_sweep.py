@@ -28,6 +28,11 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from nodes.planner.registry import one_with_role
+
+# the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
+APF = one_with_role("papf-baseline")
+
 WORLD = "papf-test-1"
 GOAL = (2.2, 2.7)                 # [m] PAPF Table 1; the start is the odometry origin
 APF_PATH_M = 4.50                 # PAPF Table 2, Test (I), APF path length
@@ -123,7 +128,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
         for side, along, offset in grid:
             these = []
             for seed in seeds:
-                r = plan(sweep_world(side, along, offset), "apf", seed=seed, max_time_s=timeout_s)
+                r = plan(sweep_world(side, along, offset), APF, seed=seed, max_time_s=timeout_s)
                 these.append({"side_m": side, "along_m": along, "offset_m": offset, "seed": seed,
                               "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
                               "path_m": round(r.length_m, 3)})

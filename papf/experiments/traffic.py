@@ -21,14 +21,17 @@ import numpy as np
 
 from common import robot
 from common.errors import RecordingError
-from nodes.planner.iapf_fields import Lanes
+from nodes.planner.registry import declared, with_role
+from nodes.planner.road import Lanes
 from papf.experiments.trials import markdown_table, quiet_runner_logs, run_stack, write_csv
 from papf.offline.car import road_figures
 from worlds import load_world, packaged_worlds, world_path
 
 ROAD_WORLDS = tuple(w for w in packaged_worlds() if w.startswith("road-"))
-CASES = (("iapf", "truth"), ("iapf", "tracker"), ("apf", "none"), ("papf", "none"),
-         ("arapf", "none"))
+# (planner, objects): the planners that read tracks with the sim's and the tracker's, then
+# those that declare the role "traffic" without tracks
+CASES = (tuple((p, o) for p in declared("uses_objects") for o in ("truth", "tracker"))
+         + tuple((p, "none") for p in with_role("traffic")))
 STARTUP_S = 180.0   # [s wall] for the nodes to come up: JIT warm-ups are slow on a busy machine
 HEADER = ["world", "planner", "objects", "outcome", "duration [s]", "path [m]", "collisions",
           "left road", "lane changes", "min speed [m/s]", "max speed [m/s]"]

@@ -16,7 +16,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from nodes.planner.registry import one_with_role
 from papf.experiments.trials import markdown_table, write_csv
+
+# the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
+WANG = one_with_role("wang-proposed")
+WANG_APF = one_with_role("wang-baseline")
 
 #: (figure, world, method, the paper's outcome)
 FIGURES = (
@@ -33,7 +38,7 @@ FIGURES = (
     ("Fig. 11", "wang-3d-fig11", "improved", "reached"),
     ("Fig. 12", "wang-3d-fig12", "improved", "fails"),
 )
-PLANNER = {"traditional": "wang-apf", "improved": "wang"}
+PLANNER = {"traditional": WANG_APF, "improved": WANG}
 HEADER = ["figure", "world", "method", "paper", "fixed step (as published)", "iterations",
           "min clearance [units]", "ROSbot planner", "ROSbot outcome", "ROSbot path [m]"]
 

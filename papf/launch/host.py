@@ -18,6 +18,7 @@ import zenoh
 from common import runauth
 from common.errors import ConfigError
 from common.transport import StopRequested, wait_alive, zenoh_config
+from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
@@ -132,7 +133,7 @@ def _failed(reason: str, opt: LaunchOptions, prof: Profile) -> RunResult:
 
 def _result(monitor: RunMonitor, opt: LaunchOptions, prof: Profile, wall_s: float = 0.0):
     world = opt.values.get("world") or prof.defaults.get("world", "")
-    return monitor.result(str(opt.values.get("planner") or prof.defaults.get("planner", "apf")),
+    return monitor.result(str(opt.values.get("planner") or prof.defaults.get("planner", DEFAULT_PLANNER)),
                           load_world(world).name if world else "", int(opt.values.get("seed") or 0),
                           wall_s)
 
@@ -145,7 +146,7 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
     monitor = RunMonitor(opt.timeout_s, goal=(world.goal[0], world.goal[1], world.tolerance))
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
                       stall_s=opt.stall_s or STALL_S, run_key=run_key)
-    planner = str(opt.values.get("planner") or prof.defaults.get("planner", "apf"))
+    planner = str(opt.values.get("planner") or prof.defaults.get("planner", DEFAULT_PLANNER))
     try:
         if seq.handshake(world):
             seq.start(f"profile={prof.name} world={world.name}")

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from common.errors import ConfigError
 from common.ports import Port, select
+from nodes.planner.registry import declared
 from schemas.keys import TOPICS
 from worlds import load_world, world_path
 
@@ -33,7 +34,7 @@ VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record",
              "view")
 ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
-OBJECT_PLANNERS = ("iapf",)              # planners that use tracks: their default is truth
+OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth
 
 
 def objects_for(planner: str | None, objects: str | None,

@@ -17,6 +17,7 @@ import zenoh
 
 from common import runauth
 from common.transport import wait_alive, zenoh_config
+from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_run
@@ -35,7 +36,7 @@ PROFILE = "sim"   # papf run = this launch profile + the run sequence
 @dataclass
 class RunConfig:
     world: str
-    planner: str = "apf"
+    planner: str = DEFAULT_PLANNER
     seed: int = 0
     timeout_s: float = 300.0           # [s sim time]
     realtime: bool = False

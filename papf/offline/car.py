@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nodes.planner.iapf import HostState, IAPFCore
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.iapf.algorithm import HostState, IAPFCore
+from nodes.planner.road import Lanes, Track
 
 Mover = Callable[[float], Track]   # sim time [s] -> the vehicle's track at that time
 
@@ -118,7 +118,7 @@ class _Contacts:
 
 
 def run_road(core: IAPFCore, start: HostState, movers: Sequence[Mover], lanes: Lanes,
-             duration_s: float, name: str = "iapf", y_goal: float | None = None,
+             duration_s: float, name: str, y_goal: float | None = None,
              finish_x: float | None = None, stop_on_collision: bool = False,
              goal_x: float | None = None) -> RoadRun:
     """Run ``core`` from ``start`` among ``movers`` for ``duration_s`` of sim time, or until the

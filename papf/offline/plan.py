@@ -25,8 +25,8 @@ from common.errors import ConfigError
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
-from nodes.planner.iapf_fields import Lanes
 from nodes.planner.registry import make_planner
+from nodes.planner.road import Lanes
 from papf.offline.car import road_figures
 from papf.offline.point3d import plan_3d
 from papf.offline.result import PlanResult, write_path  # noqa: F401 - part of this module's API

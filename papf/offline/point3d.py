@@ -26,14 +26,15 @@ import math
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
+from nodes.planner.field import APFParams
+from nodes.planner.registry import declared
 from papf.offline.result import PlanResult
 from worlds import World
 
 RAYS = 4000               # [-] rays of the 3-D range sensor (~3.2 deg apart; ours)
 RANGE_MAX_M = 25.0        # [m] as the RPLIDAR A3
-PLANAR_ONLY = ("arapf",)  # strategies that read the planar scan (beam angles), not just points
+PLANAR_ONLY = tuple(declared("planar_only"))  # strategies that read the planar scan (beam angles), not just points
 
 
 def fibonacci_directions(n: int) -> np.ndarray:

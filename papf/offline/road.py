@@ -15,14 +15,15 @@ import dataclasses
 from pathlib import Path
 
 from common.errors import ConfigError
-from nodes.planner.iapf import HostState, IAPFCore, IAPFParams
-from nodes.planner.iapf_fields import Lanes, Track
-from nodes.planner.registry import load_params
+from nodes.planner.iapf.algorithm import HostState, IAPFCore, IAPFParams
+from nodes.planner.registry import car_variants, load_params
+from nodes.planner.road import Lanes, Track
 from papf.offline.car import RoadRun, run_road
 from papf.offline.result import PlanResult
 from worlds import Obstacle, World
 
-CAR_PLANNERS = {"iapf": "IAPF", "iapf-np": "IAPF without prediction", "apf": "traditional APF"}
+#: car-scale run name -> label (the planners' declared ``car_variants``)
+CAR_PLANNERS = {variant: v[1] for variant, v in car_variants().items()}
 
 
 def lanes_of(world: World) -> Lanes:
@@ -54,12 +55,9 @@ def car_params(planner: str, params=(), params_file: str | Path | None = None) -
     if planner not in CAR_PLANNERS:
         raise ConfigError(f"planner {planner!r} does not run on car-scale road worlds; "
                           f"valid: {sorted(CAR_PLANNERS)}")
-    _, p = load_params("iapf", params_file, list(params))
-    if planner == "iapf-np":
-        p = dataclasses.replace(p, prediction=False)
-    if planner == "apf":
-        p = dataclasses.replace(p, traditional=True, prediction=False)
-    return p
+    strategy, _, changes, _ = car_variants()[planner]
+    _, p = load_params(strategy, params_file, list(params))
+    return dataclasses.replace(p, **changes)
 
 
 def run_car(world: World, planner: str, params=(), params_file=None,

@@ -13,7 +13,7 @@ Two fields:
   factor 2, and so do we) and per obstacle within ``rho_0`` of its centre
   ``F_rep = K_rep (1/rho - 1/rho_0) / rho^2`` away from it (the gradient of eq. 3 with
   the same factor dropped). Table 1: K_att = 10, K_rep = 2, rho_0 = 20.
-- ``improved`` — eqs. 6-8 as :func:`nodes.planner.wang.wang_force` reads them (the ROSbot
+- ``improved`` — eqs. 6-8 as :func:`nodes.planner.wang.strategy.wang_force` reads them (the ROSbot
   planner's field), on the obstacle centres with R_0 = the obstacle's radius in eq. 6, and
   K_rep = 5 (Sec. 4: "the basic parameters remained unchanged ... except for the repulsion
   gain coefficient").
@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.wang import WangParams, wang_force
+from nodes.planner.wang.strategy import WangParams, wang_force
 from worlds import World, load_world
 
 METHODS = ("traditional", "improved")

@@ -16,11 +16,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
+from nodes.planner.registry import car_variants  # noqa: E402
 from papf.offline.car import rect_corners  # noqa: E402
 from papf.offline.road import CAR_PLANNERS, lanes_of  # noqa: E402
 from worlds import load_world  # noqa: E402
 
-COLOURS = {"iapf": "tab:blue", "iapf-np": "tab:green", "apf": "tab:red"}
+COLOURS = {variant: v[3] for variant, v in car_variants().items()}
+PROPOSED = next(iter(car_variants()))   # the car planner itself (IAPF): drawn on top, with its boxes
 MARK_EVERY_S = 1.0
 HOST_SIZE = (4.5, 1.8)
 
@@ -66,13 +68,13 @@ def plot_case(out_png: str | Path, case: str, csv_dir: str | Path) -> Path:
             ax.plot([float(r["x"]) for r in rows], [float(r["y"]) for r in rows],
                     color=COLOURS[pl], lw=1.2, label=CAR_PLANNERS[pl])
         every = MARK_EVERY_S if float(vehicles[-1]["t"]) <= 6.0 else 2.0 * MARK_EVERY_S
-        for r in _marks(runs.get("iapf", []), every):
-            _box(ax, float(r["x"]), float(r["y"]), float(r["yaw"]), HOST_SIZE, COLOURS["iapf"],
+        for r in _marks(runs.get(PROPOSED, []), every):
+            _box(ax, float(r["x"]), float(r["y"]), float(r["yaw"]), HOST_SIZE, COLOURS[PROPOSED],
                  f"{float(r['t']):g}s")
         for r in _marks(vehicles, every):
             _box(ax, float(r["x"]), float(r["y"]), float(r["yaw"]),
                  (float(r["length"]), float(r["width"])), "dimgray", f"{float(r['t']):g}s", 0.25)
-        goal = [(float(r["x"]), float(r["temp_goal_y"])) for r in runs.get("iapf", [])
+        goal = [(float(r["x"]), float(r["temp_goal_y"])) for r in runs.get(PROPOSED, [])
                 if r["temp_goal_y"]]
         if goal:
             ax.scatter(*zip(*goal, strict=True), s=4, color="tab:orange",
@@ -84,9 +86,9 @@ def plot_case(out_png: str | Path, case: str, csv_dir: str | Path) -> Path:
         ax.set_ylabel("y [m]")
         ax.set_title(f"{case}: host (IAPF, blue) and vehicles (grey) every {every:g} s")
         ax.legend(loc="upper left", fontsize=7, ncol=4)
-        for pl, rows in sorted(runs.items(), key=lambda kv: kv[0] == "iapf"):   # IAPF on top
+        for pl, rows in sorted(runs.items(), key=lambda kv: kv[0] == PROPOSED):   # IAPF on top
             av.plot([float(r["t"]) for r in rows], [3.6 * float(r["v"]) for r in rows],
-                    color=COLOURS[pl], label=CAR_PLANNERS[pl], lw=2.0 if pl == "iapf" else 1.2)
+                    color=COLOURS[pl], label=CAR_PLANNERS[pl], lw=2.0 if pl == PROPOSED else 1.2)
         ids = sorted({r["id"] for r in vehicles})
         for i in ids:
             rows = [r for r in vehicles if r["id"] == i]

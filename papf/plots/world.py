@@ -25,6 +25,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
+from nodes.planner.registry import declared  # noqa: E402
 from worlds import World  # noqa: E402
 
 OBSTACLE_COLOUR = "0.35"
@@ -37,8 +38,7 @@ MARKERS = ("o", "s", "^", "D", "v", "P")
 PAD_M = 0.4            # [m] margin around the world and the paths
 MIN_RATIO = 0.35       # [-] the shorter side of a view spans at least this much of the longer
 FOOTPRINT_EVERY_M = 1.0   # [m] of path between footprint outlines
-PLANNER_COLOURS = {"apf": "tab:blue", "papf": "tab:orange", "arapf": "tab:purple",
-                   "wang": "tab:brown"}
+PLANNER_COLOURS = declared("colour")   # each planner's own (Strategy.colour), others by index
 
 
 def new_axes(world: World, figsize=(7.0, 6.0)):

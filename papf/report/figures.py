@@ -27,6 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from nodes.planner.registry import declared  # noqa: E402
 from papf.plots.world import (  # noqa: E402
     LINESTYLES,
     MARKERS,
@@ -40,8 +41,7 @@ from papf.report.tables import PlannerSummary, planner_order, worlds_of  # noqa:
 from worlds import World  # noqa: E402
 
 DPI = 110
-PLANNER_MAPS = {"apf": "Blues", "papf": "Oranges", "arapf": "Purples", "wang": "Greens",
-                "iapf": "Reds"}
+PLANNER_MAPS = declared("colour_map")   # each planner's own (Strategy.colour_map)
 OTHER_MAPS = ("Greys", "YlGn", "PuRd", "GnBu")
 
 

@@ -15,7 +15,7 @@ DEFINITIONS = (
 
 
 def headline(report, world: str) -> str:
-    apf, papf = report.summary("apf", world), report.summary("papf", world)
+    apf, papf = report.summary(tables.BASELINE, world), report.summary(tables.PROPOSED, world)
     if apf is None or papf is None:
         return ""
     a, p = apf.stats["charge_mAh"], papf.stats["charge_mAh"]
@@ -25,7 +25,7 @@ def headline(report, world: str) -> str:
     verdict = "lower" if pct < 0 else "higher"
     return (f"**PAPF vs APF on {world}** ({report.model} model): mean charge {p.mean:.2f} vs "
             f"{a.mean:.2f} mAh — PAPF draws {abs(pct):.1f} % {verdict} (paper: "
-            f"{tables.PAPER_CHARGE_MAH['papf']} vs {tables.PAPER_CHARGE_MAH['apf']} mAh, "
+            f"{tables.PAPER_CHARGE_MAH[tables.PROPOSED]} vs {tables.PAPER_CHARGE_MAH[tables.BASELINE]} mAh, "
             f"{tables.PAPER_CHARGE_CHANGE_PCT:+.1f} %).\n")
 
 

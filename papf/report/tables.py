@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nodes.planner.registry import one_with_role
 from papf.report.metrics import RunMetrics, seed_text
 
 # (attribute, label, unit, format) of the figures that get statistics
@@ -45,7 +46,9 @@ PAPER = {  # attribute -> what the paper reports for PAPF vs APF
     "ang_accel_sq": "“much smoother” (Fig. 13, not quantified)",
     "heading_oscillations": "APF oscillates, PAPF not (Fig. 13, not quantified)",
 }
-PAPER_CHARGE_MAH = {"apf": 149.7, "papf": 117.6}
+#: the PAPF paper's comparison (IV-C): its baseline (classic APF) and PAPF, by their declared roles
+BASELINE, PROPOSED = one_with_role("papf-baseline"), one_with_role("papf-proposed")
+PAPER_CHARGE_MAH = {BASELINE: 149.7, PROPOSED: 117.6}
 PAPER_CHARGE_CHANGE_PCT = -21.4
 
 
@@ -71,8 +74,8 @@ class PlannerSummary:
 
 
 def planner_order(planners: Sequence[str]) -> list[str]:
-    """apf first, papf second, the rest alphabetically (the base of comparisons comes first)."""
-    rank = {"apf": 0, "papf": 1}
+    """The paper's baseline first, PAPF second, the rest alphabetically (the base of comparisons first)."""
+    rank = {BASELINE: 0, PROPOSED: 1}
     return sorted(set(planners), key=lambda p: (rank.get(p.split(" ")[0], 2), p))
 
 
@@ -158,9 +161,9 @@ def comparison_markdown(summaries: Sequence[PlannerSummary], model: str = "") ->
     blocks = []
     for other in summaries[1:]:
         header = ["figure", f"{base.planner} (mean)", f"{other.planner} (mean)", "change",
-                  "paper (PAPF vs APF)" if (base.planner, other.planner) == ("apf", "papf")
+                  "paper (PAPF vs APF)" if (base.planner, other.planner) == (BASELINE, PROPOSED)
                   else "paper"]
-        paper_ok = (base.planner, other.planner) == ("apf", "papf")
+        paper_ok = (base.planner, other.planner) == (BASELINE, PROPOSED)
         rows = []
         for attr, label, unit, fmt in STAT_METRICS:
             b, o = base.stats[attr], other.stats[attr]

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from common.transport import wait_alive
-from nodes.planner.iapf_fields import Lanes
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner
+from nodes.planner.road import Lanes
 from schemas import Keys
 from schemas.messages import (
     Goal,

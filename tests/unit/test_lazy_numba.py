@@ -64,10 +64,10 @@ def test_lazy_module_runs_on_first_attribute_and_is_the_imported_module():
     code = """
 import sys
 from nodes.planner.lazy import lazy_module
-m = lazy_module("nodes.planner.kernels")
+m = lazy_module("nodes.planner.papf.kernels")
 assert "numba" not in sys.modules          # bound, not run
 assert m.HAVE_NUMBA in (True, False)       # first attribute: runs it
-import nodes.planner.kernels as again
+import nodes.planner.papf.kernels as again
 assert again is m and again.rollout is m.rollout
 """
     _modules_after(code)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
-from nodes.planner.wang import WangAPFParams, traditional_force
+from nodes.planner.wang.strategy import WangAPFParams, traditional_force
 from papf.experiments.energy import EnergyExperiment, plan, validate
 from papf.experiments.paper_study import DEVIATIONS, READINGS, _turning, _variants
 from papf.offline.wang_step import PointParams, fixed_step

@@ -1,4 +1,4 @@
-"""The compiled PAPF cycle (nodes/planner/papf_kernel.py) against the numpy steps, bit for bit."""
+"""The compiled PAPF cycle (nodes/planner/papf/compiled.py) against the numpy steps, bit for bit."""
 
 import dataclasses
 import math
@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from nodes.planner.apf import APFParams
-from nodes.planner.kernels import HAVE_NUMBA
-from nodes.planner.papf import PAPFParams, PAPFStrategy
+from nodes.planner.field import APFParams
+from nodes.planner.papf.kernels import HAVE_NUMBA
+from nodes.planner.papf.strategy import PAPFParams, PAPFStrategy
 from nodes.planner.registry import make_planner
 from schemas.messages import Goal, Odometry
 from tests.support.toysim import box_segments, cast_scan, simulate, toy_world

@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
-from nodes.planner.apf import (
+from nodes.planner.apf.strategy import APFStrategy
+from nodes.planner.core import Planner, scan_view
+from nodes.planner.field import (
     APFParams,
     Repulsors,
     apf_force,
@@ -16,8 +18,7 @@ from nodes.planner.apf import (
     speed_ref,
     turn_rate,
 )
-from nodes.planner.core import Planner, scan_view
-from nodes.planner.registry import APFStrategy, load_params, make_planner
+from nodes.planner.registry import load_params, make_planner
 from schemas.messages import Goal, Odometry, Scan
 from tests.support.toysim import simulate, toy_world
 

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams, Repulsors, apf_force
-from nodes.planner.arapf import (
+from nodes.planner.arapf.strategy import (
     ARAPFParams,
     ARAPFStrategy,
     abandon,
@@ -21,6 +20,7 @@ from nodes.planner.arapf import (
     with_wall,
 )
 from nodes.planner.core import scan_view
+from nodes.planner.field import APFParams, Repulsors, apf_force
 from nodes.planner.registry import make_planner
 from papf.offline.plan import plan
 from schemas.messages import Odometry

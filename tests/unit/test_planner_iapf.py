@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from nodes.planner.iapf import (
+from nodes.planner.iapf.algorithm import (
     PAPER_PRESET,
     HostState,
     IAPFCore,
@@ -18,7 +18,7 @@ from nodes.planner.iapf import (
     stop_deceleration,
     temporary_goal,
 )
-from nodes.planner.iapf_fields import (
+from nodes.planner.iapf.fields import (
     Lanes,
     Track,
     attraction_gradient,
@@ -245,7 +245,7 @@ def test_registry_and_planner_step_with_road_and_tracks():
 
 @pytest.mark.parametrize(("traditional", "stop"), [(False, 0.0), (True, 0.0), (False, 0.5)])
 def test_prediction_kernel_matches_the_step_by_step_core(traditional, stop):
-    from nodes.planner.iapf_kernel import HAVE_NUMBA
+    from nodes.planner.iapf.kernels import HAVE_NUMBA
 
     p = dataclasses.replace(IAPFParams(), traditional=traditional, literal_rotation=traditional,
                             stop_decel_frac=stop)
@@ -311,7 +311,7 @@ def test_brake_priority_suspends_the_return_to_cruise():
     assert info.accel == pytest.approx(max(-p.a_b, 0.63 * -ux))      # eta1 F_oX alone
     _, plain = IAPFCore(IAPFParams()).step(HostState(0.0, 2.0, 6.0), [ob], ROAD, 0.0)
     assert plain.accel > 0.0                                        # eq. 25: (V_c - v)^3 wins
-    from nodes.planner.iapf_kernel import HAVE_NUMBA
+    from nodes.planner.iapf.kernels import HAVE_NUMBA
     s0 = HostState(0.0, 2.0, 6.0)
     ref = IAPFCore(p, use_numba=False).predict(s0, [ob], ROAD, 2.0)
     if HAVE_NUMBA:

@@ -6,10 +6,16 @@ import math
 import numpy as np
 import pytest
 
-from nodes.planner.apf import APFParams, Repulsors, apf_force
 from nodes.planner.core import scan_view
-from nodes.planner.kernels import HAVE_NUMBA, rollout, tail_stagnation
-from nodes.planner.papf import PAPFParams, PAPFStrategy, predict, quark_force, temporary_goal
+from nodes.planner.field import APFParams, Repulsors, apf_force
+from nodes.planner.papf.kernels import HAVE_NUMBA, rollout, tail_stagnation
+from nodes.planner.papf.strategy import (
+    PAPFParams,
+    PAPFStrategy,
+    predict,
+    quark_force,
+    temporary_goal,
+)
 from nodes.planner.registry import make_planner
 from schemas.messages import Goal, Odometry
 from tests.support.toysim import box_segments, cast_scan, simulate, toy_world

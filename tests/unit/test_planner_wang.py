@@ -1,4 +1,4 @@
-"""Wang's improved APF (our reading, see nodes/planner/wang.py and docs/planners.md): 2-D and 3-D."""
+"""Wang's improved APF (our reading, see nodes/planner/wang/strategy.py and docs/planners.md): 2-D and 3-D."""
 
 import dataclasses
 import math
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams
 from nodes.planner.core import ScanView
+from nodes.planner.field import APFParams
 from nodes.planner.registry import load_params, make_planner
-from nodes.planner.wang import (
+from nodes.planner.wang.strategy import (
     WangParams,
     WangStrategy,
     attraction_coef,

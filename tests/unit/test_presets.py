@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams
 from nodes.planner.core import scan_view
-from nodes.planner.papf import PAPER_PRESET, PAPFParams, PAPFStrategy, predict, quark_force
+from nodes.planner.field import APFParams
+from nodes.planner.papf.strategy import PAPER_PRESET, PAPFParams, PAPFStrategy, predict, quark_force
 from nodes.planner.registry import PLANNERS, load_params, preset_sets, preset_settings
 from papf.experiments.trials import variants
 from schemas.messages import Odometry

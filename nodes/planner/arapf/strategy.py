@@ -1,27 +1,9 @@
-"""AR-APF: APF supported by augmented reality (Szczepanski, Energies 2021, 14, 6642).
+"""AR-APF as a planner strategy (Szczepanski, Energies 2021, 14, 6642).
 
-Per cycle (:meth:`ARAPFStrategy.plan`), on the shared APF core with the paper's own
-constants (Table 1: k_RT = 5, k_RO = 5/L, k_RW = k_RD = 10 k_RO, charges -1 / +1):
-
-1. **Detection** (Sec. 3.1, :func:`detect_minimum`): the beams within +-alpha of the goal
-   direction that return closer than d_min block; if no free run between them opens at
-   least s_min (:func:`opening`), a local minimum lies ahead. Runs every cycle without AR,
-   on the scan alone (no prediction).
-2. **Virtual wall** (Sec. 3.2, :func:`object_ends`): from the outermost blocking beams walk
-   outwards (within +-beta) while successive returns are closer than d_max; the last
-   points are the object's ends; N_wall points evenly between them (:func:`wall_points`).
-   The wall stays fixed in the world frame until abandonment.
-3. **Side and virtual obstacle** (Sec. 3.3): go round the end giving the shorter path
-   (:func:`choose_left`); the obstacle (k_RD) sits on the robot's other side, s_min/2
-   from it, across the goal direction (:func:`obstacle_beside`). While the robot's
-   perception augmented with the wall (:func:`with_wall`) still shows the minimum closed
-   by the wall, the obstacle is placed beside the robot again; then it stays put.
-4. **Force** (eq. 4) = goal + obstacles + virtual wall + virtual obstacle.
-5. **Abandonment** (Sec. 3.4, :func:`abandon`): F_w and F_goal within delta_gamma.
-
-Without a local minimum the force is eq. 2 with k_RO: AR-APF is then exactly the APF
-planner with ``k_vo_l = 5`` (paper, Test III). Every choice where the paper is silent is
-argued in docs/planners.md (AR-APF section).
+On a local minimum ahead (Sec. 3.1) a virtual wall across the object and a virtual obstacle
+beside the robot (Secs. 3.2-3.3, eq. 4) push it round until abandonment (Sec. 3.4); without
+one it is APF with ``k_vo_l = 5``. Registered as ``arapf`` (planar scans only). The steps:
+docs/planners.md, "The algorithms in the code"; the choices: its AR-APF section.
 """
 
 from __future__ import annotations
@@ -33,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.apf import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.arapf.settings import ARAPF
+from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.field import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
 
 PASSAGE_WIDTHS = ("opening", "gap")
 
@@ -187,11 +170,16 @@ def abandon(force: np.ndarray, f_goal: np.ndarray, delta_gamma_deg: float) -> bo
     return angle_deg(force, f_goal) <= delta_gamma_deg
 
 
-class ARAPFStrategy:
+class ARAPFStrategy(Strategy):
     """AR-APF on the shared APF core (registered as ``arapf``)."""
 
     name = "arapf"
+    rank = 2
+    roles = ("compared", "traffic", "arapf-proposed")
+    colour, colour_map = "tab:purple", "Purples"
+    planar_only = True   # reads the scan's beams (local minimum, object ends), not just points
     Params = ARAPFParams
+    SPECS = ARAPF
     #: ``--preset paper``: eqs. 2-4 without range limits, the obstacle placed once, the
     #: passage measured bound to bound (docs/planners.md, "Presets").
     PAPER_PRESET = {"range_limited": False, "wall_range_limited": False, "follow": False,
@@ -237,6 +225,7 @@ class ARAPFStrategy:
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
+        """Eq. 4 at ``pos`` [m]: goal, obstacles, and the virtual wall and obstacle while a local minimum is handled."""
         ap, field = self.params, self._field(apf)
         if self.wall is None:
             fresh = self._augment(pos, goal, view)

@@ -5,7 +5,7 @@ constant step ``Delta``; it is the hot loop of PAPF (up to (M + 1) * (lambda + l
 / Delta force evaluations over the whole scan per cycle).
 
 The two implementations give **bit-identical** results (tested): the numpy one uses
-:func:`nodes.planner.apf.coulomb_sum` (sequential sums, per-point arithmetic written out)
+:func:`nodes.planner.field.coulomb_sum` (sequential sums, per-point arithmetic written out)
 and scalar maths for the step; the numba one does the same operations in the same order
 (no ``fastmath``, so no reassociation or fused multiply-add).
 """
@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from nodes.planner.apf import EPS_M, coulomb_sum
+from nodes.planner.field import EPS_M, coulomb_sum
 
 try:
     import numba
@@ -343,7 +343,7 @@ def field_force(pos, goal, g_goal: float, obstacles, g_obs: float, d_o: float,
                 use_numba: bool = True) -> np.ndarray:
     """Eq. 2 at ``pos``: ``-g_goal S(goal) - g_obs S(obstacles within d_o)`` (S = coulomb_sum).
 
-    Bit for bit :func:`nodes.planner.apf.apf_force` without extra repulsors (gains
+    Bit for bit :func:`nodes.planner.field.apf_force` without extra repulsors (gains
     ``k_VG q_V q_G`` and ``k_VO q_V q_O``), one compiled call instead of numpy's dozen.
     """
     pos = np.ascontiguousarray(pos, dtype=float)

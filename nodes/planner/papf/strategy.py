@@ -1,34 +1,10 @@
-"""Predictive APF (Szczepanski et al., IEEE Access 2022, Sec. III; Table 1 parameters).
+"""PAPF as a planner strategy (Szczepanski et al., IEEE Access 2022, Sec. III, Table 1).
 
-One cycle (:meth:`PAPFStrategy.plan`):
-
-1. **Prediction** (Algorithm 1): from the robot, step ``Delta`` along the eq. 7 force
-   towards the *global* goal for ``i_max = lambda / Delta`` steps, plus ``lambda_stag /
-   Delta`` more for the stagnation check (:func:`predict`). The goal's pull is evaluated
-   as if the goal were at most lambda away (``pull_range_fraction``): the robot itself is
-   driven by a temporary goal <= lambda away (step 4), and the prediction is to foresee
-   that motion — a far goal's literal 5/r^2 pull (0.05-0.3) makes it stall in front of
-   every gap the robot could pass (docs/planners.md).
-2. **Top quarks** (Sec. III-B): if all the extra ``lambda_stag`` points lie within ``R`` of
-   their mean, the prediction stagnated: put a top quark (k_VQ = 5 k_VO, q_Q = -1, range
-   d_q) at that mean, keep the path as *abandoned* and predict again; at most ``M``
-   repetitions per cycle and at most ``M`` quarks in use (0 <= M_curr <= M, eq. 7).
-3. **Temporary goal** (Sec. III-C, eq. 8): the predicted point farthest from the line
-   through the robot along the classic APF force (eq. 2 at the robot).
-4. **Motion** (Sec. III-D): the eq. 7 force with the temporary goal in place of the global
-   one (obstacles + quarks); the planner core turns it into (v, w) by eqs. 3, 5.
-
-Quarks are placed obstacles: they persist in the world frame until the goal changes (the
-paper never removes one; ``persist_quarks=false`` recomputes them every cycle instead).
-Choices where the paper is silent (docs/planners.md, "PAPF"): d_q = 2 lambda (eq. 7 names
-d_q, Table 1 gives no value); beyond M quarks the oldest gives way (the paper: at most M);
-after M repetitions without a stagnation-free path the motion uses eq. 7 with the global
-goal (mode ``unresolved``); in the motion law a quark acts as a charged ball of radius
-lambda_stag (no singular push when the robot stands on it) acting within d_o (eq. 7's
-where-clause); the prediction stops at the goal; ties in eq. 8 go to the farthest point
-along the path; a cycle that places a quark tells the stagnation watch the search goes on.
-Each choice is a switch of :class:`PAPFParams`; ``--preset paper`` (:data:`PAPER_PRESET`)
-turns them all off.
+Each cycle predicts a path (Algorithm 1), places top quarks where it stagnates (Sec. III-B)
+and steers by eq. 7 towards the temporary goal of eq. 8. Registered as ``papf``: the
+planner node and the offline simulations run it through the registry. Our choices where
+the paper is silent are switches of :class:`PAPFParams`, off with ``--preset paper``; the
+reading step by step: docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations
@@ -38,13 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.planner.apf import EPS_M, APFParams
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.field import EPS_M, APFParams
 from nodes.planner.lazy import lazy_module
+from nodes.planner.papf.settings import PAPF
 
 # the kernels (and numba) load when a PAPF planner is built, not with the registry
-kernels = lazy_module("nodes.planner.kernels")
-papf_kernel = lazy_module("nodes.planner.papf_kernel")
+kernels = lazy_module("nodes.planner.papf.kernels")
+papf_kernel = lazy_module("nodes.planner.papf.compiled")
 
 
 @dataclass(frozen=True)
@@ -93,6 +70,8 @@ class PAPFParams:
 
 @dataclass
 class Prediction:
+    """Algorithm 1's result: the path [m], top quarks [m], abandoned paths, and whether it resolved."""
+
     path: np.ndarray                 # (n, D) predicted points from the robot, lambda part only
     quarks: np.ndarray               # (Q, D) top quarks in use after this cycle, oldest first
     abandoned: list                  # paths that stagnated
@@ -105,7 +84,7 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
 
     At most ``M`` repetitions (new quarks) per call and at most ``M`` quarks in use: a new
     quark beyond ``M`` replaces the oldest one. The whole loop is one kernel call
-    (:func:`nodes.planner.kernels.predict_paths`).
+    (:func:`nodes.planner.papf.kernels.predict_paths`).
     """
     g_goal = apf.k_vg * apf.q_v * apf.q_g
     g_obs = apf.k_vo * apf.q_v * apf.q_o
@@ -208,11 +187,15 @@ PAPER_PRESET = {"pull_range_fraction": 0.0, "motion_quarks_within_d_o": False, "
                 "quark_restarts_watch": False, "replace_oldest_quark": False, "tie_tol_m": 0.0}
 
 
-class PAPFStrategy:
+class PAPFStrategy(Strategy):
     """PAPF on the shared APF core (registered as ``papf``)."""
 
     name = "papf"
+    rank = 1
+    roles = ("compared", "traffic", "papf-proposed")
+    colour, colour_map = "tab:orange", "Oranges"
     Params = PAPFParams
+    SPECS = PAPF
     PAPER_PRESET = PAPER_PRESET
 
     def __init__(self, params: PAPFParams | None = None):
@@ -222,6 +205,7 @@ class PAPFStrategy:
         self.uses_numba = self.params.use_numba and kernels.HAVE_NUMBA
 
     def reset(self) -> None:
+        """Drop the top quarks (a new goal)."""
         self.quarks = None
 
     def warm_up(self, apf: APFParams) -> None:
@@ -239,6 +223,7 @@ class PAPFStrategy:
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
+        """Prediction, top quarks and eq. 8's temporary goal, then eq. 7's force at ``pos`` [m]."""
         pp = self.params
         obstacles = view.points
         kept = self.quarks if pp.persist_quarks else None
@@ -261,7 +246,7 @@ class PAPFStrategy:
                     top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)
 
     def _plan_compiled(self, pos, goal, obstacles, apf: APFParams, kept) -> Plan:
-        """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf_kernel.plan_compiled`)."""
+        """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf.compiled.plan_compiled`)."""
         pp = self.params
         out = papf_kernel.plan_compiled(pos, goal, obstacles, apf, pp, kept)
         path, quarks, abandoned, resolved, target, force = out

@@ -15,7 +15,7 @@ the particle X; with Table 1 charges (q_V = q_O = -1, q_G = +1) the goal pulls a
 obstacles push.
 
 Summation is sequential (``cumsum``) and the per-point arithmetic is written out, so the
-numba kernels in :mod:`nodes.planner.kernels` give bit-identical results.
+numba kernels in :mod:`nodes.planner.papf.kernels` give bit-identical results.
 """
 
 from __future__ import annotations

@@ -1,80 +1,17 @@
-"""IAPF potential fields and their gradients (Jin et al., Symmetry 2024, Sec. 2.2 and 3.1).
+"""IAPF's potential fields and their exact gradients (Jin et al., Symmetry 2024, Sec. 2.2, 3.1).
 
-Pure scalar maths (``math``, no numpy: a cycle evaluates a handful of obstacles, where
-Python floats beat array overhead). Every function returns the *gradient* ``dU/dX, dU/dY``
-(the force is its negative, eq. 13) and, for tests and plots, the potential itself.
-Our reading of each ambiguous equation is stated where it is implemented and argued in
-docs/planners.md ("IAPF").
-
-- :class:`Lanes`: the road the planner was told (y of the right solid line, lane width
-  d_w, lane count), never read from a world file.
-- :func:`road_gradient` — eqs. 4, 5, 18: quartic boundary field outside the outer lane
-  centres (k1), quadratic lane-centre field between them (k2).
-- :func:`attraction_gradient` — eqs. 6-8, 19: cruise pull b1 along +x, goal pull b2 and the
-  lane-goal cosine b3 (half period ``D_g``).
-- :func:`safety_distance` — eq. 9.
-- :func:`obstacle_gradient` — eqs. 10, 11, 15, 16, 20: the rotated Gaussian field of one
-  obstacle; :func:`traditional_gradient` — eq. 12, the traditional APF's 1/d field.
-- ours: :func:`stop_deceleration` (the stop law with eq. 9's S_m) and :func:`road_headings`
-  (phi of eq. 10 for slow tracks).
+Pure scalar maths, used by :class:`nodes.planner.iapf.algorithm.IAPFCore` and its kernel
+tests: road (eqs. 4-5, 18), attraction (eqs. 6-8, 19), safety distance (eq. 9), obstacles
+(eqs. 10-12, 15-16, 20), our stop law. Each function returns the gradient and the
+potential; the equations by function: docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
-from typing import NamedTuple
 
-
-class Lanes(NamedTuple):
-    """A straight one-way road along +x: ``y_min`` [m] right solid line, ``width`` [m] d_w."""
-
-    y_min: float
-    width: float
-    count: int
-
-    @property
-    def y_max(self) -> float:
-        """[m] left solid line."""
-        return self.y_min + self.count * self.width
-
-    def lane_of(self, y: float) -> int:
-        """Index of the lane holding ``y`` (clamped to 0 … count-1)."""
-        return min(max(int(math.floor((y - self.y_min) / self.width)), 0), self.count - 1)
-
-    def centre(self, lane: int) -> float:
-        """[m] y of a lane's centre line."""
-        return self.y_min + (lane + 0.5) * self.width
-
-    def nearest_boundary(self, y: float) -> float:
-        """[m] y of the solid line nearer to ``y`` (Algorithm 1's y_nb)."""
-        return self.y_min if y - self.y_min <= self.y_max - y else self.y_max
-
-
-@dataclass(frozen=True)
-class Track:
-    """One obstacle as the planner sees it: pose, velocity and footprint (world frame)."""
-
-    x: float            # [m]
-    y: float            # [m]
-    yaw: float          # [rad] heading phi of eq. 10
-    vx: float = 0.0     # [m/s]
-    vy: float = 0.0     # [m/s]
-    length: float = 0.0  # [m] along the heading
-    width: float = 0.0   # [m]
-    id: int = 0
-
-    @property
-    def speed(self) -> float:
-        """[m/s] v_o of eq. 9."""
-        return math.hypot(self.vx, self.vy)
-
-    def moved(self, dt: float) -> Track:
-        """Where a constant-velocity obstacle is ``dt`` [s] later (Algorithm 1, Step 1)."""
-        return Track(self.x + self.vx * dt, self.y + self.vy * dt, self.yaw, self.vx, self.vy,
-                     self.length, self.width, self.id)
-
+from nodes.planner.road import Lanes, Track
 
 # -- road (eqs. 4, 5, 18) ------------------------------------------------------------
 
@@ -208,7 +145,7 @@ def stop_deceleration(x: float, y: float, v: float, tracks, lanes: Lanes, host_l
     X than ``v``: ``(v - v_oX)^2 / (2 (gap - S_m))`` (infinite once inside ``S_m``); the largest.
     Eq. 9's safety distance is the braking distance at ``a_b`` plus ``S_m``; eq. 25's field
     alone cannot brake a host at speed to a stop within it (its return term beats the field),
-    so :meth:`nodes.planner.iapf.IAPFCore.advance` brakes with this once it exceeds
+    so :meth:`nodes.planner.iapf.algorithm.IAPFCore.advance` brakes with this once it exceeds
     ``stop_decel_frac a_b``.
     """
     lane = lanes.lane_of(y)

@@ -1,7 +1,7 @@
 """IAPF prediction kernel (Algorithm 1, Step 1) — numba when available, plain Python otherwise.
 
 :func:`rollout` advances the host ``n`` steps with the whole IAPF step of
-:class:`nodes.planner.iapf.IAPFCore.advance` — eqs. 4-5/18 (road), 6-8/19 (attraction), 9
+:class:`nodes.planner.iapf.algorithm.IAPFCore.advance` — eqs. 4-5/18 (road), 6-8/19 (attraction), 9
 (safety cut-off), 10-11/15-16/20 (obstacles; eq. 12 for the baseline), 25-26 (speed),
 21-22 (heading and position) — written out in one loop over plain floats and arrays, so
 that numba can compile the very same source. It is the hot loop of IAPF (``f_step``
@@ -73,7 +73,7 @@ def _obstacle_grad_py(hx, hy, ob, prm):
 
 
 def _stop_need_py(x, y, v, obs, prm, y_min, width, count, shift):
-    """The stop law's deceleration (:func:`nodes.planner.iapf_fields.stop_deceleration`)."""
+    """The stop law's deceleration (:func:`nodes.planner.iapf.fields.stop_deceleration`)."""
     lane = min(max(int(math.floor((y - y_min) / width)), 0), count - 1)
     need = 0.0
     for i in range(obs.shape[0]):
@@ -150,7 +150,7 @@ _rollout_jit = numba.njit(cache=True)(_rollout) if HAVE_NUMBA else None
 
 
 def pack_params(p) -> np.ndarray:
-    """:class:`nodes.planner.iapf.IAPFParams` -> the kernel's params vector."""
+    """:class:`nodes.planner.iapf.algorithm.IAPFParams` -> the kernel's params vector."""
     vals = [p.k1, p.k2, p.b1, p.b2, p.a_x, p.a_y, p.eta1, p.eta2, p.a_b, p.s_m, p.obstacle_gain,
             p.mass, p.a_max, p.v_max_factor * p.v_cruise, p.v_cruise, 0.0,
             math.radians(p.heading_max_deg), math.radians(p.yaw_rate_max_deg), p.host_length,

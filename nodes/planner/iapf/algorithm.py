@@ -1,23 +1,10 @@
-"""IAPF: Jin et al., "An Efficient Trajectory Planning Approach for Autonomous Ground Vehicles
-Using Improved Artificial Potential Field", Symmetry 16 (2024) 106 — the planning core.
+"""IAPF's planning core (Jin et al., Symmetry 16 (2024) 106): one step of the host particle.
 
-The host is a particle with a speed (Sec. 3): each step of ``step_s`` it
-
-1. drops the obstacles farther than the safety distance (eq. 9);
-2. predicts ``f_step`` low-resolution steps ahead (Algorithm 1, Step 1), counts the
-   predicted points beyond the middle between the lane centre and the nearest solid line
-   (eq. 24) and, above ``c_f``, sets a temporary lane goal in the neighbouring lane for
-   ``t_c`` seconds (Steps 3-6);
-3. sums the fields' negative gradients (eq. 13: road eqs. 4-5/18, attraction eqs. 6-8/19,
-   obstacles eqs. 10-11/15-16/20) into F;
-4. updates the speed from the obstacles' X force (eqs. 25-26) and
-5. moves along the force direction (eqs. 21-22).
-
-:class:`IAPFCore` is that step, free of transport and of the stack's planner interface;
-:mod:`nodes.planner.iapf_strategy` adapts it to :class:`~nodes.planner.core.Planner`.
-Parameters: :class:`IAPFParams` (Table 1 where the paper gives a value, ours otherwise;
-docs/planners.md argues each). ``traditional=True`` is the paper's baseline: eq. 12 field,
-constant speed, no prediction.
+Safety filter (eq. 9), prediction and temporary lane goal (Algorithm 1), fields (eq. 13),
+speed (eqs. 25-26), motion (eqs. 21-22). :class:`IAPFCore` is used by the planner's IAPF
+strategy (:mod:`nodes.planner.iapf.strategy`) and the offline car simulation
+(papf/offline/car.py); ``traditional=True`` is the paper's baseline. Step by step:
+docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations
@@ -28,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nodes.planner.iapf_fields import (
+from nodes.planner.iapf.fields import (
     Lanes,
     attraction_gradient,
     gap,
@@ -42,7 +29,7 @@ from nodes.planner.iapf_fields import (
 from nodes.planner.lazy import lazy_module
 
 # the rollout kernel (and numba) loads when an IAPF core is built, not with the registry
-iapf_kernel = lazy_module("nodes.planner.iapf_kernel")
+iapf_kernel = lazy_module("nodes.planner.iapf.kernels")
 
 
 @dataclass(frozen=True)
@@ -190,6 +177,7 @@ class IAPFCore:
         self._prm = None       # the kernel's params vector (packed once)
 
     def reset(self) -> None:
+        """Forget the temporary lane goal and its timer (a new goal)."""
         self.temp_goal_y, self.t_goal = None, -math.inf
 
     # -- forces -------------------------------------------------------------------------
@@ -251,7 +239,7 @@ class IAPFCore:
     def predict(self, s: HostState, tracks, lanes: Lanes, y_goal: float | None) -> np.ndarray:
         """Step 1: ``f_step`` states (x, y, v, yaw) ``predict_step_s`` apart, obstacles at
         constant velocity, the field without the temporary goal (the future the vehicle would
-        drive into). Runs :func:`nodes.planner.iapf_kernel.rollout` (numba when available)."""
+        drive into). Runs :func:`nodes.planner.iapf.kernels.rollout` (numba when available)."""
         p = self.p
         if self._prm is None:
             self._prm = iapf_kernel.pack_params(p)

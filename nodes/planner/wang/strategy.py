@@ -1,28 +1,8 @@
-"""Improved APF of G. Wang, "Real-time path planning based on improved artificial potential
-field method" (papers/improved-apf-wang.txt), on N-dimensional points (2-D and 3-D).
+"""Wang's improved APF (``wang``, eqs. 6-8) and his traditional APF (``wang-apf``, eqs. 1-5)
+as planner strategies, on N-dimensional points (2-D in the node, 3-D in papf/offline/point3d.py).
 
-The paper's eqs. 6-8 mix up their distances (text and formulas disagree); this is our
-reading, kept to what the text says each coefficient must do (docs/planners.md, Wang):
-
-- **Attraction** (eqs. 6-7): ``F_att = k_att * eta_eff * (X_g - X_u)`` (quadratic potential,
-  linear force). :func:`eta` is the paper's sine, ``(sin((rho_min - R_0) / rho_0 * pi - pi/2)
-  + 1) / 2`` on ``R_0 .. R_0 + rho_0`` of the nearest obstacle point (our X_0; rho_min its
-  distance, R_0 = 0 for LiDAR points), 0 inside R_0, 1 beyond: the linear pull, which grows
-  without bound with the goal distance, fades out against an obstacle, so the repulsion
-  always wins there. Near the target the attraction takes over again (:func:`attraction_coef`,
-  ``eta_eff = 1 - lambda_goal (1 - eta)``, = 1 at the target).
-- **Repulsion** (eq. 8): each point at ``rho < rho_1 = 2 rho_0`` pushes with
-  ``lambda_obs(rho) * lambda_goal(d_g) * k_rep * (1/rho - 1/rho_1) / rho^2`` along the
-  point->robot direction. :func:`lambda_obs` is the paper's cosine (1 inside rho_0, 0 from
-  rho_1 on); :func:`lambda_goal` = ``(1 - cos(pi * min(d_g / rho_1, 1))) / 2`` makes the
-  repulsion vanish at the target (the paper's fix for a goal next to an obstacle).
-- **Control point** (ours): Wang moves a point along the force; a ROSbot cannot move its
-  axle centre sideways, so in 2-D the force is evaluated ``control_offset_m`` ahead of the
-  robot (:func:`control_point`). At the saddle in front of an obstacle on the way to the
-  goal, turning then moves the point sideways, into the field's unstable direction, and the
-  robot commits to one side instead of turning in place.
-
-The planner core then applies the PAPF paper's eqs. 3 and 5 (shared motion law) to the force.
+Wang's eqs. 6-8 mix up their distances; our reading, and the control point ahead of the
+robot (ours): docs/planners.md, "The algorithms in the code" and its Wang section.
 """
 
 from __future__ import annotations
@@ -34,8 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.apf import EPS_M, APFParams
-from nodes.planner.core import Plan, ScanView
+from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.field import EPS_M, APFParams
+from nodes.planner.wang.settings import WANG, WANG_APF
 
 
 @dataclass(frozen=True)
@@ -138,22 +119,21 @@ def scaled_to_scan(wp, apf: APFParams):
     return wp
 
 
-class WangStrategy:
+class WangStrategy(Strategy):
     """Wang's improved APF (registered as ``wang``)."""
 
     name = "wang"
+    rank = 3
+    roles = ("compared", "wang-proposed")
+    colour, colour_map = "tab:brown", "Greens"
     Params = WangParams
+    SPECS = WANG
     #: ``--preset paper``: the force at the robot itself (Wang moves a point along it).
     PAPER_PRESET = {"control_offset_m": 0.0}
 
-    def __init__(self, params: WangParams | None = None):
-        self.params = params or WangParams()
-
-    def reset(self) -> None:
-        pass
-
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
+        """Eqs. 6-8 at the control point ahead of ``pos`` [m]."""
         wp = scaled_to_scan(self.params, apf)
         at = control_point(pos, yaw, goal, wp)
         return Plan(force=wang_force(at, goal, view.points, wp))
@@ -184,19 +164,17 @@ def traditional_force(pos, goal, obstacles, wp: WangAPFParams) -> np.ndarray:
     return force
 
 
-class WangAPFStrategy:
+class WangAPFStrategy(Strategy):
     """Wang's traditional APF baseline, eqs. 1-5 (registered as ``wang-apf``)."""
 
     name = "wang-apf"
+    rank = 4
+    roles = ("wang-baseline",)
     Params = WangAPFParams
+    SPECS = WANG_APF
     PAPER_PRESET: dict = {}   # eqs. 1-5 as written
-
-    def __init__(self, params: WangAPFParams | None = None):
-        self.params = params or WangAPFParams()
-
-    def reset(self) -> None:
-        pass
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
+        """Eqs. 2 and 4 at ``pos`` [m] (the traditional APF)."""
         return Plan(force=traditional_force(pos, goal, view.points, scaled_to_scan(self.params, apf)))

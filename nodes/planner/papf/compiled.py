@@ -1,22 +1,8 @@
-"""One PAPF cycle in two compiled calls (numba) — bit for bit the numpy steps of :mod:`papf`.
+"""One PAPF cycle in two numba calls, bit for bit the numpy steps of :mod:`nodes.planner.papf.strategy`.
 
-:meth:`nodes.planner.papf.PAPFStrategy.plan` with numba (2-D, the prediction stopping at
-the goal) runs:
-
-1. :func:`_front`: the prediction with its top-quark loop (Algorithm 1, Sec. III-B;
-   :func:`nodes.planner.kernels._predict_numba`), eq. 2 at the robot (the direction line
-   of eq. 8) and each quark's distance from the robot (eq. 7, motion law);
-2. in numpy, the operations whose rounding is numpy's own and that a kernel cannot
-   reproduce: the norms and the projection of eq. 8 (BLAS ``dot``/``gemv``, fused
-   multiply-adds) and the quarks' ``|r|^3`` (numpy's ``power``, SIMD on some CPUs);
-3. :func:`_back`: the rest of eq. 8 (normal distances, the tie rule, the farthest point)
-   and the motion force, eq. 2 at the temporary goal plus the quark term of eq. 7.
-
-Every operation is the one :func:`nodes.planner.papf.temporary_goal`,
-:func:`nodes.planner.papf.quark_force` and :func:`nodes.planner.kernels.field_force` do,
-in the same order (sums of two terms commute exactly; numpy's sum over the quarks is
-sequential from 0.0): the results are identical (tests/unit/test_papf_kernel.py), only the
-Python and numpy call overhead around the kernel is gone.
+:meth:`~nodes.planner.papf.strategy.PAPFStrategy.plan` uses it when numba is installed (2-D,
+prediction stopping at the goal); tests/unit/test_papf_kernel.py checks the identity. How
+the cycle splits between kernels and numpy: docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations
@@ -26,11 +12,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from nodes.planner.apf import EPS_M
-from nodes.planner.kernels import HAVE_NUMBA, numba
+from nodes.planner.field import EPS_M
+from nodes.planner.papf.kernels import HAVE_NUMBA, numba
 
 if HAVE_NUMBA:
-    from nodes.planner.kernels import _field_numba, _predict_numba
+    from nodes.planner.papf.kernels import _field_numba, _predict_numba
 
     _jit = numba.njit(cache=True, error_model="numpy")
 
@@ -88,11 +74,11 @@ if HAVE_NUMBA:
 
 def plan_compiled(pos, goal, obstacles, apf, pp, quarks=None):
     """One PAPF cycle (2-D, ``pp.stop_at_goal``, numba): ``(path, quarks, abandoned,
-    resolved, target, force)`` — what :func:`nodes.planner.papf.predict`, eq. 8
-    (:func:`nodes.planner.papf.temporary_goal`) and the motion force give, bit for bit.
+    resolved, target, force)`` — what :func:`nodes.planner.papf.strategy.predict`, eq. 8
+    (:func:`nodes.planner.papf.strategy.temporary_goal`) and the motion force give, bit for bit.
 
-    ``apf``/``pp``: :class:`~nodes.planner.apf.APFParams` and
-    :class:`~nodes.planner.papf.PAPFParams`; ``quarks``: the ones already placed (or None).
+    ``apf``/``pp``: :class:`~nodes.planner.field.APFParams` and
+    :class:`~nodes.planner.papf.strategy.PAPFParams`; ``quarks``: the ones already placed (or None).
     ``abandoned`` is one ``(n, i_max + 1, 2)`` array (a sequence of the abandoned paths).
     """
     last = _LAST   # one read: another thread may replace it meanwhile

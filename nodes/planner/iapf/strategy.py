@@ -1,16 +1,9 @@
-"""IAPF as a strategy of the planner node (``--planner iapf``): the core of
-:mod:`nodes.planner.iapf` on obstacle tracks and the road the run announced.
+"""IAPF as a planner strategy (``--planner iapf``): :class:`~nodes.planner.iapf.algorithm.IAPFCore`
+on the obstacle tracks and the road the run announced, scaled to the ROSbot.
 
-Inputs beyond the scan: :meth:`IAPFStrategy.observe` receives the latest obstacle tracks
-(``<ns>/objects``: ground truth or the LiDAR tracker, paired with the scan by the planner
-core) and the road (from the goal handshake) — the planner never reads a world file. The scan itself is not used: IAPF's fields are
-built from tracked vehicles (Sec. 2.2.3), and the road is lines on the floor.
-
-Scale: :class:`IAPFParams` are the paper's car-scale values (lanes of ``lane_width_ref``
-= 4 m). On the run's road every length is scaled by ``d_w / lane_width_ref`` and time so
-that the cruise speed is ``cruise_speed`` (:func:`nodes.planner.iapf.scaled`); the
-planning step is the control period. Output: the planned heading phi_E (eq. 21) and the
-updated speed v_c (eq. 26), which the planner's heading controller then tracks.
+It reads tracks, not the scan (``observe``), and outputs a heading (eq. 21) and a speed
+(eq. 26) that the planner core tracks. Inputs and scale: docs/planners.md, "The algorithms
+in the code" and its IAPF section.
 """
 
 from __future__ import annotations
@@ -22,19 +15,30 @@ import numpy as np
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.planner import lazy
-from nodes.planner.apf import APFParams
-from nodes.planner.core import Plan, ScanView
-from nodes.planner.iapf import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
-from nodes.planner.iapf_fields import Lanes, Track
+from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.field import APFParams
+from nodes.planner.iapf.algorithm import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
+from nodes.planner.iapf.settings import IAPF
+from nodes.planner.road import Lanes, Track
 
 LANE_GOAL_AHEAD = 1.0  # [s] the temporary lane goal is drawn this far ahead at the cruise speed
 
 
-class IAPFStrategy:
+class IAPFStrategy(Strategy):
     """Jin 2024 IAPF on the shared planner core."""
 
     name = "iapf"
+    rank = 5
+    roles = ("car-proposed",)
+    colour_map = "Reds"
+    uses_objects = True   # its fields are built from tracked vehicles (Sec. 2.2.3)
+    #: the offline car-scale runs (papf/offline/road.py): name -> (label, settings changed,
+    #: colour); the first is IAPF itself, the paper's Table 2 rows are these names
+    car_variants = {"iapf": ("IAPF", {}, "tab:blue"),
+                    "iapf-np": ("IAPF without prediction", {"prediction": False}, "tab:green"),
+                    "apf": ("traditional APF", {"traditional": True, "prediction": False}, "tab:red")}
     Params = IAPFParams
+    SPECS = IAPF
     PAPER_PRESET = PAPER_PRESET
 
     def __init__(self, params: IAPFParams | None = None):
@@ -49,6 +53,7 @@ class IAPFStrategy:
         self.v: float | None = None
 
     def reset(self) -> None:
+        """Forget the core's lane goal and the planned speed (a new goal)."""
         if self._core is not None:
             self._core.reset()
         self.v = None
@@ -84,6 +89,7 @@ class IAPFStrategy:
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
+        """One IAPF step on the observed tracks and road: heading [rad] (eq. 21) and speed [m/s] (eq. 26)."""
         if self.lanes is None:
             return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw)
         core = self.core_for(self.lanes)

@@ -1,0 +1,29 @@
+"""Declared type and valid range of every IAPF parameter (see :mod:`nodes.planner.settings`)."""
+
+from __future__ import annotations
+
+from common.params import FLAG, Spec, integer, num, pos
+from common.robot import V_MAX_M_S
+
+# IAPF (Yang et al.): car-scale road planner; Table 1 values and ours (nodes/planner/iapf/algorithm.py).
+# Its a_x, a_y are negative by the paper's eq. 11 (the obstacle field decays with them).
+IAPF: dict[str, Spec] = {
+    "k1": pos(1e4), "k2": pos(1e4), "b1": num(0.0, 1e4), "b2": num(0.0, 1e4), "b3": num(0.0, 1e4),
+    "a_x": num(-100.0, 0.0, "1/m^2", hi_open=True, safety=True),
+    "a_y": num(-100.0, 0.0, "1/m^2", hi_open=True, safety=True),
+    "eta1": num(0.0, 100.0), "eta2": num(0.0, 100.0),
+    "step_s": pos(1.0, "s"), "horizon_s": pos(60.0, "s"),
+    "s_m": pos(100.0, "m", safety=True), "a_b": pos(20.0, "m/s^2", safety=True),
+    "f_step": integer(1, 1000), "c_f": integer(1, 1000), "t_c": pos(60.0, "s"),
+    "v_cruise": pos(50.0, "m/s"), "obstacle_gain": pos(1e6, safety=True), "mass": pos(1e5, "kg"),
+    "a_max": pos(20.0, "m/s^2"), "v_max_factor": num(1.0, 3.0),
+    "predict_step_s": pos(5.0, "s"), "goal_half_period_lanes": pos(100.0),
+    "b3_temp": num(0.0, 1e4), "heading_max_deg": pos(90.0, "deg"),
+    "yaw_rate_max_deg": num(0.0, 3600.0, "deg/s"), "host_length": pos(20.0, "m"),
+    "host_width": pos(10.0, "m"), "literal_rotation": FLAG, "prediction": FLAG,
+    "traditional": FLAG, "k_trad": pos(1e7), "lane_width_ref": pos(20.0, "m"),
+    "cruise_speed": pos(V_MAX_M_S, "m/s", safety=True),
+    "brake_priority": FLAG, "follow_min_frac": num(0.0, 1.0), "goal_lane_s": num(0.0, 600.0, "s"),
+    "stop_decel_frac": num(0.0, 1.0), "node_stop_decel_frac": num(0.0, 1.0),
+    "heading_min_speed": num(0.0, 50.0, "m/s"),
+}

@@ -1,0 +1,33 @@
+"""``papf new planner NAME [--from P]``: scaffold a planner plug-in (:mod:`nodes.planner.scaffold`)."""
+
+from __future__ import annotations
+
+import sys
+
+from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS
+
+
+def register(sub) -> None:
+    p = sub.add_parser("new", help="scaffold a new planner (its folder, its test)",
+                       description="Scaffold a new part of the stack in this checkout.")
+    kinds = p.add_subparsers(dest="kind", required=True, metavar="KIND")
+    q = kinds.add_parser("planner", help="a planner plug-in copied from an existing planner",
+                         description="Copy planner --from's folder to nodes/planner/NAME/ (its "
+                                     "strategy renamed) and write tests/unit/test_planner_NAME.py; "
+                                     "the registry finds it, `papf plan` and `papf run` take it "
+                                     "as --planner NAME. Never overwrites. Exit 2 on a bad name.")
+    q.add_argument("name", metavar="NAME", help="the new planner's name (lowercase, a-z 0-9 _)")
+    q.add_argument("--from", dest="source", default=DEFAULT_PLANNER, metavar="P",
+                   help=f"planner to copy: {' | '.join(PLANNERS)} (default {DEFAULT_PLANNER})")
+    q.set_defaults(func=cmd_new_planner)
+
+
+def cmd_new_planner(args) -> int:
+    from nodes.planner.scaffold import new_planner, repo_root
+
+    root = repo_root()
+    for path in new_planner(args.name, args.source, root):
+        print(path.relative_to(root))
+    print(f"planner {args.name!r} from {args.source!r}: try `papf plan --world open --planner "
+          f"{args.name}`, then edit nodes/planner/{args.name}/", file=sys.stderr)
+    return 0
