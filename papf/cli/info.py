@@ -21,11 +21,12 @@ def register(sub) -> None:
 
 def cmd_info(args) -> int:
     """What the summary says, and whether the data holds it: every chunk's CRC is checked."""
+    from papf.cli.report import topic_map
     from papf.recording.reader import Recording  # mcap: only when reading
     from papf.recording.rosbag import is_rosbag
     from papf.recording.scan import scan_file
 
-    if is_rosbag(args.file):
+    if is_rosbag(args.file, topic_map(args)):
         return _bag_info(args)
     try:
         with Recording(args.file) as rec:

@@ -76,8 +76,10 @@ ROLE_KEYS = {"odom": ("odom", "wheels"), "battery": ("battery/measured",),
              "cmd_vel": ("cmd_vel",), "scan": ("scan",), "tf": ()}
 
 
-def is_rosbag(path: str | Path) -> bool:
-    """A rosbag2 directory, a ``.db3``, or an ``.mcap`` whose messages are CDR."""
+def is_rosbag(path: str | Path, topics: TopicMap | None = None) -> bool:
+    """A rosbag2 from the robot: its directory, its ``.db3``, or its ``.mcap`` (CDR messages,
+    and beside its ``metadata.yaml`` or holding the odometry topic). Any other CDR MCAP stays
+    a plain MCAP, which ``papf replay`` republishes byte for byte (docs/recording.md)."""
     p = Path(path)
     if p.is_dir():
         return (p / "metadata.yaml").is_file()
@@ -91,13 +93,16 @@ def is_rosbag(path: str | Path) -> bool:
             summary = make_reader(fh).get_summary()
     except Exception:   # not an MCAP, or a broken one: the recording reader says which
         return False
-    return summary is not None and any(c.message_encoding == "cdr"
-                                       for c in summary.channels.values())
+    if summary is None:
+        return False
+    cdr = {c.topic for c in summary.channels.values() if c.message_encoding == "cdr"}
+    odom = (topics or TopicMap()).odom
+    return bool(cdr) and ((p.parent / "metadata.yaml").is_file() or odom in cdr)
 
 
 def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | BagRecording:
     """Our recording, or a rosbag2 read as one (see the module doc)."""
-    return BagRecording(path, topics) if is_rosbag(path) else Recording(path)
+    return BagRecording(path, topics) if is_rosbag(path, topics) else Recording(path)
 
 
 class BagRecording:

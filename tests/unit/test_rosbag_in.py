@@ -176,6 +176,16 @@ def test_measured_charge_integral():
     assert math.isclose(measured_charge_mAh([(0, -1.0), (s, -1.0)], 0, s), -1 / 3.6)
 
 
+def test_a_bags_mcap_alone_is_still_a_bag(bags, tmp_path):
+    root, truth = bags
+    import shutil
+    shutil.copy(root / "mcap" / "mcap.mcap", tmp_path / "copied.mcap")   # no metadata.yaml
+    assert is_rosbag(tmp_path / "copied.mcap")
+    assert close(run_metrics(tmp_path / "copied.mcap").measured_charge_mAh, truth.charge_mAh, 0.02)
+    # without the odometry topic (under the mapping) it is a plain CDR MCAP
+    assert not is_rosbag(tmp_path / "copied.mcap", TopicMap.parse("odom=/elsewhere"))
+
+
 def test_our_recordings_are_not_bags(tmp_path):
     from nodes.recorder.writer import RunWriter
     from papf.recording.reader import Recording
