@@ -11,19 +11,24 @@ def register(sub) -> None:
                        description="Top view (world, path, footprint, the planner's mind), "
                        "speed and charge over time; time, speed and charge in the title. "
                        "MP4 needs ffmpeg.")
-    p.add_argument("src", metavar="FILE.mcap")
+    from papf.cli.report import add_topics_option
+
+    p.add_argument("src", metavar="FILE.mcap|BAG")
     p.add_argument("out", metavar="OUT.gif|OUT.mp4")
     p.add_argument("--fps", type=float, default=10.0, help="frames per second (default 10)")
     p.add_argument("--speed", type=float, default=4.0,
                    help="sim seconds per video second (default 4)")
     p.add_argument("--world", help="world to draw (default: the recording's metadata)")
     p.add_argument("--dpi", type=int, default=80, help="resolution (default 80)")
+    add_topics_option(p)
     p.set_defaults(func=cmd_animate)
 
 
 def cmd_animate(args: argparse.Namespace) -> int:
+    from papf.cli.report import topic_map
     from papf.report.animation import animate
 
-    n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi)
+    n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi,
+                topics=topic_map(args))
     print(f"{args.out}: {n} frames at {args.fps:g} fps ({args.speed:g}x)")
     return 0

@@ -1,4 +1,5 @@
-"""``papf info F.mcap``: what a recording holds (metadata, messages per key, time span)."""
+"""``papf info F.mcap|BAG``: what a recording holds (metadata, messages per key, time span);
+of a rosbag2: its topics, and which of them ``papf report`` reads as what (``--topics``)."""
 
 from __future__ import annotations
 
@@ -9,17 +10,24 @@ from common.errors import PapfError
 
 
 def register(sub) -> None:
-    p = sub.add_parser("info", help="what a recording holds")
-    p.add_argument("file", metavar="F.mcap")
+    from papf.cli.report import add_topics_option
+
+    p = sub.add_parser("info", help="what a recording (or a rosbag2 from the robot) holds")
+    p.add_argument("file", metavar="F.mcap|BAG")
     p.add_argument("--json", action="store_true")
+    add_topics_option(p)
     p.set_defaults(func=cmd_info)
 
 
 def cmd_info(args) -> int:
     """What the summary says, and whether the data holds it: every chunk's CRC is checked."""
+    from papf.cli.report import topic_map
     from papf.recording.reader import Recording  # mcap: only when reading
+    from papf.recording.rosbag import is_rosbag
     from papf.recording.scan import scan_file
 
+    if is_rosbag(args.file, topic_map(args)):
+        return _bag_info(args)
     try:
         with Recording(args.file) as rec:
             first, last = rec.time_span_ns()
@@ -58,3 +66,28 @@ def _print_info(file, info: dict, channels: dict, first: int, last: int) -> None
         n = info["messages"].get(key, 0)
         enc = f"{msg_enc} / {schema_enc}" if schema_enc else f"{msg_enc} / no schema (raw)"
         print(f"  {key:<{width}} {n:>8}  {schema or '-':<24} {enc}")
+
+
+def _bag_info(args) -> int:
+    """A rosbag2: storage, span, every topic with its type and count, and the roles read."""
+    from dataclasses import asdict
+
+    from papf.cli.report import topic_map
+    from papf.recording.rosbag import BagRecording
+
+    topics = topic_map(args)
+    with BagRecording(args.file, topics) as bag:
+        first, last = bag.time_span_ns()
+        info = {"file": args.file, "rosbag2": True, "duration_s": (last - first) / 1e9,
+                "topics": {t: {"type": m, "messages": n} for t, (m, n) in bag.bag_topics().items()},
+                "roles": asdict(topics), "as_our_keys": bag.counts()}
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    print(f"{args.file}: rosbag2, {info['duration_s']:.3f} s")
+    role_of = {t: r for r, t in info["roles"].items()}
+    width = max(len(t) for t in info["topics"])
+    print(f"  {'TOPIC':<{width}} {'MESSAGES':>8}  {'TYPE':<32} READ AS")
+    for t, d in sorted(info["topics"].items()):
+        print(f"  {t:<{width}} {d['messages']:>8}  {d['type']:<32} {role_of.get(t, '-')}")
+    return 0

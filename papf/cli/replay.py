@@ -20,7 +20,11 @@ def register(sub) -> None:
     p = sub.add_parser("replay", help="republish a recording with its timing",
                        description="Republish a recording on its keys, in log-time "
                                    "order, with the recorded timing scaled by --rate.")
-    p.add_argument("file", metavar="F.mcap")
+    from papf.cli.report import add_topics_option
+
+    p.add_argument("file", metavar="F.mcap|BAG",
+                   help="a recording, or a rosbag2 from the robot (replayed as our messages on "
+                        "our keys: odom, wheels, battery/measured, cmd_vel, scan)")
     p.add_argument("--rate", type=float, default=1.0,
                    help="speed factor; 0 = as fast as possible (default 1)")
     p.add_argument("--keys", action="append", metavar="EXPR",
@@ -28,6 +32,7 @@ def register(sub) -> None:
     p.add_argument("--into-live", action="store_true",
                    help="replay even where a live stack runs in the target namespace "
                         "(its nodes would act on the recorded messages)")
+    add_topics_option(p)
     add_zenoh_args(p)
     add_view_flag(p)
     # --namespace from add_zenoh_args: here it remaps; unset = the recorded keys as they are.
@@ -44,13 +49,15 @@ def cmd_replay(args) -> int:
 
 def _replay(args, stop: StopRequested) -> int:
     """Check the file, the rate and where it would publish before publishing anything."""
+    from papf.cli.report import topic_map
     from papf.console.progress import DecileProgress
-    from papf.recording.reader import Recording  # mcap: only when replaying
     from papf.recording.replay import check_rate, replay, target_namespaces
+    from papf.recording.rosbag import open_run  # mcap, rosbags: only when replaying
 
     try:
         check_rate(args.rate)
-        with Recording(args.file) as rec:
+        topics = topic_map(args)
+        with open_run(args.file, topics) as rec:
             namespaces = target_namespaces(rec, args.keys, args.namespace)
         where = ", ".join(args.connect) or ("the --zenoh-config endpoints" if args.zenoh_config
                                              else DEFAULT_ENDPOINT)
@@ -59,7 +66,8 @@ def _replay(args, stop: StopRequested) -> int:
             print(f"papf replay: publishing {args.file} into the Zenoh router at {where}, "
                   f"namespace {', '.join(sorted(namespaces)) or '(none)'}", file=sys.stderr)
             stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,
-                           progress=_progress_printer(bar), stop=lambda: bool(stop))
+                           progress=_progress_printer(bar), stop=lambda: bool(stop),
+                           topics=topics)
     except PapfError as exc:
         print(f"papf replay: {exc}", file=sys.stderr)
         return 2

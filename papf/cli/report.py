@@ -12,31 +12,56 @@ import json
 def register(sub) -> None:
     p = sub.add_parser(
         "report", help="energy report of recorded runs (report.md, report.csv, PNGs)",
-        description="Read MCAP recordings only; write report.md, report.csv, trajectories.png, "
-                    "charge.png and motion.png. Charge and energy are re-metered from the "
-                    "recorded odometry and wheel states.")
+        description="Read MCAP recordings and rosbag2s recorded on the ROSbot only; write "
+                    "report.md, report.csv, trajectories.png, charge.png and motion.png. Charge "
+                    "and energy are re-metered from the recorded odometry and wheel states (a "
+                    "bag's: from its odometry); a bag's /battery current gives the measured "
+                    "charge beside them.")
     p.add_argument("inputs", nargs="+", metavar="DIR|FILE",
-                   help="directories (every *.mcap inside) and/or .mcap files")
+                   help="directories (every *.mcap and rosbag2 inside), .mcap files, rosbag2 "
+                        "directories (metadata.yaml) or their .mcap / .db3")
     p.add_argument("--energy-model", choices=("paper", "motor"),
                    help="re-meter with this model (default: the model the live meter ran); "
                         "a re-metered report goes to its own files (report-paper.md, …)")
     p.add_argument("--out", metavar="DIR",
                    help="output directory (default: the one DIR given, else the first file's)")
     p.add_argument("--json", action="store_true", help="print per-run figures as JSON lines")
+    add_topics_option(p)
     p.set_defaults(func=cmd_report)
 
 
-def cmd_report(args) -> int:
-    from papf.report.report import build_report  # matplotlib: only when reporting
-    from papf.report.tables import summary_markdown
+def add_topics_option(p) -> None:
+    """``--topics``: which topics of a rosbag2 are odometry, battery, commands, scans, TF."""
+    p.add_argument("--topics", metavar="ROLE=/topic,...",
+                   help="a rosbag2's topic names (default: the ROSbot's: "
+                        "odom=/odometry/filtered,battery=/battery,cmd_vel=/cmd_vel,scan=/scan,"
+                        "tf=/tf); roles not named keep their default")
 
-    report = build_report(args.inputs, args.out, args.energy_model)
+
+def topic_map(args):
+    """The parsed ``--topics`` (ConfigError: one line, exit 2)."""
+    from papf.recording.rosbag import TopicMap
+
+    return TopicMap.parse(getattr(args, "topics", None))
+
+
+def cmd_report(args) -> int:
+    from papf.report.metrics import BAG
+    from papf.report.report import build_report  # matplotlib: only when reporting
+    from papf.report.tables import bags_markdown, summary_markdown
+
+    report = build_report(args.inputs, args.out, args.energy_model, topics=topic_map(args))
     if args.json:
         for m in report.runs:
             print(json.dumps(m.row()))
         return 0
     print(f"{report.model_note}; {report.pose_note}")
-    for world in sorted({s.world for s in report.summaries}):
+    bags = [r for r in report.runs if r.outcome == BAG]
+    if bags:
+        print("\nbags recorded on the robot:")
+        print(bags_markdown(bags, report.model))
+    bag_worlds = {r.world for r in bags}
+    for world in sorted({s.world for s in report.summaries} - bag_worlds):
         print(f"\nworld {world}:")
         print(summary_markdown([s for s in report.summaries if s.world == world], report.model))
     print(f"\nwrote {', '.join(str(f) for f in report.files)}")

@@ -17,12 +17,13 @@ def replay_with_view(args: argparse.Namespace, replay_fn) -> int:
     import zenoh
 
     from common.transport import DEFAULT_ENDPOINT, StopRequested, config_from_args, wait_alive
+    from papf.cli.report import topic_map
     from papf.launch.supervisor import Supervisor, port_in_use, wait_port
-    from papf.recording.reader import Recording
     from papf.recording.replay import recorded_namespace
+    from papf.recording.rosbag import SOURCE, open_run
     from schemas import Keys
 
-    with Recording(args.file) as rec:
+    with open_run(args.file, topic_map(args)) as rec:
         meta, recorded_ns = rec.run_metadata, recorded_namespace(rec)
     ns = args.namespace or recorded_ns or "rosbot"
     own_router = (args.mode == "client" and not args.connect and not args.zenoh_config
@@ -37,7 +38,8 @@ def replay_with_view(args: argparse.Namespace, replay_fn) -> int:
         z = [a for ep in args.connect for a in ("--connect", ep)] + ["--namespace", ns,
                                                                       "--mode", args.mode]
         z += ["--zenoh-config", args.zenoh_config] if args.zenoh_config else []
-        world = ["--world", meta["world"]] if meta.get("world") else []
+        world = (["--world", meta["world"]] if meta.get("world") and meta.get("source") != SOURCE
+                 else [])
         sup.start("viewer", [sys.executable, "-m", "nodes.viewer", *z, "--port", str(args.view),
                              "--goals", "refuse", *world])
         with zenoh.open(config_from_args(args)) as session:

@@ -164,7 +164,7 @@ def plot_plan(world: World, result, out_png: str | Path, title: str) -> Path:
     return out
 
 
-def mind_png(runs, files: dict, world: World | None, out_png: str | Path) -> Path:
+def mind_png(runs, files: dict, world: World | None, out_png: str | Path, topics=None) -> Path:
     """The report's ``mind.png``: for the first run of each planner, its path, footprints and
     the mind at its most telling cycle (from the recording's ``planner/state``)."""
     from papf.recording.track import load_track
@@ -176,7 +176,7 @@ def mind_png(runs, files: dict, world: World | None, out_png: str | Path) -> Pat
                              squeeze=False)
     try:
         for ax, (planner, r) in zip(axes[0], firsts.items(), strict=False):
-            track = load_track(files[r.file])
+            track = load_track(files[r.file], topics=topics)
             if world is not None and world.dims == 2:
                 draw_world(ax, world)
             xy, t = track.xyyaw, track.t

@@ -14,6 +14,10 @@ A jump in log time longer than ``max_gap_s`` (e.g. from sim-time stamps to messa
 stamped with their wall-clock receive time, which had no ``stamp_ns``) is replayed
 as ``max_gap_s``, so one odd stamp cannot stall a replay for decades.
 
+A rosbag2 from the robot (:mod:`papf.recording.rosbag`) is replayed as our messages on
+our keys, msgpack-encoded, so the stack's nodes take it (the energy meter re-meters it,
+the viewer shows it).
+
 Pure: the caller passes a publish function ``(key, payload) -> None`` or anything
 with ``declare_publisher(key)`` (a Zenoh session); no Zenoh import here.
 """
@@ -29,6 +33,7 @@ from typing import Any
 
 from common.errors import RecordingError
 from papf.recording.reader import Recording
+from papf.recording.rosbag import BagRecording, TopicMap, open_run
 from schemas.keys import TOPICS
 
 MAX_GAP_S = 5.0         # [s] of log time; longest pause replayed (see module doc)
@@ -48,7 +53,7 @@ class ReplayStats:
     per_key: dict[str, int] = field(default_factory=dict)
 
 
-def recorded_namespace(rec: Recording) -> str | None:
+def recorded_namespace(rec: Recording | BagRecording) -> str | None:
     """The namespace a recording was made under: its ``run`` metadata ``namespace``,
     else the prefix of the first key that ends in a stack topic (``rosbot/scan``)."""
     ns = rec.run_metadata.get("namespace")
@@ -73,7 +78,8 @@ def zenoh_key(topic: str) -> str | None:
     return key
 
 
-def target_namespaces(rec: Recording, keys=None, namespace: str | None = None) -> set[str]:
+def target_namespaces(rec: Recording | BagRecording, keys=None,
+                      namespace: str | None = None) -> set[str]:
     """Namespaces a replay of ``rec`` would publish under: ``namespace`` if given, else
     the recorded one, else the first chunk of each replayed key."""
     if namespace:
@@ -165,17 +171,19 @@ def replay(path: str | Path, target: Publish | Any, rate: float | None = 1.0,
            progress: Callable[[int, int], None] | None = None,
            stop: Callable[[], bool] = lambda: False, max_gap_s: float = MAX_GAP_S,
            clock: Callable[[], float] = time.monotonic,
-           sleep: Callable[[float], None] = time.sleep) -> ReplayStats:
+           sleep: Callable[[float], None] = time.sleep,
+           topics: TopicMap | None = None) -> ReplayStats:
     """Republish ``path`` on ``target``; see the module doc.
 
     ``keys``: key expression(s) of the recorded keys to replay (default all);
     ``namespace``: publish under this namespace instead of the recorded one;
-    ``progress(done, total)`` is called about ten times a second; ``stop()`` aborts.
+    ``progress(done, total)`` is called about ten times a second; ``stop()`` aborts;
+    ``topics``: a rosbag2's topic names (it is replayed as our messages on our keys).
     """
     check_rate(rate)
     stats = ReplayStats()
     publishers = _Publishers(target)
-    with Recording(path) as rec:
+    with open_run(path, topics) as rec:
         old_ns = recorded_namespace(rec) if namespace else None
         counts = rec.counts()
         total = sum(counts.get(k, 0) for k in rec.keys(keys))

@@ -1,8 +1,10 @@
 """A recorded run as arrays for pictures (``papf animate``, the report's mind figure).
 
 Poses from ground truth (``sim/pose``) when recorded, else odometry; speed from odometry;
-charge from ``battery``; every ``planner/state``. Times in seconds of the recording's
-stamps. Pure: reads the file, nothing else.
+charge from ``battery`` (a rosbag2 has none: re-metered from its odometry with the motor
+model, as ``papf report`` does by default); every
+``planner/state``. Times in seconds of the recording's stamps. Pure: reads the file,
+nothing else.
 """
 
 from __future__ import annotations
@@ -13,9 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import ConfigError, PapfError
+from nodes.energy_meter.core import EnergyMeter
 from papf.recording.foxglove_export import stack_topic
-from papf.recording.reader import Recording
-from schemas.messages import BatteryState, Odometry, PlannerState
+from papf.recording.rosbag import NS, BagRecording, TopicMap, open_run
+from schemas.messages import BatteryState, BatteryVoltage, Odometry, PlannerState, WheelStates
 from worlds import World, load_world
 
 
@@ -35,22 +38,42 @@ class RunTrack:
     state_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
-def load_track(path: str | Path, world: str | None = None) -> RunTrack:
+BAG_KEYS = [f"{NS}/odom", f"{NS}/wheels", f"{NS}/battery/measured"]
+
+
+def _metered(meter: EnergyMeter, msg) -> list[BatteryState]:
+    """What the energy meter says after ``msg`` (odometry, wheels or the measured voltage)."""
+    try:
+        if isinstance(msg, BatteryVoltage):
+            meter.set_measured_voltage(msg.voltage, msg.stamp_ns)
+            return []
+        state = meter.feed(msg) if isinstance(msg, Odometry | WheelStates) else None
+    except PapfError:   # a sample the meter refuses, as papf report's re-meter drops it
+        return []
+    return [state] if state is not None else []
+
+
+def load_track(path: str | Path, world: str | None = None,
+               topics: TopicMap | None = None) -> RunTrack:
     """Poses (ground truth if recorded, else odometry), speed, charge, planner states."""
     poses: dict[str, list[Odometry]] = {"sim/pose": [], "odom": []}
     batt: list[BatteryState] = []
     states: list[PlannerState] = []
-    with Recording(path) as rec:
+    with open_run(path, topics) as rec:
         meta = rec.run_metadata
-        for key, msg, _ in rec.messages():
+        bag = isinstance(rec, BagRecording)
+        meter = EnergyMeter() if bag else None   # a bag has no meter's figures: re-meter it
+        for key, msg, _ in rec.messages(BAG_KEYS if bag else None):
             topic = stack_topic(key)
+            if meter is not None:
+                batt += _metered(meter, msg)
             if topic in poses and isinstance(msg, Odometry):
                 poses[topic].append(msg)
             elif topic == "battery" and isinstance(msg, BatteryState):
                 batt.append(msg)
             elif topic == "planner/state" and isinstance(msg, PlannerState):
                 states.append(msg)
-    name = world or meta.get("world")
+    name = world or (None if bag else meta.get("world"))
     w = None
     if name:
         try:

@@ -31,6 +31,7 @@ from papf.plots.mind import (  # noqa: E402
     rgba,
 )
 from papf.plots.world import draw_world  # noqa: E402
+from papf.recording.rosbag import TopicMap  # noqa: E402
 from papf.recording.track import RunTrack, load_track  # noqa: E402
 
 MAX_FRAMES = 1500
@@ -113,8 +114,9 @@ class Animator:
 
 
 def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 4.0,
-            world: str | None = None, dpi: int = 80) -> int:
-    """Render ``src`` into ``out`` (.gif or .mp4); returns the number of frames."""
+            world: str | None = None, dpi: int = 80, topics: TopicMap | None = None) -> int:
+    """Render ``src`` (a recording or a rosbag2, its topics mapped by ``topics``) into ``out``
+    (.gif or .mp4); returns the number of frames."""
     out = Path(out)
     suffix = out.suffix.lower()
     if suffix not in (".gif", ".mp4"):
@@ -124,7 +126,7 @@ def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 
                           "write a .gif instead")
     if not (fps > 0 and speed > 0):
         raise ConfigError(f"--fps {fps} and --speed {speed} must be > 0")
-    anim = Animator(load_track(src, world), fps, speed)
+    anim = Animator(load_track(src, world, topics), fps, speed)
     try:
         frames = anim.frames()
         writer = (animation.PillowWriter(fps=fps) if suffix == ".gif"

@@ -36,7 +36,7 @@ from papf.plots.world import (  # noqa: E402
     set_view,
     view_extent,
 )
-from papf.report.metrics import RunMetrics, seed_text  # noqa: E402
+from papf.report.metrics import BAG, RunMetrics, seed_text  # noqa: E402
 from papf.report.tables import PlannerSummary, planner_order, worlds_of  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -140,10 +140,14 @@ def _charge_panel(ax, runs, summaries, style) -> None:
         mine = [r for r in runs if r.planner == s.planner]
         xs = x + np.arange(len(mine))
         for xi, r in zip(xs, mine, strict=True):
-            ok = r.outcome == "reached"
+            ok = r.outcome in ("reached", BAG)
             ax.bar(xi, r.charge_mAh, color=style[r.file].colour, alpha=0.9 if ok else 0.35,
                    hatch=None if ok else "//", edgecolor="k", lw=0.5)
-            ticks.append((xi, f"{r.planner}\nseed {seed_text(r.seed)}"))
+            if r.measured_charge_mAh is not None:   # a bag's charge measured on the robot
+                ax.plot(xi, r.measured_charge_mAh, "D", color="k", ms=6,
+                        label="measured (/battery current)")
+            ticks.append((xi, f"{r.planner}\nseed {seed_text(r.seed)}" if r.outcome != BAG
+                          else r.file))
         st = s.stats["charge_mAh"]
         if st.n and len(xs):
             lo, hi = xs[0] - 0.45, xs[-1] + 0.45
@@ -155,7 +159,11 @@ def _charge_panel(ax, runs, summaries, style) -> None:
                         textcoords="offset points", xytext=(0, 6), ha="center", fontsize=8)
         x = xs[-1] + 1.6 if len(xs) else x + 1.6
     ax.set_xticks([t for t, _ in ticks], [lab for _, lab in ticks], fontsize=8)
-    top = max((r.charge_mAh for r in runs if np.isfinite(r.charge_mAh)), default=1.0)
+    top = max((c for r in runs for c in (r.charge_mAh, r.measured_charge_mAh or 0.0)
+               if np.isfinite(c)), default=1.0)
+    if any(r.measured_charge_mAh is not None for r in runs):
+        handles, labels = ax.get_legend_handles_labels()
+        ax.legend(handles[:1], labels[:1], fontsize=8, loc="lower right")
     ax.set_ylim(0.0, 1.18 * top if top > 0 else 1.0)
     ax.grid(True, axis="y", lw=0.3, alpha=0.5)
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from papf.report import tables
-from papf.report.metrics import OSCILLATION_W_RAD_S
+from papf.report.metrics import BAG, OSCILLATION_W_RAD_S
 
 DEFINITIONS = (
     "duration: first motion (|v| > 0.01 m/s) to the outcome; path: the pose source's path up "
@@ -90,8 +90,31 @@ def _world_section(report, world: str) -> list[str]:
     ]
 
 
+def _bags_section(report, bags: list) -> list[str]:
+    lines = [
+        "## Bags recorded on the robot",
+        "",
+        f"Re-metered from each bag's odometry ({report.model} model; wheel speeds and torques "
+        "derived from it as the live ROSbot driver does, the pack's measured voltage from "
+        "`/battery`) beside the charge measured by the robot: ∫ current dt of `/battery` over "
+        "the odometry's span (ROS sign convention: negative current = discharge; none where "
+        "the battery carries no current). Duration: first to last odometry sample moving "
+        "faster than 0.01 m/s; path: the odometry's.",
+        "",
+        tables.bags_markdown(bags, report.model),
+        "",
+    ]
+    for world in tables.worlds_of(bags):
+        lines += [f"![path of {world}]({report.pngs[('trajectories', world)]})", "",
+                  f"![heading, v and ω of {world}]({report.pngs[('motion', world)]})", ""]
+    return lines
+
+
 def markdown(report) -> str:
     lines = _intro(report)
-    for world in tables.worlds_of(report.runs):
+    bags = [r for r in report.runs if r.outcome == BAG]
+    if bags:
+        lines += _bags_section(report, bags)
+    for world in tables.worlds_of([r for r in report.runs if r.outcome != BAG]):
         lines += _world_section(report, world)
     return "\n".join(lines)

@@ -18,10 +18,20 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import RecordingError
-from papf.launch.outcome import NS, RunMonitor
+from papf.launch.outcome import MOVING_SPEED, NS, RunMonitor
 from papf.recording.reader import Recording
+from papf.recording.rosbag import BagRecording, TopicMap, measured_charge_mAh, open_run
 from papf.report.remeter import Remeter, battery_at
-from schemas import BatteryState, Clock, Event, Odometry, PlannerStatus, Twist, WheelStates
+from schemas import (
+    BatteryState,
+    BatteryVoltage,
+    Clock,
+    Event,
+    Odometry,
+    PlannerStatus,
+    Twist,
+    WheelStates,
+)
 
 OSCILLATION_W_RAD_S = 0.1   # [rad/s] |w| a swing must exceed to count (ASSUMPTION: well above
                             # the sim's straight-line yaw corrections, ~0.02 rad/s; 5.7 deg/s)
@@ -29,6 +39,7 @@ REPRODUCE_TOL = 1e-9        # [-] relative: a file's figure vs the live run's su
 NO_TIMEOUT_S = 1e9          # [s] stands for "no timeout known" (the monitor needs a number)
 NO_OUTCOME = "no_outcome"   # the recording ends before any outcome message (timeout unknown)
 INCOMPLETE = "incomplete"   # ... and before the run's timeout: the recording lost the end
+BAG = "bag"                 # a rosbag2 recorded on the robot: no outcome, figures over the bag
 
 
 @dataclass(frozen=True)
@@ -72,6 +83,8 @@ class RunMetrics:
     jerk_sq: float              # [m^2/s^5] integral of (d^2v/dt^2)^2 over the motion
     heading_oscillations: int   # sign changes of w beyond +-OSCILLATION_W_RAD_S
     collisions: int
+    measured_charge_mAh: float | None = None   # [mAh] ∫ current dt of a bag's /battery over
+                                               #     its odometry; None: no current measured
     series: Series | None = field(default=None, repr=False, compare=False)
 
     def row(self) -> dict:
@@ -137,7 +150,8 @@ class _Collector:
                          f"{ns}/sim/pose": (Odometry, self._on_sim_pose),
                          f"{ns}/cmd_vel": (Twist, m.on_cmd),
                          f"{ns}/odom": (Odometry, self._on_odom),
-                         f"{ns}/wheels": (WheelStates, self.remeter.feed)}
+                         f"{ns}/wheels": (WheelStates, self.remeter.feed),
+                         f"{ns}/battery/measured": (BatteryVoltage, self.remeter.measured)}
 
     def _on_sim_pose(self, msg: Odometry) -> None:
         self.ground_truth = True
@@ -173,13 +187,15 @@ class _Collector:
 
 
 def run_metrics(path: str | Path, energy_model: str | None = None,
-                energy_params: dict | None = None, with_series: bool = True) -> RunMetrics:
-    """Figures of the run recorded in ``path`` (see the module doc).
+                energy_params: dict | None = None, with_series: bool = True,
+                topics: TopicMap | None = None) -> RunMetrics:
+    """Figures of the run recorded in ``path`` (see the module doc), or of a rosbag2
+    (:func:`papf.recording.rosbag.open_run`, its topics mapped by ``topics``).
 
     ``energy_model``: ``paper`` | ``motor`` | None (the model the live meter ran, from the
     run metadata). Raises RecordingError for a truncated or foreign file.
     """
-    with Recording(path) as rec:
+    with open_run(path, topics) as rec:
         meta = rec.run_metadata
         ns = meta.get("namespace") or _guess_namespace(rec)
         model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or "motor"
@@ -187,11 +203,27 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
         col = _Collector(ns, timeout_s, Remeter(model, energy_params))
         for key, msg, _t in rec.messages(list(col.handlers)):
             col.feed(key, msg)
+        bag = _bag_figures(rec, col) if isinstance(rec, BagRecording) else None
     col.finish()
-    return _assemble(Path(path), meta, col, model, with_series)
+    m = _assemble(Path(path), meta, col, model, with_series)
+    if bag is not None:
+        m.outcome, m.reason = BAG, "a rosbag2 recorded on the robot: figures over its odometry"
+        m.duration_s, m.measured_charge_mAh = bag
+    return m
 
 
-def _recorded_model(rec: Recording, ns: str) -> str:
+def _bag_figures(rec: BagRecording, col: _Collector) -> tuple[float, float | None]:
+    """A bag's (duration [s]: first to last odometry sample moving faster than
+    MOVING_SPEED, measured charge [mAh] over its odometry or None)."""
+    moving = [o.stamp_ns for o in col.odom if abs(o.v) > MOVING_SPEED]
+    duration = (moving[-1] - moving[0]) / NS if moving else 0.0
+    if not col.odom:
+        return duration, None
+    span = (col.odom[0].stamp_ns, col.odom[-1].stamp_ns)
+    return duration, measured_charge_mAh(rec.battery_currents(), *span)
+
+
+def _recorded_model(rec: Recording | BagRecording, ns: str) -> str:
     """The model the live meter ran, from its first recorded battery message ("" if none)."""
     for _key, msg, _t in rec.messages([f"{ns}/battery"]):
         if isinstance(msg, BatteryState):
@@ -204,7 +236,7 @@ def seed_text(seed: int) -> str:
     return "?" if seed < 0 else str(seed)
 
 
-def _guess_namespace(rec: Recording) -> str:
+def _guess_namespace(rec: Recording | BagRecording) -> str:
     odom = [k for k in rec.keys() if k.endswith("/odom")]
     if not odom:
         raise RecordingError(f"{rec.path}: no '<namespace>/odom' channel; is this a papf run "

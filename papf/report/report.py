@@ -27,6 +27,7 @@ from pathlib import Path
 
 from common.errors import ConfigError, PapfError, RecordingError
 from papf.plots.mind import mind_png
+from papf.recording.rosbag import TopicMap, is_rosbag
 from papf.report import figures, tables
 from papf.report.markdown import markdown
 from papf.report.metrics import RunMetrics, run_metrics
@@ -61,6 +62,8 @@ class Report:
     @property
     def model_note(self) -> str:
         live = self.live_models
+        if not self.suffix and not live:   # rosbag2s: the robot's own meter is not in them
+            return f"energy model: {self.model} (re-metered; no live meter recorded)"
         if not self.suffix:
             return f"energy model: {self.model} (as the live meter ran)"
         return f"energy model: {self.model} (re-metered; the live meter ran {live or 'none'})"
@@ -78,12 +81,16 @@ class Report:
 
 
 def find_recordings(inputs: Iterable[str | Path]) -> list[Path]:
-    """The ``.mcap`` files named, and those directly inside named directories (sorted)."""
+    """The ``.mcap`` files and rosbag2 directories named, and those directly inside named
+    directories (sorted)."""
     found: list[Path] = []
     for item in inputs:
         p = Path(item)
-        if p.is_dir():
-            found += sorted(f for f in p.glob("*.mcap") if f.is_file())
+        if p.is_dir() and is_rosbag(p):
+            found.append(p)
+        elif p.is_dir():
+            found += sorted(f for f in p.iterdir() if (f.is_file() and f.suffix == ".mcap")
+                            or (f.is_dir() and is_rosbag(f)))
         elif p.is_file():
             found.append(p)
         elif p.exists():
@@ -92,20 +99,25 @@ def find_recordings(inputs: Iterable[str | Path]) -> list[Path]:
         else:
             raise RecordingError(f"{str(item)!r}: no such file or directory")
     if not found:
-        raise RecordingError("no .mcap recordings in " + ", ".join(map(str, inputs)))
+        raise RecordingError("no .mcap recordings or rosbag2 directories in "
+                             + ", ".join(map(str, inputs)))
     return list(dict.fromkeys(found))
 
 
 def default_out(inputs: Sequence[str | Path]) -> Path:
-    """The one directory given, else the directory of the first file."""
+    """The one directory given (beside it for a rosbag2: never inside the robot's bag),
+    else the directory of the first file."""
     first = Path(inputs[0])
-    return first if len(inputs) == 1 and first.is_dir() else first.parent
+    if len(inputs) == 1 and first.is_dir():
+        return first.parent / f"{first.name}-report" if is_rosbag(first) else first
+    return first.parent
 
 
 def collect(paths: Sequence[Path], energy_model: str | None = None,
-            energy_params: dict | None = None) -> list[RunMetrics]:
+            energy_params: dict | None = None, topics: TopicMap | None = None
+            ) -> list[RunMetrics]:
     """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name."""
-    runs = [run_metrics(p, energy_model, energy_params) for p in paths]
+    runs = [run_metrics(p, energy_model, energy_params, topics=topics) for p in paths]
     order = tables.planner_order([r.planner for r in runs])
     return sorted(runs, key=lambda r: (r.world, order.index(r.planner), r.seed, r.file))
 
@@ -119,8 +131,10 @@ def suffix_for(runs: Sequence[RunMetrics], energy_model: str | None) -> str:
 
 
 def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None,
-                 energy_model: str | None = None, energy_params: dict | None = None) -> Report:
-    """Read the recordings, write report.md, report.csv and the PNGs into ``out_dir``."""
+                 energy_model: str | None = None, energy_params: dict | None = None,
+                 topics: TopicMap | None = None) -> Report:
+    """Read the recordings (and rosbag2s, their topics mapped by ``topics``), write
+    report.md, report.csv and the PNGs into ``out_dir``."""
     if energy_model not in (None, *MODELS):
         raise ConfigError(f"energy model {energy_model!r} is not one of {', '.join(MODELS)}")
     paths = find_recordings(inputs)
@@ -130,17 +144,18 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     except OSError as exc:
         raise RecordingError(f"cannot create the report directory {str(out)!r}: "
                              f"{exc.strerror}") from None
-    runs = collect(paths, energy_model, energy_params)
+    runs = collect(paths, energy_model, energy_params, topics)
     files = {Path(p).name: Path(p) for p in paths}
     report = Report(runs, tables.summarise(runs), out, suffix=suffix_for(runs, energy_model))
     try:
-        _write(report, runs, files, out)
+        _write(report, runs, files, out, topics)
     except OSError as exc:
         raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}") from None
     return report
 
 
-def _write(report: Report, runs: list, files: dict, out: Path) -> None:
+def _write(report: Report, runs: list, files: dict, out: Path,
+           topics: TopicMap | None = None) -> None:
     """The report's PNGs, CSV and Markdown into ``out``."""
     note = f"{report.model_note} · {report.pose_note} · papf report"
     charge = report.name("charge")
@@ -157,7 +172,7 @@ def _write(report: Report, runs: list, files: dict, out: Path) -> None:
         report.pngs[("trajectories", world_name)] = traj
         report.pngs[("motion", world_name)] = motion
         mind = report.name("mind", world_name)
-        report.files.append(mind_png(mine, files, _world(world_name), out / mind))
+        report.files.append(mind_png(mine, files, _world(world_name), out / mind, topics))
         report.pngs[("mind", world_name)] = mind
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
     tables.write_csv(csv_path, runs, report.summaries)

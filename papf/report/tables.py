@@ -142,6 +142,19 @@ def runs_markdown(runs: Sequence[RunMetrics], model: str = "") -> str:
     return _md_table(header, rows)
 
 
+def bags_markdown(runs: Sequence[RunMetrics], model: str = "") -> str:
+    """Rosbag2s from the robot: path, duration, re-metered and measured charge side by side."""
+    m = f", {model} model" if model else ""
+    header = ["bag", "duration [s]", "path [m]", f"charge re-metered [mAh{m}]",
+              "charge measured [mAh]", "measured / re-metered"]
+    rows = [[r.file, _f(r.duration_s, ".2f"), _f(r.path_length_m, ".3f"), _f(r.charge_mAh, ".3f"),
+             "none (/battery carries no current)" if r.measured_charge_mAh is None
+             else _f(r.measured_charge_mAh, ".3f"),
+             "–" if r.measured_charge_mAh is None or not r.charge_mAh
+             else _f(r.measured_charge_mAh / r.charge_mAh, ".3f")] for r in runs]
+    return _md_table(header, rows)
+
+
 def summary_markdown(summaries: Sequence[PlannerSummary], model: str = "") -> str:
     """Mean ± sd per planner; give the summaries of one world (several: a world column)."""
     several = len({s.world for s in summaries}) > 1
