@@ -11,15 +11,18 @@ from __future__ import annotations
 import argparse
 import sys
 
+from common.ros_link import add_ros_args, ros_domain
 from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
 
 TOPIC_EPILOG = """\
 KEY: a stack topic without the namespace (scan, odom, planner/state) gets it
-(rosbot/scan); a leading / names the bridge's ROS 2 topic (/scan, /odometry/filtered);
-anything else is a Zenoh key expression used as given (rosbot/**, lab/r1/odom).
-Our messages are decoded by their msgpack type, the bridge's CDR by the key
-(cmd_vel, odometry/filtered, battery, scan, imu/data, joint_states, tf) or --ros-type."""
+(rosbot/scan); a leading / names a ROS 2 topic (/scan, /odometry/filtered): the bridge's
+key, or with --ros rmw_zenoh rmw_zenoh's key in --ros-domain; anything else is a Zenoh
+key expression used as given (rosbot/**, lab/r1/odom, 0/**).
+Our messages are decoded by their msgpack type, rmw_zenoh's CDR by the type its key
+names, the bridge's CDR by the key (cmd_vel, odometry/filtered, battery, scan, imu/data,
+joint_states, tf) or --ros-type."""
 
 
 def register(sub) -> None:
@@ -32,6 +35,7 @@ def register(sub) -> None:
     q.add_argument("--duration", type=float, default=2.0, metavar="S",
                    help="how long to listen [s] (default 2)")
     q.add_argument("--json", action="store_true", help="one JSON object per key")
+    add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_list)
     q = tsub.add_parser("echo", help="print the messages on a key", epilog=TOPIC_EPILOG,
@@ -46,6 +50,7 @@ def register(sub) -> None:
     q.add_argument("--json", action="store_true", help="one JSON object per message")
     q.add_argument("--ros-type", metavar="TYPE", help="decode CDR as this ROS 2 type "
                    "(e.g. sensor_msgs/msg/LaserScan) instead of guessing from the key")
+    add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_echo)
     q = tsub.add_parser("hz", help="print the rate of a key in Hz", epilog=TOPIC_EPILOG,
@@ -58,6 +63,7 @@ def register(sub) -> None:
     q.add_argument("--duration", type=float, default=0.0, metavar="S",
                    help="stop after S seconds (default: until Ctrl-C)")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of CDR payloads (stamps)")
+    add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_hz)
 
@@ -78,6 +84,13 @@ def _out(line: str) -> None:
         raise SystemExit(0) from None
 
 
+def _key(args) -> str:
+    """KEY resolved (see TOPIC_EPILOG); a bad --ros-domain is a usage error (exit 2)."""
+    from papf.bus.topics import resolve_key
+
+    return resolve_key(args.key, Keys(args.namespace), args.ros, ros_domain(args))
+
+
 def cmd_topic_list(args) -> int:
     from papf.bus.topics import topic_list
 
@@ -88,10 +101,10 @@ def cmd_topic_list(args) -> int:
 
 
 def cmd_topic_echo(args) -> int:
-    from papf.bus.topics import echo, resolve_key
+    from papf.bus.topics import echo
 
     stop = StopRequested()
-    key = resolve_key(args.key, Keys(args.namespace))
+    key = _key(args)
     count = 1 if args.once else args.count
     with _session(args) as s:
         n = echo(s, key, _out, count=count, timeout_s=args.timeout, ros_type=args.ros_type,
@@ -106,13 +119,13 @@ def cmd_topic_echo(args) -> int:
 
 
 def cmd_topic_hz(args) -> int:
-    from papf.bus.topics import hz, resolve_key
+    from papf.bus.topics import hz
 
     if args.window < 2:
         print("papf topic hz: --window must be at least 2 messages", file=sys.stderr)
         return 2
     stop = StopRequested()
-    key = resolve_key(args.key, Keys(args.namespace))
+    key = _key(args)
     with _session(args) as s:
         hz(s, key, _out, window=args.window, duration_s=args.duration, ros_type=args.ros_type,
            stop=lambda: bool(stop))
