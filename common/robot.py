@@ -46,5 +46,10 @@ LIDAR_RANGE_MAX_M = 25.0       # [m]
 # [m] scan plane above the floor: the A3 sits on the 0.22 m tall robot's top and scans ~2 cm
 # below its own top (assumption from the outline)
 LIDAR_HEIGHT_M = 0.2
+# [m] the LiDAR's mount in the robot frame (base_link): ASSUMPTION, slightly ahead of the centre on
+# the top plate, on the centre line, its x axis along the robot's
+LIDAR_X_M = 0.02
+LIDAR_Y_M = 0.0
+LIDAR_YAW_RAD = 0.0
 # The robot's footprint circle: half the chassis diagonal, what a planner must keep clear.
 FOOTPRINT_RADIUS_M = 0.5 * (BODY_LENGTH_M**2 + BODY_WIDTH_M**2) ** 0.5   # = 0.154

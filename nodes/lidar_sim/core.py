@@ -42,8 +42,7 @@ p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
 SENSOR_HEIGHT = robot.LIDAR_HEIGHT_M   # [m] scan plane above the floor (common.robot)
-SENSOR_X = 0.02          # [m] sensor ahead of the robot centre (assumption: mounted slightly
-                         # forward on the top plate)
+SENSOR_X = robot.LIDAR_X_M   # [m] sensor ahead of the robot centre (common.robot)
 
 
 _BODY, _FRACTION = itemgetter(0), itemgetter(2)   # of a rayTestBatch hit

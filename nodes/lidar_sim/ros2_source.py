@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 
-from common import ros2
+from common import robot, ros2
 from common.errors import SchemaError
 from common.ros_link import add_ros_args, open_link, ros_domain
 from schemas import Scan
@@ -40,9 +40,9 @@ NAME = "lidar_sim"
 ROS_NODE = "papf_lidar"            # our ROS 2 node name on rmw_zenoh
 TWO_PI = 2.0 * math.pi
 CLOCK_TIMEOUT_NS = 1_000_000_000   # [ns] no driver clock for this long: do not publish scans
-# Sensor pose in the robot frame: the simulated LiDAR's assumption (nodes/lidar_sim/core.py);
+# Sensor pose in the robot frame: the mount assumed in common.robot (as the simulated LiDAR);
 # on a real robot set it from TF (``ros2 run tf2_ros tf2_echo base_link laser``).
-SENSOR_X, SENSOR_Y, SENSOR_YAW = 0.02, 0.0, 0.0   # [m], [m], [rad]
+SENSOR_X, SENSOR_Y, SENSOR_YAW = robot.LIDAR_X_M, robot.LIDAR_Y_M, robot.LIDAR_YAW_RAD  # m, m, rad
 
 
 def classify(ranges: np.ndarray, range_min: float, range_max: float) -> np.ndarray:

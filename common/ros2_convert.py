@@ -1,0 +1,272 @@
+"""Our messages <-> ROS 2 messages (rosbags' ROS 2 Jazzy typestore) and CDR bytes.
+
+The ROS 2 face and ``papf export ros2`` publish these; ``papf report`` of a rosbag2 reads
+the other way. Pure functions, no transport. Frames (REP 105): ``odom`` is the world
+frame our poses are in, ``base_link`` the robot (x forward, z up), ``laser`` the LiDAR at
+its mount (:mod:`common.robot`, the URDF of :mod:`common.urdf`). Stamps are our
+``stamp_ns`` (sim time in sim runs). Sign conventions that differ: ROS's
+``BatteryState.current`` is negative while discharging (ours positive), and NaN there
+means "not measured".
+
+Typestore: ``Stores.ROS2_JAZZY`` (rosbags >= 0.10 has it). The four types the robot bridge
+uses (:mod:`common.ros2`, Humble) have the same definitions and CDR in both.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+from rosbags.typesys import Stores, get_typestore
+
+from common import robot
+from common.units import NS_PER_S as NS
+from common.urdf import BASE_LINK, LASER
+from schemas.messages import BatteryState, Odometry, PlannerState, Scan, Twist
+
+STORE = Stores.ROS2_JAZZY
+ODOM = "odom"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+ODOMETRY = "nav_msgs/msg/Odometry"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+TWIST = "geometry_msgs/msg/Twist"
+BATTERY_STATE = "sensor_msgs/msg/BatteryState"
+PATH = "nav_msgs/msg/Path"
+MARKER_ARRAY = "visualization_msgs/msg/MarkerArray"
+STRING = "std_msgs/msg/String"
+PACK_CAPACITY_AH = robot.CELL_CAPACITY_MAH / 1000.0   # [Ah] 3 cells in series: one cell's
+# The viewer's colours of the planner's mind (nodes/viewer/scene.MIND_COLOURS; a test keeps
+# them equal), r g b a in 0..1, and the drawn sizes [m].
+COLOURS = {"prediction": (0.42, 0.15, 0.75, 1.0), "abandoned": (0.5, 0.5, 0.5, 0.5),
+           "quark": (0.84, 0.15, 0.16, 0.9), "temporary_goal": (0.09, 0.75, 0.81, 1.0),
+           "force": (0.15, 0.15, 0.15, 1.0), "virtual_wall": (0.89, 0.47, 0.76, 1.0)}
+QUARK_DIAMETER_M, TEMP_GOAL_DIAMETER_M = 0.12, 0.16
+FORCE_MIN_M, FORCE_MAX_M = 0.15, 0.8   # [m] drawn length of the force arrow (log-scaled |F|)
+MARKER_NS = "mind"
+
+
+@lru_cache(maxsize=1)
+def typestore():
+    """The ROS 2 Jazzy type store (built once; read-only afterwards)."""
+    return get_typestore(STORE)
+
+
+def _cls(typename: str):
+    return typestore().types[typename]
+
+
+def serialize(msg, typename: str) -> bytes:
+    """A rosbags message -> CDR bytes (little endian, with the 4-byte encapsulation header)."""
+    return bytes(typestore().serialize_cdr(msg, typename))
+
+
+def deserialize(data: bytes | memoryview, typename: str):
+    """CDR bytes -> a rosbags message of ``typename``."""
+    return typestore().deserialize_cdr(bytes(data), typename)
+
+
+# -- pieces ---------------------------------------------------------------------------------------
+def time_msg(stamp_ns: int):
+    sec, nanosec = divmod(int(stamp_ns), NS)
+    return _cls("builtin_interfaces/msg/Time")(sec=sec, nanosec=nanosec)
+
+
+def stamp_of(header) -> int:
+    """Integer nanoseconds of a ``std_msgs/msg/Header``'s stamp."""
+    return int(header.stamp.sec) * NS + int(header.stamp.nanosec)
+
+
+def header(stamp_ns: int, frame_id: str):
+    return _cls("std_msgs/msg/Header")(stamp=time_msg(stamp_ns), frame_id=frame_id)
+
+
+def quaternion(yaw: float):
+    """The quaternion of a rotation by ``yaw`` [rad] about z."""
+    return _cls("geometry_msgs/msg/Quaternion")(x=0.0, y=0.0, z=math.sin(0.5 * yaw),
+                                                w=math.cos(0.5 * yaw))
+
+
+def yaw_of(q) -> float:
+    """Yaw [rad] of a quaternion (ZYX convention; roll and pitch ignored)."""
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def _vec3(x: float = 0.0, y: float = 0.0, z: float = 0.0):
+    return _cls("geometry_msgs/msg/Vector3")(x=float(x), y=float(y), z=float(z))
+
+
+def _point(x: float = 0.0, y: float = 0.0, z: float = 0.0):
+    return _cls("geometry_msgs/msg/Point")(x=float(x), y=float(y), z=float(z))
+
+
+def _pose(x: float, y: float, yaw: float, z: float = 0.0):
+    return _cls("geometry_msgs/msg/Pose")(position=_point(x, y, z), orientation=quaternion(yaw))
+
+
+def _transform(stamp_ns: int, parent: str, child: str, x: float, y: float, z: float,
+               yaw: float):
+    tf = _cls("geometry_msgs/msg/Transform")(translation=_vec3(x, y, z), rotation=quaternion(yaw))
+    return _cls("geometry_msgs/msg/TransformStamped")(header=header(stamp_ns, parent),
+                                                      child_frame_id=child, transform=tf)
+
+
+# -- ours -> ROS 2 --------------------------------------------------------------------------------
+def laser_scan(scan: Scan, frame_id: str = LASER):
+    """``sensor_msgs/msg/LaserScan`` of a scan; ranges as recorded (inf = no return)."""
+    r = np.asarray(scan.ranges, dtype=np.float32)
+    n = len(r)
+    period = 1.0 / robot.LIDAR_RATE_HZ
+    return _cls(LASER_SCAN)(
+        header=header(scan.stamp_ns, frame_id), angle_min=float(scan.angle_min),
+        angle_max=float(scan.angle_min + scan.angle_increment * max(n - 1, 0)),
+        angle_increment=float(scan.angle_increment), time_increment=period / max(n, 1),
+        scan_time=period, range_min=float(scan.range_min), range_max=float(scan.range_max),
+        ranges=r, intensities=np.zeros(0, np.float32))
+
+
+def odometry(odo: Odometry):
+    """``nav_msgs/msg/Odometry``: pose in ``odom``, twist in ``base_link``, no covariance."""
+    tw = _cls(TWIST)(linear=_vec3(x=odo.v), angular=_vec3(z=odo.w))
+    cov = np.zeros(36, dtype=np.float64)
+    return _cls(ODOMETRY)(
+        header=header(odo.stamp_ns, ODOM), child_frame_id=BASE_LINK,
+        pose=_cls("geometry_msgs/msg/PoseWithCovariance")(pose=_pose(odo.x, odo.y, odo.yaw),
+                                                          covariance=cov),
+        twist=_cls("geometry_msgs/msg/TwistWithCovariance")(twist=tw, covariance=cov.copy()))
+
+
+def tf_odom(odo: Odometry):
+    """``tf2_msgs/msg/TFMessage``: ``odom -> base_link`` at the odometry's pose."""
+    return _cls(TF_MESSAGE)(transforms=[_transform(odo.stamp_ns, ODOM, BASE_LINK, odo.x, odo.y,
+                                                   0.0, odo.yaw)])
+
+
+def tf_static(stamp_ns: int = 0):
+    """``tf2_msgs/msg/TFMessage``: ``base_link -> laser`` at the LiDAR's mount (common.robot)."""
+    return _cls(TF_MESSAGE)(transforms=[_transform(
+        stamp_ns, BASE_LINK, LASER, robot.LIDAR_X_M, robot.LIDAR_Y_M, robot.LIDAR_HEIGHT_M,
+        robot.LIDAR_YAW_RAD)])
+
+
+def twist(cmd: Twist):
+    """``geometry_msgs/msg/Twist``: linear.x = v [m/s], angular.z = w [rad/s]."""
+    return _cls(TWIST)(linear=_vec3(x=cmd.v), angular=_vec3(z=cmd.w))
+
+
+def battery_state(b: BatteryState, frame_id: str = BASE_LINK):
+    """``sensor_msgs/msg/BatteryState``; current negative while discharging (ROS convention),
+    charge [Ah] = state of charge x the pack's capacity."""
+    cls = _cls(BATTERY_STATE)
+    status = (cls.POWER_SUPPLY_STATUS_DISCHARGING if b.current > 0
+              else cls.POWER_SUPPLY_STATUS_NOT_CHARGING)
+    return cls(header=header(b.stamp_ns, frame_id), voltage=float(b.voltage),
+               temperature=math.nan, current=-float(b.current),
+               charge=float(b.soc) * PACK_CAPACITY_AH, capacity=PACK_CAPACITY_AH,
+               design_capacity=PACK_CAPACITY_AH, percentage=float(b.soc),
+               power_supply_status=status, power_supply_health=cls.POWER_SUPPLY_HEALTH_UNKNOWN,
+               power_supply_technology=cls.POWER_SUPPLY_TECHNOLOGY_LION, present=True,
+               cell_voltage=np.zeros(0, np.float32), cell_temperature=np.zeros(0, np.float32),
+               location="", serial_number=b.model)
+
+
+def path(state: PlannerState, frame_id: str = ODOM):
+    """``nav_msgs/msg/Path`` of the planner's predicted path; each pose faces the next point."""
+    pts = [(float(p[0]), float(p[1])) for p in state.predicted_path]
+    poses = []
+    for i, (x, y) in enumerate(pts):
+        a, b = (i, i + 1) if i + 1 < len(pts) else (i - 1, i)
+        yaw = (math.atan2(pts[b][1] - pts[a][1], pts[b][0] - pts[a][0]) if a >= 0 else 0.0)
+        poses.append(_cls("geometry_msgs/msg/PoseStamped")(header=header(state.stamp_ns, frame_id),
+                                                           pose=_pose(x, y, yaw)))
+    return _cls(PATH)(header=header(state.stamp_ns, frame_id), poses=poses)
+
+
+def _marker(state: PlannerState, mid: int, kind: str, colour: str, width: float,
+            points=(), z: float = 0.0):
+    cls = _cls("visualization_msgs/msg/Marker")
+    r, g, b, a = COLOURS[colour]
+    return cls(header=header(state.stamp_ns, ODOM), ns=MARKER_NS, id=mid, type=getattr(cls, kind),
+               action=cls.ADD, pose=_pose(0.0, 0.0, 0.0), scale=_vec3(width, width, width),
+               color=_cls("std_msgs/msg/ColorRGBA")(r=r, g=g, b=b, a=a),
+               lifetime=_cls("builtin_interfaces/msg/Duration")(sec=0, nanosec=0),
+               frame_locked=False, points=[_point(p[0], p[1], z) for p in points], colors=[],
+               texture_resource="", texture=_cls("sensor_msgs/msg/CompressedImage")(
+                   header=header(0, ""), format="", data=np.zeros(0, np.uint8)),
+               uv_coordinates=[], text="", mesh_resource="",
+               mesh_file=_cls("visualization_msgs/msg/MeshFile")(filename="",
+                                                                 data=np.zeros(0, np.uint8)),
+               mesh_use_embedded_materials=False)
+
+
+def _force_points(state: PlannerState, robot_xy):
+    fx, fy = state.force
+    mag = math.hypot(fx, fy)
+    if robot_xy is None or not (mag > 0 and math.isfinite(mag)):
+        return None
+    length = min(FORCE_MAX_M, FORCE_MIN_M + 0.15 * math.log1p(mag))
+    x, y = robot_xy
+    return [(x, y), (x + length * fx / mag, y + length * fy / mag)]
+
+
+def markers(state: PlannerState, robot_xy: tuple[float, float] | None = None):
+    """``visualization_msgs/msg/MarkerArray`` of the planner's mind this cycle, in ``odom``:
+    DELETEALL first (the previous cycle goes), then the top quarks, the temporary goal, the
+    abandoned predictions, the force arrow at ``robot_xy`` (log-scaled length) and the
+    virtual walls. Marker ids are stable by role; ``ns`` is ``mind``."""
+    cls = _cls("visualization_msgs/msg/Marker")
+    clear = _marker(state, 0, "SPHERE_LIST", "quark", 0.0)
+    clear.action = cls.DELETEALL
+    out = [clear]
+    if state.top_quarks:
+        out.append(_marker(state, 1, "SPHERE_LIST", "quark", QUARK_DIAMETER_M,
+                           state.top_quarks, z=0.1))
+    if len(state.temporary_goal) >= 2:
+        out.append(_marker(state, 2, "SPHERE_LIST", "temporary_goal", TEMP_GOAL_DIAMETER_M,
+                           [tuple(state.temporary_goal[:2])], z=0.08))
+    arrow = _force_points(state, robot_xy)
+    if arrow is not None:
+        m = _marker(state, 3, "ARROW", "force", 0.03, arrow, z=0.3)
+        m.scale = _vec3(0.03, 0.06, 0.08)   # shaft diameter, head diameter, head length
+        out.append(m)
+    out += [_marker(state, 100 + i, "LINE_STRIP", "abandoned", 0.015, p, z=0.02)
+            for i, p in enumerate(state.abandoned_paths) if len(p) > 1]
+    out += [_marker(state, 1000 + i, "LINE_STRIP", "virtual_wall", 0.05, w, z=0.05)
+            for i, w in enumerate(state.virtual_walls) if len(w) > 1]
+    return _cls(MARKER_ARRAY)(markers=out)
+
+
+def string(text: str):
+    """``std_msgs/msg/String`` (``/robot_description`` carries the URDF in one)."""
+    return _cls(STRING)(data=text)
+
+
+# -- ROS 2 -> ours --------------------------------------------------------------------------------
+def odometry_of(msg, stamp_ns: int | None = None) -> Odometry:
+    """Our planar :class:`Odometry` of a ``nav_msgs/msg/Odometry`` (stamp: its header's)."""
+    p = msg.pose.pose
+    return Odometry(stamp_ns=stamp_of(msg.header) if stamp_ns is None else stamp_ns,
+                    x=float(p.position.x), y=float(p.position.y), yaw=yaw_of(p.orientation),
+                    v=float(msg.twist.twist.linear.x), w=float(msg.twist.twist.angular.z))
+
+
+def twist_of(msg, stamp_ns: int) -> Twist:
+    """Our :class:`Twist` of a ``geometry_msgs/msg/Twist`` (it has no stamp: give one)."""
+    return Twist(stamp_ns=stamp_ns, v=float(msg.linear.x), w=float(msg.angular.z))
+
+
+def discharge_current_of(msg) -> float | None:
+    """Current drawn from the pack [A], positive while discharging, of a
+    ``sensor_msgs/msg/BatteryState``; None when it carries none (NaN or not finite)."""
+    current = float(msg.current)
+    return -current if math.isfinite(current) else None
+
+
+def scan_of(msg, stamp_ns: int | None = None) -> Scan:
+    """Our :class:`Scan` of a ``sensor_msgs/msg/LaserScan`` at the LiDAR's mount (common.robot);
+    the geometry as the message gives it (no resampling)."""
+    return Scan(stamp_ns=stamp_of(msg.header) if stamp_ns is None else stamp_ns,
+                angle_min=float(msg.angle_min), angle_increment=float(msg.angle_increment),
+                range_min=float(msg.range_min), range_max=float(msg.range_max),
+                ranges=np.asarray(msg.ranges, dtype=np.float32), sensor_x=robot.LIDAR_X_M,
+                sensor_y=robot.LIDAR_Y_M, sensor_yaw=robot.LIDAR_YAW_RAD)
