@@ -41,6 +41,30 @@ def add_ros_args(parser: argparse.ArgumentParser, cmd_vel: bool = True) -> None:
                        help="cmd_vel message: twist (the ROSbot's default) or twist_stamped")
 
 
+def add_face_args(parser: argparse.ArgumentParser) -> None:
+    """``--ros-face [--ros-face-domain N]`` of ``papf run`` and ``papf launch``."""
+    parser.add_argument("--ros-face", action="store_true",
+                        help="also show the stack to ROS 2 tools and RViz over rmw_zenoh "
+                             "(nodes.ros_face; docs/robot.md \"The ROS 2 face\")")
+    parser.add_argument("--ros-face-domain", type=int, default=None, metavar="N",
+                        help="ROS domain of the face (default: $ROS_DOMAIN_ID, else 0); must "
+                             "differ from a robot's on rmw_zenoh")
+
+
+def face_domain(args: argparse.Namespace) -> int | None:
+    """The face's domain when ``--ros-face`` is on (None when off); ConfigError if it is the
+    domain of the robot's rmw_zenoh (``--ros rmw_zenoh``): its /cmd_vel would bypass the driver."""
+    if not getattr(args, "ros_face", False):
+        return None
+    value = getattr(args, "ros_face_domain", None)
+    domain = rz.default_domain() if value is None else rz.check_domain(value)
+    if getattr(args, "ros", "bridge") == "rmw_zenoh" and domain == ros_domain(args):
+        raise ConfigError(f"--ros-face in ROS domain {domain}, the robot's rmw_zenoh domain: the "
+                          "face's /cmd_vel, /scan and /odom would mix with the robot's; give "
+                          "--ros-face-domain another domain")
+    return domain
+
+
 def ros_domain(args: argparse.Namespace) -> int:
     """``--ros-domain`` checked, else ``ROS_DOMAIN_ID``, else 0 (ConfigError on a bad value)."""
     value = getattr(args, "ros_domain", None)
@@ -118,12 +142,15 @@ class RmwZenohLink(RosLink):
 
     middleware = "rmw_zenoh"
 
-    def __init__(self, session, domain: int, node: str, namespace: str = ""):
+    def __init__(self, session, domain: int, node: str, namespace: str = "",
+                 ids: itertools.count | None = None):
+        """``ids``: entity ids shared by every link on one session (several ROS nodes)."""
         super().__init__(session, namespace)
         self.domain = rz.check_domain(domain)
         self.zid = str(session.info.zid())
-        self.ids = itertools.count(1)
-        self.node_entity = rz.Entity(self.domain, self.zid, 0, 0, rz.NODE,
+        self.ids = ids or itertools.count(0)
+        node_id = next(self.ids)
+        self.node_entity = rz.Entity(self.domain, self.zid, node_id, node_id, rz.NODE,
                                      "/" + self.namespace if self.namespace else "/", node)
         self._token(self.node_entity)
 
@@ -140,9 +167,21 @@ class RmwZenohLink(RosLink):
         return self._keep(self.session.liveliness().declare_token(entity.token()))
 
     def publisher(self, topic: str, typename: str, qos: rz.Qos = rz.RELIABLE_10) -> _RmwPublisher:
+        """A publisher; transient local QoS keeps the last ``depth`` samples for late joiners
+        as rmw_zenoh does (``rmw_publisher_data.cpp``: zenoh-ext advanced publisher with a
+        cache and publisher detection, sample-miss heartbeats when reliable)."""
         entity = self._entity(rz.PUBLISHER, topic, typename, qos)
-        pub = self._keep(_RmwPublisher(self.session.declare_publisher(self.key(topic, typename)),
-                                       entity.gid))
+        key = self.key(topic, typename)
+        if qos.durability == 1:
+            from zenoh import ext
+
+            miss = ext.MissDetectionConfig(sporadic_heartbeat=0.5) if qos.reliability == 1 else None
+            zpub = ext.declare_advanced_publisher(
+                self.session, key, cache=ext.CacheConfig(max_samples=qos.depth),
+                sample_miss_detection=miss, publisher_detection=True)
+        else:
+            zpub = self.session.declare_publisher(key)
+        pub = self._keep(_RmwPublisher(zpub, entity.gid))
         self._token(entity)
         return pub
 

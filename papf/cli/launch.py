@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from common.ros_link import add_ros_args, cmd_vel_type, ros_domain
+from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
 from papf.cli.view import add_view_flag
 
 
@@ -46,6 +46,7 @@ def register(sub) -> None:
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
     add_view_flag(p)
     add_ros_args(p)
+    add_face_args(p)
     p.set_defaults(func=cmd_launch)
 
 
@@ -60,7 +61,8 @@ def cmd_launch(args) -> int:
               "bridge_namespace": args.bridge_namespace, "view": args.view,
               "realtime": "1" if args.realtime else None,
               "objects": args.objects, "ros": args.ros, "cmd_vel_type": args.cmd_vel_type,
-              "ros_domain": domain}
+              "ros_domain": domain, "ros_face_domain": face_domain(args),
+              "ros_face": "1" if args.ros_face else None}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,
