@@ -82,3 +82,20 @@ def test_goal_pose_becomes_our_goal_keeping_the_runs_tolerance():
         core.goal_from_pose(_pose(math.nan, 1.0))
     with pytest.raises(SchemaError, match="not a CDR PoseStamped"):
         core.goal_from_pose(b"\x00\x01\x00\x00garbage")
+
+
+def test_rviz_config_shows_every_face_topic():
+    from pathlib import Path
+
+    import yaml
+
+    cfg = yaml.safe_load((Path(__file__).parents[2] / "docs" / "ros2-face.rviz").read_text())
+    manager = cfg["Visualization Manager"]
+    assert manager["Global Options"]["Fixed Frame"] == "odom"
+    topics = {d["Topic"]["Value"] for d in manager["Displays"] if "Topic" in d}
+    topics.add(next(d for d in manager["Displays"]
+                    if d["Class"].endswith("RobotModel"))["Description Topic"]["Value"])
+    assert topics == {"/scan", "/odom", "/plan", "/markers", "/robot_description"}
+    assert any(d["Class"].endswith("/TF") for d in manager["Displays"])   # /tf, /tf_static
+    goal, = [t for t in manager["Tools"] if t["Class"].endswith("SetGoal")]
+    assert goal["Topic"]["Value"] == "/goal_pose"
