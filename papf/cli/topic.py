@@ -28,7 +28,8 @@ joint_states, tf) or --ros-type."""
 def register(sub) -> None:
     p = sub.add_parser("topic", help="list, echo and measure the bus's topics (like ros2 topic)",
                        description="Poke the bus: what is published, what it says, how often.")
-    tsub = p.add_subparsers(dest="topic_command", required=True, metavar="list|echo|hz")
+    tsub = p.add_subparsers(dest="topic_command", required=True,
+                            metavar="list|echo|hz|pub|info")
     q = tsub.add_parser("list", help="keys heard, with type, encoding and rate; nodes alive",
                         description="Listen to every key for --duration seconds and list what "
                                     "arrived (plus the stack's silent topics and live nodes).")
@@ -66,6 +67,32 @@ def register(sub) -> None:
     add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_hz)
+    q = tsub.add_parser("pub", help="publish a message typed as YAML/JSON (like ros2 topic pub)",
+                        epilog=TOPIC_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Publish VALUE (the message's fields as YAML or JSON, e.g. "
+                                    "\"{v: 0.2, w: 0.0}\" or \"{linear: {x: 0.2}}\") on KEY; "
+                                    "fields not given take their defaults.")
+    q.add_argument("key", metavar="KEY")
+    q.add_argument("value", metavar="VALUE", nargs="?", default="{}")
+    q.add_argument("--once", "-1", action="store_true", help="publish once and exit")
+    q.add_argument("--times", "-t", type=int, default=0, metavar="N",
+                   help="publish N times and exit (default: until Ctrl-C)")
+    q.add_argument("--rate", "-r", type=float, default=1.0, metavar="HZ", help="rate (1 Hz)")
+    q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of a /topic (default: the "
+                   "ROSbot's type of that topic)")
+    add_ros_args(q, cmd_vel=False)
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_pub)
+    q = tsub.add_parser("info", help="publishers and subscribers of a key (like ros2 topic info)",
+                        epilog=TOPIC_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Our keys: the alive nodes that declare it as an output or "
+                                    "input. A ROS 2 /topic with --ros rmw_zenoh: its publishers "
+                                    "and subscriptions from rmw_zenoh's liveliness tokens.")
+    q.add_argument("key", metavar="KEY")
+    q.add_argument("--verbose", "-v", action="store_true", help="types, QoS and GIDs too")
+    add_ros_args(q, cmd_vel=False)
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_info)
 
 
 def _session(args):
@@ -132,3 +159,49 @@ def cmd_topic_hz(args) -> int:
     return 0
 
 
+def cmd_topic_pub(args) -> int:
+    from papf.bus.fields import parse_value
+    from papf.bus.pub import prepare, publish
+
+    times = 1 if args.once else args.times
+    if times < 0 or not (args.rate > 0 and args.rate <= 1000):
+        print("papf topic pub: --times must be >= 0 and --rate in (0, 1000] Hz", file=sys.stderr)
+        return 2
+    prepared = prepare(args.key, parse_value(args.value), Keys(args.namespace), args.ros_type)
+    domain = ros_domain(args)
+    stop = StopRequested()
+    with _session(args) as s:
+        publish(s, prepared, args.ros, domain, times, args.rate, _out, lambda: bool(stop))
+    return 130 if stop and times != 1 else 0
+
+
+def cmd_topic_info(args) -> int:
+    from papf.bus.graph import our_topic_info, ros_entities, ros_topic_info
+    from schemas.keys import TOPICS
+
+    keys = Keys(args.namespace)
+    domain = ros_domain(args)
+    with _session(args) as s:
+        if args.key in TOPICS:
+            info = our_topic_info(s, keys, args.key)
+            _out(f"Key: {keys.key(args.key)}\nType: {TOPICS[args.key].TYPE}")
+            for role in ("publishers", "subscriptions"):
+                names = info[role]
+                _out(f"{role.capitalize()[:-1]} count: {len(names)}"
+                     + "".join(f"\n  {n}" for n in names))
+            return 0
+        if not args.key.startswith("/") or args.ros != "rmw_zenoh":
+            print(f"papf topic info: {args.key!r}: give a stack topic ({', '.join(sorted(TOPICS))})"
+                  " or a ROS 2 /topic with --ros rmw_zenoh (the bridge announces no ROS graph on "
+                  "Zenoh: use ros2 topic info on the robot)", file=sys.stderr)
+            return 2
+        topic = "/" + args.key.strip("/")
+        info = ros_topic_info(ros_entities(s, domain), topic)
+    types = sorted({e.typename for v in info.values() for e in v})
+    _out(f"Topic: {topic} (rmw_zenoh, domain {domain})\nType: {', '.join(types) or '?'}")
+    for role, entities in info.items():
+        _out(f"{role.capitalize()[:-1]} count: {len(entities)}")
+        for e in entities:
+            _out(f"  {e.fq_node}" + (f"  [{e.typename}, {e.hash}, {e.qos.describe()}, gid "
+                                     f"{e.gid.hex('.')}]" if args.verbose else ""))
+    return 0
