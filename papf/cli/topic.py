@@ -121,10 +121,31 @@ def _key(args) -> str:
 def cmd_topic_list(args) -> int:
     from papf.bus.topics import topic_list
 
+    domain = ros_domain(args)
     stop = StopRequested()
     with _session(args) as s:
         topic_list(s, Keys(args.namespace), args.duration, _out, lambda: bool(stop), args.json)
+        if args.ros == "rmw_zenoh":   # the ROS 2 graph of the domain, from rmw_zenoh's tokens
+            _ros_graph(s, domain, args.json)
     return 130 if stop else 0
+
+
+def _ros_graph(session, domain: int, as_json: bool) -> None:
+    import json
+
+    from common import rmw_zenoh as rz
+    from papf.bus.graph import ros_entities, ros_nodes
+
+    entities = ros_entities(session, domain)
+    topics = sorted({(e.topic, e.typename) for e in entities if e.kind in (rz.PUBLISHER,
+                                                                           rz.SUBSCRIPTION)})
+    if as_json:
+        _out(json.dumps({"ros_domain": domain, "ros_nodes": ros_nodes(entities),
+                         "ros_topics": [{"topic": t, "type": ty} for t, ty in topics]}))
+        return
+    _out(f"ROS 2 on rmw_zenoh, domain {domain}: nodes {', '.join(ros_nodes(entities)) or 'none'}")
+    for topic, typename in topics:
+        _out(f"  {topic}  [{typename}]")
 
 
 def cmd_topic_echo(args) -> int:

@@ -39,6 +39,11 @@ def test_node_list_and_info_on_the_ros_graph(router, session):
         r = papf("node", "list", "--ros", "rmw_zenoh", "--ros-domain", str(DOMAIN), router=router)
         assert r.returncode == 0, r.stderr
         assert f"/controller_manager  (ROS 2, rmw_zenoh domain {DOMAIN})" in r.stdout
+        r = papf("topic", "list", "--duration", "0.5", "--ros", "rmw_zenoh", "--ros-domain",
+                 str(DOMAIN), router=router)
+        assert r.returncode == 0, r.stderr
+        assert f"ROS 2 on rmw_zenoh, domain {DOMAIN}: nodes /controller_manager" in r.stdout
+        assert "  /cmd_vel  [geometry_msgs/msg/Twist]" in r.stdout
         r = papf("node", "info", "/controller_manager", "--ros", "rmw_zenoh", "--ros-domain",
                  str(DOMAIN), router=router)
         assert r.returncode == 0, r.stderr
