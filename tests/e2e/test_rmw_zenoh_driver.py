@@ -152,8 +152,8 @@ def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, sessio
         while time.monotonic() - t0 < 1.5:                        # 10 Hz commands, stamped now
             stamp = int((time.monotonic() - t0) * 1e9)
             session.put(keys.cmd_vel, Twist(stamp_ns=stamp, v=0.2, w=0.2).to_bytes())
+            t_last = time.monotonic()                             # the last command went out
             time.sleep(0.1)
-        t_last = time.monotonic()
         assert _wait(lambda: any(t > t_last and v == 0.0 and w == 0.0
                                  for t, v, w, _ in robot.cmds), 5.0)
         cruise = [c for c in robot.cmds if c[0] <= t_last]
@@ -161,6 +161,8 @@ def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, sessio
         assert cruise and cruise[-1][1] == pytest.approx(0.2) and cruise[-1][2] == pytest.approx(0.2)
         brake = next(t for t, v, _, _ in after if v < 0.2 - 1e-9)
         zero = next(t for t, v, w, _ in after if v == 0.0 and w == 0.0)
+        print(f"{cmd_type}: brake {brake - t_last:.3f} s, zero {zero - t_last:.3f} s after the "
+              f"last command; {len(robot.cmds)} commands decoded")
         assert brake - t_last <= 0.55, f"watchdog braked {brake - t_last:.3f} s after the last command"
         assert zero - t_last <= 0.9, f"zero Twist {zero - t_last:.3f} s after the last command"
         # every sample carries rmw_zenoh's attachment: seq from 1 upwards, stamp, one GID
