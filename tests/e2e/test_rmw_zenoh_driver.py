@@ -219,3 +219,46 @@ def test_emulator_plays_a_rosbot_on_rmw_zenoh(router, spawn, session):
         assert _wait(lambda: got[-1][0].pose.pose.position.x > 0.1, 5.0)
     finally:
         sub.undeclare()
+
+
+@pytest.mark.e2e
+def test_lidar_source_reads_a_third_party_laserscan_over_rmw_zenoh(router, spawn, session):
+    """``python -m nodes.lidar_sim --source ros2 --ros rmw_zenoh``: the real /scan as our Scan."""
+    from schemas import Clock, Scan
+
+    keys = Keys("rmwlidar")
+    scan_key = (f"{DOMAIN}/scan/sensor_msgs::msg::dds_::LaserScan_/"
+                "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828")
+    c = STORE.types
+    n = 720
+    ranges = np.full(n, 3.0, dtype=np.float32)
+    ranges[: n // 4] = np.inf                                    # no return behind-left
+    msg = c["sensor_msgs/msg/LaserScan"](
+        header=c["std_msgs/msg/Header"](stamp=c["builtin_interfaces/msg/Time"](sec=1, nanosec=0),
+                                        frame_id="laser"),
+        angle_min=-math.pi, angle_max=math.pi - 2 * math.pi / n, angle_increment=2 * math.pi / n,
+        time_increment=0.0, scan_time=0.1, range_min=0.2, range_max=25.0, ranges=ranges,
+        intensities=np.zeros(0, np.float32))
+    payload = bytes(STORE.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    got = []
+    sub = session.declare_subscriber(keys.scan, lambda s: got.append(
+        Scan.from_bytes(s.payload.to_bytes())))
+    spawn("lidar_sim", [sys.executable, "-m", "nodes.lidar_sim", "--source", "ros2", "--connect",
+                        router, "--namespace", keys.ns, "--ros", "rmw_zenoh", "--ros-domain",
+                        str(DOMAIN)])
+    try:
+        assert not wait_alive(session, keys, ["lidar_sim"], 30.0)
+        assert any("/MS/%/%/papf_lidar/%scan/sensor_msgs::msg::dds_::LaserScan_/" in t
+                   for t in _tokens(session))
+        for k in range(30):                                      # 3 s at 10 Hz
+            session.put(keys.clock, Clock(stamp_ns=k * 100_000_000).to_bytes())
+            session.put(scan_key, payload, attachment=z_serialize(
+                (Int64(k + 1), Int64(time.time_ns()), bytes(16))).to_bytes())
+            time.sleep(0.1)
+        assert _wait(lambda: len(got) >= 5, 5.0), len(got)
+        scan = got[-1]
+        r = np.asarray(scan.ranges)
+        assert len(r) == 300 and np.isinf(r[1: 300 // 4 - 1]).all()   # bin 0 wraps to +pi
+        assert r[300 // 2] == pytest.approx(3.0)
+    finally:
+        sub.undeclare()
