@@ -111,3 +111,29 @@ def test_a_third_party_ros2_client_finds_decodes_and_steers_the_stack():
     result = json.loads(out.strip().splitlines()[-1])
     assert result["outcome"] == "reached", err[-2000:]
     assert result["path_length_m"] == pytest.approx(GOAL[0], abs=0.4)   # /goal_pose, not 5 m
+
+
+@pytest.mark.e2e
+def test_face_refuses_a_domain_where_a_robot_takes_cmd_vel(router, session):
+    """A robot's controller subscribes /cmd_vel (rmw_zenoh token, written literally): the
+    face's ungated commands would drive it, so the face exits 2 with one line."""
+    token = session.liveliness().declare_token(
+        f"@ros2_lv/{DOMAIN}/100f0e0d0c0b0a090807060504030201/0/3/MS/%/%/controller_manager/"
+        "%cmd_vel/geometry_msgs::msg::dds_::Twist_/"
+        "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a/::,10:,:,:,,")
+    try:
+        r = subprocess.run([sys.executable, "-m", "nodes.ros_face", "--ros-domain", str(DOMAIN),
+                            "--connect", router, "--namespace", "face2"],
+                           capture_output=True, text=True, timeout=120)
+    finally:
+        token.undeclare()
+    assert r.returncode == 2, r.stderr
+    assert "/controller_manager subscribe /cmd_vel" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_launch_refuses_the_face_on_the_robots_domain():
+    r = subprocess.run([sys.executable, "-m", "papf", "launch", "laptop", "--ros", "rmw_zenoh",
+                        "--ros-domain", "3", "--ros-face", "--ros-face-domain", "3", "--world",
+                        "open", "--connect", "tcp/127.0.0.1:7", "--dry-run"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "--ros-face-domain" in r.stderr and r.stdout == ""
