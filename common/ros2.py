@@ -23,10 +23,11 @@ from common.errors import SchemaError
 from common.units import NS_PER_S as NS
 
 TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"   # Jazzy's diff-drive controller can take it
 ODOMETRY = "nav_msgs/msg/Odometry"
 BATTERY_STATE = "sensor_msgs/msg/BatteryState"
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
-TYPES = (TWIST, ODOMETRY, BATTERY_STATE, LASER_SCAN)
+TYPES = (TWIST, TWIST_STAMPED, ODOMETRY, BATTERY_STATE, LASER_SCAN)
 
 CDR_LE_HEADER = b"\x00\x01\x00\x00"   # encapsulation: plain CDR, little endian, no options
 CDR_HEADERS = (b"\x00\x00", b"\x00\x01")  # CDR big / little endian (first two bytes)
@@ -99,6 +100,11 @@ def _vec3(x: float = 0.0, y: float = 0.0, z: float = 0.0):
 def twist(v: float, w: float):
     """``geometry_msgs/Twist`` with linear.x = v [m/s], angular.z = w [rad/s], the rest 0."""
     return msg_class(TWIST)(linear=_vec3(x=v), angular=_vec3(z=w))
+
+
+def twist_stamped(v: float, w: float, stamp: int, frame_id: str = "base_link"):
+    """``geometry_msgs/TwistStamped``: :func:`twist` with a header (stamp [ns], frame)."""
+    return msg_class(TWIST_STAMPED)(header=header(stamp, frame_id), twist=twist(v, w))
 
 
 def odometry(stamp: int, x: float, y: float, yaw: float, v: float, w: float,

@@ -66,15 +66,22 @@ class BridgeTopics:
 
 
 # -- commands -----------------------------------------------------------------------------------
-def twist_to_cdr(v: float, w: float) -> bytes:
-    """Our command (v [m/s], w [rad/s]) as the CDR ``geometry_msgs/Twist`` the robot takes."""
+def twist_to_cdr(v: float, w: float, typename: str = ros2.TWIST, stamp_ns: int = 0) -> bytes:
+    """Our command (v [m/s], w [rad/s]) as the CDR the robot takes: ``geometry_msgs/Twist``, or
+    ``TwistStamped`` (header stamp ``stamp_ns`` [ns, wall clock], frame ``base_link``)."""
+    if typename == ros2.TWIST_STAMPED:
+        return ros2.encode(ros2.twist_stamped(v, w, stamp_ns), typename)
     return ros2.encode(ros2.twist(v, w), ros2.TWIST)
 
 
-def cdr_to_twist(data: bytes) -> tuple[float, float]:
-    """(linear.x, angular.z) of a CDR ``geometry_msgs/Twist``."""
-    msg = ros2.decode(data, ros2.TWIST)
-    return float(msg.linear.x), float(msg.angular.z)
+def cdr_to_twist(data: bytes, typename: str = ros2.TWIST) -> tuple[float, float]:
+    """(linear.x, angular.z) of a CDR ``geometry_msgs/Twist`` (or ``TwistStamped``)."""
+    msg = ros2.decode(data, typename)
+    tw = msg.twist if typename == ros2.TWIST_STAMPED else msg
+    v, w = float(tw.linear.x), float(tw.angular.z)
+    if not (math.isfinite(v) and math.isfinite(w)):
+        raise ros2.CdrError(f"{typename}: non-finite linear.x {v!r} or angular.z {w!r}")
+    return v, w
 
 
 # -- odometry -----------------------------------------------------------------------------------

@@ -1,9 +1,14 @@
-"""Real-ROSbot base driver: ``python -m nodes.base_driver --driver rosbot [--bridge-namespace NS]``.
+"""Real-ROSbot base driver: ``python -m nodes.base_driver --driver rosbot [--ros rmw_zenoh]``.
 
 The same node contract as the simulated driver (liveliness ``<ns>/alive/base_driver``),
-talking to the robot through ``zenoh-bridge-ros2dds`` (docs/architecture.md "The robot"). Always real time.
+talking to the robot through ``zenoh-bridge-ros2dds`` (``--ros bridge``, the default) or as
+the ROS 2 node ``/papf_base_driver`` on rmw_zenoh (``--ros rmw_zenoh --ros-domain N``:
+rmw_zenoh's keys, liveliness tokens and attachments, :mod:`common.ros_link`);
+docs/architecture.md "The robot". Always real time. ``--cmd-vel-type twist_stamped`` sends
+``geometry_msgs/TwistStamped`` (Jazzy's diff-drive controller) instead of ``Twist``.
 
-Ports (``<ns>`` = ``--namespace``; ``<b>/`` = ``--bridge-namespace`` + ``/``, empty by default):
+Ports (``<ns>`` = ``--namespace``; ``<b>/`` = ``--bridge-namespace`` + ``/``, empty by
+default; on rmw_zenoh ``<b>/t`` is the key of ROS topic ``/<bridge-namespace>/t``):
 
 ==========================  ====================  ===  ========================================
 key                         type                  dir  what
@@ -45,7 +50,16 @@ import time
 from collections import Counter
 
 import schemas.messages as messages
+from common import ros2
 from common.errors import SchemaError
+from common.ros_link import (
+    BridgeLink,
+    RosLink,
+    add_ros_args,
+    cmd_vel_type,
+    open_link,
+    ros_domain,
+)
 from common.transport import Node, open_node, setup_logging
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.rosbot import (
@@ -61,6 +75,7 @@ from schemas import Clock, Event, Odometry, Twist
 from worlds import load_world
 
 NAME = "base_driver"
+ROS_NODE = "papf_base_driver"    # our ROS 2 node name on rmw_zenoh
 ZERO_HOLD_NS = 1_000_000_000     # [ns] zeros keep going out this long after a stop, then silence
 ODOM_TIMEOUT_NS = 500_000_000    # [ns] robot odometry older than this is not republished
 EXIT_ZEROS = 3                   # zero commands sent when the node stops
@@ -78,6 +93,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--bridge-odom", default=d.odometry, metavar="TOPIC",
                    help="odometry topic (odometry/filtered)")
     g.add_argument("--bridge-battery", default=d.battery, metavar="TOPIC", help="(battery)")
+    add_ros_args(parser)
 
 
 def bridge_topics(args: argparse.Namespace) -> BridgeTopics:
@@ -94,11 +110,14 @@ class RosbotDriver:
     """Gate our commands to the robot and republish its odometry on the run's clock."""
 
     def __init__(self, node: Node, topics: BridgeTopics, limits: RosbotLimits, period_ns: int,
-                 frame: OdomFrame):
+                 frame: OdomFrame, link: RosLink | None = None, cmd_type: str = ros2.TWIST):
         self.node, self.log, self.topics = node, node.log, topics
         self.gate = CommandGate(limits)
         self.period_ns, self.frame = period_ns, frame
-        self.cmd_pub = node.session.declare_publisher(topics.key(topics.cmd_vel))
+        self.link = link or BridgeLink(node.session, topics.namespace)
+        self.cmd_type = cmd_type
+        self.cmd_key = self.link.key(topics.cmd_vel, cmd_type)
+        self.cmd_pub = self.link.publisher(topics.cmd_vel, cmd_type)
         self.t0: int | None = None          # monotonic ns of run time 0 (None: no run)
         self.tick = 0                       # next tick index of the run
         self.robot = None                   # latest RobotOdom
@@ -149,7 +168,7 @@ class RosbotDriver:
             self.bad[what] += 1
             if self.bad[what] <= 5 or self.bad[what] % 100 == 0:
                 self.log.warning("dropped bad robot message #%d on %s: %s", self.bad[what],
-                                 self.topics.key(getattr(self.topics, what)), exc)
+                                 getattr(self.topics, what), exc)
 
     # -- outputs --------------------------------------------------------------------------
     def run_time(self, now: int) -> int:
@@ -177,7 +196,7 @@ class RosbotDriver:
                 return
         else:
             self.zero_since = None
-        self.cmd_pub.put(twist_to_cdr(v, w))
+        self.cmd_pub.put(twist_to_cdr(v, w, self.cmd_type, time.time_ns()))
         self.sent += 1
 
     def on_tick(self, now: int) -> None:
@@ -196,7 +215,7 @@ class RosbotDriver:
                 self.log.info("robot odometry back")
         elif not self.odom_lost and (self.robot is not None or stamp > ODOM_TIMEOUT_NS):
             self.odom_lost = True
-            self.event("node_fault", f"no robot odometry on {self.topics.key(self.topics.odometry)} "
+            self.event("node_fault", f"no robot odometry on {self.topics.odometry} "
                        f"for > {ODOM_TIMEOUT_NS * 1e-9:g} s: odom not published")
         self.node.publish("clock", Clock(stamp_ns=stamp))
 
@@ -222,7 +241,7 @@ class RosbotDriver:
 
     def stop_robot(self) -> None:
         for _ in range(EXIT_ZEROS):
-            self.cmd_pub.put(twist_to_cdr(0.0, 0.0))
+            self.cmd_pub.put(twist_to_cdr(0.0, 0.0, self.cmd_type, time.time_ns()))
 
     # -- loop -----------------------------------------------------------------------------
     def watchdog_due(self) -> int | None:
@@ -265,28 +284,30 @@ class RosbotDriver:
 def main(args: argparse.Namespace) -> int:
     log = setup_logging(NAME, getattr(args, "log_level", "INFO"))
     topics = bridge_topics(args)
+    cmd_type = cmd_vel_type(args)
     limits = RosbotLimits(watchdog_ns=int(round(getattr(args, "watchdog", 0.5) * 1e9)))
     period_ns = int(round(1e9 / getattr(args, "odom_hz", 50.0)))
     world = getattr(args, "world", None)
     start = Pose2D(*load_world(world).start) if world else Pose2D(0.0, 0.0, 0.0)
+    ros_domain(args)                       # a bad domain: exit 2 before any session opens
     with open_node(NAME, args, log) as node:
         node.subscribe("cmd_vel")
         node.subscribe("events")
-        subs = [node.session.declare_subscriber(
-            topics.key(getattr(topics, what)),
-            lambda s, w=what: node.inbox.put((w, s.payload.to_bytes())))
-            for what in ("odometry", "battery")]
+        link = open_link(args, node.session, ROS_NODE, topics.namespace)
+        for what, typename in (("odometry", ros2.ODOMETRY), ("battery", ros2.BATTERY_STATE)):
+            link.subscribe(getattr(topics, what), typename,
+                           lambda data, w=what: node.inbox.put((w, data)))
         node.declare_publishers("odom", "wheels", "clock", "events")
-        driver = RosbotDriver(node, topics, limits, period_ns, OdomFrame(start))
-        log.info("rosbot driver: bridge keys %s; limits %s", topics.keys, limits)
+        driver = RosbotDriver(node, topics, limits, period_ns, OdomFrame(start), link, cmd_type)
+        log.info("rosbot driver over %s: cmd_vel %s (%s), odometry %s; limits %s",
+                 link.middleware, driver.cmd_key, cmd_type,
+                 link.key(topics.odometry, ros2.ODOMETRY), limits)
         node.ready()
         try:
             driver.run()
         finally:
             driver.stop_robot()
-            for sub in subs:
-                sub.undeclare()
-            driver.cmd_pub.undeclare()
+            link.close()
             log.info("stopped: %d commands sent to the robot, %d late ones dropped", driver.sent,
                      driver.late)
     return 0

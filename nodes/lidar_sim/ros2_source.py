@@ -1,7 +1,9 @@
-"""The real RPLIDAR as our ``Scan``: ``python -m nodes.lidar_sim --source ros2 [--bridge-namespace NS]``.
+"""The real RPLIDAR as our ``Scan``: ``python -m nodes.lidar_sim --source ros2 [--ros rmw_zenoh]``.
 
 Reads ``sensor_msgs/LaserScan`` CDR from the bridge key ``[<bridge-ns>/]scan`` (the ROSbot's
-``rplidar_ros``/``sllidar_ros2`` through ``zenoh-bridge-ros2dds``, docs/architecture.md "The robot") and publishes
+``rplidar_ros``/``sllidar_ros2`` through ``zenoh-bridge-ros2dds``, docs/architecture.md "The
+robot"), or with ``--ros rmw_zenoh --ros-domain N`` from rmw_zenoh's key of ``/scan`` as the
+ROS 2 node ``/papf_lidar`` (:mod:`common.ros_link`), and publishes
 ``<ns>/scan``: the same 360° geometry as the simulated LiDAR (``--beams`` rays from -π,
 2π/L apart; L = 300 by default, the paper's Table 1), so planners cannot tell the two apart.
 Liveliness: ``<ns>/alive/lidar_sim``.
@@ -31,9 +33,11 @@ import numpy as np
 
 from common import robot, ros2
 from common.errors import SchemaError
+from common.ros_link import add_ros_args, open_link, ros_domain
 from schemas import Scan
 
 NAME = "lidar_sim"
+ROS_NODE = "papf_lidar"            # our ROS 2 node name on rmw_zenoh
 TWO_PI = 2.0 * math.pi
 CLOCK_TIMEOUT_NS = 1_000_000_000   # [ns] no driver clock for this long: do not publish scans
 # Sensor pose in the robot frame: the mount assumed in common.robot (as the simulated LiDAR);
@@ -105,6 +109,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--sensor-x", type=float, default=SENSOR_X, help="[m] laser in base_link")
     g.add_argument("--sensor-y", type=float, default=SENSOR_Y, help="[m]")
     g.add_argument("--sensor-yaw", type=float, default=SENSOR_YAW, help="[rad]")
+    add_ros_args(parser, cmd_vel=False)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -114,16 +119,18 @@ def main(args: argparse.Namespace) -> int:
     log = setup_logging(NAME, getattr(args, "log_level", "INFO"))
     topics = BridgeTopics(getattr(args, "bridge_namespace", ""),
                           scan=getattr(args, "bridge_scan", "scan"))
-    topics.check_separate(args.namespace)
-    key = topics.key(topics.scan)
+    if getattr(args, "ros", "bridge") == "bridge":
+        topics.check_separate(args.namespace)
+    ros_domain(args)                       # a bad domain: exit 2 before any session opens
     sensor = (getattr(args, "sensor_x", SENSOR_X), getattr(args, "sensor_y", SENSOR_Y),
               getattr(args, "sensor_yaw", SENSOR_YAW))
     clock = None                        # (run time ns, monotonic ns it arrived)
     published = bad = 0
     with open_node(NAME, args, log) as node:
         node.subscribe("clock")
-        sub = node.session.declare_subscriber(
-            key, lambda s: node.inbox.put(("ros2_scan", s.payload.to_bytes())))
+        link = open_link(args, node.session, ROS_NODE, topics.namespace)
+        link.subscribe(topics.scan, ros2.LASER_SCAN, lambda data: node.inbox.put(("ros2_scan", data)))
+        key = link.key(topics.scan, ros2.LASER_SCAN)
         node.declare_publishers("scan")
         node.ready()
         log.info("LaserScan from %s -> %s (%d beams)", key, node.keys.scan, args.beams)
@@ -143,6 +150,6 @@ def main(args: argparse.Namespace) -> int:
                     node.publish("scan", scan)
                     published += 1
         finally:
-            sub.undeclare()
+            link.close()
             log.info("published %d scans (%d bad LaserScans dropped)", published, bad)
     return 0

@@ -3,8 +3,9 @@
 Two encodings share the bus (docs/robot.md): our messages are msgpack maps that name
 their type (``"_type": "papf/Scan/v1"``, :mod:`schemas`); the ROS 2 topics that
 ``zenoh-bridge-ros2dds`` carries are CDR with a 4-byte encapsulation header, and CDR
-does not name its type, so it is taken from the key (:data:`ROS_TYPES`: the ROSbot's
-topics, optionally under a bridge namespace) or given with ``--ros-type``.
+does not name its type, so it is taken from the key (rmw_zenoh's keys name it; on the
+bridge :data:`ROS_TYPES`: the ROSbot's topics, optionally under a bridge namespace) or
+given with ``--ros-type``.
 Anything else is shown as its size and first bytes.
 """
 
@@ -17,7 +18,7 @@ from typing import Any, NamedTuple
 import msgpack
 import numpy as np
 
-from common import ros2
+from common import rmw_zenoh, ros2
 from common.errors import SchemaError
 from nodes.recorder.writer import peek_stamp
 from schemas.messages import BY_TYPE
@@ -51,8 +52,14 @@ class Decoded(NamedTuple):
 
 
 def ros_type_for_key(key: str) -> str | None:
-    """ROS 2 type of a bridge key: ``scan`` or ``<bridge-ns>/scan`` -> LaserScan; else None."""
+    """ROS 2 type of a key: an rmw_zenoh key names it (``0/scan/sensor_msgs::msg::dds_::
+    LaserScan_/RIHS01_…``); a bridge key ``scan`` or ``<bridge-ns>/scan`` -> LaserScan; else None."""
     parts = key.strip("/").split("/")
+    if len(parts) >= 4 and parts[-1].startswith("RIHS01_") and "::dds_::" in parts[-2]:
+        try:
+            return rmw_zenoh.ros_type_name(parts[-2])
+        except SchemaError:
+            return None
     for i in range(len(parts)):
         found = ROS_TYPES.get("/".join(parts[i:]))
         if found:

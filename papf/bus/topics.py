@@ -5,7 +5,8 @@ Zenoh has no topic registry, so ``list`` listens: it subscribes to every key (``
 stack's own topics of the namespace that stayed silent, and the nodes whose liveliness
 tokens exist. ``echo`` and ``hz`` subscribe to one key expression. Decoding:
 :mod:`papf.bus.decode`. Key names (:func:`resolve_key`): ``scan`` is our topic
-``<ns>/scan``, ``/scan`` is the bridge's ROS 2 ``scan``, anything else is used verbatim.
+``<ns>/scan``, ``/scan`` is the ROS 2 topic ``/scan`` (the bridge's key ``scan``, or with
+``--ros rmw_zenoh`` rmw_zenoh's key of it in ``--ros-domain``), anything else is verbatim.
 """
 
 from __future__ import annotations
@@ -29,11 +30,14 @@ Out = Callable[[str], None]
 Stop = Callable[[], bool]
 
 
-def resolve_key(name: str, keys: Keys) -> str:
-    """``scan`` -> ``rosbot/scan`` (a stack topic); ``/scan`` -> ``scan``; else as given."""
+def resolve_key(name: str, keys: Keys, ros: str = "bridge", domain: int = 0) -> str:
+    """``scan`` -> ``rosbot/scan`` (a stack topic); ``/scan`` -> the bridge's ``scan``, or on
+    rmw_zenoh ``<domain>/scan/*/*`` (any type and hash); else as given."""
     if name in TOPICS:
         return keys.key(name)
-    return name[1:] if name.startswith("/") else name
+    if not name.startswith("/"):
+        return name
+    return f"{domain}/{name.strip('/')}/*/*" if ros == "rmw_zenoh" else name[1:]
 
 
 class Inbox:

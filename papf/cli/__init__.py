@@ -31,6 +31,7 @@ from papf.cli import (
     info,
     launch,
     new,
+    node,
     plan,
     record,
     recover,
@@ -43,7 +44,7 @@ from papf.cli import (
     worlds,
 )
 
-COMMANDS = (run, worlds, launch, topic, goal, teleop, plan, experiment, report, record, replay,
+COMMANDS = (run, worlds, launch, topic, node, goal, teleop, plan, experiment, report, record, replay,
             recover, info, view, export, animate, bench, emulator, certs, new)
 
 

@@ -22,6 +22,7 @@ BENCHES = {
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
     "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
+    "face": "ROS 2 face: CPU per planner cycle, added latency; lockstep run with/without --ros-face",
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
 }
 

@@ -1,15 +1,18 @@
-"""``papf rosbot-emulator``: the ROSbot as seen through zenoh-bridge-ros2dds (:mod:`papf.robot.emulator`)."""
+"""``papf rosbot-emulator``: the ROSbot behind zenoh-bridge-ros2dds or on rmw_zenoh (:mod:`papf.robot.emulator`)."""
 
 from __future__ import annotations
 
+from common.ros_link import add_ros_args
 from common.transport import add_zenoh_args
 
 
 def register(sub) -> None:
-    p = sub.add_parser("rosbot-emulator", help="emulate the ROSbot behind zenoh-bridge-ros2dds",
+    p = sub.add_parser("rosbot-emulator",
+                       help="emulate the ROSbot behind zenoh-bridge-ros2dds or on rmw_zenoh",
                        description="Subscribe CDR cmd_vel, drive a unicycle with the ROSbot's "
                                    "limits, publish CDR odometry/filtered, battery (and scan "
-                                   "with --world), as the real robot does through the bridge.")
+                                   "with --world), as the real robot does through the bridge "
+                                   "(--ros bridge) or on rmw_zenoh (--ros rmw_zenoh).")
     p.add_argument("--bridge-namespace", default="", metavar="NS",
                    help="bridge namespace of the emulated topics (default: none)")
     p.add_argument("--world", help="world the robot stands in: scan it (start pose too)")
@@ -23,6 +26,7 @@ def register(sub) -> None:
                    help="pack voltage reported on battery (12.0)")
     p.add_argument("--trace", metavar="FILE", help="append a JSON line per command received")
     p.add_argument("--log-level", default="INFO")
+    add_ros_args(p)
     add_zenoh_args(p)
     p.set_defaults(func=cmd_emulator)
 

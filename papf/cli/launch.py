@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 from nodes.planner.registry import PLANNERS
+from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
 from papf.cli.view import add_view_flag
 
 
@@ -45,6 +46,8 @@ def register(sub) -> None:
     p.add_argument("--dry-run", action="store_true", help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
     add_view_flag(p)
+    add_ros_args(p)
+    add_face_args(p)
     p.set_defaults(func=cmd_launch)
 
 
@@ -52,11 +55,15 @@ def cmd_launch(args) -> int:
     from papf.launch.host import launch  # zenoh: only when launching
     from papf.launch.profile import LaunchOptions
 
+    cmd_vel_type(args)
+    domain = ros_domain(args) if args.ros == "rmw_zenoh" else None   # checked before any process
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
               "record": args.record, "energy_model": args.energy_model,
               "bridge_namespace": args.bridge_namespace, "view": args.view,
               "realtime": "1" if args.realtime else None,
-              "objects": args.objects}
+              "objects": args.objects, "ros": args.ros, "cmd_vel_type": args.cmd_vel_type,
+              "ros_domain": domain, "ros_face_domain": face_domain(args),
+              "ros_face": "1" if args.ros_face else None}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,

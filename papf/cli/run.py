@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
+from common.ros_link import add_face_args, face_domain
 from papf.cli.options import add_planner_settings, add_world_and_planner
 from papf.cli.view import add_view_flag
 
@@ -44,6 +45,7 @@ def register(sub) -> None:
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
     add_view_flag(p)
+    add_face_args(p)
     p.set_defaults(func=cmd_run)
 
 
@@ -61,7 +63,7 @@ def run_config(args):
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
-                     progress=None if not args.json else False)
+                     ros_face=face_domain(args), progress=None if not args.json else False)
 
 
 def cmd_run(args) -> int:

@@ -11,27 +11,32 @@ from __future__ import annotations
 import argparse
 import sys
 
+from common.ros_link import add_ros_args, ros_domain
 from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
 
 TOPIC_EPILOG = """\
 KEY: a stack topic without the namespace (scan, odom, planner/state) gets it
-(rosbot/scan); a leading / names the bridge's ROS 2 topic (/scan, /odometry/filtered);
-anything else is a Zenoh key expression used as given (rosbot/**, lab/r1/odom).
-Our messages are decoded by their msgpack type, the bridge's CDR by the key
-(cmd_vel, odometry/filtered, battery, scan, imu/data, joint_states, tf) or --ros-type."""
+(rosbot/scan); a leading / names a ROS 2 topic (/scan, /odometry/filtered): the bridge's
+key, or with --ros rmw_zenoh rmw_zenoh's key in --ros-domain; anything else is a Zenoh
+key expression used as given (rosbot/**, lab/r1/odom, 0/**).
+Our messages are decoded by their msgpack type, rmw_zenoh's CDR by the type its key
+names, the bridge's CDR by the key (cmd_vel, odometry/filtered, battery, scan, imu/data,
+joint_states, tf) or --ros-type."""
 
 
 def register(sub) -> None:
     p = sub.add_parser("topic", help="list, echo and measure the bus's topics (like ros2 topic)",
                        description="Poke the bus: what is published, what it says, how often.")
-    tsub = p.add_subparsers(dest="topic_command", required=True, metavar="list|echo|hz")
+    tsub = p.add_subparsers(dest="topic_command", required=True,
+                            metavar="list|echo|hz|pub|info")
     q = tsub.add_parser("list", help="keys heard, with type, encoding and rate; nodes alive",
                         description="Listen to every key for --duration seconds and list what "
                                     "arrived (plus the stack's silent topics and live nodes).")
     q.add_argument("--duration", type=float, default=2.0, metavar="S",
                    help="how long to listen [s] (default 2)")
     q.add_argument("--json", action="store_true", help="one JSON object per key")
+    add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_list)
     q = tsub.add_parser("echo", help="print the messages on a key", epilog=TOPIC_EPILOG,
@@ -46,6 +51,7 @@ def register(sub) -> None:
     q.add_argument("--json", action="store_true", help="one JSON object per message")
     q.add_argument("--ros-type", metavar="TYPE", help="decode CDR as this ROS 2 type "
                    "(e.g. sensor_msgs/msg/LaserScan) instead of guessing from the key")
+    add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_echo)
     q = tsub.add_parser("hz", help="print the rate of a key in Hz", epilog=TOPIC_EPILOG,
@@ -58,8 +64,35 @@ def register(sub) -> None:
     q.add_argument("--duration", type=float, default=0.0, metavar="S",
                    help="stop after S seconds (default: until Ctrl-C)")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of CDR payloads (stamps)")
+    add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_hz)
+    q = tsub.add_parser("pub", help="publish a message typed as YAML/JSON (like ros2 topic pub)",
+                        epilog=TOPIC_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Publish VALUE (the message's fields as YAML or JSON, e.g. "
+                                    "\"{v: 0.2, w: 0.0}\" or \"{linear: {x: 0.2}}\") on KEY; "
+                                    "fields not given take their defaults.")
+    q.add_argument("key", metavar="KEY")
+    q.add_argument("value", metavar="VALUE", nargs="?", default="{}")
+    q.add_argument("--once", "-1", action="store_true", help="publish once and exit")
+    q.add_argument("--times", "-t", type=int, default=0, metavar="N",
+                   help="publish N times and exit (default: until Ctrl-C)")
+    q.add_argument("--rate", "-r", type=float, default=1.0, metavar="HZ", help="rate (1 Hz)")
+    q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of a /topic (default: the "
+                   "ROSbot's type of that topic)")
+    add_ros_args(q, cmd_vel=False)
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_pub)
+    q = tsub.add_parser("info", help="publishers and subscribers of a key (like ros2 topic info)",
+                        epilog=TOPIC_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Our keys: the alive nodes that declare it as an output or "
+                                    "input. A ROS 2 /topic with --ros rmw_zenoh: its publishers "
+                                    "and subscriptions from rmw_zenoh's liveliness tokens.")
+    q.add_argument("key", metavar="KEY")
+    q.add_argument("--verbose", "-v", action="store_true", help="types, QoS and GIDs too")
+    add_ros_args(q, cmd_vel=False)
+    add_zenoh_args(q)
+    q.set_defaults(func=cmd_topic_info)
 
 
 def _session(args):
@@ -78,20 +111,48 @@ def _out(line: str) -> None:
         raise SystemExit(0) from None
 
 
+def _key(args) -> str:
+    """KEY resolved (see TOPIC_EPILOG); a bad --ros-domain is a usage error (exit 2)."""
+    from papf.bus.topics import resolve_key
+
+    return resolve_key(args.key, Keys(args.namespace), args.ros, ros_domain(args))
+
+
 def cmd_topic_list(args) -> int:
     from papf.bus.topics import topic_list
 
+    domain = ros_domain(args)
     stop = StopRequested()
     with _session(args) as s:
         topic_list(s, Keys(args.namespace), args.duration, _out, lambda: bool(stop), args.json)
+        if args.ros == "rmw_zenoh":   # the ROS 2 graph of the domain, from rmw_zenoh's tokens
+            _ros_graph(s, domain, args.json)
     return 130 if stop else 0
 
 
+def _ros_graph(session, domain: int, as_json: bool) -> None:
+    import json
+
+    from common import rmw_zenoh as rz
+    from papf.bus.graph import ros_entities, ros_nodes
+
+    entities = ros_entities(session, domain)
+    topics = sorted({(e.topic, e.typename) for e in entities if e.kind in (rz.PUBLISHER,
+                                                                           rz.SUBSCRIPTION)})
+    if as_json:
+        _out(json.dumps({"ros_domain": domain, "ros_nodes": ros_nodes(entities),
+                         "ros_topics": [{"topic": t, "type": ty} for t, ty in topics]}))
+        return
+    _out(f"ROS 2 on rmw_zenoh, domain {domain}: nodes {', '.join(ros_nodes(entities)) or 'none'}")
+    for topic, typename in topics:
+        _out(f"  {topic}  [{typename}]")
+
+
 def cmd_topic_echo(args) -> int:
-    from papf.bus.topics import echo, resolve_key
+    from papf.bus.topics import echo
 
     stop = StopRequested()
-    key = resolve_key(args.key, Keys(args.namespace))
+    key = _key(args)
     count = 1 if args.once else args.count
     with _session(args) as s:
         n = echo(s, key, _out, count=count, timeout_s=args.timeout, ros_type=args.ros_type,
@@ -106,16 +167,62 @@ def cmd_topic_echo(args) -> int:
 
 
 def cmd_topic_hz(args) -> int:
-    from papf.bus.topics import hz, resolve_key
+    from papf.bus.topics import hz
 
     if args.window < 2:
         print("papf topic hz: --window must be at least 2 messages", file=sys.stderr)
         return 2
     stop = StopRequested()
-    key = resolve_key(args.key, Keys(args.namespace))
+    key = _key(args)
     with _session(args) as s:
         hz(s, key, _out, window=args.window, duration_s=args.duration, ros_type=args.ros_type,
            stop=lambda: bool(stop))
     return 0
 
 
+def cmd_topic_pub(args) -> int:
+    from papf.bus.fields import parse_value
+    from papf.bus.pub import prepare, publish
+
+    times = 1 if args.once else args.times
+    if times < 0 or not (args.rate > 0 and args.rate <= 1000):
+        print("papf topic pub: --times must be >= 0 and --rate in (0, 1000] Hz", file=sys.stderr)
+        return 2
+    prepared = prepare(args.key, parse_value(args.value), Keys(args.namespace), args.ros_type)
+    domain = ros_domain(args)
+    stop = StopRequested()
+    with _session(args) as s:
+        publish(s, prepared, args.ros, domain, times, args.rate, _out, lambda: bool(stop))
+    return 130 if stop and times != 1 else 0
+
+
+def cmd_topic_info(args) -> int:
+    from papf.bus.graph import our_topic_info, ros_entities, ros_topic_info
+    from schemas.keys import TOPICS
+
+    keys = Keys(args.namespace)
+    domain = ros_domain(args)
+    with _session(args) as s:
+        if args.key in TOPICS:
+            info = our_topic_info(s, keys, args.key)
+            _out(f"Key: {keys.key(args.key)}\nType: {TOPICS[args.key].TYPE}")
+            for role in ("publishers", "subscriptions"):
+                names = info[role]
+                _out(f"{role.capitalize()[:-1]} count: {len(names)}"
+                     + "".join(f"\n  {n}" for n in names))
+            return 0
+        if not args.key.startswith("/") or args.ros != "rmw_zenoh":
+            print(f"papf topic info: {args.key!r}: give a stack topic ({', '.join(sorted(TOPICS))})"
+                  " or a ROS 2 /topic with --ros rmw_zenoh (the bridge announces no ROS graph on "
+                  "Zenoh: use ros2 topic info on the robot)", file=sys.stderr)
+            return 2
+        topic = "/" + args.key.strip("/")
+        info = ros_topic_info(ros_entities(s, domain), topic)
+    types = sorted({e.typename for v in info.values() for e in v})
+    _out(f"Topic: {topic} (rmw_zenoh, domain {domain})\nType: {', '.join(types) or '?'}")
+    for role, entities in info.items():
+        _out(f"{role.capitalize()[:-1]} count: {len(entities)}")
+        for e in entities:
+            _out(f"  {e.fq_node}" + (f"  [{e.typename}, {e.hash}, {e.qos.describe()}, gid "
+                                     f"{e.gid.hex('.')}]" if args.verbose else ""))
+    return 0

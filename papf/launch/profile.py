@@ -31,7 +31,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
              "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
-             "view")
+             "view", "ros", "ros_domain", "cmd_vel_type", "ros_face", "ros_face_domain")
 ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth

@@ -1,7 +1,10 @@
-"""`papf rosbot-emulator`: the ROSbot as seen through ``zenoh-bridge-ros2dds``, without a robot.
+"""`papf rosbot-emulator`: the ROSbot as seen through ``zenoh-bridge-ros2dds`` or rmw_zenoh, without a robot.
 
 What a driver sees of the real robot (docs/architecture.md "The robot"), on the bridge keys
-``[<bridge-ns>/]<topic>``, all CDR with the encapsulation header:
+``[<bridge-ns>/]<topic>`` (``--ros bridge``, the default) or as the ROS 2 node
+``/rosbot_emulator`` on rmw_zenoh (``--ros rmw_zenoh --ros-domain N``: rmw_zenoh's keys,
+liveliness tokens and attachments, :mod:`common.ros_link`), all CDR with the encapsulation
+header (``cmd_vel`` is ``TwistStamped`` with ``--cmd-vel-type twist_stamped``):
 
 =======================  ===========================  ===  ==================================
 key                      type                         dir  what
@@ -34,12 +37,15 @@ import time
 
 from common import ros2
 from common.errors import SchemaError
+from common.ros_link import cmd_vel_type, open_link, ros_domain
 from common.transport import open_node, setup_logging
 from nodes.base_driver.limits import CommandGate, RosbotLimits, unicycle
 from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
 from worlds import load_world
 
 NAME = "rosbot_emulator"
+ROS_NODE = "rosbot_emulator"        # its ROS 2 node name on rmw_zenoh
+PUBLISHED = {"odometry": ros2.ODOMETRY, "battery": ros2.BATTERY_STATE, "scan": ros2.LASER_SCAN}
 BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
 SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (docs/architecture.md "The robot")
 NO_TIMEOUT_NS = 10**18              # "never": --cmd-timeout 0
@@ -87,60 +93,68 @@ def run(args: argparse.Namespace) -> int:
     """``papf rosbot-emulator`` (options: :mod:`papf.cli.emulator`) until SIGINT/SIGTERM."""
     log = setup_logging("emulator", args.log_level)
     topics = BridgeTopics(args.bridge_namespace)
-    topics.check_separate(args.namespace)
+    if getattr(args, "ros", "bridge") == "bridge":
+        topics.check_separate(args.namespace)
+    ros_domain(args)                       # a bad domain: exit 2 before any session opens
+    cmd_type = cmd_vel_type(args)
     start = Pose2D(*load_world(args.world).start) if args.world else ORIGIN
     robot = EmulatedRosbot(args.cmd_timeout, start)
-    period = int(round(1e9 / args.rate))
     lidar = _lidar(args)
     # line-buffered: the trace can be read while the emulator runs (tests, a live tail -f)
     trace = open(args.trace, "a", encoding="utf-8", buffering=1) if args.trace else None  # noqa: SIM115
     with open_node(NAME, args, log) as node:
-        s = node.session
-        sub = s.declare_subscriber(topics.key(topics.cmd_vel), lambda smp: node.inbox.put(
-            (time.monotonic_ns(), smp.payload.to_bytes())))
-        pubs = {t: s.declare_publisher(topics.key(getattr(topics, t)))
-                for t in ("odometry", "battery", "scan")}
+        link = open_link(args, node.session, ROS_NODE, topics.namespace)
+        link.subscribe(topics.cmd_vel, cmd_type,
+                       lambda data: node.inbox.put((time.monotonic_ns(), data)))
+        pubs = {t: link.publisher(getattr(topics, t), typename) for t, typename in PUBLISHED.items()}
         node.ready()
-        log.info("emulating the ROSbot on %s (scan: %s)", topics.keys, "yes" if lidar else "no")
-        now = last = time.monotonic_ns()
-        next_battery = next_scan = now
+        log.info("emulating the ROSbot over %s: cmd_vel %s (%s); %s (scan: %s)", link.middleware,
+                 link.key(topics.cmd_vel, cmd_type), cmd_type,
+                 {t: link.key(getattr(topics, t), ty) for t, ty in PUBLISHED.items()},
+                 "yes" if lidar else "no")
         try:
-            while not node.stop:
-                try:
-                    t_rx, data = node.inbox.get(timeout=max(0.0, (last + period - now) * 1e-9))
-                    try:
-                        v, w = cdr_to_twist(data)
-                    except SchemaError as exc:
-                        log.warning("dropped bad cmd_vel: %s", exc)
-                    else:
-                        robot.command(v, w, t_rx)
-                        if trace:
-                            trace.write(json.dumps({"t_ns": t_rx, "v": v, "w": w}) + "\n")
-                except queue.Empty:
-                    pass
-                now = time.monotonic_ns()
-                if now - last < period:
-                    continue
-                robot.step(now, (now - last) * 1e-9)
-                last, wall = now, time.time_ns()
-                pubs["odometry"].put(robot.odometry_cdr(wall))
-                if now >= next_battery:
-                    next_battery = now + BATTERY_PERIOD_NS
-                    pubs["battery"].put(ros2.encode(ros2.battery_state(wall, args.battery_voltage),
-                                                    ros2.BATTERY_STATE))
-                if lidar is not None and now >= next_scan:
-                    next_scan = now + SCAN_PERIOD_NS
-                    pubs["scan"].put(_scan_cdr(lidar, robot.world_pose, wall))
+            _loop(node, robot, pubs, lidar, trace, args, cmd_type, log)
         finally:
-            sub.undeclare()
-            for p in pubs.values():
-                p.undeclare()
+            link.close()
             if trace:
                 trace.close()
             if lidar is not None:
                 lidar.close()
             log.info("stopped after %d commands; odom pose %s", robot.commands, robot.pose)
     return 0
+
+
+def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, log) -> None:
+    """Take commands, step the body at ``--rate`` Hz, publish odometry, battery and scan."""
+    period = int(round(1e9 / args.rate))
+    now = last = time.monotonic_ns()
+    next_battery = next_scan = now
+    while not node.stop:
+        try:
+            t_rx, data = node.inbox.get(timeout=max(0.0, (last + period - now) * 1e-9))
+            try:
+                v, w = cdr_to_twist(data, cmd_type)
+            except SchemaError as exc:
+                log.warning("dropped bad cmd_vel: %s", exc)
+            else:
+                robot.command(v, w, t_rx)
+                if trace:
+                    trace.write(json.dumps({"t_ns": t_rx, "v": v, "w": w}) + "\n")
+        except queue.Empty:
+            pass
+        now = time.monotonic_ns()
+        if now - last < period:
+            continue
+        robot.step(now, (now - last) * 1e-9)
+        last, wall = now, time.time_ns()
+        pubs["odometry"].put(robot.odometry_cdr(wall))
+        if now >= next_battery:
+            next_battery = now + BATTERY_PERIOD_NS
+            pubs["battery"].put(ros2.encode(ros2.battery_state(wall, args.battery_voltage),
+                                            ros2.BATTERY_STATE))
+        if lidar is not None and now >= next_scan:
+            next_scan = now + SCAN_PERIOD_NS
+            pubs["scan"].put(_scan_cdr(lidar, robot.world_pose, wall))
 
 
 def _scan_cdr(lidar, pose: Pose2D, wall_ns: int) -> bytes:

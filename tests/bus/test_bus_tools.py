@@ -68,6 +68,18 @@ def test_resolve_key_namespace_and_bridge_names():
     assert topics.resolve_key("planner/state", Keys("lab/r1")) == "lab/r1/planner/state"
     assert topics.resolve_key("/scan", KEYS) == "scan"
     assert topics.resolve_key("rosbot/**", KEYS) == "rosbot/**"
+    assert topics.resolve_key("/odometry/filtered", KEYS, "rmw_zenoh", 3) == "3/odometry/filtered/*/*"
+    assert topics.resolve_key("scan", KEYS, "rmw_zenoh", 3) == "rosbot/scan"
+
+
+def test_decode_rmw_zenoh_cdr_by_the_type_its_key_names():
+    # rmw_zenoh's key as ros2/rmw_zenoh liveliness_utils.cpp TopicInfo::TopicInfo writes it
+    key = ("0/robot1/odom/nav_msgs::msg::dds_::Odometry_/"
+           "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0")
+    data = ros2.encode(ros2.odometry(7, 1.0, 2.0, 0.0, 0.0, 0.0), ros2.ODOMETRY)
+    d = decode(key, data)
+    assert (d.encoding, d.type_name, d.stamp_ns) == (CDR, ros2.ODOMETRY, 7)
+    assert ros_type_for_key("0/scan/not_a_type/RIHS01_00") is None
 
 
 # -- rates, progress --------------------------------------------------------------------------

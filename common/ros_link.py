@@ -1,0 +1,204 @@
+"""The robot's ROS 2 middleware on a Zenoh session: the bridge or rmw_zenoh (thin, no maths).
+
+``--ros bridge`` (default): ``zenoh-bridge-ros2dds`` maps ROS topic ``/t`` to key
+``[<ns>/]t``; we put and take bare CDR. ``--ros rmw_zenoh``: we are ROS 2 nodes on
+rmw_zenoh's own wire format (:mod:`common.rmw_zenoh`): the key with domain, DDS type name
+and RIHS01 hash, a liveliness token for our node and for each publisher and subscription
+(so ``ros2 node list`` / ``ros2 topic info -v`` on the robot see us) and each sample's
+attachment (sequence number, source timestamp, GID).
+
+A link hands out publishers (``put(cdr)``) and subscriptions (callback with the CDR
+bytes) by ROS topic and type; :meth:`RosLink.close` undeclares all of it.
+
+``--cmd-vel-type twist|twist_stamped``: Jazzy's diff-drive controller can take
+``geometry_msgs/TwistStamped``; the ROSbot's default stays ``Twist``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import threading
+import time
+
+from common import rmw_zenoh as rz
+from common.errors import ConfigError
+
+MIDDLEWARES = ("bridge", "rmw_zenoh")
+CMD_VEL_TYPES = {"twist": "geometry_msgs/msg/Twist",
+                 "twist_stamped": "geometry_msgs/msg/TwistStamped"}
+
+
+def add_ros_args(parser: argparse.ArgumentParser, cmd_vel: bool = True) -> None:
+    """``--ros``, ``--ros-domain`` (and ``--cmd-vel-type``) on a node or command."""
+    g = parser.add_argument_group("the robot's ROS 2 middleware")
+    g.add_argument("--ros", choices=MIDDLEWARES, default="bridge",
+                   help="zenoh-bridge-ros2dds (default) or rmw_zenoh (ROS 2 Jazzy and later)")
+    g.add_argument("--ros-domain", type=int, default=None, metavar="N",
+                   help="ROS domain id for rmw_zenoh (default: $ROS_DOMAIN_ID, else 0)")
+    if cmd_vel:
+        g.add_argument("--cmd-vel-type", choices=tuple(CMD_VEL_TYPES), default="twist",
+                       help="cmd_vel message: twist (the ROSbot's default) or twist_stamped")
+
+
+def add_face_args(parser: argparse.ArgumentParser) -> None:
+    """``--ros-face [--ros-face-domain N]`` of ``papf run`` and ``papf launch``."""
+    parser.add_argument("--ros-face", action="store_true",
+                        help="also show the stack to ROS 2 tools and RViz over rmw_zenoh "
+                             "(nodes.ros_face; docs/robot.md \"The ROS 2 face\")")
+    parser.add_argument("--ros-face-domain", type=int, default=None, metavar="N",
+                        help="ROS domain of the face (default: $ROS_DOMAIN_ID, else 0); must "
+                             "differ from a robot's on rmw_zenoh")
+
+
+def face_domain(args: argparse.Namespace) -> int | None:
+    """The face's domain when ``--ros-face`` is on (None when off); ConfigError if it is the
+    domain of the robot's rmw_zenoh (``--ros rmw_zenoh``): its /cmd_vel would bypass the driver."""
+    if not getattr(args, "ros_face", False):
+        return None
+    value = getattr(args, "ros_face_domain", None)
+    domain = rz.default_domain() if value is None else rz.check_domain(value)
+    if getattr(args, "ros", "bridge") == "rmw_zenoh" and domain == ros_domain(args):
+        raise ConfigError(f"--ros-face in ROS domain {domain}, the robot's rmw_zenoh domain: the "
+                          "face's /cmd_vel, /scan and /odom would mix with the robot's; give "
+                          "--ros-face-domain another domain")
+    return domain
+
+
+def ros_domain(args: argparse.Namespace) -> int:
+    """``--ros-domain`` checked, else ``ROS_DOMAIN_ID``, else 0 (ConfigError on a bad value)."""
+    value = getattr(args, "ros_domain", None)
+    return rz.default_domain() if value is None else rz.check_domain(value)
+
+
+def cmd_vel_type(args: argparse.Namespace) -> str:
+    name = getattr(args, "cmd_vel_type", "twist")
+    if name not in CMD_VEL_TYPES:
+        raise ConfigError(f"--cmd-vel-type {name!r}: give one of {', '.join(CMD_VEL_TYPES)}")
+    return CMD_VEL_TYPES[name]
+
+
+class RosLink:
+    """Common part: remember what was declared, undeclare it on :meth:`close`."""
+
+    middleware = ""
+
+    def __init__(self, session, namespace: str = ""):
+        self.session, self.namespace = session, namespace.strip("/")
+        self._declared: list = []
+
+    def key(self, topic: str, typename: str) -> str:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        for thing in reversed(self._declared):
+            try:
+                thing.undeclare()
+            except Exception:  # noqa: BLE001 - a closed session: nothing left to undeclare
+                pass
+        self._declared.clear()
+
+    def _keep(self, thing):
+        self._declared.append(thing)
+        return thing
+
+
+class BridgeLink(RosLink):
+    """zenoh-bridge-ros2dds: topic ``t`` -> key ``[<ns>/]t``, bare CDR."""
+
+    middleware = "bridge"
+
+    def key(self, topic: str, typename: str = "") -> str:
+        topic = topic.strip("/")
+        return f"{self.namespace}/{topic}" if self.namespace else topic
+
+    def publisher(self, topic: str, typename: str, qos: rz.Qos = rz.RELIABLE_10):
+        return self._keep(self.session.declare_publisher(self.key(topic)))
+
+    def subscribe(self, topic: str, typename: str, callback, qos: rz.Qos = rz.RELIABLE_10):
+        return self._keep(self.session.declare_subscriber(
+            self.key(topic), lambda s: callback(s.payload.to_bytes())))
+
+
+class _RmwPublisher:
+    """A publisher with rmw_zenoh's attachment on every sample (sequence numbers from 1)."""
+
+    def __init__(self, zpub, gid: bytes):
+        self.zpub, self.gid = zpub, gid
+        self.seq = itertools.count(1)
+        self._lock = threading.Lock()
+
+    def put(self, cdr: bytes) -> None:
+        with self._lock:
+            att = rz.Attachment(next(self.seq), time.time_ns(), self.gid).encode()
+            self.zpub.put(cdr, attachment=att)
+
+    def undeclare(self) -> None:
+        self.zpub.undeclare()
+
+
+class RmwZenohLink(RosLink):
+    """One ROS 2 node on rmw_zenoh: ``/<ns>/<node>`` in ``domain``, its node token declared now."""
+
+    middleware = "rmw_zenoh"
+
+    def __init__(self, session, domain: int, node: str, namespace: str = "",
+                 ids: itertools.count | None = None):
+        """``ids``: entity ids shared by every link on one session (several ROS nodes)."""
+        super().__init__(session, namespace)
+        self.domain = rz.check_domain(domain)
+        self.zid = str(session.info.zid())
+        self.ids = ids or itertools.count(0)
+        node_id = next(self.ids)
+        self.node_entity = rz.Entity(self.domain, self.zid, node_id, node_id, rz.NODE,
+                                     "/" + self.namespace if self.namespace else "/", node)
+        self._token(self.node_entity)
+
+    def key(self, topic: str, typename: str) -> str:
+        return rz.topic_key(self.domain, rz.topic_name(topic, self.namespace), typename)
+
+    def _entity(self, kind: str, topic: str, typename: str, qos: rz.Qos) -> rz.Entity:
+        n = self.node_entity
+        return rz.Entity(self.domain, self.zid, n.node_id, next(self.ids), kind, n.namespace,
+                         n.node, topic=rz.topic_name(topic, self.namespace), typename=typename,
+                         qos=qos)
+
+    def _token(self, entity: rz.Entity):
+        return self._keep(self.session.liveliness().declare_token(entity.token()))
+
+    def publisher(self, topic: str, typename: str, qos: rz.Qos = rz.RELIABLE_10) -> _RmwPublisher:
+        """A publisher; transient local QoS keeps the last ``depth`` samples for late joiners
+        as rmw_zenoh does (``rmw_publisher_data.cpp``: zenoh-ext advanced publisher with a
+        cache and publisher detection, sample-miss heartbeats when reliable)."""
+        entity = self._entity(rz.PUBLISHER, topic, typename, qos)
+        key = self.key(topic, typename)
+        if qos.durability == 1:
+            from zenoh import ext
+
+            miss = ext.MissDetectionConfig(sporadic_heartbeat=0.5) if qos.reliability == 1 else None
+            zpub = ext.declare_advanced_publisher(
+                self.session, key, cache=ext.CacheConfig(max_samples=qos.depth),
+                sample_miss_detection=miss, publisher_detection=True)
+        else:
+            zpub = self.session.declare_publisher(key)
+        pub = self._keep(_RmwPublisher(zpub, entity.gid))
+        self._token(entity)
+        return pub
+
+    def subscribe(self, topic: str, typename: str, callback, qos: rz.Qos = rz.RELIABLE_10):
+        """Deliver each sample's CDR bytes to ``callback`` (the attachment is not needed to decode)."""
+        entity = self._entity(rz.SUBSCRIPTION, topic, typename, qos)
+        sub = self._keep(self.session.declare_subscriber(
+            self.key(topic, typename), lambda s: callback(s.payload.to_bytes())))
+        self._token(entity)
+        return sub
+
+
+def open_link(args: argparse.Namespace, session, node: str, namespace: str = "") -> RosLink:
+    """The link ``--ros`` asks for; ``node`` names our ROS 2 node on rmw_zenoh."""
+    middleware = getattr(args, "ros", "bridge")
+    if middleware == "bridge":
+        return BridgeLink(session, namespace)
+    if middleware == "rmw_zenoh":
+        return RmwZenohLink(session, ros_domain(args), node, namespace)
+    raise ConfigError(f"--ros {middleware!r}: give one of {', '.join(MIDDLEWARES)}")
