@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import json
 
-from nodes.planner.registry import PLANNERS
 from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
+from nodes.planner.registry import PLANNERS
 from papf.cli.view import add_view_flag
 
 
