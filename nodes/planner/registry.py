@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import ConfigError
+from common.optional import tomllib
 from common.params import Spec, check_all, check_value, unknown_name
 from nodes.planner.apf import APFParams, apf_force
 from nodes.planner.arapf import ARAPFStrategy
@@ -26,12 +27,6 @@ from nodes.planner.iapf_strategy import IAPFStrategy
 from nodes.planner.papf import PAPFStrategy
 from nodes.planner.settings import specs_of
 from nodes.planner.wang import WangAPFStrategy, WangStrategy
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
-
 
 PRESETS = ("default", "paper")
 

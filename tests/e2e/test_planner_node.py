@@ -175,15 +175,14 @@ def test_lockstep_pair_timeout_outlasts_the_drivers_lockstep_timeout():
     defaults and in the `sim` profile papf run starts."""
     from pathlib import Path
 
-    import tomllib
-
+    from common.optional import tomllib
     from common.units import LOCKSTEP_PAIR_TIMEOUT_S
     from nodes.base_driver.__main__ import build_parser
     from nodes.tracker.core import Tracker, TrackerParams
     from nodes.tracker.loop import TrackerLoop
 
     driver_default = build_parser().parse_args([]).lockstep_timeout
-    profile = tomllib.loads((Path(__file__).resolve().parents[2] / "papf" / "profiles" / "sim.toml").read_text())
+    profile = tomllib.loads((Path(__file__).resolve().parents[2] / "papf" / "launch" / "profiles" / "sim.toml").read_text())
     assert LOCKSTEP_PAIR_TIMEOUT_S > max(driver_default, float(profile["defaults"]["lockstep_timeout"]))
     assert loop().pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
     assert TrackerLoop(Tracker(TrackerParams())).pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
+from common.optional import tomllib
 from nodes.planner.registry import PLANNERS
 from papf.offline.plan import FootprintChecker, plan, write_path
 from papf.offline.point3d import cast_points, fibonacci_directions
@@ -24,11 +25,6 @@ from papf.offline.world_gen import (
 from papf.plots.paths import plot_paths
 from worlds import load_world, parse_world
 from worlds.geometry import signed_distance
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
