@@ -111,7 +111,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
               timeout_s: float = 300.0) -> tuple[list[dict], dict | None]:
     """APF over the grid; write the CSVs and the Markdown; return (summary rows, chosen)."""
     from papf.experiments.trials import markdown_table, progress_bar, write_csv
-    from papf.offline.plan import plan
+    from papf.offline.run import simulate
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -123,7 +123,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
         for side, along, offset in grid:
             these = []
             for seed in seeds:
-                r = plan(sweep_world(side, along, offset), "apf", seed=seed, max_time_s=timeout_s)
+                r = simulate(sweep_world(side, along, offset), "apf", seed=seed, max_time_s=timeout_s)
                 these.append({"side_m": side, "along_m": along, "offset_m": offset, "seed": seed,
                               "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
                               "path_m": round(r.length_m, 3)})

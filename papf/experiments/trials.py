@@ -90,13 +90,14 @@ def variants(planners: Sequence[str], presets: Sequence[str] = ("default",)) -> 
 
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
                 params=None, preset: str = "default") -> Trial:
-    """One offline run (:func:`papf.offline.plan.plan`) with the planner's ``preset``."""
+    """One offline run (:func:`papf.offline.run.simulate`) with the planner's ``preset``."""
     from nodes.planner.registry import preset_sets
-    from papf.offline.plan import param_sets, plan  # pybullet: only for offline runs
+    from papf.offline.plan import param_sets
+    from papf.offline.run import simulate  # pybullet: only for offline runs
 
     t0 = time.monotonic()
-    r = plan(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
-             max_time_s=timeout_s)
+    r = simulate(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
+                 max_time_s=timeout_s)
     return Trial(r.world, planner, seed, "offline", r.outcome, r.duration_s, r.length_m,
                  r.collisions, r.reason, min_clearance_m=r.min_clearance_m,
                  wall_time_s=time.monotonic() - t0, path=r.path, preset=preset)
