@@ -41,8 +41,8 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
+    from common.outcomes import EXIT_CODES
     from nodes.planner.registry import preset_sets
-    from papf.launch.outcome import EXIT_CODES
     from papf.offline.result import write_path
     from papf.offline.run import simulate  # pybullet: only when planning
     from worlds import load_world

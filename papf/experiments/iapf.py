@@ -166,7 +166,7 @@ def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), 
         if plots:
             from papf.plots.iapf_cases import plot_case  # matplotlib: only with plots
 
-            plot_case(out / f"{case}.png", case, out)
+            plot_case(out / f"{case}.png", case, out, CAR_PLANNERS)
     with open(out / "iapf.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
         w.writeheader()

@@ -33,6 +33,7 @@ from nodes.planner.core import ScanView
 from nodes.planner.stagnation import StagnationWatch
 from papf.offline.result import PlanResult
 from worlds import World
+from worlds.shapes import sphere_clearance, spheres_of
 
 RAYS = 4000               # [-] rays of the 3-D range sensor (~3.2 deg apart; ours)
 RANGE_MAX_M = 25.0        # [m] as the RPLIDAR A3
@@ -48,17 +49,6 @@ def fibonacci_directions(n: int) -> np.ndarray:
     return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
-def spheres_of(world: World) -> np.ndarray:
-    """(K, 4) rows (cx, cy, cz, radius) of the world's sphere obstacles; ConfigError otherwise."""
-    rows = []
-    for i, ob in enumerate(world.obstacles):
-        if ob.shape != "sphere":
-            raise ConfigError(f"world {world.name!r}: obstacles[{i}] is a {ob.kind}; 3-D worlds "
-                              "take only kind = \"sphere\" obstacles")
-        rows.append((*ob.center[:3], ob.radius))
-    return np.array(rows, dtype=float).reshape(-1, 4)
-
-
 def cast_points(pos: np.ndarray, spheres: np.ndarray, dirs: np.ndarray,
                 range_max: float = RANGE_MAX_M) -> np.ndarray:
     """First hit of each ray from ``pos`` on any sphere, as (K, 3) points [m] (ray order)."""
@@ -72,13 +62,6 @@ def cast_points(pos: np.ndarray, spheres: np.ndarray, dirs: np.ndarray,
         best = np.where((disc >= 0) & (t > 0) & (t < best), t, best)
     hit = best <= range_max
     return pos + dirs[hit] * best[hit, None]
-
-
-def clearance(pos: np.ndarray, spheres: np.ndarray) -> float:
-    """Distance from the point to the nearest sphere surface [m] (< 0 inside); inf if none."""
-    if spheres.shape[0] == 0:
-        return math.inf
-    return float(np.min(np.linalg.norm(spheres[:, :3] - pos, axis=1) - spheres[:, 3]))
 
 
 def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: float,
@@ -98,7 +81,7 @@ def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: 
     pos = np.array(world.start[:3], dtype=float)
     goal = np.array(world.goal[:3], dtype=float)
     rows, states = [(0.0, *pos)], []
-    min_clear = clearance(pos, spheres)
+    min_clear = sphere_clearance(pos, spheres)
     outcome, reason, steps, moved_t, cycles = "", "", 0, None, 0
     while not outcome:
         t = steps * dt
@@ -126,7 +109,7 @@ def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: 
             moved_t = t
         steps += 1
         rows.append((steps * dt, *pos))
-        c = clearance(pos, spheres)
+        c = sphere_clearance(pos, spheres)
         min_clear = min(min_clear, c)
         if c < 0:
             outcome, reason = "collision", f"point inside a sphere at {np.round(pos, 2)}"

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from papf.launch.outcome import OUTCOMES
+from common.outcomes import OUTCOMES
 from papf.recording.reader import open_recording
 
 PY = sys.executable
