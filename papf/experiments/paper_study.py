@@ -1,4 +1,4 @@
-"""Two studies of PAPF against its paper (offline, :func:`papf.offline.plan.plan`):
+"""Two studies of PAPF against its paper (offline, :func:`papf.offline.run.simulate`):
 
 - ``papf experiment horizon`` (:func:`run_horizon`): PAPF IV-A / Fig. 7 — lambda in
   {0.5, 1, 1.5, 2} m on the Fig. 7-like world ``papf-horizon`` (goal 7 m straight ahead,

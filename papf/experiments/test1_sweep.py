@@ -4,7 +4,7 @@ The PAPF paper (Sec. IV-B, Table 2, Figs. 6 and 8) gives Test (I)'s start (the o
 origin) and goal ((2.2, 2.7) m, Table 1) but not its obstacle: Fig. 6 is a photo of the lab,
 absent from our copy. ``papf-test-1`` places one square box on the right of the start-goal
 line; its side, its distance along the line and its offset to the right are free unknowns.
-This sweep runs the **APF baseline only** (offline, :func:`papf.offline.plan.plan`, several seeds)
+This sweep runs the **APF baseline only** (offline, :func:`papf.offline.run.simulate`, several seeds)
 over a grid of those three, so the box can be sized by APF's Table 2 figures (4.50 m; the
 duration, 69.79 s, is reported as a secondary check) without ever looking at PAPF — PAPF is
 then validated on the chosen world, not fitted to it.

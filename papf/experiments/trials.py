@@ -1,7 +1,7 @@
 """One run of a planner on a world as a :class:`Trial` — offline or through the stack.
 
 One :class:`Trial` per (world, planner, seed), run either offline (:func:`run_offline`,
-:mod:`papf.offline.plan`) or through the full process stack (:func:`run_stack`,
+:func:`papf.offline.run.simulate`) or through the full process stack (:func:`run_stack`,
 :func:`papf.launch.run.run` on a free port, recorded to MCAP so the ground-truth path can be
 drawn); plus the CSV / Markdown writers and the progress bar the experiments share.
 """
