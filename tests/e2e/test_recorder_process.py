@@ -13,7 +13,7 @@ from common.transport import wait_alive
 from papf.recording import Recording, recover
 from schemas import Keys, Twist
 from schemas.messages import ALL_MESSAGES
-from tests.unit.test_recorder import key_of, sample
+from tests.support.recordings import key_of, sample
 
 ALIVE_TIMEOUT_S = 30.0
 

@@ -14,7 +14,7 @@ from papf.experiments.energy import EnergyExperiment, plan, print_summary, run_e
 from papf.launch.outcome import RunResult
 from papf.launch.run import resolve_run
 from papf.report import run_metrics
-from tests.unit.test_report import write_synthetic
+from tests.support.recordings import write_synthetic
 
 
 def test_plan_names_files_and_seeds(tmp_path):

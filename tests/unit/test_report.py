@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,43 +15,10 @@ from nodes.recorder.writer import RunWriter
 from papf.recording.reader import Recording
 from papf.report import build_report, remeter_file, run_metrics
 from papf.report.metrics import NO_OUTCOME, heading_oscillations, smoothness
-from schemas import Clock, Event, Odometry, PlannerStatus, WheelStates
+from schemas import Event
+from tests.support.recordings import SPEED, write_synthetic
 
-STEP_NS = 20_000_000           # 50 Hz, as the sim driver
-SPEED = 0.5                    # [m/s] of the synthetic run
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-
-
-def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int = 100,
-                    total_k: int = 120, speed: float = SPEED, model: str = "paper",
-                    outcome: str | None = "reached", meta: dict | None = None,
-                  ground_truth: bool = True) -> EnergyMeter:
-    """A straight run along x: standing at k = 0, ``speed`` from k = 1; outcome at ``end_k``.
-
-    Samples continue to ``total_k`` (after the outcome, as a real recording does). The
-    live battery is what a ``model`` meter gives for the same odom/wheels. Returns that meter.
-    """
-    meter = EnergyMeter(model)
-    run_meta = {"world": "energy", "planner": planner, "seed": str(seed), "namespace": "rosbot",
-                "energy_model": model, **(meta or {})}
-    run_meta = {k: v for k, v in run_meta.items() if v is not None}   # None: not recorded
-    with RunWriter(path, run_meta) as w:
-        w.write_message("rosbot/events", Event(stamp_ns=0, kind="run_started", source="test"))
-        for k in range(total_k + 1):
-            t = k * STEP_NS
-            v = speed if k else 0.0
-            odom = Odometry(stamp_ns=t, x=speed * t / NS, y=0.0, yaw=0.0, v=v, w=0.0)
-            wheels = WheelStates(stamp_ns=t, speed=(v / WHEEL_RADIUS_M,) * 4, torque=(0.05,) * 4)
-            for key, msg in (("sim/pose", odom), ("odom", odom), ("wheels", wheels),
-                             ("clock", Clock(stamp_ns=t))):
-                if key != "sim/pose" or ground_truth:
-                    w.write_message(f"rosbot/{key}", msg)
-            meter.feed(odom)
-            w.write_message("rosbot/battery", meter.feed(wheels))
-            if k % 5 == 0:
-                state = outcome if (k == end_k and outcome) else "driving"
-                w.write_message("rosbot/planner/status", PlannerStatus(stamp_ns=t, state=state))
-    return meter
 
 
 # -- pure helpers -------------------------------------------------------------------------------
