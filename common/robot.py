@@ -33,6 +33,9 @@ W_MAX_RAD_S = 3.0              # [rad/s] |angular.z| limit
 A_MAX_M_S2 = 1.0               # [m/s^2] linear acceleration limit
 ALPHA_MAX_RAD_S2 = 4.0         # [rad/s^2] angular acceleration limit
 CMD_VEL_TIMEOUT_NS = 500_000_000   # [ns] the controller's cmd_vel_timeout (0.5 s)
+# [m/s] |v| above which the robot counts as moving: a run's duration starts there (ours;
+# the launcher's outcome judge and the offline loops)
+MOVING_SPEED = 0.01
 
 # -- battery -------------------------------------------------------------------------------------
 CELLS_IN_SERIES = 3            # 3 x 18650 Li-ion, 3500 mAh

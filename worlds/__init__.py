@@ -13,12 +13,8 @@ from importlib import resources
 from pathlib import Path
 
 from common.errors import WorldError
+from common.optional import tomllib
 from worlds.traffic import Motion, ObstacleState, Road, state_at
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
 
 DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (docs/worlds.md)
 KINDS = ("box", "cylinder", "wall", "sphere")

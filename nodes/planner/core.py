@@ -32,6 +32,7 @@ from common.units import NS_PER_S
 from nodes.planner.field import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
 from nodes.planner.road import Lanes, Track
 from nodes.planner.scan_kernel import scan_points
+from nodes.planner.stagnation import StagnationWatch
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
 
 
@@ -172,10 +173,7 @@ class Planner:
         self.goal: Goal | None = None
         self.state = "idle"
         self.reason = ""
-        self._best = math.inf           # best distance to goal at the last progress [m]
-        self._best_ns = 0               # scan time of the last progress [ns]
-        self._win_ns = 0                # scan time the current window began [ns]
-        self._anchor = None             # robot position where the current window began [m]
+        self.watch = StagnationWatch()  # no progress towards the goal -> stagnated
         self._apf_for_l: dict[int, APFParams] = {}
         self.objects: tuple = ()        # latest obstacle tracks (strategies that use them)
         self.road = None                # the road of the run, once announced
@@ -200,8 +198,7 @@ class Planner:
         if not same:
             self.goal = goal
             self.state, self.reason = "ready", ""
-            self._best, self._best_ns = math.inf, 0
-            self._win_ns, self._anchor = 0, None
+            self.watch.reset()
             self.strategy.reset()
         return PlannerStatus(stamp_ns=goal.stamp_ns, state="ready", reason=self.reason)
 
@@ -248,7 +245,7 @@ class Planner:
         view = scan_view(scan, odom, self.jit_scan)
         self.strategy.observe(self.objects, self.road, t / NS_PER_S, odom.v)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
-        why = plan.stagnated or self._watch(t, dist, apf, pos, plan.searching)
+        why = plan.stagnated or self.watch.check(t, dist, apf, pos, plan.searching)
         if why:
             return self._stop(t, "stagnated", why, dist, t0, plan, view)
         theta_ref = heading_ref(plan.force) if plan.heading is None else plan.heading
@@ -278,25 +275,6 @@ class Planner:
         if beams not in self._apf_for_l:
             self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
         return self._apf_for_l[beams]
-
-    def _watch(self, t: int, dist: float, apf: APFParams, pos=None, searching: bool = False) -> str:
-        """Stagnation watch: no progress > stagnation_progress_m towards the goal and no move
-        of stagnation_roam_m away from where the window began, within stagnation_window_s; or no
-        progress towards the goal within stagnation_max_s."""
-        if dist < self._best - apf.stagnation_progress_m or not math.isfinite(self._best):
-            self._best, self._best_ns = dist, t
-            self._win_ns, self._anchor = t, pos
-            return ""
-        if searching or (pos is not None and self._anchor is not None and float(
-                np.hypot(*(pos - self._anchor))) > apf.stagnation_roam_m):
-            self._win_ns, self._anchor = t, pos
-        if t - self._win_ns > apf.stagnation_window_s * NS_PER_S:
-            return (f"no progress > {apf.stagnation_progress_m} m towards the goal in "
-                    f"{apf.stagnation_window_s} s (best {self._best:.3f} m)")
-        if t - self._best_ns > apf.stagnation_max_s * NS_PER_S:
-            return (f"no progress > {apf.stagnation_progress_m} m towards the goal in "
-                    f"{apf.stagnation_max_s} s (best {self._best:.3f} m)")
-        return ""
 
     def _stop(self, t, state, reason, dist, t0, plan: Plan | None = None,
               view: ScanView | None = None):

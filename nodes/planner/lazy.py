@@ -6,8 +6,8 @@ kernel, and neither does the launcher (``papf run`` checks planner names and set
 through :mod:`nodes.planner.registry`). So :mod:`nodes.planner.papf.strategy` and
 :mod:`nodes.planner.iapf.algorithm` bind their kernel modules with :func:`lazy_module`: the module
 object is there at import, its code (and numba's import) runs at the first attribute
-read — when a PAPF or IAPF planner is built. :data:`HAVE_NUMBA` says whether numba is
-installed without importing it.
+read — when a PAPF or IAPF planner is built. :data:`HAVE_NUMBA`
+(:mod:`common.optional`) says whether numba is installed without importing it.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import importlib.util
 import sys
 from types import ModuleType
 
-HAVE_NUMBA = importlib.util.find_spec("numba") is not None
+from common.optional import HAVE_NUMBA  # noqa: F401 - read here by the planners (lazy.HAVE_NUMBA)
 
 
 def lazy_module(name: str) -> ModuleType:

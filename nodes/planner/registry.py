@@ -24,16 +24,11 @@ from pathlib import Path
 
 import nodes.planner as planner_package
 from common.errors import ConfigError
+from common.optional import tomllib
 from common.params import Spec, check_all, check_value, unknown_name
 from nodes.planner.core import Planner, Strategy
 from nodes.planner.field import APFParams
 from nodes.planner.settings import APF as APF_SPECS
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
-
 
 PRESETS = ("default", "paper")
 

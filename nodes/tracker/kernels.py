@@ -14,12 +14,9 @@ import math
 
 import numpy as np
 
-try:
-    import numba
-except ImportError:  # numba is optional (pyproject extra "fast")
-    numba = None
+from common.optional import HAVE_NUMBA, numba_or_none
 
-HAVE_NUMBA = numba is not None
+numba = numba_or_none()   # None without the extra "fast": the numpy twins run
 
 
 def _segment_boxes(xy, ranges, beams, beam_count, increment, cluster_radius, lam, range_sd,

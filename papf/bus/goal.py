@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import zenoh
 
 from common import runauth
+from common.outcomes import EXIT_CODES
 from papf.console.progress import DecileProgress
-from papf.launch.outcome import EXIT_CODES
 from schemas import Event, Goal, Keys, PlannerStatus
 
 HANDSHAKE_S = 15.0     # [s wall] for a planner to acknowledge the goal

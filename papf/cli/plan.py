@@ -1,4 +1,4 @@
-"""``papf plan``: a planner on a world offline, no processes (:mod:`papf.offline.plan`)."""
+"""``papf plan``: a planner on a world offline, no processes (:func:`papf.offline.run.simulate`)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import sys
 from common.params import SEED, TIMEOUT, arg_type
 from nodes.planner.registry import car_variants, one_with_role
 from papf.cli.options import add_planner_settings, add_world_and_planner, planner_help
+from papf.offline.run import MOTIONS
 
 
 def register(sub) -> None:
@@ -27,7 +28,7 @@ def register(sub) -> None:
     add_planner_settings(p)
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper literally)")
-    p.add_argument("--motion", choices=("robot", "fixed-step"), default="robot",
+    p.add_argument("--motion", choices=MOTIONS, default="robot",
                    help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
                         "the obstacles' centres known (planners "
                         f"{one_with_role('wang-baseline')} and {one_with_role('wang-proposed')} only)")
@@ -41,42 +42,30 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
+    from common.outcomes import EXIT_CODES
     from nodes.planner.registry import preset_sets
-    from papf.launch.outcome import EXIT_CODES
-    from papf.offline.plan import plan, write_path  # pybullet: only when planning
+    from papf.offline.result import write_path
+    from papf.offline.run import simulate  # pybullet: only when planning
     from worlds import load_world
     from worlds.checks import check_runnable
 
     world = load_world(args.world)
     check_runnable(world, max_obstacles=sys.maxsize)   # offline: no obstacle limit
-    if args.motion == "fixed-step":
-        return _fixed_step(world, args)
     sets = [*preset_sets(args.preset), *args.set]
-    if world.vehicle == "car":   # the IAPF paper's cases: its vehicle model, car scale
-        from papf.offline.road import plan_car
-
-        result = plan_car(world, args.planner, sets, args.params, max_time_s=args.timeout)
-    else:
-        result = plan(world, args.planner, params=sets, seed=args.seed,
-                      max_time_s=args.timeout, dt=args.dt, params_file=args.params,
-                      keep_states=bool(args.plot))
+    result = simulate(world, args.planner, params=sets, seed=args.seed, max_time_s=args.timeout,
+                      dt=args.dt, params_file=args.params, keep_states=bool(args.plot),
+                      motion=args.motion)
     if args.out:
         write_path(result, args.out)
     if args.plot:  # matplotlib: only with --plot
-        title = f"{world.name}: {args.planner} (offline, seed {args.seed})"
-        if world.dims == 2 and world.vehicle != "car":  # with the mind and the ROSbot's footprint
-            from papf.plots.mind import plot_plan
-
-            plot_plan(world, result, args.plot, title)
-        else:
-            from papf.plots.paths import plot_paths
-
-            label = f"{args.planner} ({result.outcome})"
-            plot_paths(world, {label: result.path}, args.plot, title,
-                       times={label: result.times})
+        _plot(world, result, args)
     s = result.summary()
     if args.json:
         print(json.dumps(s))
+    elif result.motion == "fixed-step":
+        print(f"{s['world']} {s['planner']} (fixed step): {s['outcome']} after {s['cycles']} "
+              f"iterations, path {s['path_length_m']:.2f} m, min clearance "
+              f"{s['min_clearance_m']:.2f} m ({s['reason']})")
     else:
         print(f"{s['world']} {s['planner']}: {s['outcome']} after {s['duration_s']:.1f} s, "
               f"{s['path_length_m']:.2f} m, min clearance {s['min_clearance_m']:.2f} m"
@@ -87,22 +76,18 @@ def cmd_plan(args) -> int:
     return EXIT_CODES.get(result.outcome, 6)
 
 
-def _fixed_step(world, args) -> int:
-    """Wang's published simulation (:func:`papf.offline.wang_step.fixed_step`)."""
-    from common.errors import ConfigError
-    from papf.offline.wang_step import fixed_step
+def _plot(world, result, args) -> None:
+    """The PNG of ``--plot``: the ROSbot's run with its mind, or the path alone."""
+    if result.motion == "unicycle":   # with the mind and the ROSbot's footprint
+        from papf.plots.mind import plot_plan
 
-    methods = {one_with_role("wang-baseline"): "traditional", one_with_role("wang-proposed"): "improved"}
-    if args.planner not in methods:
-        raise ConfigError(f"--motion fixed-step: planner {args.planner!r}; valid: {sorted(methods)}")
-    r = fixed_step(world, methods[args.planner])
-    if args.plot:
-        from papf.plots.world import plot_paths
+        plot_plan(world, result, args.plot, f"{world.name}: {args.planner} (offline, seed {args.seed})")
+        return
+    from papf.plots.paths import plot_paths
 
-        plot_paths(world, {f"{args.planner} ({r.outcome})": r.path}, args.plot,
-                   f"{world.name}: {args.planner}, fixed step (Wang's simulation)")
-    s = r.summary()
-    print(json.dumps(s) if args.json else
-          f"{s['world']} {args.planner} (fixed step): {s['outcome']} after {s['iterations']} "
-          f"iterations, path {s['path_length']:.2f}, min clearance {s['min_clearance']:.2f}")
-    return {"reached": 0, "collision": 4}.get(r.outcome, 3)
+    label = f"{args.planner} ({result.outcome})"
+    title = (f"{world.name}: {args.planner}, fixed step (Wang's simulation)"
+             if result.motion == "fixed-step" else
+             f"{world.name}: {args.planner} (offline, seed {args.seed})")
+    times = None if result.motion == "fixed-step" else {label: result.times}   # iterations, no time
+    plot_paths(world, {label: result.path}, args.plot, title, times=times)

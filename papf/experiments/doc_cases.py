@@ -1,7 +1,7 @@
 """``papf experiment cases``: the small studies behind the older tables of docs/planners.md.
 
 Each study (:data:`STUDIES`) is a list of cases: a label, a planner, its settings, the worlds
-and seeds, offline (:mod:`papf.offline.plan`) and/or through the stack (:func:`run_stack`). Every
+and seeds, offline (:func:`papf.offline.run.simulate`) and/or through the stack (:func:`run_stack`). Every
 run goes into ``OUT/cases-runs.csv``; each case's summary (reached k/n, ranges of duration,
 path, clearance and charge over its runs) into ``OUT/<study>.csv``, the file a docs table
 is generated from (``papf/doctools/tables.py``).

@@ -28,7 +28,8 @@ import numpy as np
 from nodes.planner.iapf.algorithm import HostState, IAPFCore
 from nodes.planner.registry import car_variants
 from nodes.planner.road import Track
-from papf.offline.road import CAR_PLANNERS, car_params, lanes_of, mover, run_car
+from papf.offline.road import CAR_PLANNERS, car_params, lanes_of, mover
+from papf.offline.run import simulate
 from worlds import load_world
 
 CASES = {"iapf-case-a": 5.0, "iapf-case-b": 5.0, "iapf-case-c": 6.0, "iapf-case-d": 10.0}
@@ -155,7 +156,7 @@ def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), 
         world = load_world(case)
         runs = {}
         for planner in planners:
-            run = run_car(world, planner, params, duration_s=CASES[case])
+            run = simulate(world, planner, params, max_time_s=CASES[case], whole_time=True).trace
             runs[planner] = run
             hz = horizon_times(world, planner, run, params) if horizon else []
             rows.append(_row(case, planner, run, hz))
@@ -167,7 +168,7 @@ def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), 
         if plots:
             from papf.plots.iapf_cases import plot_case  # matplotlib: only with plots
 
-            plot_case(out / f"{case}.png", case, out)
+            plot_case(out / f"{case}.png", case, out, CAR_PLANNERS)
     with open(out / "iapf.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
         w.writeheader()

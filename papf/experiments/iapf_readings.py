@@ -13,7 +13,7 @@ from pathlib import Path
 
 from nodes.planner.iapf.algorithm import PAPER_PRESET
 from papf.experiments.iapf import CASES, IAPF, IAPF_NP, TRADITIONAL
-from papf.offline.road import run_car
+from papf.offline.run import simulate
 from worlds import load_world
 
 LEADER_C_KMH = 28.8      # case C's leader (Table 1 v_obs1.3)
@@ -69,7 +69,7 @@ def run_readings(out: str | Path, progress=None) -> list[dict]:
     for label, planner, sets in READINGS:
         row = {"reading": label, "planner": planner, "settings": " ".join(sets)}
         for case, duration in CASES.items():
-            run = run_car(worlds[case], planner, sets, duration_s=duration)
+            run = simulate(worlds[case], planner, sets, max_time_s=duration, whole_time=True).trace
             row[case] = _cell(run, case)
             row[f"{case}_min_clearance_m"] = round(run.min_clearance_m, 3)
         rows.append(row)

@@ -1,4 +1,4 @@
-"""Two studies of PAPF against its paper (offline, :func:`papf.offline.plan.plan`):
+"""Two studies of PAPF against its paper (offline, :func:`papf.offline.run.simulate`):
 
 - ``papf experiment horizon`` (:func:`run_horizon`): PAPF IV-A / Fig. 7 — lambda in
   {0.5, 1, 1.5, 2} m on the Fig. 7-like world ``papf-horizon`` (goal 7 m straight ahead,
@@ -58,7 +58,7 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
                 world: str = HORIZON_WORLD) -> list[dict]:
     """PAPF with each horizon (both presets) and APF on ``world``; write horizon.csv/.md."""
     from papf.experiments.trials import markdown_table, write_csv
-    from papf.offline.plan import plan
+    from papf.offline.run import simulate
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -67,7 +67,7 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
     rows = []
     for planner, preset, h in runs:
         sets = (["preset=paper"] if preset == "paper" else []) + ([f"horizon_m={h}"] if h else [])
-        r = plan(world, planner, params=sets, seed=seed, keep_states=True)
+        r = simulate(world, planner, params=sets, seed=seed, keep_states=True)
         cyc = np.array([s.compute_ns for s in r.states], float) / 1e6
         rows.append({"planner": planner, "preset": preset, "horizon_m": "" if h is None else h,
                      "outcome": r.outcome, "duration_s": round(r.duration_s, 1),

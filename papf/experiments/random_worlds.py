@@ -2,7 +2,7 @@
 
 The first ``n`` *solvable* worlds of the seeded set (:func:`papf.offline.world_gen.generate_solvable`:
 obstacle fields, dead ends, narrow gaps, in turn) are run with every planner — offline by
-default (:mod:`papf.offline.plan`, fast), or through the whole stack (``mode="stack"``). Writes
+default (:func:`papf.offline.run.simulate`, fast), or through the whole stack (``mode="stack"``). Writes
 
 - ``OUT/random.md`` — per planner: reached / collision / stagnated / timeout / failed rates
   over the solvable worlds, the success rate per world kind, and split by the world's

@@ -4,7 +4,7 @@ The PAPF paper (Sec. IV-B, Table 2, Figs. 6 and 8) gives Test (I)'s start (the o
 origin) and goal ((2.2, 2.7) m, Table 1) but not its obstacle: Fig. 6 is a photo of the lab,
 absent from our copy. ``papf-test-1`` places one square box on the right of the start-goal
 line; its side, its distance along the line and its offset to the right are free unknowns.
-This sweep runs the **APF baseline only** (offline, :func:`papf.offline.plan.plan`, several seeds)
+This sweep runs the **APF baseline only** (offline, :func:`papf.offline.run.simulate`, several seeds)
 over a grid of those three, so the box can be sized by APF's Table 2 figures (4.50 m; the
 duration, 69.79 s, is reported as a secondary check) without ever looking at PAPF — PAPF is
 then validated on the chosen world, not fitted to it.
@@ -116,7 +116,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
               timeout_s: float = 300.0) -> tuple[list[dict], dict | None]:
     """APF over the grid; write the CSVs and the Markdown; return (summary rows, chosen)."""
     from papf.experiments.trials import markdown_table, progress_bar, write_csv
-    from papf.offline.plan import plan
+    from papf.offline.run import simulate
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -128,7 +128,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
         for side, along, offset in grid:
             these = []
             for seed in seeds:
-                r = plan(sweep_world(side, along, offset), APF, seed=seed, max_time_s=timeout_s)
+                r = simulate(sweep_world(side, along, offset), APF, seed=seed, max_time_s=timeout_s)
                 these.append({"side_m": side, "along_m": along, "offset_m": offset, "seed": seed,
                               "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
                               "path_m": round(r.length_m, 3)})

@@ -1,7 +1,7 @@
 """One run of a planner on a world as a :class:`Trial` — offline or through the stack.
 
 One :class:`Trial` per (world, planner, seed), run either offline (:func:`run_offline`,
-:mod:`papf.offline.plan`) or through the full process stack (:func:`run_stack`,
+:func:`papf.offline.run.simulate`) or through the full process stack (:func:`run_stack`,
 :func:`papf.launch.run.run` on a free port, recorded to MCAP so the ground-truth path can be
 drawn); plus the CSV / Markdown writers and the progress bar the experiments share.
 """
@@ -90,13 +90,14 @@ def variants(planners: Sequence[str], presets: Sequence[str] = ("default",)) -> 
 
 def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: float = 300.0,
                 params=None, preset: str = "default") -> Trial:
-    """One offline run (:func:`papf.offline.plan.plan`) with the planner's ``preset``."""
+    """One offline run (:func:`papf.offline.run.simulate`) with the planner's ``preset``."""
     from nodes.planner.registry import preset_sets
-    from papf.offline.plan import param_sets, plan  # pybullet: only for offline runs
+    from papf.offline.plan import param_sets
+    from papf.offline.run import simulate  # pybullet: only for offline runs
 
     t0 = time.monotonic()
-    r = plan(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
-             max_time_s=timeout_s)
+    r = simulate(world, planner, params=[*preset_sets(preset), *param_sets(params)], seed=seed,
+                 max_time_s=timeout_s)
     return Trial(r.world, planner, seed, "offline", r.outcome, r.duration_s, r.length_m,
                  r.collisions, r.reason, min_clearance_m=r.min_clearance_m,
                  wall_time_s=time.monotonic() - t0, path=r.path, preset=preset)

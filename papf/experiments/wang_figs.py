@@ -2,12 +2,14 @@
 
 Each figure is run twice:
 
-- **as published** — :func:`papf.offline.wang_step.fixed_step`: a point stepping 0.5 along the
+- **as published** — ``motion="fixed-step"`` (:mod:`papf.offline.wang_step`): a point stepping 0.5 along the
   force for at most J = 200 iterations, Table 1 gains, the obstacles' centres known
   (Wang's MATLAB simulation);
-- **on the ROSbot** — :func:`papf.offline.plan.plan` (offline; 2-D: simulated LiDAR and the
+- **on the ROSbot** — the default motion (offline; 2-D: simulated LiDAR and the
   ROSbot's motion law; 3-D: the point robot of :mod:`papf.offline.point3d`) with the registry's
   ``wang-apf`` (traditional, eqs. 1-5) or ``wang`` (improved, eqs. 6-8) planner.
+
+Both through :func:`papf.offline.run.simulate`.
 
 Writes ``OUT/wang.md`` and ``OUT/wang.csv``.
 """
@@ -45,18 +47,17 @@ HEADER = ["figure", "world", "method", "paper", "fixed step (as published)", "it
 
 def run_wang(out: str | Path, seed: int = 0, timeout_s: float = 300.0) -> list[dict]:
     """Run every figure both ways; write ``wang.md`` and ``wang.csv`` into ``out``."""
-    from papf.offline.plan import plan
-    from papf.offline.wang_step import fixed_step
+    from papf.offline.run import simulate
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for fig, world, method, paper in FIGURES:
-        fs = fixed_step(world, method)
-        robot = plan(world, PLANNER[method], seed=seed, max_time_s=timeout_s)
+        fs = simulate(world, PLANNER[method], motion="fixed-step")
+        robot = simulate(world, PLANNER[method], seed=seed, max_time_s=timeout_s)
         rows.append({"figure": fig, "world": world, "method": method, "paper": paper,
-                     "fixed_step": fs.outcome, "iterations": fs.iterations,
-                     "min_clearance": round(fs.min_clearance, 3), "planner": PLANNER[method],
+                     "fixed_step": fs.outcome, "iterations": fs.cycles,
+                     "min_clearance": round(fs.min_clearance_m * fs.units_per_m, 3), "planner": PLANNER[method],
                      "rosbot": robot.outcome, "rosbot_path_m": round(robot.length_m, 2)})
     write_csv(rows, out / "wang.csv")
     table = markdown_table(HEADER, [list(r.values()) for r in rows])

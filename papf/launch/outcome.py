@@ -18,17 +18,16 @@ from bisect import bisect_right
 from collections import deque
 from dataclasses import asdict, dataclass
 
+from common.outcomes import EXIT_CODES
+from common.robot import MOVING_SPEED
 from common.units import NS_PER_S as NS
 from schemas import BatteryState, Clock, Event, Goal, Odometry, PlannerStatus, Twist
 
-MOVING_SPEED = 0.01  # [m/s] |v| above which the robot counts as moving (duration_s starts)
 POSE_WINDOW = 4096     # [-] pose samples kept: 82 s at 50 Hz, far more than the launcher lags
 BATTERY_WINDOW = 4096  # [-] battery samples kept
 MAX_FAULTS = 20        # [-] node_fault events kept verbatim (the rest are counted)
 GOAL_SLACK_M = 1e-6    # [m] rounding allowance of the ground-truth goal check
 
-OUTCOMES = ("reached", "stagnated", "collision", "timeout", "failed")
-EXIT_CODES = {"reached": 0, "stagnated": 3, "collision": 4, "timeout": 5, "failed": 6}
 
 
 @dataclass

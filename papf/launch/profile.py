@@ -19,15 +19,11 @@ from importlib import resources
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.optional import tomllib
 from common.ports import Port, select
 from nodes.planner.registry import declared
 from schemas.keys import TOPICS
 from worlds import load_world, world_path
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
 
 VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
              "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",

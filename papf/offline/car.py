@@ -20,17 +20,9 @@ import numpy as np
 
 from nodes.planner.iapf.algorithm import HostState, IAPFCore
 from nodes.planner.road import Lanes, Track
+from worlds.shapes import rect_corners
 
 Mover = Callable[[float], Track]   # sim time [s] -> the vehicle's track at that time
-
-
-def rect_corners(x: float, y: float, yaw: float, length: float, width: float) -> np.ndarray:
-    """(4, 2) corners of a rectangle centred at (x, y) along ``yaw`` [m], counter-clockwise."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    hx, hy = 0.5 * length, 0.5 * width
-    local = np.array([(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)])
-    return np.column_stack([x + c * local[:, 0] - s * local[:, 1],
-                            y + s * local[:, 0] + c * local[:, 1]])
 
 
 def _seg_point_dist(a: np.ndarray, b: np.ndarray, pts: np.ndarray) -> np.ndarray:

@@ -1,27 +1,22 @@
-"""Offline planning: run a planner of the registry on a world without the process stack.
+"""The ROSbot offline on a 2-D world: :func:`plan_robot` (called by
+:func:`papf.offline.run.simulate`, the one offline entry point).
 
-``plan(world, "papf")`` -> :class:`PlanResult` (path, outcome, duration, length).
-
-2-D worlds: the real :class:`nodes.planner.core.Planner` in the one offline closed loop
+The real :class:`nodes.planner.core.Planner` in the one offline closed loop
 (:func:`papf.offline.unicycle.closed_loop`) with the stack's robot: scans from
 :class:`nodes.lidar_sim.core.LidarSim` (pybullet rays, seeded noise) every control period
 ``dt`` (10 Hz, as the stack), the start pose jittered as the sim driver does for the same
 seed, the driver's :class:`~nodes.base_driver.limits.CommandGate` (|v| <= 0.9 m/s,
 |w| <= 3 rad/s, 1 m/s^2, 4 rad/s^2) and the footprint box of the driver's chassis
-(0.200 x 0.235 m) against the world's obstacles in pybullet (:mod:`worlds.bullet`).
-
-3-D worlds (Wang, Sec. 5: sphere obstacles): :mod:`papf.offline.point3d`, a point robot.
+(0.200 x 0.235 m) against the world's obstacles in pybullet (:mod:`worlds.bullet`); in 3-D
+worlds (spheres) the point robot of :mod:`papf.offline.point3d`.
 
 Outcomes as ``papf run``: reached | stagnated | collision | timeout | failed.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
-from common.errors import ConfigError
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarParams, LidarSim
@@ -29,9 +24,9 @@ from nodes.planner.registry import make_planner
 from nodes.planner.road import Lanes
 from papf.offline.car import road_figures
 from papf.offline.point3d import plan_3d
-from papf.offline.result import PlanResult, write_path  # noqa: F401 - part of this module's API
-from papf.offline.unicycle import FootprintChecker, closed_loop, start_pose  # noqa: F401 - API, as above
-from worlds import World, load_world
+from papf.offline.result import PlanResult
+from papf.offline.unicycle import FootprintChecker, closed_loop, start_pose
+from worlds import World
 
 DEFAULT_MAX_TIME_S = 300.0  # [s] sim-time limit, as `papf run --timeout`
 
@@ -45,23 +40,12 @@ def param_sets(params: Mapping[str, object] | Sequence[str] | None) -> list[str]
     return [str(s) for s in params]
 
 
-def plan(world: World | str | Path, planner_name: str, params=None, seed: int = 0,
-         max_time_s: float = DEFAULT_MAX_TIME_S, dt: float = 0.1,
-         lidar: LidarParams | None = None, keep_states: bool = False,
-         params_file: str | Path | None = None) -> PlanResult:
-    """Run ``planner_name`` on ``world`` (a World, packaged name or path) to an outcome.
-
-    ``params``: planner settings (``{"name": value}`` or ``["name=value"]``, as ``--set``);
-    ``seed``: LiDAR noise and start jitter; ``dt`` [s]: control period; ``lidar``: scan geometry and noise
-    (default: the stack's). In 3-D worlds ``lidar`` is ignored (see :mod:`papf.offline.point3d`).
-    """
-    if not isinstance(world, World):
-        world = load_world(world)
-    if not (dt > 0 and math.isfinite(dt)):
-        raise ConfigError(f"dt = {dt!r} s must be a finite number > 0")
-    if not max_time_s > 0:
-        raise ConfigError(f"max_time_s = {max_time_s!r} must be > 0")
-    planner = make_planner(planner_name, params_file, param_sets(params))
+def plan_robot(world: World, planner_name: str, sets: list[str], params_file, seed: int,
+               max_time_s: float, dt: float, lidar: LidarParams | None,
+               keep_states: bool) -> PlanResult:
+    """The registry's ``planner_name`` with ``--set`` strings ``sets`` on the ROSbot (2-D) or
+    the point robot (3-D), to an outcome within ``max_time_s`` [s] of sim time."""
+    planner = make_planner(planner_name, params_file, sets)
     if world.dims == 3:
         return plan_3d(world, planner, planner_name, seed, max_time_s, dt, keep_states)
     return _plan_2d(world, planner, planner_name, seed, max_time_s, dt, lidar, keep_states)

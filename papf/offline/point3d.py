@@ -11,8 +11,8 @@ the registry's strategies on the shared N-D APF core:
 - **Motion**: the point moves along F by ``V dt`` with ``V = Limit(|F|, V_max)`` (eq. 5 with
   no heading error: a point has no orientation), every control period ``dt``.
 - **Collision**: the point inside a sphere (no body radius: a point robot, as Wang's).
-- **Stagnation**: the strategy's own verdict, or the planner's watch (no progress of
-  ``stagnation_progress_m`` within ``stagnation_window_s``), as in 2-D.
+- **Stagnation**: the strategy's own verdict, or the planner core's watch
+  (:class:`nodes.planner.stagnation.StagnationWatch`, the same rule as in 2-D).
 
 World convention: in a 3-D world (3-number goal) ``[robot] start`` is (x, y, z) [m], not
 (x, y, yaw). Planners that need the planar scan geometry (AR-APF) are 2-D only.
@@ -26,11 +26,15 @@ import math
 import numpy as np
 
 from common.errors import ConfigError
+from common.robot import MOVING_SPEED
+from common.units import NS_PER_S
 from nodes.planner.core import ScanView
 from nodes.planner.field import APFParams
 from nodes.planner.registry import declared
+from nodes.planner.stagnation import StagnationWatch
 from papf.offline.result import PlanResult
 from worlds import World
+from worlds.shapes import sphere_clearance, spheres_of
 
 RAYS = 4000               # [-] rays of the 3-D range sensor (~3.2 deg apart; ours)
 RANGE_MAX_M = 25.0        # [m] as the RPLIDAR A3
@@ -44,17 +48,6 @@ def fibonacci_directions(n: int) -> np.ndarray:
     r = np.sqrt(1.0 - z * z)
     phi = math.pi * (3.0 - math.sqrt(5.0)) * i
     return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
-
-
-def spheres_of(world: World) -> np.ndarray:
-    """(K, 4) rows (cx, cy, cz, radius) of the world's sphere obstacles; ConfigError otherwise."""
-    rows = []
-    for i, ob in enumerate(world.obstacles):
-        if ob.shape != "sphere":
-            raise ConfigError(f"world {world.name!r}: obstacles[{i}] is a {ob.kind}; 3-D worlds "
-                              "take only kind = \"sphere\" obstacles")
-        rows.append((*ob.center[:3], ob.radius))
-    return np.array(rows, dtype=float).reshape(-1, 4)
 
 
 def cast_points(pos: np.ndarray, spheres: np.ndarray, dirs: np.ndarray,
@@ -72,33 +65,6 @@ def cast_points(pos: np.ndarray, spheres: np.ndarray, dirs: np.ndarray,
     return pos + dirs[hit] * best[hit, None]
 
 
-def clearance(pos: np.ndarray, spheres: np.ndarray) -> float:
-    """Distance from the point to the nearest sphere surface [m] (< 0 inside); inf if none."""
-    if spheres.shape[0] == 0:
-        return math.inf
-    return float(np.min(np.linalg.norm(spheres[:, :3] - pos, axis=1) - spheres[:, 3]))
-
-
-class ProgressWatch:
-    """No progress of ``progress_m`` towards the goal within ``window_s`` -> a reason string.
-
-    The same rule as the planner core's stagnation watch (APFParams.stagnation_*).
-    """
-
-    def __init__(self, window_s: float, progress_m: float):
-        self.window_s, self.progress_m = window_s, progress_m
-        self.best, self.best_t = math.inf, 0.0
-
-    def check(self, t: float, dist: float) -> str:
-        if dist < self.best - self.progress_m or not math.isfinite(self.best):
-            self.best, self.best_t = dist, t
-            return ""
-        if t - self.best_t > self.window_s:
-            return (f"no progress > {self.progress_m} m towards the goal in {self.window_s} s "
-                    f"(best {self.best:.3f} m)")
-        return ""
-
-
 def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: float,
             keep_states: bool):
     """Closed loop of a point robot (see module doc)."""
@@ -112,41 +78,39 @@ def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: 
         apf = dataclasses.replace(apf, lidar_points=RAYS)
     strategy = planner.strategy
     strategy.reset()
-    watch = ProgressWatch(apf.stagnation_window_s, apf.stagnation_progress_m)
+    watch = StagnationWatch()
     pos = np.array(world.start[:3], dtype=float)
     goal = np.array(world.goal[:3], dtype=float)
     rows, states = [(0.0, *pos)], []
-    min_clear = clearance(pos, spheres)
-    outcome, reason, steps, moved_t = "", "", 0, None
+    min_clear = sphere_clearance(pos, spheres)
+    outcome, reason, steps, moved_t, cycles = "", "", 0, None, 0
     while not outcome:
         t = steps * dt
         dist = float(np.linalg.norm(goal - pos))
         if dist <= world.tolerance:
             outcome, reason = "reached", f"within {world.tolerance} m of the goal"
             break
-        reason = watch.check(t, dist)
-        if reason:
-            outcome = "stagnated"
-            break
         points = cast_points(pos, spheres, dirs)
         view = ScanView(origin=pos.copy(), angles=np.zeros(0), ranges=np.zeros(0),
                         points=points, valid=np.zeros(0, dtype=bool))
         out = strategy.plan(pos, 0.0, goal, view, apf)
+        cycles += 1
         if keep_states:
             states.append(out)
-        if out.stagnated:
-            outcome, reason = "stagnated", out.stagnated
+        why = out.stagnated or watch.check(round(t * NS_PER_S), dist, apf, pos, out.searching)
+        if why:
+            outcome, reason = "stagnated", why
             break
         force = np.asarray(out.force, dtype=float)
         norm = float(np.linalg.norm(force))
         speed = min(norm, apf.v_max)              # eq. 5 with no heading error
         if norm > 0:
             pos = pos + force / norm * speed * dt
-        if moved_t is None and speed > 0.01:
+        if moved_t is None and speed > MOVING_SPEED:
             moved_t = t
         steps += 1
         rows.append((steps * dt, *pos))
-        c = clearance(pos, spheres)
+        c = sphere_clearance(pos, spheres)
         min_clear = min(min_clear, c)
         if c < 0:
             outcome, reason = "collision", f"point inside a sphere at {np.round(pos, 2)}"
@@ -159,4 +123,4 @@ def plan_3d(world: World, planner, name: str, seed: int, max_time_s: float, dt: 
                       path=arr[:, 1:4], times=arr[:, 0], headings=np.zeros(0),
                       duration_s=max(0.0, t_end - start_t), sim_time_s=t_end,
                       min_clearance_m=min(min_clear, 1.0), collisions=int(outcome == "collision"),
-                      states=states)
+                      motion="point3d", cycles=cycles, states=states)

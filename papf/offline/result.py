@@ -1,4 +1,5 @@
-"""The result of an offline run (:func:`papf.offline.plan.plan`, 2-D or 3-D) and its path file."""
+"""The one result of every offline run (:func:`papf.offline.run.simulate`, any motion model)
+and its path file."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ from common.errors import ConfigError
 
 @dataclass
 class PlanResult:
-    """One offline run. ``path`` rows are positions (x, y) or (x, y, z) [m] per control cycle."""
+    """One offline run. ``path`` rows are positions (x, y) or (x, y, z) [m] per control cycle
+    (per iteration for Wang's fixed step, which has no time: ``times`` counts iterations)."""
 
     world: str
     planner: str
@@ -27,8 +29,12 @@ class PlanResult:
     sim_time_s: float              # sim time of the outcome [s]
     min_clearance_m: float         # closest approach of the footprint / point to an obstacle [m]
     collisions: int
+    motion: str = "unicycle"       # the motion model: unicycle | point3d | fixed-step | car
+    cycles: int = 0                # planner cycles (force evaluations) made
     states: list = field(default_factory=list)   # keep_states: PlannerState (2-D) or Plan (3-D) per cycle
     road: dict = field(default_factory=dict)     # road worlds: left_road, lane_changes, min/max speed
+    units_per_m: float = 1.0       # fixed step: the paper's map units per metre (Wang's gains are in them)
+    trace: object = None           # car: the whole RoadRun (speeds, temporary goals, step times, vehicles)
 
     @property
     def length_m(self) -> float:
@@ -40,7 +46,7 @@ class PlanResult:
     def summary(self) -> dict:
         """The `papf plan --json` object (no path)."""
         return {"outcome": self.outcome, "planner": self.planner, "world": self.world,
-                "seed": self.seed, "duration_s": round(self.duration_s, 6),
+                "seed": self.seed, "motion": self.motion, "cycles": self.cycles, "duration_s": round(self.duration_s, 6),
                 "path_length_m": round(self.length_m, 6), "sim_time_s": round(self.sim_time_s, 6),
                 "collisions": self.collisions,
                 "min_clearance_m": round(self.min_clearance_m, 6), **self.road,

@@ -5,8 +5,9 @@ IAPF (``iapf``) or by the paper's traditional APF baseline (``apf``: eq. 12 obst
 constant speed, no prediction, same road and cruise fields); the other vehicles follow
 their world tracks and are seen as ground-truth tracks. The goal's x is a finish line.
 
-:func:`plan_car` returns a :class:`papf.offline.plan.PlanResult` (as ``papf plan`` prints it) and
-:func:`run_car` the full :class:`papf.offline.car.RoadRun` for experiments and figures.
+:func:`plan_car` returns the one offline :class:`papf.offline.result.PlanResult` (through
+:func:`papf.offline.run.simulate`), the full :class:`papf.offline.car.RoadRun` of
+:func:`run_car` as its ``trace`` for the experiments' figures.
 """
 
 from __future__ import annotations
@@ -78,16 +79,20 @@ def run_car(world: World, planner: str, params=(), params_file=None,
 
 
 def plan_car(world: World, planner: str, params=(), params_file=None,
-             max_time_s: float = 60.0) -> PlanResult:
-    """``papf plan`` on a car-scale world: to the finish line, a collision or the time limit."""
-    run = run_car(world, planner, params, params_file, max_time_s=max_time_s)
+             max_time_s: float = 60.0, whole_time: bool = False) -> PlanResult:
+    """A car-scale world to the finish line, a collision or ``max_time_s`` [s]; with
+    ``whole_time`` for all of ``max_time_s``, through contacts (the paper's figures)."""
+    run = run_car(world, planner, params, params_file,
+                  duration_s=max_time_s if whole_time else None, max_time_s=max_time_s)
     t_end = float(run.times[-1])
     reason = {"reached": f"passed x = {world.goal[0]:g} m",
               "collision": "the host's footprint touched a vehicle",
-              "timeout": f"no outcome within {max_time_s:g} s"}[run.outcome]
+              "timeout": (f"ran the whole {max_time_s:g} s" if whole_time
+                          else f"no outcome within {max_time_s:g} s")}[run.outcome]
     return PlanResult(world=world.name, planner=planner, seed=0, outcome=run.outcome,
                       reason=reason, path=run.states[:, :2].copy(), times=run.times,
                       headings=run.states[:, 3].copy(), duration_s=t_end, sim_time_s=t_end,
                       min_clearance_m=run.min_clearance_m, collisions=run.collisions,
+                      motion="car", cycles=len(run.step_us),
                       road={k: v for k, v in run.summary().items()
-                            if k not in ("collisions", "min_clearance_m")})
+                            if k not in ("collisions", "min_clearance_m")}, trace=run)

@@ -20,10 +20,10 @@ from collections.abc import Callable
 import numpy as np
 
 from common.quiet import import_quietly
+from common.robot import MOVING_SPEED
 from common.units import NS_PER_S as NS
 from nodes.base_driver.limits import CommandGate, unicycle
 from nodes.base_driver.sim import SimParams, jittered_start
-from papf.launch.outcome import MOVING_SPEED
 from papf.offline.result import PlanResult
 from schemas.messages import Odometry, Scan
 from worlds import World
@@ -102,10 +102,11 @@ def closed_loop(world: World, planner, name: str, seed: int, start: tuple[float,
     rows, states = [(0.0, x, y, yaw)], []
     outcome, reason, t_end, moved_ns = "", "", 0, None
     min_clear = clearance(x, y, yaw, 0)
-    collisions, t = 0, 0
+    collisions, t, cycles = 0, 0, 0
     while not outcome:
         cmd, state, status = planner.step(scan(x, y, yaw, t), Odometry(stamp_ns=t, x=x, y=y,
                                                                        yaw=yaw, v=v, w=w))
+        cycles += 1
         if keep_states:
             states.append(state)
         if status.state in TERMINAL:
@@ -138,4 +139,4 @@ def closed_loop(world: World, planner, name: str, seed: int, start: tuple[float,
                       path=arr[:, 1:3], times=arr[:, 0], headings=arr[:, 3],
                       duration_s=max(0, t_end - start_ns) / NS, sim_time_s=t_end / NS,
                       min_clearance_m=float(min_clear), collisions=collisions,
-                      states=states)
+                      motion="unicycle", cycles=cycles, states=states)

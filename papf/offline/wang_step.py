@@ -9,10 +9,9 @@ written in map units; 10 for the 3-D worlds, which are stored scaled 0.1 to metr
 
 Two fields:
 
-- ``traditional`` — eqs. 1-5: ``F_att = K_att (X_g - X_u)`` (eq. 2; the paper drops eq. 1's
-  factor 2, and so do we) and per obstacle within ``rho_0`` of its centre
-  ``F_rep = K_rep (1/rho - 1/rho_0) / rho^2`` away from it (the gradient of eq. 3 with
-  the same factor dropped). Table 1: K_att = 10, K_rep = 2, rho_0 = 20.
+- ``traditional`` — eqs. 1-5 as :func:`nodes.planner.wang.strategy.traditional_force` reads them (the
+  ROSbot planner ``wang-apf``'s field, one "point" per obstacle centre). Table 1: K_att = 10,
+  K_rep = 2, rho_0 = 20.
 - ``improved`` — eqs. 6-8 as :func:`nodes.planner.wang.strategy.wang_force` reads them (the ROSbot
   planner's field), on the obstacle centres with R_0 = the obstacle's radius in eq. 6, and
   K_rep = 5 (Sec. 4: "the basic parameters remained unchanged ... except for the repulsion
@@ -22,6 +21,9 @@ Outcomes: ``reached`` (the point comes within ``step / 2`` of the target: the cl
 fixed-step walk straight at it is sure to get), ``collision`` (a step ends inside an
 obstacle or its segment crosses one), ``failed`` (``J`` iterations spent: the paper's
 "local oscillations", "failed to reach the final target point").
+
+:func:`fixed_step` returns the one offline :class:`~papf.offline.result.PlanResult`, in metres
+(``units_per_m`` says the map scale; ``cycles`` the iterations made).
 """
 
 from __future__ import annotations
@@ -32,10 +34,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.wang.strategy import WangParams, wang_force
+from nodes.planner.registry import one_with_role
+from nodes.planner.wang.strategy import WangAPFParams, WangParams, traditional_force, wang_force
+from papf.offline.result import PlanResult
 from worlds import World, load_world
 
 METHODS = ("traditional", "improved")
+PLANNER_METHODS = {one_with_role("wang-baseline"): "traditional",   # the registry's planners
+                   one_with_role("wang-proposed"): "improved"}
+CLEARANCE_CAP_M = 1.0   # [m] clearances above this are reported as the cap (as the other motions)
 
 
 @dataclass(frozen=True)
@@ -48,27 +55,6 @@ class PointParams:
     k_rep: float = 2.0         # K_rep (traditional; the improved run uses k_rep_improved)
     k_rep_improved: float = 5.0  # Sec. 4: K_rep = 5 for the improved APF
     rho_0: float = 20.0        # influence radius of the obstacles
-
-
-@dataclass
-class PointResult:
-    world: str
-    method: str
-    outcome: str               # reached | collision | failed
-    iterations: int            # force evaluations made
-    path: np.ndarray           # (N, D) in map units
-    min_clearance: float       # closest approach to an obstacle surface [map units]
-    final_distance: float      # to the target [map units]
-
-    @property
-    def length(self) -> float:
-        return float(np.sum(np.linalg.norm(np.diff(self.path, axis=0), axis=1))) if len(self.path) > 1 else 0.0
-
-    def summary(self) -> dict:
-        return {"world": self.world, "method": self.method, "outcome": self.outcome,
-                "iterations": self.iterations, "path_length": round(self.length, 3),
-                "min_clearance": round(self.min_clearance, 3),
-                "final_distance": round(self.final_distance, 3)}
 
 
 def obstacles_of(world: World, units_per_m: float) -> tuple[np.ndarray, np.ndarray]:
@@ -84,17 +70,9 @@ def obstacles_of(world: World, units_per_m: float) -> tuple[np.ndarray, np.ndarr
     return (np.array(cs, float).reshape(-1, dims) * units_per_m, np.array(rs, float) * units_per_m)
 
 
-def traditional_force(pos, goal, centres, pp: PointParams) -> np.ndarray:
-    """Eqs. 2 and 4 (gradients of eqs. 1 and 3, factor 2 dropped as the paper's eq. 2 does)."""
-    force = pp.k_att * (goal - pos)
-    away = pos - centres
-    rho = np.sqrt(np.sum(away * away, axis=1))
-    near = (rho < pp.rho_0) & (rho > 1e-12)
-    if near.any():
-        r = rho[near]
-        mag = pp.k_rep * (1.0 / r - 1.0 / pp.rho_0) / r**2
-        force = force + np.sum(away[near] * (mag / r)[:, None], axis=0)
-    return force
+def _traditional(pp: PointParams) -> WangAPFParams:
+    """Table 1's field as the planner's parameters: one "point" (L = 1) per obstacle centre."""
+    return WangAPFParams(k_att=pp.k_att, k_rep_l=pp.k_rep, lidar_points=1, rho_0=pp.rho_0)
 
 
 def _improved(pp: PointParams, r_0: float) -> WangParams:
@@ -114,8 +92,9 @@ def _clearance(p, q, centres, radii) -> float:
 
 
 def fixed_step(world: World | str, method: str, pp: PointParams | None = None,
-               units_per_m: float | None = None) -> PointResult:
-    """Wang's point walk on ``world`` with the ``traditional`` or ``improved`` field."""
+               units_per_m: float | None = None) -> PlanResult:
+    """Wang's point walk on ``world`` with the ``traditional`` or ``improved`` field (the
+    planners ``wang-apf`` and ``wang``), in the paper's map units; the result in metres."""
     if method not in METHODS:
         raise ConfigError(f"method {method!r}; valid: {list(METHODS)}")
     world = world if isinstance(world, World) else load_world(world)
@@ -125,11 +104,12 @@ def fixed_step(world: World | str, method: str, pp: PointParams | None = None,
     goal = np.array(world.goal[: world.dims], float) * scale
     pos = np.array(world.start[: world.dims], float) * scale
     wps = [_improved(pp, float(r)) for r in radii] if method == "improved" else []
+    trad = _traditional(pp)
     path, clear, outcome, used = [pos.copy()], math.inf, "failed", 0
     for k in range(1, pp.iterations + 1):
         used = k
         if method == "traditional":
-            f = traditional_force(pos, goal, centres, pp)
+            f = traditional_force(pos, goal, centres, trad)
         else:   # R_0 of eq. 6 is the radius of the nearest obstacle
             near = int(np.argmin(np.linalg.norm(centres - pos, axis=1))) if len(centres) else 0
             f = wang_force(pos, goal, centres, wps[near] if wps else _improved(pp, 0.0))
@@ -145,5 +125,19 @@ def fixed_step(world: World | str, method: str, pp: PointParams | None = None,
         if np.linalg.norm(goal - pos) <= pp.step / 2:
             outcome = "reached"
             break
-    return PointResult(world.name, method, outcome, used, np.array(path), clear,
-                       float(np.linalg.norm(goal - pos)))
+    return _result(world, method, outcome, used, np.array(path) / scale, clear / scale, pp, scale)
+
+
+def _result(world: World, method: str, outcome: str, iterations: int, path: np.ndarray,
+            clear_m: float, pp: PointParams, scale: float) -> PlanResult:
+    """The walk as the one offline result (no time: ``times`` counts the iterations)."""
+    reason = {"reached": f"within {pp.step / 2:g} map units of the target",
+              "collision": f"a step enters an obstacle near {np.round(path[-1], 2).tolist()}",
+              "failed": f"{iterations} iterations spent (Wang's local oscillations)"}[outcome]
+    planner = {m: p for p, m in PLANNER_METHODS.items()}[method]
+    return PlanResult(world=world.name, planner=planner, seed=0, outcome=outcome, reason=reason,
+                      path=path, times=np.arange(path.shape[0], dtype=float),
+                      headings=np.zeros(0), duration_s=0.0, sim_time_s=0.0,
+                      min_clearance_m=min(clear_m, CLEARANCE_CAP_M),
+                      collisions=int(outcome == "collision"), motion="fixed-step",
+                      cycles=iterations, units_per_m=scale)

@@ -17,9 +17,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from nodes.planner.registry import car_variants  # noqa: E402
-from papf.offline.car import rect_corners  # noqa: E402
-from papf.offline.road import CAR_PLANNERS, lanes_of  # noqa: E402
-from worlds import load_world  # noqa: E402
+from worlds import World, load_world  # noqa: E402
+from worlds.shapes import rect_corners  # noqa: E402
 
 COLOURS = {variant: v[3] for variant, v in car_variants().items()}
 PROPOSED = next(iter(car_variants()))   # the car planner itself (IAPF): drawn on top, with its boxes
@@ -36,11 +35,11 @@ def _marks(rows: list[dict], every: float) -> list[dict]:
     return [r for r in rows if abs(float(r["t"]) / every - round(float(r["t"]) / every)) < 1e-6]
 
 
-def _road(ax, world, x0: float, x1: float) -> None:
-    lanes = lanes_of(world)
-    for i in range(lanes.count + 1):
-        y = lanes.y_min + i * lanes.width
-        solid = i in (0, lanes.count)
+def _road(ax, world: World, x0: float, x1: float) -> None:
+    road = world.road
+    for i in range(road.lanes + 1):
+        y = road.y_min + i * road.lane_width
+        solid = i in (0, road.lanes)
         ax.plot([x0, x1], [y, y], color="black", lw=1.5 if solid else 1.0,
                 ls="-" if solid else (0, (6, 6)))
 
@@ -52,11 +51,12 @@ def _box(ax, x, y, yaw, size, colour, label=None, alpha=0.35) -> None:
         ax.text(x, y + size[1] / 2 + 0.15, label, ha="center", va="bottom", fontsize=6, color=colour)
 
 
-def plot_case(out_png: str | Path, case: str, csv_dir: str | Path) -> Path:
-    """One case's figure from ``csv_dir``/``<case>-<planner>.csv`` and ``<case>-vehicles.csv``."""
+def plot_case(out_png: str | Path, case: str, csv_dir: str | Path, labels: dict[str, str]) -> Path:
+    """One case's figure from ``csv_dir``/``<case>-<planner>.csv`` and ``<case>-vehicles.csv``,
+    for each planner of ``labels`` (planner -> its legend label) whose CSV is there."""
     csv_dir = Path(csv_dir)
     world = load_world(case)
-    runs = {pl: _read(csv_dir / f"{case}-{pl}.csv") for pl in CAR_PLANNERS
+    runs = {pl: _read(csv_dir / f"{case}-{pl}.csv") for pl in labels
             if (csv_dir / f"{case}-{pl}.csv").exists()}
     vehicles = _read(csv_dir / f"{case}-vehicles.csv")
     xs = [float(r["x"]) for rows in runs.values() for r in rows] + [float(r["x"]) for r in vehicles]
@@ -66,7 +66,7 @@ def plot_case(out_png: str | Path, case: str, csv_dir: str | Path) -> Path:
         _road(ax, world, x0, x1)
         for pl, rows in runs.items():
             ax.plot([float(r["x"]) for r in rows], [float(r["y"]) for r in rows],
-                    color=COLOURS[pl], lw=1.2, label=CAR_PLANNERS[pl])
+                    color=COLOURS[pl], lw=1.2, label=labels[pl])
         every = MARK_EVERY_S if float(vehicles[-1]["t"]) <= 6.0 else 2.0 * MARK_EVERY_S
         for r in _marks(runs.get(PROPOSED, []), every):
             _box(ax, float(r["x"]), float(r["y"]), float(r["yaw"]), HOST_SIZE, COLOURS[PROPOSED],
@@ -79,16 +79,16 @@ def plot_case(out_png: str | Path, case: str, csv_dir: str | Path) -> Path:
         if goal:
             ax.scatter(*zip(*goal, strict=True), s=4, color="tab:orange",
                        label="temporary lane goal (y, at the host's x)")
-        lanes = lanes_of(world)
+        y_max = world.road.y_min + world.road.lanes * world.road.lane_width
         ax.set_xlim(x0, x1)
-        ax.set_ylim(lanes.y_min - 1.0, lanes.y_max + 1.0)
+        ax.set_ylim(world.road.y_min - 1.0, y_max + 1.0)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.set_title(f"{case}: host (IAPF, blue) and vehicles (grey) every {every:g} s")
         ax.legend(loc="upper left", fontsize=7, ncol=4)
         for pl, rows in sorted(runs.items(), key=lambda kv: kv[0] == PROPOSED):   # IAPF on top
             av.plot([float(r["t"]) for r in rows], [3.6 * float(r["v"]) for r in rows],
-                    color=COLOURS[pl], label=CAR_PLANNERS[pl], lw=2.0 if pl == PROPOSED else 1.2)
+                    color=COLOURS[pl], label=labels[pl], lw=2.0 if pl == PROPOSED else 1.2)
         ids = sorted({r["id"] for r in vehicles})
         for i in ids:
             rows = [r for r in vehicles if r["id"] == i]

@@ -164,19 +164,22 @@ def plot_plan(world: World, result, out_png: str | Path, title: str) -> Path:
     return out
 
 
-def mind_png(runs, files: dict, world: World | None, out_png: str | Path, topics=None) -> Path:
-    """The report's ``mind.png``: for the first run of each planner, its path, footprints and
-    the mind at its most telling cycle (from the recording's ``planner/state``)."""
-    from papf.recording.track import load_track
-
+def first_runs(runs) -> dict:
+    """planner -> its first run in ``runs`` (the one :func:`mind_png` shows)."""
     firsts: dict[str, object] = {}
     for r in runs:
         firsts.setdefault(r.planner, r)
+    return firsts
+
+
+def mind_png(firsts: dict, world: World | None, out_png: str | Path) -> Path:
+    """The report's ``mind.png``: ``firsts`` maps each planner to (its first run, that run's
+    track from the recording, :class:`papf.recording.track.RunTrack`); per planner its path,
+    footprints and the mind at its most telling cycle (the track's ``planner/state``)."""
     fig, axes = plt.subplots(1, max(len(firsts), 1), figsize=(5.0 * max(len(firsts), 1), 4.6),
                              squeeze=False)
     try:
-        for ax, (planner, r) in zip(axes[0], firsts.items(), strict=False):
-            track = load_track(files[r.file], topics=topics)
+        for ax, (planner, (r, track)) in zip(axes[0], firsts.items(), strict=False):
             if world is not None and world.dims == 2:
                 draw_world(ax, world)
             xy, t = track.xyyaw, track.t

@@ -5,7 +5,7 @@ draws four panels: the 3-D view; the top projection (x-y) and the side projectio
 each sphere as its outline circle in that plane (a path point inside the circle is not
 necessarily inside the sphere — the clearance panel is the truth); and the clearance
 over time, the distance from the point robot to the nearest sphere surface
-(:func:`papf.offline.point3d.clearance`), with 0 marked — below it is a collision.
+(:func:`worlds.shapes.sphere_clearance`), with 0 marked — below it is a collision.
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
-from papf.offline.point3d import clearance, spheres_of  # noqa: E402
 from papf.plots.world import (  # noqa: E402
     GOAL_COLOUR,
     MARKERS,
@@ -32,6 +31,7 @@ from papf.plots.world import (  # noqa: E402
     path_style,
 )
 from worlds import World  # noqa: E402
+from worlds.shapes import sphere_clearance, spheres_of  # noqa: E402
 
 PLANES = (("top (x-y)", 0, 1, "y [m]"), ("side (x-z)", 0, 2, "z [m]"))
 
@@ -75,7 +75,7 @@ def _clearance(ax, world: World, paths: Mapping[str, np.ndarray],
             continue
         t = np.asarray(times[label]) if times and label in times else None
         x = t if t is not None and len(t) == len(arr) else np.arange(len(arr))
-        ax.plot(x, [clearance(p, spheres) for p in arr], color=colour_for(label, k),
+        ax.plot(x, [sphere_clearance(p, spheres) for p in arr], color=colour_for(label, k),
                 label=label, **{**path_style(k), "lw": max(path_style(k)["lw"] - 1.0, 1.0)})
     ax.axhline(0.0, color="tab:red", lw=1.0, ls="--", label="surface (collision below)")
     ax.set_xlabel("time [s]" if times else "step")

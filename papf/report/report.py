@@ -26,8 +26,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from common.errors import ConfigError, PapfError, RecordingError
-from papf.plots.mind import mind_png
+from papf.plots.mind import first_runs, mind_png
 from papf.recording.rosbag import TopicMap, is_rosbag
+from papf.recording.track import load_track
 from papf.report import figures, tables
 from papf.report.markdown import markdown
 from papf.report.metrics import RunMetrics, run_metrics
@@ -172,7 +173,8 @@ def _write(report: Report, runs: list, files: dict, out: Path,
         report.pngs[("trajectories", world_name)] = traj
         report.pngs[("motion", world_name)] = motion
         mind = report.name("mind", world_name)
-        report.files.append(mind_png(mine, files, _world(world_name), out / mind, topics))
+        firsts = {pl: (r, load_track(files[r.file], topics=topics)) for pl, r in first_runs(mine).items()}
+        report.files.append(mind_png(firsts, _world(world_name), out / mind))
         report.pngs[("mind", world_name)] = mind
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
     tables.write_csv(csv_path, runs, report.summaries)

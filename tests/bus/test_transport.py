@@ -1,22 +1,13 @@
-"""Transport helpers over a real router process: typed pub/sub, bad payloads dropped, liveliness."""
+"""Transport helpers over a real router: typed pub/sub, bad payloads dropped, liveliness."""
 
-import argparse
 import logging
 import time
 
 import pytest
 import zenoh
 
-from common.errors import ConfigError
-from common.transport import Node, add_zenoh_args, alive_nodes, wait_alive, zenoh_config
+from common.transport import Node, alive_nodes, wait_alive, zenoh_config
 from schemas import Keys, Odometry, Twist
-
-
-def test_config_defaults_to_embedded_router_client():
-    conf = zenoh_config()
-    assert '"client"' in conf.get_json("mode")
-    assert "7447" in conf.get_json("connect/endpoints")
-    assert conf.get_json("scouting/multicast/enabled") == "false"
 
 
 def test_router_without_scouting_delay_opens_and_serves_a_client():
@@ -32,22 +23,6 @@ def test_router_without_scouting_delay_opens_and_serves_a_client():
             time.sleep(0.05)
         sub.undeclare()
     assert got and got[0] == b"1"
-
-
-def test_config_from_cli_args():
-    p = argparse.ArgumentParser()
-    add_zenoh_args(p)
-    a = p.parse_args(["--mode", "peer", "--listen", "tcp/127.0.0.1:9000", "--namespace", "r2"])
-    assert a.mode == "peer" and a.namespace == "r2" and a.listen == ["tcp/127.0.0.1:9000"]
-
-
-def test_bad_config_file_is_a_config_error(tmp_path):
-    bad = tmp_path / "z.json5"
-    bad.write_text("{ this is : not json5 ")
-    with pytest.raises(ConfigError, match="cannot read Zenoh config"):
-        zenoh_config(config_file=str(bad))
-    with pytest.raises(ConfigError, match="mode"):
-        zenoh_config(mode="satellite")
 
 
 def wait_for(pred, timeout=30.0):

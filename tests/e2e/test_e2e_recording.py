@@ -18,8 +18,6 @@ from papf.recording.replay import replay
 from schemas import BatteryState, Keys
 from tests.support.e2e import papf_run
 
-pytestmark = pytest.mark.e2e
-
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):

@@ -15,8 +15,6 @@ from papf.launch.supervisor import free_port, wait_port
 from schemas import Clock, Keys
 from tests.support.e2e import papf_run, pids_of, start_papf_run
 
-pytestmark = pytest.mark.e2e
-
 NODES = ("nodes.base_driver", "nodes.lidar_sim", "nodes.planner", "nodes.energy_meter",
          "papf.launch.router")
 
@@ -69,14 +67,6 @@ def test_every_nodes_last_line_comes_before_the_launcher_exits():
     for node, last in (("lidar_sim", "published"), ("energy_meter", "stopped:"),
                        ("base_driver", "run stopped"), ("planner", "stopping after")):
         assert any(line.startswith(f"[{node}]") and last in line for line in err.splitlines()), err
-
-
-def test_broken_world_file_is_a_clear_usage_error(tmp_path):
-    bad = tmp_path / "bad.toml"
-    bad.write_text("[goal]\nposition = [1]\n")
-    code, res, err = papf_run("--world", str(bad))
-    assert code == 2 and res is None
-    assert "goal.position" in err
 
 
 def test_killing_the_planner_stops_the_robot_and_fails_the_run():

@@ -9,8 +9,6 @@ from papf.recording.reader import iter_messages
 from schemas.messages import Objects
 from tests.support.e2e import papf_run
 
-pytestmark = pytest.mark.e2e
-
 
 def objects_of(path, ns="rosbot"):
     return [msg for _key, msg, _t in iter_messages(path, f"{ns}/objects")]

@@ -1,100 +1,15 @@
-"""`papf experiment energy`: plan, orchestration (with a stand-in run), one real run."""
+"""`papf experiment energy`: one real run through the stack."""
 
 from __future__ import annotations
 
 import io
-from dataclasses import replace
-from pathlib import Path
 
-import pytest
 from rich.console import Console
 
-from common.errors import ConfigError
-from papf.experiments.energy import EnergyExperiment, plan, print_summary, run_experiment
-from papf.launch.outcome import RunResult
-from papf.launch.run import resolve_run
-from papf.report import run_metrics
-from tests.e2e.test_report import SHORT_WORLD, write_synthetic
+from papf.experiments.energy import EnergyExperiment, run_experiment
+from tests.e2e.test_report import SHORT_WORLD
 
 
-def test_plan_names_files_and_seeds(tmp_path):
-    specs = plan(EnergyExperiment(out=tmp_path, runs=3, planners=("apf", "papf"), seed=10))
-    assert [s.path.name for s in specs] == ["apf-1.mcap", "apf-2.mcap", "apf-3.mcap",
-                                            "papf-1.mcap", "papf-2.mcap", "papf-3.mcap"]
-    assert [s.seed for s in specs] == [11, 12, 13, 11, 12, 13]   # k-th runs share their noise
-    assert all(s.path.parent == tmp_path for s in specs)
-
-
-@pytest.mark.parametrize(("change", "match"), [
-    ({"runs": 0}, "at least 1"), ({"planners": ("apf", "nope")}, "nope.*valid: apf"),
-    ({"planners": ()}, "empty"), ({"planners": ("apf", "apf")}, "twice"),
-    ({"energy_model": "x"}, "motor, paper"), ({"timeout_s": 0.0}, "> 0"),
-])
-def test_bad_settings_are_refused_before_any_run(tmp_path, change, match):
-    exp = replace(EnergyExperiment(out=tmp_path), **change)
-    with pytest.raises(ConfigError, match=match):
-        run_experiment(exp, Console(file=io.StringIO()), run_fn=pytest.fail)
-
-
-class FakeRuns:
-    """Stands in for papf.launch.run.run: writes a synthetic recording, returns its summary."""
-
-    def __init__(self, charge_error: float = 0.0, cut_first: int = 0):
-        self.configs = []
-        self.charge_error = charge_error
-        self.cut_first = cut_first   # this many first recordings lose their end
-
-    def __call__(self, cfg) -> RunResult:
-        self.configs.append(cfg)
-        speed = (0.4 if cfg.planner == "apf" else 0.5) + 0.01 * cfg.seed
-        write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed)
-        m = run_metrics(cfg.record)
-        if len(self.configs) <= self.cut_first:  # the live run was whole; the file is not
-            write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed, total_k=80,
-                            outcome=None, meta={"timeout_s": "300"})
-        return RunResult(m.outcome, cfg.planner, "energy", cfg.seed, m.duration_s,
-                         m.path_length_m, m.charge_mAh + self.charge_error, m.energy_J, 0,
-                         m.t_end_s, 0.1)
-
-
-def test_experiment_records_every_run_and_reports(tmp_path):
-    out = tmp_path / "exp"
-    fake, text = FakeRuns(), io.StringIO()
-    console = Console(file=text, width=200)
-    res = run_experiment(EnergyExperiment(out=out, runs=2, seed=4), console, run_fn=fake)
-    assert [(c.planner, c.seed, Path(c.record).name) for c in fake.configs] == [
-        ("apf", 5, "apf-1.mcap"), ("apf", 6, "apf-2.mcap"),
-        ("papf", 5, "papf-1.mcap"), ("papf", 6, "papf-2.mcap")]
-    cfg = fake.configs[0]
-    assert cfg.world == "energy" and cfg.progress is False and cfg.port
-    recorder = resolve_run(cfg).nodes["recorder"]    # the sim profile states the timeout
-    assert "timeout_s=300" in recorder and "experiment=energy" in recorder
-    assert all(c.port for c in fake.configs)          # an explicit free port each run
-    for name in ("report.md", "report.csv", "trajectories.png", "charge.png", "motion.png"):
-        assert (out / name).is_file()
-    assert res.mismatches == [] and res.exit_code == 0
-    assert [s.reached for s in res.report.summaries] == [2, 2]
-    assert text.getvalue().count("reached") >= 4          # one line per finished run
-    print_summary(res, console)
-    shown = text.getvalue()
-    assert "PAPF vs APF charge: " in shown and "wall time" in shown
-
-
-def test_report_that_disagrees_with_the_live_run_is_flagged(tmp_path):
-    res = run_experiment(EnergyExperiment(out=tmp_path, runs=1, planners=("apf",)),
-                         Console(file=io.StringIO()), run_fn=FakeRuns(charge_error=1e-3))
-    assert res.mismatches and "charge_mAh" in res.mismatches[0] and res.exit_code == 6
-
-
-def test_a_recording_that_lost_its_end_is_reported_not_run_again(tmp_path):
-    fake, text = FakeRuns(cut_first=1), io.StringIO()
-    res = run_experiment(EnergyExperiment(out=tmp_path, runs=1, planners=("apf",)),
-                         Console(file=text, width=200), run_fn=fake)
-    assert len(fake.configs) == 1                       # the recorder's ack makes files whole
-    assert res.mismatches and res.exit_code == 6
-
-
-@pytest.mark.e2e
 def test_one_real_run_through_the_stack(tmp_path):
     world = tmp_path / "short.toml"
     world.write_text(SHORT_WORLD)

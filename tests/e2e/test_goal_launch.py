@@ -10,11 +10,7 @@ import sys
 import threading
 import time
 
-import pytest
-
 from papf.launch.supervisor import free_port, wait_port
-
-pytestmark = pytest.mark.e2e
 
 
 def test_goal_retargets_the_planner_of_a_launched_session():

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from papf.launch.outcome import OUTCOMES
+from common.outcomes import OUTCOMES
 from papf.recording.reader import open_recording
 
 PY = sys.executable
@@ -100,7 +100,6 @@ def _trace(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line.endswith("}")]
 
 
-@pytest.mark.e2e
 def test_split_over_netns_survives_a_link_cut(netns, tmp_path):
     world, trace, record = tmp_path / "corridor.toml", tmp_path / "trace.jsonl", tmp_path / "run.mcap"
     world.write_text(WORLD)

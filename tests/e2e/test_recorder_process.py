@@ -8,15 +8,13 @@ import sys
 import time
 
 import msgpack
-import pytest
 
 from common.transport import wait_alive
 from papf.recording import Recording, recover
 from schemas import Keys, Twist
 from schemas.messages import ALL_MESSAGES
-from tests.e2e.test_recorder import key_of, sample
+from tests.support.recordings import key_of, sample
 
-pytestmark = pytest.mark.e2e
 ALIVE_TIMEOUT_S = 30.0
 
 

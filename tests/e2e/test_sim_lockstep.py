@@ -13,7 +13,6 @@ import threading
 import time
 from contextlib import contextmanager
 
-import pytest
 import zenoh
 
 from common.errors import SchemaError
@@ -21,8 +20,6 @@ from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import Supervisor, free_port, wait_port
 from schemas import Keys
 from schemas.messages import Clock, Event, Odometry, Scan, Twist
-
-pytestmark = pytest.mark.e2e
 
 PY = sys.executable
 KEYS = Keys("rosbot")

@@ -21,8 +21,6 @@ import pytest
 from common.transport import wait_alive
 from schemas import Keys
 
-pytestmark = pytest.mark.e2e
-
 
 def _trace(path) -> list[dict]:
     try:

@@ -14,7 +14,6 @@ import time
 
 import msgpack
 import numpy as np
-import pytest
 import zenoh
 
 from common.transport import zenoh_config
@@ -24,8 +23,6 @@ from schemas.keys import TOPICS
 from schemas.messages import Odometry, Scan, Twist
 from tests.e2e.test_e2e_run import assert_no_orphans
 from tests.support.e2e import papf_run, pids_of, start_papf_run
-
-pytestmark = pytest.mark.e2e
 
 FIGURES = ("outcome", "duration_s", "path_length_m", "charge_mAh", "energy_J", "collisions",
            "sim_time_s")

@@ -35,7 +35,6 @@ from schemas.messages import (
     Twist,
 )
 
-pytestmark = pytest.mark.e2e
 KEYS = Keys("rosbot")
 
 

@@ -122,3 +122,61 @@ def test_the_graph_sees_function_local_imports():
     graph = import_graph()
     assert "papf.launch.run" in graph["papf.cli.run"]        # imported inside cmd_run
     assert "nodes.base_driver.rosbot_node" in graph["nodes.base_driver.__main__"]  # lazy
+
+
+# -- inside papf/: rooms by rank (docs/architecture.md "Layers") ----------------------------
+# commands (cli, doctools) -> experiments -> reports -> launch, offline -> recording, bus,
+# robot -> pictures (plots) -> console. Rooms of one rank do not import each other (offline
+# never imports the launcher). ``papf`` itself (__init__: the version) is read by anyone.
+PAPF_ROOMS = {"papf.__main__": 7, "papf.cli": 6, "papf.doctools": 6, "papf.experiments": 5,
+              "papf.report": 4, "papf.launch": 3, "papf.offline": 3, "papf.recording": 2,
+              "papf.bus": 2, "papf.robot": 2, "papf.plots": 1, "papf.console": 0, "papf": -1}
+
+
+def papf_room(module: str) -> str:
+    """The room (folder) of a module of papf/: ``papf.offline.run`` -> ``papf.offline``."""
+    return ".".join(module.split(".")[:2])
+
+
+def room_violations(graph: dict[str, set[str]]) -> list[str]:
+    """Edges between papf/'s rooms that do not point to a lower room (rooms of one rank,
+    e.g. offline and launch, do not import each other)."""
+    out = []
+    for a, edges in graph.items():
+        if not a.startswith("papf"):
+            continue
+        for b in sorted(edges):
+            ra, rb = papf_room(a), papf_room(b)
+            if b.startswith("papf") and ra != rb and PAPF_ROOMS[rb] >= PAPF_ROOMS[ra]:
+                out.append(f"{a} -> {b}")
+    return out
+
+
+def test_every_papf_module_lies_in_a_room():
+    loose = [m for m in project_modules() if m.startswith("papf") and papf_room(m) not in PAPF_ROOMS]
+    assert not loose, f"modules outside papf/'s rooms (add the folder to PAPF_ROOMS): {loose}"
+
+
+def test_papf_rooms_import_only_lower_rooms():
+    bad = room_violations(import_graph())
+    assert not bad, "imports across papf/'s rooms that do not point down:\n" + "\n".join(bad)
+
+
+def test_the_room_check_sees_sideways_and_upward_edges():
+    graph = {"papf.plots.x": {"papf.offline.run"}, "papf.offline.run": {"papf.launch.outcome"},
+             "papf.cli.plan": {"papf.offline.run", "papf.plots.paths"}}
+    assert room_violations(graph) == ["papf.plots.x -> papf.offline.run",
+                                      "papf.offline.run -> papf.launch.outcome"]
+
+
+def test_optional_imports_are_decided_once():
+    """``HAVE_NUMBA`` is assigned and ``tomli`` imported only in common/optional.py."""
+    places = set()
+    for name, path in project_modules().items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Assign) and any(
+                    isinstance(t, ast.Name) and t.id == "HAVE_NUMBA" for t in node.targets):
+                places.add(name)
+            if isinstance(node, ast.Import) and any(a.name == "tomli" for a in node.names):
+                places.add(name)
+    assert places == {"common.optional"}

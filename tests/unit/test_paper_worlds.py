@@ -17,7 +17,7 @@ from papf.experiments.paper_tests import (
 )
 from papf.experiments.random_worlds import kind_of, summarize
 from papf.experiments.trials import Trial, markdown_table
-from papf.offline.plan import FootprintChecker
+from papf.offline.unicycle import FootprintChecker
 from papf.offline.world_gen import is_solvable
 from worlds import load_world, packaged_worlds
 from worlds.geometry import signed_distance

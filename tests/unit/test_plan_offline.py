@@ -1,4 +1,5 @@
-"""Offline planning (papf.offline.plan, papf.offline.point3d), random worlds, plots: fast, no processes."""
+"""Offline planning (papf.offline.run.simulate and its motion models), random worlds, plots:
+fast, no processes."""
 
 import json
 import math
@@ -8,9 +9,12 @@ import numpy as np
 import pytest
 
 from common.errors import ConfigError
+from common.optional import tomllib
 from nodes.planner.registry import PLANNERS
-from papf.offline.plan import FootprintChecker, plan, write_path
 from papf.offline.point3d import cast_points, fibonacci_directions
+from papf.offline.result import write_path
+from papf.offline.run import simulate
+from papf.offline.unicycle import FootprintChecker
 from papf.offline.world_gen import (
     GAP_RANGE_M,
     KINDS,
@@ -25,11 +29,6 @@ from papf.plots.paths import plot_paths
 from worlds import load_world, parse_world
 from worlds.geometry import signed_distance
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
-
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
@@ -43,7 +42,7 @@ def corridor(obstacles, goal=(3.0, 0.0), start=(0.0, 0.0, 0.0)):
 
 # -- 2-D closed loop ------------------------------------------------------------------
 def test_apf_reaches_the_goal_in_the_open_world():
-    r = plan("open", "apf")
+    r = simulate("open", "apf")
     assert r.outcome == "reached" and r.collisions == 0
     assert np.hypot(*(r.path[-1] - np.array(load_world("open").goal))) <= 0.1 + 0.01
     assert 4.9 <= r.length_m <= 5.2          # 5 m straight ahead, minus the tolerance
@@ -52,7 +51,7 @@ def test_apf_reaches_the_goal_in_the_open_world():
 
 
 def test_apf_stagnates_in_a_dead_end_and_does_not_hang():
-    r = plan("papf-test-4", "apf", max_time_s=200)
+    r = simulate("papf-test-4", "apf", max_time_s=200)
     assert r.outcome == "stagnated"
     assert "no progress" in r.reason or r.reason
     assert r.sim_time_s < 200 and r.collisions == 0
@@ -60,29 +59,29 @@ def test_apf_stagnates_in_a_dead_end_and_does_not_hang():
 
 @pytest.mark.skipif("papf" not in PLANNERS, reason="PAPF strategy not registered yet")
 def test_papf_escapes_the_dead_end():
-    r = plan("papf-test-4", "papf", max_time_s=200)
+    r = simulate("papf-test-4", "papf", max_time_s=200)
     assert r.outcome == "reached" and r.collisions == 0 and r.min_clearance_m > 0
 
 
 def test_collision_is_detected_and_ends_the_run():
     # a wall across the corridor and an APF that ignores obstacles (d_o ~ 0) drives into it
     world = corridor([{"kind": "wall", "from": [1.0, -0.75], "to": [1.0, 0.75], "thickness": 0.1}])
-    r = plan(world, "apf", params={"d_o": 0.01, "v_max": 0.5})
+    r = simulate(world, "apf", params={"d_o": 0.01, "v_max": 0.5})
     assert r.outcome == "collision" and r.collisions == 1
     assert r.min_clearance_m < 0
     assert r.path[-1][0] < 1.0                  # stopped at the wall, not through it
 
 
 def test_timeout_when_the_time_limit_is_short():
-    r = plan("open", "apf", max_time_s=2.0)
+    r = simulate("open", "apf", max_time_s=2.0)
     assert r.outcome == "timeout" and math.isclose(r.sim_time_s, 2.0)
 
 
 def test_same_seed_same_path_and_bad_dt_rejected():
-    a, b = plan("papf-test-1", "apf", max_time_s=10), plan("papf-test-1", "apf", max_time_s=10)
+    a, b = simulate("papf-test-1", "apf", max_time_s=10), simulate("papf-test-1", "apf", max_time_s=10)
     np.testing.assert_array_equal(a.path, b.path)
     with pytest.raises(ConfigError, match="dt"):
-        plan("open", "apf", dt=0.0)
+        simulate("open", "apf", dt=0.0)
 
 
 def test_footprint_clearance_of_the_chassis_box():
@@ -100,7 +99,7 @@ def test_footprint_clearance_of_the_chassis_box():
 
 
 def test_path_files_csv_and_json(tmp_path):
-    r = plan("open", "apf", max_time_s=3.0)
+    r = simulate("open", "apf", max_time_s=3.0)
     write_path(r, tmp_path / "p.csv")
     lines = (tmp_path / "p.csv").read_text().splitlines()
     assert lines[0] == "t,x,y,yaw" and len(lines) == r.path.shape[0] + 1
@@ -112,14 +111,26 @@ def test_path_files_csv_and_json(tmp_path):
         write_path(r, tmp_path / "p.txt")
 
 
+# -- the one entry point picks the motion model ------------------------------------
+def test_simulate_picks_the_motion_model_from_the_world_and_motion():
+    assert simulate("open", "apf", max_time_s=1.0).motion == "unicycle"
+    car = simulate("iapf-case-a", "iapf", max_time_s=1.0)
+    assert car.motion == "car" and car.cycles == 50 and car.trace.times[-1] == car.sim_time_s
+    whole = simulate("iapf-case-a", "iapf", max_time_s=1.0, whole_time=True)
+    assert whole.outcome == "timeout" and whole.reason == "ran the whole 1 s"
+    assert simulate("wang-table1-fig5", "wang-apf", motion="fixed-step").motion == "fixed-step"
+    with pytest.raises(ConfigError, match="car-scale"):
+        simulate("open", "apf", whole_time=True)
+
+
 # -- 3-D point robot ---------------------------------------------------------------
 def test_3d_point_robot_reaches_and_bypasses_a_sphere(tmp_path):
     world = parse_world({"name": "s", "robot": {"start": [0, 0, 0]}, "goal": {"position": [2.0, 0.0, 0.5]},
                          "obstacles": [{"kind": "sphere", "center": [1.0, 0.1, 0.2], "radius": 0.25}]})
-    r = plan(world, "apf", params={"v_max": 0.5}, max_time_s=60)
+    r = simulate(world, "apf", params={"v_max": 0.5}, max_time_s=60)
     assert r.outcome == "reached" and r.path.shape[1] == 3 and r.min_clearance_m > 0
     with pytest.raises(ConfigError, match="2-D only"):
-        plan(world, "arapf")
+        simulate(world, "arapf")
     out = plot_paths(world, {"apf": r.path}, tmp_path / "w3.png")
     assert out.read_bytes()[:8] == PNG_MAGIC
 

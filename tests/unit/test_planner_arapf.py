@@ -22,7 +22,7 @@ from nodes.planner.arapf.strategy import (
 from nodes.planner.core import scan_view
 from nodes.planner.field import APFParams, Repulsors, apf_force
 from nodes.planner.registry import make_planner
-from papf.offline.plan import plan
+from papf.offline.run import simulate as plan_offline
 from schemas.messages import Odometry
 from tests.support.toysim import box_segments, cast_scan, simulate, toy_world
 
@@ -217,6 +217,6 @@ def test_closed_loop_bypasses_a_dead_end_and_abandons_ar(segments):
 # -- the paper's tests (offline: pybullet LiDAR, ROSbot command limits, footprint collisions)
 @pytest.mark.parametrize("world", ["arapf-test-1", "arapf-test-2", "arapf-test-3"])
 def test_paper_worlds_are_bypassed_offline(world):
-    r = plan(world, "arapf", keep_states=True)
+    r = plan_offline(world, "arapf", keep_states=True)
     assert r.outcome == "reached" and r.collisions == 0
     assert any(s.mode == "augmented" for s in r.states)

@@ -152,10 +152,10 @@ def test_point_reaches_goal_past_a_sphere_3d():
 
 def test_unreachable_goal_world_offline():
     """worlds/wang-unreachable-goal (Wang Fig. 7-8): wang reaches it, the classic APF does not."""
-    from papf.offline.plan import plan
+    from papf.offline.run import simulate
     from worlds import load_world
 
     world = load_world("wang-unreachable-goal")
-    wang = plan(world, "wang", seed=0)
+    wang = simulate(world, "wang", seed=0)
     assert wang.outcome == "reached" and wang.collisions == 0 and wang.min_clearance_m > 0.1
-    assert plan(world, "apf", seed=0).outcome in ("stagnated", "failed", "timeout")
+    assert simulate(world, "apf", seed=0).outcome in ("stagnated", "failed", "timeout")

@@ -9,7 +9,7 @@ import pytest
 from nodes.base_driver.core import DriverCore
 from nodes.base_driver.sim import SimBase
 from nodes.lidar_sim.core import LidarParams, LidarSim
-from papf.offline.plan import plan
+from papf.offline.run import simulate
 from worlds import parse_world
 from worlds.messages import truth_objects
 
@@ -77,5 +77,5 @@ def test_offline_plan_checks_moving_obstacles_where_they_are():
     # contact when the box arrives, not against the box's start pose (2.5 m away)
     w = parse_world({"goal": {"position": [3.0, 0.0]}, "obstacles": [
         {"kind": "box", "size": [0.4, 0.3], "motion": {"track": [[0.0, 3.0, 0.0], [3.0, 0.0, 0.0]]}}]})
-    r = plan(w, "apf", seed=0, max_time_s=10.0)
+    r = simulate(w, "apf", seed=0, max_time_s=10.0)
     assert r.outcome == "collision" and 1.0 < r.sim_time_s < 3.0

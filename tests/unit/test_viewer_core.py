@@ -10,6 +10,7 @@ import jsonschema
 import numpy as np
 import pytest
 
+from common.optional import tomllib
 from nodes.viewer import convert as cv
 from nodes.viewer.core import CHANNELS, ViewCore, goal_from_client, param_sets, schema_json
 from nodes.viewer.scene import footprint_scene, mind_scene, moving_scene, world_scene
@@ -24,11 +25,6 @@ from schemas.messages import (
     Twist,
 )
 from worlds import load_world, packaged_worlds, parse_world
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
 
 SCHEMAS = {c.topic: schema_json(c.schema) for c in CHANNELS}
 TRAFFIC = parse_world(tomllib.loads("""

@@ -14,12 +14,9 @@ import math
 
 import numpy as np
 
-try:
-    import numba
-except ImportError:  # numba is optional (pyproject extra "fast")
-    numba = None
+from common.optional import HAVE_NUMBA, numba_or_none
 
-HAVE_NUMBA = numba is not None
+numba = numba_or_none()   # None without the extra "fast": the numpy twins run
 
 # params vector layout (see pack_params)
 (K1, K2, B1, B2, AX, AY, ETA1, ETA2, AB, SM, GAIN, MASS, AMAX, VMAX, VC, HALF, HMAX, YRATE,

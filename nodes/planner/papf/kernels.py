@@ -16,14 +16,10 @@ import math
 
 import numpy as np
 
+from common.optional import HAVE_NUMBA, numba_or_none
 from nodes.planner.field import EPS_M, coulomb_sum
 
-try:
-    import numba
-except ImportError:  # numba is optional (pyproject extra "fast")
-    numba = None
-
-HAVE_NUMBA = numba is not None
+numba = numba_or_none()   # None without the extra "fast": the numpy twins run
 
 
 def _carrot(pos, goal, goal_range, out):

@@ -1,0 +1,78 @@
+"""Test data shared by the tiers: a valid sample of every message type and its key
+(recorder tests), and a synthetic run's recording (report and energy-experiment tests)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from common.units import NS_PER_S as NS
+from nodes.energy_meter.core import EnergyMeter
+from nodes.energy_meter.models import WHEEL_RADIUS_M
+from nodes.recorder.writer import RunWriter
+from schemas import Clock, Event, Keys, Odometry, PlannerStatus, WheelStates
+from schemas.keys import TOPICS
+
+VALUES = {"int": 123, "float": 1.5, "bool": True, "floats": (1.0, 2.0),
+          "points": ((1.0, 2.0), (3.0, 4.0)), "paths": (((0.0, 1.0), (2.0, 3.0)),),
+          "strs": ("a", "b")}
+
+
+def sample(msg_type, stamp_ns: int = 1_000_000):
+    """One valid instance of any message type, built from its field table."""
+    kwargs = {}
+    for name, kind, md in msg_type._FIELDS:
+        if name == "stamp_ns":
+            kwargs[name] = stamp_ns
+        elif kind == "str":
+            kwargs[name] = md["choices"][0] if md.get("choices") else "x"
+        elif kind == "f32array":
+            kwargs[name] = np.arange(8, dtype=np.float32)
+        elif kind == "items":
+            kwargs[name] = (sample(md["item"], stamp_ns),)
+        elif kind == "floats" and md.get("length"):
+            kwargs[name] = tuple(float(i) for i in range(md["length"]))
+        else:
+            kwargs[name] = VALUES[kind]
+    return msg_type(**kwargs)
+
+
+def key_of(msg_type) -> str:
+    return Keys("rosbot").key(next(t for t, m in TOPICS.items() if m is msg_type))
+
+
+STEP_NS = 20_000_000           # 50 Hz, as the sim driver
+SPEED = 0.5                    # [m/s] of the synthetic run
+
+
+def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int = 100,
+                    total_k: int = 120, speed: float = SPEED, model: str = "paper",
+                    outcome: str | None = "reached", meta: dict | None = None,
+                  ground_truth: bool = True) -> EnergyMeter:
+    """A straight run along x: standing at k = 0, ``speed`` from k = 1; outcome at ``end_k``.
+
+    Samples continue to ``total_k`` (after the outcome, as a real recording does). The
+    live battery is what a ``model`` meter gives for the same odom/wheels. Returns that meter.
+    """
+    meter = EnergyMeter(model)
+    run_meta = {"world": "energy", "planner": planner, "seed": str(seed), "namespace": "rosbot",
+                "energy_model": model, **(meta or {})}
+    run_meta = {k: v for k, v in run_meta.items() if v is not None}   # None: not recorded
+    with RunWriter(path, run_meta) as w:
+        w.write_message("rosbot/events", Event(stamp_ns=0, kind="run_started", source="test"))
+        for k in range(total_k + 1):
+            t = k * STEP_NS
+            v = speed if k else 0.0
+            odom = Odometry(stamp_ns=t, x=speed * t / NS, y=0.0, yaw=0.0, v=v, w=0.0)
+            wheels = WheelStates(stamp_ns=t, speed=(v / WHEEL_RADIUS_M,) * 4, torque=(0.05,) * 4)
+            for key, msg in (("sim/pose", odom), ("odom", odom), ("wheels", wheels),
+                             ("clock", Clock(stamp_ns=t))):
+                if key != "sim/pose" or ground_truth:
+                    w.write_message(f"rosbot/{key}", msg)
+            meter.feed(odom)
+            w.write_message("rosbot/battery", meter.feed(wheels))
+            if k % 5 == 0:
+                state = outcome if (k == end_k and outcome) else "driving"
+                w.write_message("rosbot/planner/status", PlannerStatus(stamp_ns=t, state=state))
+    return meter
