@@ -17,13 +17,12 @@ def replay_with_view(args: argparse.Namespace, replay_fn) -> int:
     import zenoh
 
     from common.transport import DEFAULT_ENDPOINT, StopRequested, config_from_args, wait_alive
-    from papf.cli.report import topic_map
     from papf.launch.supervisor import Supervisor, port_in_use, wait_port
     from papf.recording.replay import recorded_namespace
-    from papf.recording.rosbag import SOURCE, open_run
+    from papf.recording.rosbag import SOURCE, TopicMap, open_run
     from schemas import Keys
 
-    with open_run(args.file, topic_map(args)) as rec:
+    with open_run(args.file, TopicMap.parse(getattr(args, "topics", None))) as rec:
         meta, recorded_ns = rec.run_metadata, recorded_namespace(rec)
     ns = args.namespace or recorded_ns or "rosbot"
     own_router = (args.mode == "client" and not args.connect and not args.zenoh_config
