@@ -2,12 +2,9 @@
 
 Shared by the simulated base driver (collisions) and the simulated LiDAR (ray
 casting), so both see exactly the same geometry. Every obstacle is a static body
-(mass 0) standing on the ground plane ``z = 0``:
-
-- ``box`` (also walls, which the parser normalises to boxes): ``size`` = extent
-  along x, y before ``yaw``, ``height`` tall;
-- ``cylinder``: ``radius``, ``height`` tall, vertical axis;
-- ``sphere``: ``radius`` at ``center`` = (x, y, z) (3-D worlds; z defaults to the radius).
+(mass 0) whose shape and pose its kind gives (:meth:`worlds.kinds.base.Kind.body`,
+:meth:`~worlds.kinds.base.Kind.pose`): boxes and walls, cylinders standing on the ground
+plane ``z = 0``, spheres at their (x, y, z).
 
 Moving obstacles (``[obstacles.motion]``) are kinematic: static bodies that
 :class:`MovingBodies` teleports to their track pose (``resetBasePositionAndOrientation``)
@@ -30,30 +27,14 @@ GROUND_FRICTION = 1.0  # [-] lateral friction of the floor; the product with the
 
 def _pose(ob: Obstacle) -> tuple[list[float], list[float]]:
     """Base position (shape centre) and orientation quaternion of an obstacle."""
-    if ob.shape == "sphere":
-        z = ob.center[2] if len(ob.center) > 2 else ob.radius
-        return [ob.center[0], ob.center[1], z], [0.0, 0.0, 0.0, 1.0]
-    quat = p.getQuaternionFromEuler([0.0, 0.0, ob.yaw])
-    return [ob.center[0], ob.center[1], ob.height / 2], list(quat)
-
-
-def _collision_shape(client_id: int, ob: Obstacle) -> int:
-    if ob.shape == "box":
-        half = [ob.size[0] / 2, ob.size[1] / 2, ob.height / 2]
-        return p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=client_id)
-    if ob.shape == "cylinder":
-        return p.createCollisionShape(p.GEOM_CYLINDER, radius=ob.radius, height=ob.height,
-                                      physicsClientId=client_id)
-    if ob.shape == "sphere":
-        return p.createCollisionShape(p.GEOM_SPHERE, radius=ob.radius, physicsClientId=client_id)
-    raise ValueError(f"obstacle shape {ob.shape!r} is not one of box, cylinder, sphere")
+    return ob.model.pose(p, ob)
 
 
 def build_world(client_id: int, world: World) -> list[int]:
     """Create one static body per obstacle of ``world``; return their body ids, in file order."""
     ids = []
     for ob in world.obstacles:
-        shape = _collision_shape(client_id, ob)
+        shape = ob.model.body(p, client_id, ob)
         pos, quat = _pose(ob)
         ids.append(p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
                                      basePosition=pos, baseOrientation=quat,

@@ -7,12 +7,12 @@ within the tolerance can reach without overlapping an obstacle, and more obstacl
 :data:`MAX_SIM_OBSTACLES`. Coordinate bounds are checked when the file is parsed
 (:data:`worlds.MAX_COORD_M`).
 
-Geometry (pure, no pybullet): signed distances to boxes (rotated), cylinders and spheres.
+Geometry: each obstacle kind's signed distance (worlds/kinds/).
 """
 
 from __future__ import annotations
 
-import math
+import numpy as np
 
 from common.errors import WorldError
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
@@ -29,23 +29,14 @@ START_CLEAR_M = min(BODY_LENGTH_M, BODY_WIDTH_M) / 2   # [m] the chassis' inscri
 def signed_distance(ob: Obstacle, point: tuple[float, ...]) -> float:
     """Distance [m] from ``point`` to the obstacle's outline (< 0 inside), in the plane
     (3-D for spheres)."""
-    if ob.shape == "sphere":
-        return math.dist(point[:3], ob.center[:3]) - ob.radius
-    px, py = point[0] - ob.center[0], point[1] - ob.center[1]
-    if ob.shape == "cylinder":
-        return math.hypot(px, py) - ob.radius
-    c, s = math.cos(ob.yaw), math.sin(ob.yaw)
-    lx, ly = c * px + s * py, -s * px + c * py              # into the box frame
-    dx, dy = abs(lx) - ob.size[0] / 2, abs(ly) - ob.size[1] / 2
-    outside = math.hypot(max(dx, 0.0), max(dy, 0.0))
-    return outside + min(max(dx, dy), 0.0)
+    return float(ob.model.distance(ob, np.asarray([point], dtype=float))[0])
 
 
 def nearest_obstacle(world: World, point: tuple[float, ...]) -> tuple[int, float] | None:
     """(index, signed distance) of the obstacle nearest to ``point``, or None."""
     best = None
     for i, ob in enumerate(world.obstacles):
-        if (ob.shape == "sphere") != (world.dims == 3):
+        if world.dims not in ob.model.world_dims:
             continue
         d = signed_distance(ob, point)
         if best is None or d < best[1]:

@@ -25,9 +25,7 @@ def goal_message(world: World, stamp_ns: int = 0) -> Goal:
 
 def footprint(ob: Obstacle) -> tuple[float, float]:
     """(length along the heading, width across it) [m] of a 2-D obstacle's footprint."""
-    if ob.shape == "box":
-        return ob.size
-    return 2 * ob.radius, 2 * ob.radius
+    return ob.model.footprint(ob)
 
 
 def truth_objects(world: World, stamp_ns: int, near: tuple[float, float] | None = None,
