@@ -115,6 +115,8 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         ctx.fail("obstacles", "must be an array of tables ([[obstacles]])")
     for i, ob in enumerate(raw):
         obstacles.append(_obstacle(ctx, ob, f"obstacles[{i}]", len(goal)))
+    if "map" in data:   # the map's walls: one obstacle after the file's (worlds/kinds/grid.py)
+        obstacles.append(KINDS["map"].parse(ctx, data["map"], "[map]"))
     road = _road(ctx, data["road"]) if "road" in data else None
     if road is not None and len(goal) != 2:
         ctx.fail("[road]", "a road needs a 2-D world (goal.position with 2 numbers)")
@@ -159,8 +161,9 @@ def _obstacle(ctx: _Ctx, ob: dict, where: str, dims: int) -> Obstacle:
     if not isinstance(ob, dict):
         ctx.fail(where, "must be a table")
     kind = ctx.str(ob, "kind", where=f"{where}.kind")
-    if kind not in KINDS:
-        ctx.fail(f"{where}.kind", f"{kind!r} is not one of {', '.join(KINDS)}")
+    if kind not in KINDS or not KINDS[kind].listed:
+        listed = ", ".join(k for k, m in KINDS.items() if m.listed)
+        ctx.fail(f"{where}.kind", f"{kind!r} is not one of {listed}")
     model = KINDS[kind]
     if "motion" not in ob:
         return model.parse(ctx, ob, where)

@@ -40,5 +40,5 @@ def cast_rays(world: World, x: float, y: float, angles: np.ndarray,
     dx, dy = np.cos(angles), np.sin(angles)
     best = np.full(np.shape(angles), np.inf)
     for ob in world.obstacles:
-        best = ob.model.cast(ob, x, y, dx, dy, best)
+        best = ob.model.cast(ob, x, y, dx, dy, best, range_max)
     return np.where(best <= range_max, best, np.inf)

@@ -35,6 +35,8 @@ def truth_objects(world: World, stamp_ns: int, near: tuple[float, float] | None 
     t = stamp_ns * 1e-9
     tracks = []
     for i, ob in enumerate(world.obstacles):
+        if not ob.model.trackable:
+            continue
         s = ob.state_at(t)
         if near is not None and math.hypot(s.x - near[0], s.y - near[1]) > max_range:
             continue

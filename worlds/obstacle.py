@@ -6,7 +6,7 @@ and drawing. Used by every module that reads a world's obstacles.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from worlds.traffic import Motion, ObstacleState, state_at
 
@@ -32,6 +32,7 @@ class Obstacle:
     yaw: float = 0.0
     height: float = DEFAULT_HEIGHT
     motion: Motion | None = None  # a kinematic track; ``center``/``yaw`` are its pose at t = 0
+    grid: object = field(default=None, compare=False, repr=False)  # a map's OccupancyMap
 
     @property
     def model(self):

@@ -71,10 +71,9 @@ def c(name: str) -> dict:
 
 
 def _obstacle_prims(obstacles, rgba: dict) -> dict:
-    """Each obstacle's solid (its kind's :meth:`~worlds.kinds.base.Kind.solid`) as primitives."""
+    """Each obstacle's solid (its kind's :meth:`~worlds.kinds.base.Kind.solids`) as primitives."""
     prims = {"cubes": [], "cylinders": [], "spheres": []}
-    for ob in obstacles:
-        s = ob.model.solid(ob)
+    for s in (s for ob in obstacles for s in ob.model.solids(ob)):
         if s.form == "cube":
             prims["cubes"].append(cube(*s.center, s.yaw, s.size, rgba))
         elif s.form == "sphere":

@@ -7,7 +7,7 @@ import os
 import sys
 
 from common.params import SEED, TIMEOUT, arg_type
-from papf.cli.options import add_planner_settings, add_world_and_planner
+from papf.cli.options import add_planner_settings, add_world_and_planner, resolve_world
 
 
 def register(sub) -> None:
@@ -46,7 +46,7 @@ def cmd_plan(args) -> int:
     from worlds import load_world
     from worlds.checks import check_runnable
 
-    world = load_world(args.world)
+    world = load_world(resolve_world(args))
     check_runnable(world, max_obstacles=sys.maxsize)   # offline: no obstacle limit
     if args.motion == "fixed-step":
         return _fixed_step(world, args)

@@ -27,7 +27,7 @@ from matplotlib.patches import Polygon  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from nodes.viewer.scene import MIND_COLOURS  # noqa: E402
-from papf.plots.world import colour_for, draw_world, obstacle_patch  # noqa: E402
+from papf.plots.world import colour_for, draw_obstacle, draw_world  # noqa: E402
 from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -76,9 +76,7 @@ def draw_moving(ax, world: World, t_s: float) -> list:
     for ob in world.obstacles:
         if ob.motion is None:
             continue
-        patch = obstacle_patch(ob.at(t_s), color=rgba("moving"), lw=0, zorder=4)
-        ax.add_patch(patch)
-        out.append(patch)
+        out.append(draw_obstacle(ax, ob.at(t_s), color=rgba("moving"), lw=0, zorder=4))
     return out
 
 

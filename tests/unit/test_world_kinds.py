@@ -115,7 +115,7 @@ def test_a_new_kind_is_one_class_and_one_registration(monkeypatch):
     ob = world.obstacles[0]
     assert cast_rays(world, 0.0, 0.0, np.array([0.0]))[0] == pytest.approx(1.75)
     assert nearest_obstacle(world, (0.0, 0.0)) == (0, pytest.approx(1.75))
-    assert isinstance(ob.model.drawing(ob), Outline) and isinstance(ob.model.solid(ob), Solid)
+    assert isinstance(ob.model.drawing(ob), Outline) and isinstance(ob.model.solids(ob)[0], Solid)
     fig, ax = new_axes(world)
     draw_world(ax, world)
     assert len(ax.patches) == 2          # the post and the goal's tolerance circle

@@ -8,11 +8,12 @@ from __future__ import annotations
 from worlds.kinds.base import Kind
 from worlds.kinds.box import Box
 from worlds.kinds.cylinder import Cylinder
+from worlds.kinds.grid import Grid
 from worlds.kinds.sphere import Sphere
 from worlds.kinds.wall import Wall
 from worlds.obstacle import KINDS
 
-KINDS.update({k.name: k for k in (Box(), Cylinder(), Wall(), Sphere())})
+KINDS.update({k.name: k for k in (Box(), Cylinder(), Wall(), Sphere(), Grid())})
 
 
 def register(kind: Kind) -> None:

@@ -2,7 +2,8 @@
 
 A kind owns its parsing from the world TOML (:meth:`Kind.parse`), its geometry
 (:meth:`Kind.distance`, :meth:`Kind.cast`), its pybullet body (:meth:`Kind.body`) and
-how it is drawn — as primitives (:class:`Outline`, :class:`Disc`, :class:`Solid`) that
+how it is drawn — as primitives (:class:`Outline`, :class:`Disc`, :class:`Raster`,
+:class:`Solid`) that
 ``papf.plots.world`` and ``nodes.viewer.scene`` turn into artists. A new kind: one module
 under ``worlds/kinds/`` and one line in ``worlds/kinds/__init__.py`` (docs/architecture.md,
 "Extending").
@@ -32,6 +33,17 @@ class Disc:
     radius: float
 
 
+@dataclass(frozen=True, eq=False)
+class Raster:
+    """Cells of a grid in the plane: ``cells`` bool [row = y, col = x], cell (0, 0)'s corner
+    at ``origin`` (x, y) [m], turned by ``yaw`` [rad], ``resolution`` [m/cell]."""
+
+    cells: np.ndarray
+    origin: tuple[float, float]
+    yaw: float
+    resolution: float
+
+
 @dataclass(frozen=True)
 class Solid:
     """A 3-D primitive: ``form`` cube | cylinder | sphere; ``center`` (x, y, z) [m], ``yaw``
@@ -50,6 +62,8 @@ class Kind:
     world_dims = (2,)      # world dimensions it is an obstacle in (2: planar, 3: Wang's 3-D)
     movable = True         # may carry ``[obstacles.motion]``
     round = False          # a circle/sphere of ``radius`` about ``center`` (Wang's point sims)
+    listed = True          # written as ``[[obstacles]]`` (False: its own table, e.g. ``[map]``)
+    trackable = True       # an object the ground-truth ``objects`` message reports
 
     def parse(self, ctx, table: dict, where: str) -> Obstacle:
         """The obstacle of one ``[[obstacles]]`` table; ``ctx`` raises WorldError (worlds._Ctx)."""
@@ -64,8 +78,9 @@ class Kind:
         raise NotImplementedError
 
     def cast(self, ob: Obstacle, x: float, y: float, dx: np.ndarray, dy: np.ndarray,
-             best: np.ndarray) -> np.ndarray:
-        """``best`` lowered where the ray from (x, y) along (dx, dy) hits first [m]."""
+             best: np.ndarray, range_max: float = float("inf")) -> np.ndarray:
+        """``best`` lowered where the ray from (x, y) along (dx, dy) hits first [m]
+        (hits beyond ``range_max`` [m] may be left out)."""
         raise NotImplementedError
 
     def corners(self, ob: Obstacle) -> list[tuple[float, float]]:
@@ -94,12 +109,12 @@ class Kind:
         """A pybullet collision shape id for ``ob`` (``p``: the pybullet module)."""
         raise NotImplementedError
 
-    def drawing(self, ob: Obstacle) -> Outline | Disc:
+    def drawing(self, ob: Obstacle) -> Outline | Disc | Raster:
         """The footprint to draw in a top view."""
         raise NotImplementedError
 
-    def solid(self, ob: Obstacle) -> Solid:
-        """The 3-D primitive to draw in the viewer."""
+    def solids(self, ob: Obstacle) -> list[Solid]:
+        """The 3-D primitives to draw in the viewer."""
         raise NotImplementedError
 
 

@@ -35,7 +35,7 @@ class Box(Kind):
         q = q - np.array(ob.size) / 2
         return np.hypot(*np.maximum(q, 0.0).T) + np.minimum(q.max(axis=1), 0.0)
 
-    def cast(self, ob, x, y, dx, dy, best):
+    def cast(self, ob, x, y, dx, dy, best, range_max=float("inf")):
         corners = self.corners(ob)
         for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1], strict=True):
             best = segment_hits(best, x, y, dx, dy, x0, y0, x1, y1)
@@ -65,9 +65,9 @@ class Box(Kind):
     def drawing(self, ob: Obstacle) -> Outline:
         return Outline(tuple(self.corners(ob)))
 
-    def solid(self, ob: Obstacle) -> Solid:
-        return Solid("cube", (ob.center[0], ob.center[1], ob.height / 2),
-                     (ob.size[0], ob.size[1], ob.height), ob.yaw)
+    def solids(self, ob: Obstacle) -> list[Solid]:
+        return [Solid("cube", (ob.center[0], ob.center[1], ob.height / 2),
+                     (ob.size[0], ob.size[1], ob.height), ob.yaw)]
 
 
 def segment_hits(best, x, y, dx, dy, x0, y0, x1, y1):

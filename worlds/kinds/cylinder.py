@@ -28,7 +28,7 @@ class Cylinder(Kind):
         rel = pts[:, :2] - np.asarray(ob.center[:2])
         return np.hypot(rel[:, 0], rel[:, 1]) - ob.radius
 
-    def cast(self, ob, x, y, dx, dy, best):
+    def cast(self, ob, x, y, dx, dy, best, range_max=float("inf")):
         return circle_hits(best, x, y, dx, dy, ob.center[0], ob.center[1], ob.radius)
 
     def bounds(self, ob: Obstacle) -> tuple[float, float, float, float]:
@@ -48,9 +48,9 @@ class Cylinder(Kind):
     def drawing(self, ob: Obstacle) -> Disc:
         return Disc((ob.center[0], ob.center[1]), ob.radius)
 
-    def solid(self, ob: Obstacle) -> Solid:
-        return Solid("cylinder", (ob.center[0], ob.center[1], ob.height / 2),
-                     (2 * ob.radius, 2 * ob.radius, ob.height))
+    def solids(self, ob: Obstacle) -> list[Solid]:
+        return [Solid("cylinder", (ob.center[0], ob.center[1], ob.height / 2),
+                     (2 * ob.radius, 2 * ob.radius, ob.height))]
 
 
 def circle_hits(best, x, y, dx, dy, cx, cy, r):

@@ -38,6 +38,6 @@ class Sphere(Cylinder):
     def drawing(self, ob: Obstacle) -> Disc:
         return Disc((ob.center[0], ob.center[1]), ob.radius)
 
-    def solid(self, ob: Obstacle) -> Solid:
+    def solids(self, ob: Obstacle) -> list[Solid]:
         z = ob.center[2] if len(ob.center) > 2 else ob.radius
-        return Solid("sphere", (ob.center[0], ob.center[1], z), (2 * ob.radius,) * 3)
+        return [Solid("sphere", (ob.center[0], ob.center[1], z), (2 * ob.radius,) * 3)]
