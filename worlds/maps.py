@@ -10,7 +10,7 @@ occ < free_thresh free, else unknown; scale: a not-opaque pixel unknown, else th
 thresholds with the middle scaled to 0..100; raw: round(shade * 255) in 0..100 is that
 value, else unknown; image row 0 is the map's top: cell (x, y) = pixel (x, height-1-y)).
 :func:`save_map` is ``tryWriteMapToFile`` in trinary mode (free 254, occupied 0,
-unknown 205; YAML with ``negate: 0``). Used by ``worlds`` (``[map]``), ``papf export map``.
+unknown 205; YAML with ``negate: 0``; ``free_thresh`` 0.196 so unknown reads back unknown). Used by ``worlds`` (``[map]``), ``papf export map``.
 Occupied and unknown cells are walls (:attr:`OccupancyMap.walls`).
 """
 
@@ -26,6 +26,9 @@ from common.errors import WorldError
 
 MODES = ("trinary", "scale", "raw")
 FREE, OCCUPIED, UNKNOWN = 0, 100, -1          # nav2_util/occ_grid_values.hpp
+# free_thresh written: ROS 1 map_saver's 0.196, not Nav2's default 0.25 — with 0.25 the
+# unknown shade 205 (occ 0.196) reads back as free, and unknown cells must stay walls
+FREE_THRESH = 0.196
 MAX_CELLS = 100_000_000                       # [-] 10 km² at 1 cm; beyond, memory runs out first
 
 
@@ -114,26 +117,47 @@ def occupancy(rgba: np.ndarray, mode: str, negate: bool, free: float, occupied: 
     return np.ascontiguousarray(out.astype(np.int8)[::-1])      # image row 0 is the map's top
 
 
-def save_map(grid: OccupancyMap, yaml_path: str | Path, free: float = 0.25,
-             occupied: float = 0.65) -> tuple[Path, Path]:
-    """Write ``grid`` as a trinary map (YAML + PGM beside it); FileExistsError if either exists."""
+def save_map(grid: OccupancyMap, yaml_path: str | Path, free: float = FREE_THRESH,
+             occupied: float = 0.65, mode: str = "trinary", negate: bool = False
+             ) -> tuple[Path, Path]:
+    """Write ``grid`` as YAML + image beside it (PGM; PNG with alpha in scale mode), pixels as
+    ``tryWriteMapToFile`` writes them (``negate``: the same map with shades inverted, which
+    Nav2 reads but never writes); FileExistsError, nothing written, if either file exists."""
     from PIL import Image
 
     yaml_path = Path(yaml_path)
-    pgm = yaml_path.with_suffix(".pgm")
-    for p in (yaml_path, pgm):
+    image = yaml_path.with_suffix(".png" if mode == "scale" else ".pgm")
+    for p in (yaml_path, image):
         if p.exists():
             raise FileExistsError(f"{p} exists; choose another name (nothing is overwritten)")
-    d = grid.data
-    img = np.full(d.shape, 205, np.uint8)
-    img[(d >= 0) & (d <= round(free * 100))] = 254
-    img[(d >= round(occupied * 100)) & (d <= 100)] = 0
-    Image.fromarray(img[::-1]).save(pgm)
+    pixels = _encode(grid.data, mode, free, occupied)
+    if negate and mode != "raw":                              # raw ignores negate
+        pixels[..., :3] = 255 - pixels[..., :3]
+    pixels = pixels[::-1]                                       # row 0 is the map's top
+    im = Image.fromarray(pixels, "RGBA") if mode == "scale" else Image.fromarray(pixels[..., 0])
+    im.save(image)
     x, y, yaw = grid.origin
-    yaml_path.write_text(f"image: {pgm.name}\nmode: trinary\nresolution: {grid.resolution!r}\n"
-                         f"origin: [{x!r}, {y!r}, {yaw!r}]\nnegate: 0\n"
+    yaml_path.write_text(f"image: {image.name}\nmode: {mode}\nresolution: {grid.resolution!r}\n"
+                         f"origin: [{x!r}, {y!r}, {yaw!r}]\nnegate: {int(negate)}\n"
                          f"occupied_thresh: {occupied!r}\nfree_thresh: {free!r}\n", encoding="utf-8")
-    return yaml_path, pgm
+    return yaml_path, image
+
+
+def _encode(d: np.ndarray, mode: str, free: float, occupied: float) -> np.ndarray:
+    """(H, W, 4) uint8 RGBA of cell values, per ``tryWriteMapToFile``'s switch on the mode."""
+    known = (d >= 0) & (d <= 100)
+    if mode == "trinary":
+        gray = np.full(d.shape, 205, np.uint8)
+        gray[known & (d <= round(free * 100))] = 254
+        gray[known & (d >= round(occupied * 100))] = 0
+    elif mode == "scale":
+        gray = np.where(known, np.rint((100.0 - d) / 100.0 * 255), 128).astype(np.uint8)
+    elif mode == "raw":
+        gray = np.where(known, d, 255).astype(np.uint8)
+    else:
+        raise ValueError(f"mode {mode!r} is not one of {', '.join(MODES)}")
+    alpha = np.where(known | (mode != "scale"), 255, 0).astype(np.uint8)
+    return np.dstack([gray, gray, gray, alpha])
 
 
 _MISSING = object()
