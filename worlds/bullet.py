@@ -30,15 +30,20 @@ def _pose(ob: Obstacle) -> tuple[list[float], list[float]]:
     return ob.model.pose(p, ob)
 
 
-def build_world(client_id: int, world: World) -> list[int]:
-    """Create one static body per obstacle of ``world``; return their body ids, in file order."""
+def build_world(client_id: int, world: World, owners: dict[int, int] | None = None) -> list[int]:
+    """Create the static bodies of every obstacle of ``world``; return each obstacle's first
+    body id, in file order. ``owners`` (if given) gets body id -> obstacle index for every
+    body (a map is several)."""
     ids = []
-    for ob in world.obstacles:
-        shape = ob.model.body(p, client_id, ob)
+    for i, ob in enumerate(world.obstacles):
         pos, quat = _pose(ob)
-        ids.append(p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
-                                     basePosition=pos, baseOrientation=quat,
-                                     physicsClientId=client_id))
+        bodies = [p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
+                                    basePosition=pos, baseOrientation=quat,
+                                    physicsClientId=client_id)
+                  for shape in ob.model.bodies(p, client_id, ob)]
+        ids.append(bodies[0] if bodies else -1)
+        if owners is not None:
+            owners.update(dict.fromkeys(bodies, i))
     return ids
 
 

@@ -170,9 +170,9 @@ class SimBase:
         p.setTimeStep(prm.step_ns * 1e-9, physicsClientId=cid)
         p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=cid)
         self.ground = add_ground(cid)
-        self.obstacles = build_world(cid, world)
+        self._obstacle_index: dict[int, int] = {}               # body id -> obstacle index
+        self.obstacles = build_world(cid, world, self._obstacle_index)
         self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
-        self._obstacle_index = {body: i for i, body in enumerate(self.obstacles)}
         self.robot = self._build_robot(start)
         for _ in range(SETTLE_STEPS):
             self._physics_step()

@@ -86,15 +86,19 @@ def test_written_maps_read_back_the_same_walls(tmp_path, mode, negate):
     assert np.array_equal(back.walls, OccupancyMap(data, 0.1, (0, 0, 0)).walls)
 
 
-def test_yawed_map_rays_and_pybullet_agree(tmp_path):
-    """A map turned by its origin's yaw: rays and the pybullet compound see the same walls."""
-    data = map_gen.corridor(0.1)
+@pytest.mark.parametrize(("make", "cell"), [(map_gen.corridor, (30.0, 12.0)),
+                                            (map_gen.warehouse, (105.0, 40.0))])
+def test_yawed_map_rays_and_pybullet_agree(tmp_path, make, cell):
+    """A map turned by its origin's yaw: rays and the pybullet meshes see the same walls
+    (the warehouse: hundreds of rectangles, more than one pybullet compound could hold)."""
+    data = make(0.1)
     saved, _ = save_map(OccupancyMap(data, 0.1, (2.0, 1.0, 0.5)), tmp_path / "c.yaml")
     (tmp_path / "w.toml").write_text('[goal]\nposition = [5.0, 5.0]\n[map]\nfile = "c.yaml"\n')
     world = load_world(tmp_path / "w.toml")
     grid = world.obstacles[0].grid
-    x, y = grid.to_world(np.array([[30.0, 12.0]]))[0]       # inside the corridor
-    angles = np.linspace(-math.pi, math.pi, 180, endpoint=False)
+    assert not grid.walls[int(cell[1]), int(cell[0])]
+    x, y = grid.to_world(np.array([cell]))[0]
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
     exact = cast_rays(world, x, y, angles, range_max=8.0)
     cid = p.connect(p.DIRECT)
     try:

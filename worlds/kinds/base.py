@@ -109,6 +109,10 @@ class Kind:
         """A pybullet collision shape id for ``ob`` (``p``: the pybullet module)."""
         raise NotImplementedError
 
+    def bodies(self, p, client_id: int, ob: Obstacle) -> list[int]:
+        """The collision shapes of ``ob``, each a static body at :meth:`pose` (one by default)."""
+        return [self.body(p, client_id, ob)]
+
     def drawing(self, ob: Obstacle) -> Outline | Disc | Raster:
         """The footprint to draw in a top view."""
         raise NotImplementedError

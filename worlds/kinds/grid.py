@@ -75,15 +75,19 @@ class Grid(Kind):
         rows, cols = ob.grid.shape
         return cols * ob.grid.resolution, rows * ob.grid.resolution
 
-    def body(self, p, client_id: int, ob: Obstacle) -> int:
+    def bodies(self, p, client_id: int, ob: Obstacle) -> list[int]:
+        """The merged rectangles as static triangle meshes (BVH: a ray or a contact test
+        visits only nearby triangles), :data:`MESH_BOXES` rectangles each. Not a compound
+        of boxes: pybullet keeps only the first 16 shapes of a compound, silently."""
         boxes = wall_boxes(ob.grid)
-        if not len(boxes):
-            return -1
-        half = np.column_stack([boxes[:, 2:4] / 2, np.full(len(boxes), ob.height / 2)])
-        frames = np.column_stack([boxes[:, 0:2], np.zeros(len(boxes))])
-        return p.createCollisionShapeArray(
-            shapeTypes=[p.GEOM_BOX] * len(boxes), halfExtents=half.tolist(),
-            collisionFramePositions=frames.tolist(), physicsClientId=client_id)
+        return [p.createCollisionShape(p.GEOM_MESH, vertices=v, indices=i,
+                                       physicsClientId=client_id)
+                for v, i in box_meshes(boxes, ob.height)]
+
+    def pose(self, p, ob: Obstacle) -> tuple[list[float], list[float]]:
+        """The map's origin on the floor, turned by its yaw (mesh vertices in its frame)."""
+        quat = p.getQuaternionFromEuler([0.0, 0.0, ob.yaw])
+        return [ob.center[0], ob.center[1], 0.0], list(quat)
 
     def drawing(self, ob: Obstacle) -> Raster:
         g: OccupancyMap = ob.grid
@@ -96,6 +100,25 @@ class Grid(Kind):
         x0, y0 = ob.center[0], ob.center[1]
         return [Solid("cube", (x0 + c * u - s * v, y0 + s * u + c * v, ob.height / 2),
                       (w, h, ob.height), yaw) for u, v, w, h in boxes.tolist()]
+
+
+MESH_BOXES = 4096   # [-] rectangles per pybullet mesh (32,768 vertices)
+_CORNERS = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0],
+                     [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], float)
+_FACES = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                   [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
+
+
+def box_meshes(boxes: np.ndarray, height: float):
+    """(vertices, indices) lists per chunk of :data:`MESH_BOXES` rectangles (u, v, w, h) [m]:
+    each a closed box from the floor to ``height`` [m], in the map's frame."""
+    for k in range(0, len(boxes), MESH_BOXES):
+        b = boxes[k:k + MESH_BOXES]
+        xy = b[:, None, 0:2] + _CORNERS[None, :, 0:2] * b[:, None, 2:4] / 2
+        z = np.broadcast_to(_CORNERS[None, :, 2:] * height, (len(b), 8, 1))
+        verts = np.concatenate([xy, z], axis=2).reshape(-1, 3)
+        idx = (_FACES[None] + 8 * np.arange(len(b))[:, None, None]).reshape(-1)
+        yield verts.tolist(), idx.tolist()
 
 
 def from_map(grid: OccupancyMap, height: float) -> Obstacle:
