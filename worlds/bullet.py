@@ -17,6 +17,8 @@ Only pybullet is imported here; the caller owns the client (``p.connect(p.DIRECT
 
 from __future__ import annotations
 
+import numpy as np
+
 from common.quiet import import_quietly
 from worlds import Obstacle, World
 
@@ -33,18 +35,58 @@ def _pose(ob: Obstacle) -> tuple[list[float], list[float]]:
 def build_world(client_id: int, world: World, owners: dict[int, int] | None = None) -> list[int]:
     """Create the static bodies of every obstacle of ``world``; return each obstacle's first
     body id, in file order. ``owners`` (if given) gets body id -> obstacle index for every
-    body (a map is several)."""
-    ids = []
+    body (a map is several; :data:`MERGED` for a mesh of many obstacles)."""
+    merged = _mergeable(world)
+    ids = [-1] * len(world.obstacles)
+    for body in _merged_bodies(client_id, [world.obstacles[i] for i in merged]):
+        for i in merged:
+            ids[i] = body if ids[i] < 0 else ids[i]
+        if owners is not None:
+            owners[body] = MERGED
     for i, ob in enumerate(world.obstacles):
+        if i in merged:
+            continue
         pos, quat = _pose(ob)
         bodies = [p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
                                     basePosition=pos, baseOrientation=quat,
                                     physicsClientId=client_id)
                   for shape in ob.model.bodies(p, client_id, ob)]
-        ids.append(bodies[0] if bodies else -1)
+        ids[i] = bodies[0] if bodies else -1
         if owners is not None:
             owners.update(dict.fromkeys(bodies, i))
     return ids
+
+
+MERGE_MIN = 64        # [-] static obstacles from which they are merged into meshes
+MESH_VERTICES = 32768  # [-] vertices per merged mesh
+MERGED = -1           # owners' value for a mesh of many obstacles
+
+
+def _mergeable(world: World) -> set[int]:
+    """Indices of the static obstacles merged into meshes: all that have triangles, when
+    there are more than :data:`MERGE_MIN` (a body each costs start-up time and every physics
+    step; a mesh's BVH costs neither)."""
+    idx = {i for i, ob in enumerate(world.obstacles)
+           if ob.motion is None and ob.model.triangles(ob) is not None}
+    return idx if len(idx) > MERGE_MIN else set()
+
+
+def _merged_bodies(client_id: int, obstacles) -> list[int]:
+    """Static triangle-mesh bodies holding ``obstacles``' solids, :data:`MESH_VERTICES` each."""
+    bodies, verts, faces, count = [], [], [], 0
+    for k, ob in enumerate(obstacles):
+        v, f = ob.model.triangles(ob)
+        verts.append(v)
+        faces.append(f + count)
+        count += len(v)
+        if count >= MESH_VERTICES or k == len(obstacles) - 1:
+            shape = p.createCollisionShape(p.GEOM_MESH, vertices=np.vstack(verts).tolist(),
+                                           indices=np.vstack(faces).ravel().tolist(),
+                                           physicsClientId=client_id)
+            bodies.append(p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
+                                            physicsClientId=client_id))
+            verts, faces, count = [], [], 0
+    return bodies
 
 
 class MovingBodies:

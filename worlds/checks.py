@@ -1,11 +1,11 @@
 """Can a world be run at all? Checks made before any process starts.
 
 A world file can be valid TOML in the fixed format and still describe a run that cannot
-succeed or that the simulator cannot serve: :func:`check_runnable` refuses (WorldError,
-one line naming the limit) a start inside an obstacle, a goal that no robot position
-within the tolerance can reach without overlapping an obstacle, and more obstacles than
-:data:`MAX_SIM_OBSTACLES`. Coordinate bounds are checked when the file is parsed
-(:data:`worlds.MAX_COORD_M`).
+succeed: :func:`check_runnable` refuses (WorldError, one line naming the problem) a start
+inside an obstacle and a goal that no robot position within the tolerance can reach
+without overlapping an obstacle. Coordinate bounds are checked when the file is parsed
+(:data:`worlds.MAX_COORD_M`). The number of obstacles is not limited: many static ones
+are merged into meshes (worlds/bullet.py; cost: docs/data/world-scale.csv).
 
 Geometry: each obstacle kind's signed distance (worlds/kinds/).
 """
@@ -18,11 +18,6 @@ from common.errors import WorldError
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from worlds import Obstacle, World
 
-# [-] obstacles the simulated driver + LiDAR loop still runs faster than real time with:
-# `papf bench sim --sim-s 5 --world W` on worlds of N small cylinders (docs/worlds.md,
-# "Limits", docs/data/obstacle-limit.csv): 500 -> 1.6x, 1000 -> 0.42x, 2000 -> 0.12x real
-# time (the cost grows about as N^2); 100,000 never came up within the 60 s start-up.
-MAX_SIM_OBSTACLES = 500
 START_CLEAR_M = min(BODY_LENGTH_M, BODY_WIDTH_M) / 2   # [m] the chassis' inscribed half-width
 
 
@@ -44,13 +39,9 @@ def nearest_obstacle(world: World, point: tuple[float, ...]) -> tuple[int, float
     return best
 
 
-def check_runnable(world: World, max_obstacles: int = MAX_SIM_OBSTACLES,
-                   robot_radius_m: float = START_CLEAR_M) -> None:
+def check_runnable(world: World, robot_radius_m: float = START_CLEAR_M) -> None:
     """WorldError when the world cannot give a run (module doc)."""
     where = f"world {world.name!r} ({world.source or 'no file'})"
-    if len(world.obstacles) > max_obstacles:
-        raise WorldError(f"{where} has {len(world.obstacles)} obstacles; the simulated stack "
-                         f"serves at most {max_obstacles} (more fall behind real time)")
     start = world.start[:world.dims]
     near = nearest_obstacle(world, start)
     clear = 0.0 if world.dims == 3 else START_CLEAR_M

@@ -23,6 +23,8 @@ BENCHES = {
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
     "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
+    "world-scale": "driver + LiDAR against world size: N obstacles, W x W m maps (x real time, "
+                   "start-up, CPU per cycle, memory)",
 }
 
 
@@ -37,7 +39,7 @@ def register(subparsers) -> None:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    script = Path(bench.__file__).parent / f"bench_{args.name}.py"
+    script = Path(bench.__file__).parent / f"bench_{args.name.replace('-', '_')}.py"
     sys.argv = [str(script), *args.args]
     try:
         runpy.run_path(str(script), run_name="__main__")

@@ -47,7 +47,7 @@ def cmd_plan(args) -> int:
     from worlds.checks import check_runnable
 
     world = load_world(resolve_world(args))
-    check_runnable(world, max_obstacles=sys.maxsize)   # offline: no obstacle limit
+    check_runnable(world)
     if args.motion == "fixed-step":
         return _fixed_step(world, args)
     sets = [*preset_sets(args.preset), *args.set]

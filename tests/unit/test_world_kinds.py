@@ -135,3 +135,44 @@ def test_a_new_kind_is_one_class_and_one_registration(monkeypatch):
 def test_a_map_is_no_obstacles_entry():
     with pytest.raises(WorldError, match="'map' is not one of"):
         world_of({"kind": "map", "file": "x.yaml"})
+
+
+def test_many_static_obstacles_are_merged_into_meshes_that_rays_and_contacts_see():
+    """Beyond MERGE_MIN static obstacles pybullet holds meshes, not a body each: the LiDAR's
+    rays see the same obstacles (cylinders as circumscribed 16-gons) and a contact with a
+    mesh names the obstacle touched."""
+    from nodes.base_driver.sim import SimBase
+    from worlds.bullet import MERGE_MIN, MERGED
+
+    rng = np.random.default_rng(3)
+    obs = [{"kind": "cylinder", "center": [float(x), float(y)], "radius": 0.15}
+           for x, y in rng.uniform(2, 12, (MERGE_MIN + 40, 2))]
+    obs += [{"kind": "box", "center": [0.0, 2.0], "size": [0.4, 0.2], "yaw": 0.3}]
+    world = world_of(*obs, goal=(1.0, 0.0))
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    exact = cast_rays(world, 0.0, 0.0, angles, range_max=15.0)
+    owners = {}
+    cid = p.connect(p.DIRECT)
+    try:
+        ids = build_world(cid, world, owners)
+        ends = [(15 * math.cos(a), 15 * math.sin(a), 0.2) for a in angles]
+        hits = p.rayTestBatch([(0.0, 0.0, 0.2)] * len(ends), ends, physicsClientId=cid)
+    finally:
+        p.disconnect(cid)
+    assert set(owners.values()) == {MERGED} and len(set(ids)) == len(owners) == 1
+    seen = np.array([h[2] * 15 if h[0] >= 0 else np.inf for h in hits])
+    both = np.isfinite(exact) & np.isfinite(seen)
+    assert both.sum() > 50 and (np.isfinite(exact) == np.isfinite(seen)).mean() > 0.97
+    assert (seen[both] <= exact[both] + 1e-6).all()           # a 16-gon holds its circle
+    assert (exact[both] - seen[both] < 0.02).mean() > 0.9     # grazing rays aside
+    sim = SimBase(parse_world({"robot": {"start": [0.0, 1.55, 1.5708]}, "goal": {"position": [0.0, 1.0]},
+                               "obstacles": obs}))
+    try:
+        sim.set_twist(0.5, 0.0)
+        touched = set()
+        for _ in range(400):                                 # 1.6 s at 4 ms: into the box
+            sim.step()
+            touched |= {c.obstacle for c in sim.contacts()}
+    finally:
+        sim.close()
+    assert touched == {len(obs) - 1}                         # the box, by its index

@@ -113,6 +113,11 @@ class Kind:
         """The collision shapes of ``ob``, each a static body at :meth:`pose` (one by default)."""
         return [self.body(p, client_id, ob)]
 
+    def triangles(self, ob: Obstacle) -> tuple[np.ndarray, np.ndarray] | None:
+        """(vertices (V, 3) [m, world frame], faces (F, 3) vertex indices) of the solid, for a
+        static world of many obstacles merged into meshes (worlds/bullet.py); None: never merged."""
+        return None
+
     def drawing(self, ob: Obstacle) -> Outline | Disc | Raster:
         """The footprint to draw in a top view."""
         raise NotImplementedError

@@ -62,12 +62,28 @@ class Box(Kind):
         half = [ob.size[0] / 2, ob.size[1] / 2, ob.height / 2]
         return p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=client_id)
 
+    def triangles(self, ob: Obstacle):
+        return prism(self.corners(ob), ob.height)
+
     def drawing(self, ob: Obstacle) -> Outline:
         return Outline(tuple(self.corners(ob)))
 
     def solids(self, ob: Obstacle) -> list[Solid]:
         return [Solid("cube", (ob.center[0], ob.center[1], ob.height / 2),
                      (ob.size[0], ob.size[1], ob.height), ob.yaw)]
+
+
+def prism(outline, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of a closed prism from the floor to ``height`` [m] over a convex
+    counter-clockwise ``outline`` [(x, y)] (fans for the caps, two triangles per side)."""
+    n = len(outline)
+    xy = np.asarray(outline, float)
+    verts = np.vstack([np.column_stack([xy, np.zeros(n)]), np.column_stack([xy, np.full(n, height)])])
+    k = np.arange(n)
+    caps = [[0, i + 1, i] for i in range(1, n - 1)] + [[n, n + i, n + i + 1] for i in range(1, n - 1)]
+    sides = np.vstack([np.column_stack([k, (k + 1) % n, n + (k + 1) % n]),
+                       np.column_stack([k, n + (k + 1) % n, n + k])])
+    return verts, np.vstack([np.array(caps, int).reshape(-1, 3), sides])
 
 
 def segment_hits(best, x, y, dx, dy, x0, y0, x1, y1):

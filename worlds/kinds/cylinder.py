@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from worlds.kinds.base import Disc, Kind, Solid, height_of
+from worlds.kinds.box import prism
 from worlds.obstacle import Obstacle
+
+SIDES = 16   # [-] sides of the prism a merged cylinder becomes (worlds/bullet.py)
 
 
 class Cylinder(Kind):
@@ -44,6 +49,13 @@ class Cylinder(Kind):
     def body(self, p, client_id: int, ob: Obstacle) -> int:
         return p.createCollisionShape(p.GEOM_CYLINDER, radius=ob.radius, height=ob.height,
                                       physicsClientId=client_id)
+
+    def triangles(self, ob: Obstacle):
+        """A :data:`SIDES`-gon prism around the cylinder (circumscribed: never smaller)."""
+        r = ob.radius / math.cos(math.pi / SIDES)
+        a = np.arange(SIDES) * (2 * math.pi / SIDES)
+        return prism(np.column_stack([ob.center[0] + r * np.cos(a), ob.center[1] + r * np.sin(a)]),
+                     ob.height)
 
     def drawing(self, ob: Obstacle) -> Disc:
         return Disc((ob.center[0], ob.center[1]), ob.radius)

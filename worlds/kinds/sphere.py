@@ -35,6 +35,9 @@ class Sphere(Cylinder):
     def body(self, p, client_id: int, ob: Obstacle) -> int:
         return p.createCollisionShape(p.GEOM_SPHERE, radius=ob.radius, physicsClientId=client_id)
 
+    def triangles(self, ob: Obstacle):
+        return None     # 3-D worlds: a few spheres, each its own body
+
     def drawing(self, ob: Obstacle) -> Disc:
         return Disc((ob.center[0], ob.center[1]), ob.radius)
 
