@@ -180,3 +180,15 @@ def test_start_and_goal_go_with_a_map(tmp_path, capsys):
     world = load_world(map_world_file(str(path), "-0.5,0.5,1.0", "3,3"))
     assert world.start == (-0.5, 0.5, 1.0) and world.goal == (3.0, 3.0)
     assert not any(tmp_path.glob("*.toml"))                    # nothing written beside the map
+
+
+def test_papf_reaches_a_goal_through_a_door_offline(tmp_path):
+    """The offline closed loop (LiDAR and footprint in pybullet) on a map made here."""
+    from papf.offline.plan import plan
+
+    save_map(OccupancyMap(map_gen.rooms(0.05), 0.05, (0.0, 0.0, 0.0)), tmp_path / "r.yaml",
+             mode="scale", negate=True)
+    world = load_world(map_world_file(str(tmp_path / "r.yaml"),
+                                      "2.5,2.0", "6.5,3.5"))
+    result = plan(world, "papf", seed=1, max_time_s=120)
+    assert (result.outcome, result.collisions) == ("reached", 0), result.reason
