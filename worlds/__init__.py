@@ -14,62 +14,16 @@ from pathlib import Path
 
 from common.errors import WorldError
 from common.optional import tomllib
-from worlds.traffic import Motion, ObstacleState, Road, state_at
+from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
+from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
+from worlds.traffic import Motion, Road, state_at
 
-DEFAULT_HEIGHT = 0.5  # [m] obstacle height when the file gives none (docs/worlds.md)
-KINDS = ("box", "cylinder", "wall", "sphere")
 VEHICLES = ("rosbot", "car")  # [robot].vehicle: the ROSbot stack, or the IAPF paper's car model
 # [m] largest coordinate or size a world may use: the simulator works in single precision
 # in places (LiDAR ranges) and a planner's 1/r^2 field vanishes long before; 1 km is far
 # beyond any indoor robot's world
 MAX_COORD_M = 1000.0
 CENTER_MATCH = 1e-6  # [m] a moving obstacle's center, if given, must be its track at t = 0
-
-
-@dataclass(frozen=True)
-class Obstacle:
-    """One obstacle, normalised: walls become boxes (from/to/thickness -> center/size/yaw).
-
-    ``kind`` keeps the file's kind; ``shape`` is the primitive: ``box``
-    (``size`` = (sx, sy) before ``yaw``), ``cylinder`` (``radius``) or ``sphere``
-    (``radius``, 3-D worlds: ``center`` has z).
-    """
-
-    kind: str
-    shape: str
-    center: tuple[float, ...]
-    size: tuple[float, float] = (0.0, 0.0)
-    radius: float = 0.0
-    yaw: float = 0.0
-    height: float = DEFAULT_HEIGHT
-    motion: Motion | None = None  # a kinematic track; ``center``/``yaw`` are its pose at t = 0
-
-    @property
-    def moving(self) -> bool:
-        return self.motion is not None
-
-    def state_at(self, t: float) -> ObstacleState:
-        """Pose and velocity at sim time ``t`` [s] (a static obstacle: its pose, zero velocity)."""
-        if self.motion is None:
-            return ObstacleState(self.center[0], self.center[1], self.yaw, 0.0, 0.0)
-        return state_at(self.motion, t)
-
-    def at(self, t: float) -> Obstacle:
-        """This obstacle placed where it is at sim time ``t`` [s] (itself when static)."""
-        if self.motion is None:
-            return self
-        s = state_at(self.motion, t)
-        return replace(self, center=(s.x, s.y), yaw=s.yaw)
-
-    def corners(self) -> list[tuple[float, float]]:
-        """The 4 corners of a box footprint (counter-clockwise), world frame [m]."""
-        if self.shape != "box":
-            raise ValueError(f"{self.kind} has no corners")
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        hx, hy = self.size[0] / 2, self.size[1] / 2
-        cx, cy = self.center[0], self.center[1]
-        return [(cx + c * dx - s * dy, cy + s * dx + c * dy)
-                for dx, dy in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))]
 
 
 @dataclass(frozen=True)
@@ -157,6 +111,8 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         ctx.fail("obstacles", "must be an array of tables ([[obstacles]])")
     for i, ob in enumerate(raw):
         obstacles.append(_obstacle(ctx, ob, f"obstacles[{i}]", len(goal)))
+    if "map" in data:   # the map's walls: one obstacle after the file's (worlds/kinds/grid.py)
+        obstacles.append(KINDS["map"].parse(ctx, data["map"], "[map]"))
     road = _road(ctx, data["road"]) if "road" in data else None
     if road is not None and len(goal) != 2:
         ctx.fail("[road]", "a road needs a 2-D world (goal.position with 2 numbers)")
@@ -201,16 +157,19 @@ def _obstacle(ctx: _Ctx, ob: dict, where: str, dims: int) -> Obstacle:
     if not isinstance(ob, dict):
         ctx.fail(where, "must be a table")
     kind = ctx.str(ob, "kind", where=f"{where}.kind")
-    if kind not in KINDS:
-        ctx.fail(f"{where}.kind", f"{kind!r} is not one of {', '.join(KINDS)}")
+    if kind not in KINDS or not KINDS[kind].listed:
+        listed = ", ".join(k for k, m in KINDS.items() if m.listed)
+        ctx.fail(f"{where}.kind", f"{kind!r} is not one of {listed}")
+    model = KINDS[kind]
     if "motion" not in ob:
-        return _shape(ctx, ob, where, kind)
-    if kind == "sphere" or dims != 2:
-        ctx.fail(f"{where}.motion", "only 2-D kinds (box, cylinder, wall) in 2-D worlds may move")
+        return model.parse(ctx, ob, where)
+    if not model.movable or dims != 2:
+        movers = ", ".join(k.name for k in KINDS.values() if k.movable)
+        ctx.fail(f"{where}.motion", f"only 2-D kinds ({movers}) in 2-D worlds may move")
     motion = _motion(ctx, ob["motion"], f"{where}.motion", 0.0)
     start = state_at(motion, 0.0)
     given = ob.get("center")
-    static = _shape(ctx, {"center": [start.x, start.y], **ob}, where, kind)
+    static = model.parse(ctx, {"center": [start.x, start.y], **ob}, where)
     if given is not None and math.dist(static.center, (start.x, start.y)) > CENTER_MATCH:
         ctx.fail(f"{where}.center", f"{list(static.center)} is not where the track is at t = 0 "
                  f"({[start.x, start.y]}); omit center on a moving obstacle or make them agree")
@@ -218,33 +177,6 @@ def _obstacle(ctx: _Ctx, ob: dict, where: str, dims: int) -> Obstacle:
     motion = replace(motion, yaw0=yaw0)
     return replace(static, center=(start.x, start.y), motion=motion,
                    yaw=state_at(motion, 0.0).yaw)
-
-
-def _shape(ctx: _Ctx, ob: dict, where: str, kind: str) -> Obstacle:
-    """The obstacle's geometry and pose as written (static, or a moving one at t = 0)."""
-    height = ctx.positive(ob, "height", f"{where}.height", default=DEFAULT_HEIGHT)
-    if kind == "wall":
-        a = ctx.vec(ob, "from", (2,), f"{where}.from")
-        b = ctx.vec(ob, "to", (2,), f"{where}.to")
-        thickness = ctx.positive(ob, "thickness", f"{where}.thickness", default=0.05)
-        length = math.dist(a, b)
-        if length <= 0:
-            ctx.fail(where, "wall 'from' and 'to' are the same point")
-        return Obstacle(kind, "box", ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2), (length, thickness),
-                        yaw=math.atan2(b[1] - a[1], b[0] - a[0]), height=height)
-    if kind == "sphere":
-        center = ctx.vec(ob, "center", (3,), f"{where}.center")
-        return Obstacle(kind, "sphere", tuple(center),
-                        radius=ctx.positive(ob, "radius", f"{where}.radius"), height=height)
-    center = ctx.vec(ob, "center", (2,), f"{where}.center")
-    if kind == "cylinder":
-        return Obstacle(kind, "cylinder", tuple(center),
-                        radius=ctx.positive(ob, "radius", f"{where}.radius"), height=height)
-    size = ctx.vec(ob, "size", (2,), f"{where}.size")
-    if min(size) <= 0:
-        ctx.fail(f"{where}.size", f"{size} must be positive")
-    return Obstacle(kind, "box", tuple(center), tuple(size),
-                    yaw=ctx.number(ob, "yaw", f"{where}.yaw", default=0.0), height=height)
 
 
 class _Ctx:

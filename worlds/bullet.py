@@ -2,12 +2,9 @@
 
 Shared by the simulated base driver (collisions) and the simulated LiDAR (ray
 casting), so both see exactly the same geometry. Every obstacle is a static body
-(mass 0) standing on the ground plane ``z = 0``:
-
-- ``box`` (also walls, which the parser normalises to boxes): ``size`` = extent
-  along x, y before ``yaw``, ``height`` tall;
-- ``cylinder``: ``radius``, ``height`` tall, vertical axis;
-- ``sphere``: ``radius`` at ``center`` = (x, y, z) (3-D worlds; z defaults to the radius).
+(mass 0) whose shape and pose its kind gives (:meth:`worlds.kinds.base.Kind.body`,
+:meth:`~worlds.kinds.base.Kind.pose`): boxes and walls, cylinders standing on the ground
+plane ``z = 0``, spheres at their (x, y, z).
 
 Moving obstacles (``[obstacles.motion]``) are kinematic: static bodies that
 :class:`MovingBodies` teleports to their track pose (``resetBasePositionAndOrientation``)
@@ -20,6 +17,8 @@ Only pybullet is imported here; the caller owns the client (``p.connect(p.DIRECT
 
 from __future__ import annotations
 
+import numpy as np
+
 from common.quiet import import_quietly
 from worlds import Obstacle, World
 
@@ -30,35 +29,64 @@ GROUND_FRICTION = 1.0  # [-] lateral friction of the floor; the product with the
 
 def _pose(ob: Obstacle) -> tuple[list[float], list[float]]:
     """Base position (shape centre) and orientation quaternion of an obstacle."""
-    if ob.shape == "sphere":
-        z = ob.center[2] if len(ob.center) > 2 else ob.radius
-        return [ob.center[0], ob.center[1], z], [0.0, 0.0, 0.0, 1.0]
-    quat = p.getQuaternionFromEuler([0.0, 0.0, ob.yaw])
-    return [ob.center[0], ob.center[1], ob.height / 2], list(quat)
+    return ob.model.pose(p, ob)
 
 
-def _collision_shape(client_id: int, ob: Obstacle) -> int:
-    if ob.shape == "box":
-        half = [ob.size[0] / 2, ob.size[1] / 2, ob.height / 2]
-        return p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=client_id)
-    if ob.shape == "cylinder":
-        return p.createCollisionShape(p.GEOM_CYLINDER, radius=ob.radius, height=ob.height,
-                                      physicsClientId=client_id)
-    if ob.shape == "sphere":
-        return p.createCollisionShape(p.GEOM_SPHERE, radius=ob.radius, physicsClientId=client_id)
-    raise ValueError(f"obstacle shape {ob.shape!r} is not one of box, cylinder, sphere")
-
-
-def build_world(client_id: int, world: World) -> list[int]:
-    """Create one static body per obstacle of ``world``; return their body ids, in file order."""
-    ids = []
-    for ob in world.obstacles:
-        shape = _collision_shape(client_id, ob)
+def build_world(client_id: int, world: World, owners: dict[int, int] | None = None) -> list[int]:
+    """Create the static bodies of every obstacle of ``world``; return each obstacle's first
+    body id, in file order. ``owners`` (if given) gets body id -> obstacle index for every
+    body (a map is several; :data:`MERGED` for a mesh of many obstacles)."""
+    merged = _mergeable(world)
+    ids = [-1] * len(world.obstacles)
+    for body in _merged_bodies(client_id, [world.obstacles[i] for i in merged]):
+        for i in merged:
+            ids[i] = body if ids[i] < 0 else ids[i]
+        if owners is not None:
+            owners[body] = MERGED
+    for i, ob in enumerate(world.obstacles):
+        if i in merged:
+            continue
         pos, quat = _pose(ob)
-        ids.append(p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
-                                     basePosition=pos, baseOrientation=quat,
-                                     physicsClientId=client_id))
+        bodies = [p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
+                                    basePosition=pos, baseOrientation=quat,
+                                    physicsClientId=client_id)
+                  for shape in ob.model.bodies(p, client_id, ob)]
+        ids[i] = bodies[0] if bodies else -1
+        if owners is not None:
+            owners.update(dict.fromkeys(bodies, i))
     return ids
+
+
+MERGE_MIN = 64        # [-] static obstacles from which they are merged into meshes
+MESH_VERTICES = 32768  # [-] vertices per merged mesh
+MERGED = -1           # owners' value for a mesh of many obstacles
+
+
+def _mergeable(world: World) -> set[int]:
+    """Indices of the static obstacles merged into meshes: all that have triangles, when
+    there are more than :data:`MERGE_MIN` (a body each costs start-up time and every physics
+    step; a mesh's BVH costs neither)."""
+    idx = {i for i, ob in enumerate(world.obstacles)
+           if ob.motion is None and ob.model.triangles(ob) is not None}
+    return idx if len(idx) > MERGE_MIN else set()
+
+
+def _merged_bodies(client_id: int, obstacles) -> list[int]:
+    """Static triangle-mesh bodies holding ``obstacles``' solids, :data:`MESH_VERTICES` each."""
+    bodies, verts, faces, count = [], [], [], 0
+    for k, ob in enumerate(obstacles):
+        v, f = ob.model.triangles(ob)
+        verts.append(v)
+        faces.append(f + count)
+        count += len(v)
+        if count >= MESH_VERTICES or k == len(obstacles) - 1:
+            shape = p.createCollisionShape(p.GEOM_MESH, vertices=np.vstack(verts).tolist(),
+                                           indices=np.vstack(faces).ravel().tolist(),
+                                           physicsClientId=client_id)
+            bodies.append(p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
+                                            physicsClientId=client_id))
+            verts, faces, count = [], [], 0
+    return bodies
 
 
 class MovingBodies:

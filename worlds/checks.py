@@ -1,51 +1,37 @@
 """Can a world be run at all? Checks made before any process starts.
 
 A world file can be valid TOML in the fixed format and still describe a run that cannot
-succeed or that the simulator cannot serve: :func:`check_runnable` refuses (WorldError,
-one line naming the limit) a start inside an obstacle, a goal that no robot position
-within the tolerance can reach without overlapping an obstacle, and more obstacles than
-:data:`MAX_SIM_OBSTACLES`. Coordinate bounds are checked when the file is parsed
-(:data:`worlds.MAX_COORD_M`).
+succeed: :func:`check_runnable` refuses (WorldError, one line naming the problem) a start
+inside an obstacle and a goal that no robot position within the tolerance can reach
+without overlapping an obstacle. Coordinate bounds are checked when the file is parsed
+(:data:`worlds.MAX_COORD_M`). The number of obstacles is not limited: many static ones
+are merged into meshes (worlds/bullet.py; cost: docs/data/world-scale.csv).
 
-Geometry (pure, no pybullet): signed distances to boxes (rotated), cylinders and spheres.
+Geometry: each obstacle kind's signed distance (worlds/kinds/).
 """
 
 from __future__ import annotations
 
-import math
+import numpy as np
 
 from common.errors import WorldError
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from worlds import Obstacle, World
 
-# [-] obstacles the simulated driver + LiDAR loop still runs faster than real time with:
-# `papf bench sim --sim-s 5 --world W` on worlds of N small cylinders (docs/worlds.md,
-# "Limits", docs/data/obstacle-limit.csv): 500 -> 1.6x, 1000 -> 0.42x, 2000 -> 0.12x real
-# time (the cost grows about as N^2); 100,000 never came up within the 60 s start-up.
-MAX_SIM_OBSTACLES = 500
 START_CLEAR_M = min(BODY_LENGTH_M, BODY_WIDTH_M) / 2   # [m] the chassis' inscribed half-width
 
 
 def signed_distance(ob: Obstacle, point: tuple[float, ...]) -> float:
     """Distance [m] from ``point`` to the obstacle's outline (< 0 inside), in the plane
     (3-D for spheres)."""
-    if ob.shape == "sphere":
-        return math.dist(point[:3], ob.center[:3]) - ob.radius
-    px, py = point[0] - ob.center[0], point[1] - ob.center[1]
-    if ob.shape == "cylinder":
-        return math.hypot(px, py) - ob.radius
-    c, s = math.cos(ob.yaw), math.sin(ob.yaw)
-    lx, ly = c * px + s * py, -s * px + c * py              # into the box frame
-    dx, dy = abs(lx) - ob.size[0] / 2, abs(ly) - ob.size[1] / 2
-    outside = math.hypot(max(dx, 0.0), max(dy, 0.0))
-    return outside + min(max(dx, dy), 0.0)
+    return float(ob.model.distance(ob, np.asarray([point], dtype=float))[0])
 
 
 def nearest_obstacle(world: World, point: tuple[float, ...]) -> tuple[int, float] | None:
     """(index, signed distance) of the obstacle nearest to ``point``, or None."""
     best = None
     for i, ob in enumerate(world.obstacles):
-        if (ob.shape == "sphere") != (world.dims == 3):
+        if world.dims not in ob.model.world_dims:
             continue
         d = signed_distance(ob, point)
         if best is None or d < best[1]:
@@ -53,13 +39,9 @@ def nearest_obstacle(world: World, point: tuple[float, ...]) -> tuple[int, float
     return best
 
 
-def check_runnable(world: World, max_obstacles: int = MAX_SIM_OBSTACLES,
-                   robot_radius_m: float = START_CLEAR_M) -> None:
+def check_runnable(world: World, robot_radius_m: float = START_CLEAR_M) -> None:
     """WorldError when the world cannot give a run (module doc)."""
     where = f"world {world.name!r} ({world.source or 'no file'})"
-    if len(world.obstacles) > max_obstacles:
-        raise WorldError(f"{where} has {len(world.obstacles)} obstacles; the simulated stack "
-                         f"serves at most {max_obstacles} (more fall behind real time)")
     start = world.start[:world.dims]
     near = nearest_obstacle(world, start)
     clear = 0.0 if world.dims == 3 else START_CLEAR_M

@@ -25,9 +25,7 @@ def goal_message(world: World, stamp_ns: int = 0) -> Goal:
 
 def footprint(ob: Obstacle) -> tuple[float, float]:
     """(length along the heading, width across it) [m] of a 2-D obstacle's footprint."""
-    if ob.shape == "box":
-        return ob.size
-    return 2 * ob.radius, 2 * ob.radius
+    return ob.model.footprint(ob)
 
 
 def truth_objects(world: World, stamp_ns: int, near: tuple[float, float] | None = None,
@@ -37,6 +35,8 @@ def truth_objects(world: World, stamp_ns: int, near: tuple[float, float] | None 
     t = stamp_ns * 1e-9
     tracks = []
     for i, ob in enumerate(world.obstacles):
+        if not ob.model.trackable:
+            continue
         s = ob.state_at(t)
         if near is not None and math.hypot(s.x - near[0], s.y - near[1]) > max_range:
             continue

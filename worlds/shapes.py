@@ -30,7 +30,7 @@ def spheres_of(world: World) -> np.ndarray:
     """(K, 4) rows (cx, cy, cz, radius) of the world's sphere obstacles; ConfigError otherwise."""
     rows = []
     for i, ob in enumerate(world.obstacles):
-        if ob.shape != "sphere":
+        if 3 not in ob.model.world_dims:
             raise ConfigError(f"world {world.name!r}: obstacles[{i}] is a {ob.kind}; 3-D worlds "
                               "take only kind = \"sphere\" obstacles")
         rows.append((*ob.center[:3], ob.radius))

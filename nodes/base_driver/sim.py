@@ -49,7 +49,7 @@ from common.errors import ConfigError
 from common.quiet import import_quietly
 from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
 from worlds import World
-from worlds.bullet import MovingBodies, add_ground, build_world
+from worlds.bullet import MERGED, MovingBodies, add_ground, build_world
 
 p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 # the calls made every physics step, looked up once
@@ -170,9 +170,9 @@ class SimBase:
         p.setTimeStep(prm.step_ns * 1e-9, physicsClientId=cid)
         p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=cid)
         self.ground = add_ground(cid)
-        self.obstacles = build_world(cid, world)
+        self._obstacle_index: dict[int, int] = {}               # body id -> obstacle index
+        self.obstacles = build_world(cid, world, self._obstacle_index)
         self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
-        self._obstacle_index = {body: i for i, body in enumerate(self.obstacles)}
         self.robot = self._build_robot(start)
         for _ in range(SETTLE_STEPS):
             self._physics_step()
@@ -291,9 +291,20 @@ class SimBase:
         seen: dict[int, Contact] = {}
         for cp in points:
             index = self._obstacle_index.get(cp[2])
+            if index == MERGED:   # a mesh of many static obstacles: the one at the contact
+                index = self._nearest_static(cp[6][0], cp[6][1])
             if index is not None and index not in seen:
                 seen[index] = Contact(index, float(cp[6][0]), float(cp[6][1]))
         return list(seen.values())
+
+    def _nearest_static(self, x: float, y: float) -> int | None:
+        """Index of the static obstacle nearest to (x, y) [m] (a contact with a merged mesh)."""
+        best = None
+        for i, ob in enumerate(self.world.obstacles):
+            if ob.motion is None:
+                d = float(ob.model.distance(ob, np.array([[x, y]]))[0])
+                best = (d, i) if best is None or d < best[0] else best
+        return best[1] if best else None
 
     def close(self) -> None:
         if self.cid is not None and p.isConnected(self.cid):

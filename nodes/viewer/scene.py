@@ -71,17 +71,16 @@ def c(name: str) -> dict:
 
 
 def _obstacle_prims(obstacles, rgba: dict) -> dict:
-    cubes, cyls, spheres = [], [], []
-    for ob in obstacles:
-        if ob.shape == "box":
-            cubes.append(cube(ob.center[0], ob.center[1], ob.height / 2, ob.yaw,
-                              (ob.size[0], ob.size[1], ob.height), rgba))
-        elif ob.shape == "sphere" and len(ob.center) == 3:
-            spheres.append(sphere(*ob.center[:3], 2 * ob.radius, rgba))
+    """Each obstacle's solid (its kind's :meth:`~worlds.kinds.base.Kind.solids`) as primitives."""
+    prims = {"cubes": [], "cylinders": [], "spheres": []}
+    for s in (s for ob in obstacles for s in ob.model.solids(ob)):
+        if s.form == "cube":
+            prims["cubes"].append(cube(*s.center, s.yaw, s.size, rgba))
+        elif s.form == "sphere":
+            prims["spheres"].append(sphere(*s.center, s.size[0], rgba))
         else:
-            cyls.append(cylinder(ob.center[0], ob.center[1], ob.height / 2, ob.radius, ob.height,
-                                 rgba))
-    return {"cubes": cubes, "cylinders": cyls, "spheres": spheres}
+            prims["cylinders"].append(cylinder(*s.center, s.size[0] / 2, s.size[2], rgba))
+    return prims
 
 
 def _x_extent(world: World) -> tuple[float, float]:

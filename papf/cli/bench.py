@@ -24,6 +24,8 @@ BENCHES = {
     "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
     "face": "ROS 2 face: CPU per planner cycle, added latency; lockstep run with/without --ros-face",
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
+    "world-scale": "driver + LiDAR against world size: N obstacles, W x W m maps (x real time, "
+                   "start-up, CPU per cycle, memory)",
 }
 
 
@@ -38,7 +40,7 @@ def register(subparsers) -> None:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    script = Path(bench.__file__).parent / f"bench_{args.name}.py"
+    script = Path(bench.__file__).parent / f"bench_{args.name.replace('-', '_')}.py"
     sys.argv = [str(script), *args.args]
     try:
         runpy.run_path(str(script), run_name="__main__")

@@ -1,12 +1,15 @@
 """``papf export foxglove IN.mcap OUT.mcap``: a recording as the live view's Foxglove
 channels (:mod:`papf.recording.foxglove_export`; why an export: docs/recording.md).
 ``papf export ros2 IN.mcap OUT_DIR``: a recording as a rosbag2 of the ROS 2 face's topics
-(:mod:`papf.recording.ros2_export`)."""
+(:mod:`papf.recording.ros2_export`).
+``papf export map WORLD OUT.yaml``: a world as a ROS map (:mod:`worlds.map_world`)."""
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from pathlib import Path
 
 
 def register(sub) -> None:
@@ -28,6 +31,42 @@ def register(sub) -> None:
     r.add_argument("src", metavar="IN.mcap")
     r.add_argument("dst", metavar="OUT_DIR")
     r.set_defaults(func=cmd_export_ros2)
+    m = formats.add_parser("map", help="a world as a ROS map (Nav2 map_server YAML + PGM)",
+                           description="Write OUT.yaml and OUT.pgm beside it (trinary, "
+                           "free 254, occupied 0): every obstacle of WORLD at t = 0, so Nav2 "
+                           "and `papf run --world OUT.yaml` use the same world. Never overwrites.")
+    m.add_argument("world", metavar="WORLD", help="packaged world name, .toml or map .yaml")
+    m.add_argument("dst", metavar="OUT.yaml")
+    m.add_argument("--resolution", type=float, default=0.05, help="[m/cell] (default 0.05)")
+    m.set_defaults(func=cmd_export_map)
+
+
+def cmd_export_map(args: argparse.Namespace) -> int:
+    from common.errors import WorldError
+    from worlds import World, load_world
+    from worlds.kinds.grid import from_map
+    from worlds.map_world import is_map, rasterize
+    from worlds.maps import load_map, save_map
+
+    if not (math.isfinite(args.resolution) and 0.001 <= args.resolution <= 10.0):
+        raise WorldError(f"--resolution {args.resolution!r}: give 0.001 .. 10 m per cell")
+    if Path(args.dst).suffix.lower() not in (".yaml", ".yml"):
+        raise WorldError(f"{args.dst!r}: the map's file name ends in .yaml (its image: .pgm beside it)")
+    if is_map(args.world):
+        grid = load_map(args.world)   # the map again (e.g. at another resolution)
+        corner = grid.origin[:2]
+        world = World(Path(args.world).stem, "", (*corner, 0.0), corner, 0.1,
+                      (from_map(grid, 0.5),), source=args.world)
+    else:
+        world = load_world(args.world)
+    if world.dims != 2:
+        raise WorldError(f"world {args.world!r} is 3-D; a ROS map is a 2-D occupancy grid")
+    try:
+        yaml_path, pgm = save_map(rasterize(world, args.resolution), args.dst)
+    except FileExistsError as exc:
+        raise WorldError(str(exc)) from None
+    print(f"{yaml_path} + {pgm.name}: {args.world} at {args.resolution:g} m/cell")
+    return 0
 
 
 def cmd_export_foxglove(args: argparse.Namespace) -> int:

@@ -11,9 +11,29 @@ def planner_help() -> str:
 
 
 def add_world_and_planner(p, planner_help: str = "") -> None:
-    """``--world`` (required) and ``--planner`` (help: :func:`planner_help` unless given)."""
-    p.add_argument("--world", required=True, help="packaged world name or path to a .toml")
+    """``--world`` (required), ``--start``/``--goal`` (with a map YAML) and ``--planner``
+    (help: :func:`planner_help` unless given)."""
+    p.add_argument("--world", required=True,
+                   help="packaged world name, path to a .toml, or a ROS map .yaml (Nav2 "
+                        "map_server format; then --start and --goal)")
+    p.add_argument("--start", metavar="X,Y[,YAW]",
+                   help="with a map .yaml: start pose [m, m, rad] (--start=-1,2 for negatives)")
+    p.add_argument("--goal", metavar="X,Y", help="with a map .yaml: goal position [m]")
     p.add_argument("--planner", default=DEFAULT_PLANNER, help=planner_help or globals()["planner_help"]())
+
+
+def resolve_world(args) -> str:
+    """``args.world``, or for a map YAML the world file of ``--start``/``--goal`` on it
+    (worlds/map_world.py); WorldError (exit 2) for --start/--goal without a map."""
+    from common.errors import WorldError
+    from worlds.map_world import is_map, map_world_file
+
+    if is_map(args.world):
+        args.world = map_world_file(args.world, args.start, args.goal)
+    elif args.start is not None or args.goal is not None:
+        raise WorldError("--start/--goal go with a map .yaml as --world; a world file "
+                         "gives its own [robot] start and [goal]")
+    return args.world
 
 
 def add_planner_settings(p) -> None:

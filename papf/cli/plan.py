@@ -8,7 +8,12 @@ import sys
 
 from common.params import SEED, TIMEOUT, arg_type
 from nodes.planner.registry import car_variants, one_with_role
-from papf.cli.options import add_planner_settings, add_world_and_planner, planner_help
+from papf.cli.options import (
+    add_planner_settings,
+    add_world_and_planner,
+    planner_help,
+    resolve_world,
+)
 from papf.offline.run import MOTIONS
 
 
@@ -49,8 +54,8 @@ def cmd_plan(args) -> int:
     from worlds import load_world
     from worlds.checks import check_runnable
 
-    world = load_world(args.world)
-    check_runnable(world, max_obstacles=sys.maxsize)   # offline: no obstacle limit
+    world = load_world(resolve_world(args))
+    check_runnable(world)
     sets = [*preset_sets(args.preset), *args.set]
     result = simulate(world, args.planner, params=sets, seed=args.seed, max_time_s=args.timeout,
                       dt=args.dt, params_file=args.params, keep_states=bool(args.plot),

@@ -6,7 +6,7 @@ import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from common.ros_link import add_face_args, face_domain
-from papf.cli.options import add_planner_settings, add_world_and_planner
+from papf.cli.options import add_planner_settings, add_world_and_planner, resolve_world
 from papf.cli.view import add_view_flag
 
 
@@ -54,6 +54,7 @@ def run_config(args):
     from nodes.planner.registry import preset_sets
     from papf.launch.run import RunConfig  # zenoh: only when a run is made
 
+    resolve_world(args)
     planner_args = [x for kv in (*preset_sets(args.preset), *args.set) for x in ("--set", kv)]
     if args.params:
         planner_args += ["--params", args.params]

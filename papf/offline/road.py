@@ -36,9 +36,8 @@ def lanes_of(world: World) -> Lanes:
 
 def footprint(ob: Obstacle) -> tuple[float, float]:
     """(length along the heading, width) [m] of a 2-D obstacle."""
-    if ob.shape == "box":
-        return float(ob.size[0]), float(ob.size[1])
-    return 2.0 * ob.radius, 2.0 * ob.radius
+    length, width = ob.model.footprint(ob)
+    return float(length), float(width)
 
 
 def mover(ob: Obstacle, ident: int):

@@ -62,7 +62,7 @@ def obstacles_of(world: World, units_per_m: float) -> tuple[np.ndarray, np.ndarr
     dims = world.dims
     cs, rs = [], []
     for i, ob in enumerate(world.obstacles):
-        if ob.shape not in ("cylinder", "sphere"):
+        if not ob.model.round:
             raise ConfigError(f"world {world.name!r}: obstacles[{i}] is a {ob.kind}; Wang's point "
                               "simulation takes round obstacles only (cylinders, spheres)")
         cs.append(ob.center[:dims])

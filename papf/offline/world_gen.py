@@ -48,7 +48,7 @@ def occupancy(world: World, grid_m: float = GRID_M, inflate_m: float = ROBOT_RAD
     xs = [world.start[0], world.goal[0]]
     ys = [world.start[1], world.goal[1]]
     for ob in world.obstacles:
-        reach = max(ob.size) if ob.shape == "box" else ob.radius
+        reach = ob.model.reach(ob)
         xs += [ob.center[0] - reach, ob.center[0] + reach]
         ys += [ob.center[1] - reach, ob.center[1] + reach]
     x0, y0 = min(xs) - margin_m, min(ys) - margin_m
@@ -212,10 +212,9 @@ def world_to_toml(world: World) -> str:
              "[robot]", f"start = {v(world.start)}", "[goal]", f"position = {v(world.goal)}",
              f"tolerance = {float(world.tolerance)!r}"]
     for ob in world.obstacles:
-        lines += ["[[obstacles]]", f'kind = "{ob.shape}"',
-                  f"center = {v(ob.center)}", f"height = {float(ob.height)!r}"]
-        if ob.shape == "box":
-            lines += [f"size = {v(ob.size)}", f"yaw = {float(ob.yaw)!r}"]
-        else:
-            lines.append(f"radius = {float(ob.radius)!r}")
+        lines.append("[[obstacles]]")
+        for key, value in ob.model.table(ob).items():
+            text = v(value) if isinstance(value, list) else (
+                json.dumps(value) if isinstance(value, str) else repr(float(value)))
+            lines.append(f"{key} = {text}")
     return "\n".join(lines) + "\n"

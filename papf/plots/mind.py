@@ -23,11 +23,11 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.patches import Circle, Polygon  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from nodes.viewer.scene import MIND_COLOURS  # noqa: E402
-from papf.plots.world import colour_for, draw_world  # noqa: E402
+from papf.plots.world import colour_for, draw_obstacle, draw_world  # noqa: E402
 from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -76,13 +76,7 @@ def draw_moving(ax, world: World, t_s: float) -> list:
     for ob in world.obstacles:
         if ob.motion is None:
             continue
-        here = ob.at(t_s)
-        if here.shape == "box":
-            patch = Polygon(here.corners(), closed=True, color=rgba("moving"), lw=0, zorder=4)
-        else:
-            patch = Circle(here.center[:2], here.radius, color=rgba("moving"), lw=0, zorder=4)
-        ax.add_patch(patch)
-        out.append(patch)
+        out.append(draw_obstacle(ax, ob.at(t_s), color=rgba("moving"), lw=0, zorder=4))
     return out
 
 

@@ -1,6 +1,6 @@
 """World and path plots (matplotlib, Agg backend: files only, no display).
 
-- :func:`draw_world` — obstacles (boxes/walls as their footprints, cylinders as discs,
+- :func:`draw_world` — obstacles (each kind's footprint, :func:`draw_obstacle`;
   spheres as wireframes on a 3-D axes), start and goal (with its tolerance) on an axes.
 - :func:`path_style` — line width, dash and end marker of the i-th path, so paths that lie
   on top of each other stay visible (the first is widest and underneath);
@@ -22,11 +22,14 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import ListedColormap  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
+from matplotlib.transforms import Affine2D  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from nodes.planner.registry import declared  # noqa: E402
-from worlds import World  # noqa: E402
+from worlds import Obstacle, World  # noqa: E402
+from worlds.kinds.base import Disc, Outline, Raster  # noqa: E402
 
 OBSTACLE_COLOUR = "0.35"
 GOAL_COLOUR = "tab:red"
@@ -54,10 +57,7 @@ def draw_world(ax, world: World) -> None:
         _draw_world_3d(ax, world)
         return
     for ob in world.obstacles:
-        if ob.shape == "box":
-            ax.add_patch(Polygon(ob.corners(), closed=True, color=OBSTACLE_COLOUR, lw=0))
-        else:  # cylinder (or a sphere's footprint in a 2-D world)
-            ax.add_patch(Circle(ob.center[:2], ob.radius, color=OBSTACLE_COLOUR, lw=0))
+        draw_obstacle(ax, ob, color=OBSTACLE_COLOUR, lw=0)
     sx, sy, yaw = world.start
     ax.plot(sx, sy, "o", color=START_COLOUR, ms=7, label="start", zorder=5)
     ax.annotate("", xy=(sx + 0.3 * np.cos(yaw), sy + 0.3 * np.sin(yaw)), xytext=(sx, sy),
@@ -70,6 +70,30 @@ def draw_world(ax, world: World) -> None:
     ax.set_ylabel("y [m]")
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.autoscale_view()
+
+
+def draw_obstacle(ax, ob: Obstacle, color=OBSTACLE_COLOUR, zorder: float = 1, **style):
+    """An obstacle's footprint (its kind's drawing) on ``ax``; returns the artist."""
+    shape = ob.model.drawing(ob)
+    if isinstance(shape, Outline):
+        return ax.add_patch(Polygon(shape.points, closed=True, color=color, zorder=zorder, **style))
+    if isinstance(shape, Disc):
+        return ax.add_patch(Circle(shape.center, shape.radius, color=color, zorder=zorder, **style))
+    if isinstance(shape, Raster):
+        return _draw_raster(ax, shape, color, zorder)
+    raise TypeError(f"no top view for a {type(shape).__name__} drawing ({ob.kind})")
+
+
+def _draw_raster(ax, r: Raster, color, zorder: float):
+    """Wall cells as an image in the map's frame (turned by its yaw about its origin)."""
+    rows, cols = r.cells.shape
+    x0, y0 = r.origin
+    img = ax.imshow(np.ma.masked_where(~r.cells, r.cells), cmap=ListedColormap([color]),
+                    origin="lower", interpolation="nearest", zorder=zorder,
+                    extent=(x0, x0 + cols * r.resolution, y0, y0 + rows * r.resolution))
+    if r.yaw:
+        img.set_transform(Affine2D().rotate_around(x0, y0, r.yaw) + ax.transData)
+    return img
 
 
 def _draw_world_3d(ax, world: World) -> None:
@@ -116,11 +140,9 @@ def view_extent(world: World | None, paths=(), pad: float = PAD_M,
         xs += [world.start[0], world.goal[0]]
         ys += [world.start[1], world.goal[1]]
         for ob in world.obstacles_at(0.0):
-            pts = ob.corners() if ob.shape == "box" else [
-                (ob.center[0] + dx * ob.radius, ob.center[1] + dy * ob.radius)
-                for dx, dy in ((-1, -1), (1, 1))] if ob.center else []
-            xs += [p[0] for p in pts]
-            ys += [p[1] for p in pts]
+            x0, y0, x1, y1 = ob.model.bounds(ob)
+            xs += [x0, x1]
+            ys += [y0, y1]
     for arr in paths:
         arr = np.asarray(arr, dtype=float)
         if arr.size:
