@@ -72,10 +72,11 @@ def run(args: argparse.Namespace) -> int:
     with open_node(NODE_NAME, args, log) as node:
         loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
                            runauth.key_from_env(), objects=args.objects,
-                           send_command=lambda cmd: node.publish("cmd_vel", cmd))
+                           send_command=lambda cmd: node.publish("cmd_vel", cmd),
+                           want_state=lambda: node.listened("planner/state"))
         for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
-        node.declare_publishers("cmd_vel", "planner/state", "planner/status", "events")
+        node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
             node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()

@@ -18,6 +18,8 @@
 - Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
   and ``planner/status``. With ``send_command`` the command goes out through it as soon as
   it exists (before the debug state is built; the returned list then holds the rest).
+  With ``want_state`` (e.g. :meth:`common.transport.Node.listened`) false, ``planner/state``
+  is neither built nor returned: a debug topic nobody subscribes to costs nothing.
 """
 
 from __future__ import annotations
@@ -40,11 +42,12 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S, log=None, run_key: bytes | None = None,
-                 objects: bool = False, send_command: Callable[[Twist], None] | None = None):
+                 objects: bool = False, send_command: Callable[[Twist], None] | None = None,
+                 want_state: Callable[[], bool] = lambda: True):
         check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
         check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])
         self.planner, self.realtime, self.use_objects = planner, realtime, objects
-        self.send_command = send_command
+        self.send_command, self.want_state = send_command, want_state
         self.stale_ns = int(stale_timeout_s * NS_PER_S)
         self.stale_s, self.pair_timeout_s = stale_timeout_s, pair_timeout_s
         self.log = log
@@ -141,6 +144,8 @@ class PlannerLoop:
         if self.send_command is not None:  # out now: the driver waits for it in lockstep
             self.send_command(cmd)
             out = []
+        if not self.want_state():
+            return [*out, ("planner/status", finish(False)[1])]
         state, status = finish()
         return [*out, ("planner/state", state), ("planner/status", status)]
 
@@ -150,9 +155,9 @@ class PlannerLoop:
         t = scan.stamp_ns
         state = "idle" if self.planner.goal is None else self.planner.state
         state = "driving" if state == "ready" else state
-        return [("cmd_vel", Twist(stamp_ns=t, v=0.0, w=0.0)),
-                ("planner/state", PlannerState(stamp_ns=t, algorithm=self.planner.strategy.name,
-                                               mode="stale")),
+        debug = [("planner/state", PlannerState(stamp_ns=t, algorithm=self.planner.strategy.name,
+                                                mode="stale"))] if self.want_state() else []
+        return [("cmd_vel", Twist(stamp_ns=t, v=0.0, w=0.0)), *debug,
                 ("planner/status", PlannerStatus(stamp_ns=t, state=state,
                                                  reason=f"stale odometry ({age}): stopped"))]
 
