@@ -232,8 +232,8 @@ class Planner:
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
         compute_ns = time.perf_counter_ns() - t0
-        return Twist(stamp_ns=t, v=v, w=w), lambda state=True: (
-            self._state(t, plan, view, theta_ref, v, w, compute_ns) if state else None,
+        return Twist(stamp_ns=t, v=v, w=w), lambda debug=True: (
+            self._state(t, plan, view, theta_ref, v, w, compute_ns) if debug else None,
             PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
 
     def warm_up(self) -> None:
@@ -279,8 +279,8 @@ class Planner:
         plan = plan or Plan(force=np.zeros(2), mode="stop")
         plan.mode = "stop" if state != "idle" else "idle"
         compute_ns = time.perf_counter_ns() - t0
-        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda state=True: (
-            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns) if state else None,
+        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda debug=True: (
+            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns) if debug else None,
             PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
 
     def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
