@@ -10,7 +10,7 @@ command and every process it started (``RUSAGE_CHILDREN``), and each process's o
 seconds (from /proc, :class:`bench.proc_cpu.TreeCPU`; ``--procs-csv`` writes their medians
 per side, planner and process, with the CPU per 100 ms cycle of sim time). ``--timeout 0.2`` times
 start-up and shut-down alone. Prints one JSON line per run and one summary per side and
-planner (medians and minima; whether every run gave the same figures) and writes the
+planner (medians and minima; whether every run of both sides gave the same figures) and writes the
 summaries with ``--csv``. Speed is reported, never asserted.
 """
 
@@ -63,8 +63,11 @@ def one_run(tree: Path, planner: str, world: str, seed: int, timeout_s: float, p
                           if name != "launcher"}}   # "launcher": this bench's own process
 
 
-def summary(label: str, runs: list[dict]) -> dict:
+def summary(label: str, runs: list[dict], reference: dict | None = None) -> dict:
+    """Medians and minima of one side's runs; ``same_figures``: every run gave the figures of
+    ``reference`` (the first run of the planner on either side; default: this side's first)."""
     med, low = statistics.median, min
+    reference = runs[0]["figures"] if reference is None else reference
     walls, inner, cpus = ([r[k] for r in runs] for k in ("command_wall_s", "run_wall_s", "cpu_s"))
     sim = runs[0]["figures"]["sim_time_s"]
     return {"date": time.strftime("%Y-%m-%dT%H:%M"), "code": label, "planner": runs[0]["planner"],
@@ -74,7 +77,7 @@ def summary(label: str, runs: list[dict]) -> dict:
             "cpu_med_s": round(med(cpus), 2), "cpu_min_s": round(low(cpus), 2), "sim_s": sim,
             "sim_over_wall_med": round(sim / med(walls), 1),
             "cpu_ms_per_cycle": round(1e3 * med(cpus) / max(sim / CYCLE_S, 1.0), 2),
-            "same_figures": all(r["figures"] == runs[0]["figures"] for r in runs),
+            "same_figures": all(r["figures"] == reference for r in runs),
             "load_min": round(min(r["load_1min"] for r in runs), 1),
             "load_max": round(max(r["load_1min"] for r in runs), 1)}
 
@@ -132,7 +135,10 @@ def main() -> None:
                 if a.jsonl:
                     with a.jsonl.open("a") as fh:
                         fh.write(json.dumps(r) + "\n")
-    rows = [summary(label, rs) for (label, _), rs in runs.items()]
+    first = {}   # planner -> the figures of its first run (before): both sides must match
+    for (_, planner), rs in runs.items():
+        first.setdefault(planner, rs[0]["figures"])
+    rows = [summary(label, rs, first[planner]) for (label, planner), rs in runs.items()]
     for row in rows:
         print(json.dumps({"bench": "run_ab", **row}), flush=True)
     if a.csv:
