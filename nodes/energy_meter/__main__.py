@@ -15,7 +15,6 @@ Bad payloads and messages the meter cannot use are logged, counted and dropped.
 from __future__ import annotations
 
 import argparse
-import threading
 
 from common.errors import ConfigError, PapfError
 from common.ports import describe, plain
@@ -39,50 +38,30 @@ def parse_settings(items: list[str]) -> dict[str, str]:
     return out
 
 
-class Metering:
-    """The meter wired to the node: each message is metered on Zenoh's thread that delivers
-    it (one lock; the main thread is never woken), the battery put from there."""
-
-    def __init__(self, meter: EnergyMeter, node, log) -> None:
-        self.meter, self.node, self.log = meter, node, log
-        self.lock = threading.Lock()   # odom and wheels may come on two of Zenoh's threads
-        self.errors = 0
-
-    def measured(self, msg) -> None:
-        with self.lock:
-            try:
-                self.meter.set_measured_voltage(msg.voltage, msg.stamp_ns)
-            except PapfError as exc:
-                self._drop(exc)
-
-    def feed(self, msg) -> None:
-        with self.lock:
-            try:
-                state = self.meter.feed(msg)
-            except PapfError as exc:
-                self._drop(exc)
-                return
-            if state is not None:
-                self.node.publish("battery", state)
-
-    def _drop(self, exc: Exception) -> None:
-        self.errors += 1
-        if self.errors <= 5 or self.errors % 100 == 0:
-            self.log.warning("dropped message #%d it cannot meter: %s", self.errors, exc)
-
-
 def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
     """Subscribe, declare, get ready, then meter every message until stopped."""
+    errors = 0
     with open_node(NODE_NAME, args, log) as node:
-        metering = Metering(meter, node, log)
+        node.subscribe("odom")
+        node.subscribe("wheels")
+        node.subscribe("battery/measured")  # the real robot's voltage replaces the model's
         node.declare_publishers("battery")
-        node.subscribe("odom", handler=metering.feed)
-        node.subscribe("wheels", handler=metering.feed)
-        node.subscribe("battery/measured", handler=metering.measured)  # the real robot's voltage
-        node.ready()                                                   # replaces the model's
-        for _ in node.messages(tick_s=1.0):   # only the stop request wakes this thread
-            pass
-    with metering.lock:
+        node.ready()
+        for topic, msg in node.messages():
+            if msg is None:
+                continue
+            try:
+                if topic == "battery/measured":
+                    meter.set_measured_voltage(msg.voltage, msg.stamp_ns)
+                    continue
+                state = meter.feed(msg)
+            except PapfError as exc:   # e.g. a measured voltage <= 0: counted, dropped
+                errors += 1
+                if errors <= 5 or errors % 100 == 0:
+                    log.warning("dropped message #%d it cannot meter: %s", errors, exc)
+                continue
+            if state is not None:
+                node.publish("battery", state)
         b = meter.battery
         log.info("stopped: %.3f mAh, %.1f J, SoC %.4f (%s model; %d stale, %d unpaired, "
                  "%d overloads)", b.charge_used_mAh, b.energy_J, b.soc, meter.model_name,
