@@ -54,14 +54,14 @@ class TreeCPU:
             self._sample()
 
     def _sample(self) -> None:
-        stack, seen = [self.root], set()
+        stack, seen = [(self.root, self._pre_exec)], set()
         while stack:                      # the tree from the root, by each task's children
-            pid = stack.pop()
+            pid, parent = stack.pop()
             if pid in seen:
                 continue
             seen.add(pid)
-            if self.names.get(pid) in (None, "", self._pre_exec):  # seen between fork and exec
-                self.names[pid] = _name(pid, self.root)
+            if self.names.get(pid) in (None, "", parent):  # seen between fork and exec: the
+                self.names[pid] = _name(pid, self.root)     # parent's name until it execs
             try:
                 tids = os.listdir(f"/proc/{pid}/task")
             except OSError:
@@ -69,7 +69,7 @@ class TreeCPU:
             for tid in tids:
                 if st := _stat(f"/proc/{pid}/task/{tid}/stat"):
                     self.threads[(pid, int(tid))] = (st[0], st[2])
-                stack += _children(pid, tid)
+                stack += [(c, self.names[pid]) for c in _children(pid, tid)]
 
     def per_process(self) -> dict[str, dict]:
         """name -> {"cpu_s": total, "python_s": Python threads, "zenoh_s": Zenoh's threads}."""

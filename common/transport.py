@@ -209,6 +209,8 @@ class Node:
         self.stop = StopRequested(wake=lambda: self.inbox.put((None, None)))  # a tick, at once
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
+        self._listeners: list = []                 # matching listeners of on-demand topics
+        self._unheard: set[str] = set()            # on-demand topics no subscriber matches now
         self._token = None
         self._last: tuple[Message | None, bytes] = (None, b"")   # last message put, encoded
 
@@ -218,6 +220,8 @@ class Node:
         expected = TOPICS.get(topic)
         if expected is not None and not isinstance(msg, expected):
             raise TypeError(f"{topic} carries {expected.__name__}, not {type(msg).__name__}")
+        if topic in self._unheard:   # an on-demand topic nobody subscribes to: no encode, no put
+            return
         pub = self._publishers.get(topic)
         if pub is None:
             pub = self._declare(topic)
@@ -225,11 +229,34 @@ class Node:
             self._last = (msg, msg.to_bytes())
         pub.put(self._last[1])
 
-    def declare_publishers(self, *topics: str) -> None:
-        """Declare publishers up front (before :meth:`ready`) so first puts are not late."""
-        for topic in topics:
+    def declare_publishers(self, *topics: str, on_demand: Iterable[str] = ()) -> None:
+        """Declare publishers up front (before :meth:`ready`) so first puts are not late.
+
+        ``on_demand``: debug topics put only while a subscriber matches them (Zenoh's
+        matching status, kept by a listener): :meth:`publish` drops their messages
+        unencoded while nobody listens, and :meth:`listened` tells the node so it need not
+        build them at all. A put nobody matches reaches no one either way.
+        """
+        for topic in (*topics, *on_demand):
             if topic not in self._publishers:
                 self._declare(topic)
+        for topic in on_demand:
+            self._watch_matching(topic)
+
+    def listened(self, topic: str) -> bool:
+        """False only for an on-demand topic no subscriber matches now."""
+        return topic not in self._unheard
+
+    def _watch_matching(self, topic: str) -> None:
+        pub = self._publishers[topic]
+
+        def on_change(status) -> None:   # Zenoh's thread; a set add/discard is atomic
+            (self._unheard.discard if status.matching else self._unheard.add)(topic)
+
+        self._unheard.add(topic)   # unheard until Zenoh says otherwise; a race can only
+        self._listeners.append(pub.declare_matching_listener(direct(on_change)))  # leave it
+        if pub.matching_status.matching:                                         # heard
+            self._unheard.discard(topic)
 
     def _declare(self, topic: str) -> zenoh.Publisher:
         # BLOCK: a full queue waits rather than drops (lockstep and recordings need every
@@ -294,6 +321,9 @@ class Node:
             self._token.undeclare()
         for sub in self._subscribers:
             sub.undeclare()
+        for listener in self._listeners:
+            listener.undeclare()
+        self._listeners.clear()
         for pub in self._publishers.values():
             pub.undeclare()
         self._subscribers.clear()

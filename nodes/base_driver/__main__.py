@@ -31,7 +31,8 @@ from nodes.base_driver.ports import PORTS, VARIANTS
 from worlds import load_world
 
 NAME = "base_driver"
-PUBLISHES = ("sim/pose", "odom", "wheels", "clock", "events")
+PUBLISHES = ("sim/pose", "odom", "wheels", "events")
+ON_DEMAND = ("clock",)   # 50 Hz that no node of a sim run reads (sim/pose carries the time)
 
 
 def drive(node: Node, loop: DriverLoop) -> None:
@@ -75,7 +76,7 @@ def main_sim(args: argparse.Namespace) -> int:
     with open_node(NAME, args, log) as node:
         node.subscribe("events")
         node.subscribe("cmd_vel")
-        node.declare_publishers(*PUBLISHES)
+        node.declare_publishers(*PUBLISHES, on_demand=ON_DEMAND)
         node.ready()
         log.info("waiting for run_started on %s (a launcher sends it; alone: papf goal X Y "
                  "--start-run, or papf teleop --start-run with --realtime)", node.keys.events)

@@ -50,12 +50,12 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
         for topic, msg in node.messages():
             if msg is None:
                 continue
-            if topic == "battery/measured":
-                meter.set_measured_voltage(msg.voltage, msg.stamp_ns)
-                continue
             try:
+                if topic == "battery/measured":
+                    meter.set_measured_voltage(msg.voltage, msg.stamp_ns)
+                    continue
                 state = meter.feed(msg)
-            except PapfError as exc:
+            except PapfError as exc:   # e.g. a measured voltage <= 0: counted, dropped
                 errors += 1
                 if errors <= 5 or errors % 100 == 0:
                     log.warning("dropped message #%d it cannot meter: %s", errors, exc)

@@ -24,7 +24,7 @@ from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner import lazy
-from nodes.planner.loop import PlannerLoop
+from nodes.planner.loop import HeldOdometry, PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
@@ -74,10 +74,13 @@ def run(args: argparse.Namespace) -> int:
     with open_node(NODE_NAME, args, log) as node:
         loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
                            runauth.key_from_env(), objects=args.objects,
-                           send_command=lambda cmd: node.publish("cmd_vel", cmd))
-        for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
+                           send_command=lambda cmd: node.publish("cmd_vel", cmd),
+                           want_state=lambda: node.listened("planner/state"))
+        held = None if args.realtime else HeldOdometry(loop, lambda: node.inbox.put((None, None)))
+        for topic in ("scan", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
-        node.declare_publishers("cmd_vel", "planner/state", "planner/status", "events")
+        node.subscribe("odom", handler=held.on_odom if held else None)
+        node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
             node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()
@@ -89,7 +92,9 @@ def run(args: argparse.Namespace) -> int:
             if topic == "planner/params":
                 _answer_params(node, args.planner, planner, msg, loop.last_stamp)
                 continue
-            out = loop.on_message(topic, msg, now) if topic else []
+            out = held.feed(now) if held else []
+            out += loop.on_message(topic, msg, now) if topic else []
+            out += held.after(now) if held else []
             for out_topic, out_msg in out + loop.poll(now):
                 node.publish(out_topic, out_msg)
                 if out_topic == "planner/status" and out_msg.state != last_status:

@@ -225,7 +225,8 @@ class Planner:
 
         The node publishes the command before it builds the debug message (tens of
         microseconds with PAPF's abandoned paths): the command's latency is the
-        algorithm's alone. ``compute_ns`` is the time to the command.
+        algorithm's alone. ``compute_ns`` is the time to the command. ``finish(False)``
+        skips the debug message (None in its place) when nobody listens to it.
         """
         if objects is not None:
             self.set_objects(Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id)
@@ -257,8 +258,8 @@ class Planner:
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
         compute_ns = time.perf_counter_ns() - t0
-        return Twist(stamp_ns=t, v=v, w=w), lambda: (
-            self._state(t, plan, view, theta_ref, v, w, compute_ns),
+        return Twist(stamp_ns=t, v=v, w=w), lambda debug=True: (
+            self._state(t, plan, view, theta_ref, v, w, compute_ns) if debug else None,
             PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
 
     def warm_up(self) -> None:
@@ -283,8 +284,8 @@ class Planner:
         plan = plan or Plan(force=np.zeros(2), mode="stop")
         plan.mode = "stop" if state != "idle" else "idle"
         compute_ns = time.perf_counter_ns() - t0
-        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda: (
-            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns),
+        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda debug=True: (
+            self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns) if debug else None,
             PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
 
     def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:

@@ -18,11 +18,13 @@
 - Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
   and ``planner/status``. With ``send_command`` the command goes out through it as soon as
   it exists (before the debug state is built; the returned list then holds the rest).
+  With ``want_state`` (e.g. :meth:`common.transport.Node.listened`) false, ``planner/state``
+  is neither built nor returned: a debug topic nobody subscribes to costs nothing.
 """
 
 from __future__ import annotations
 
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from collections.abc import Callable
 
 from common import runauth
@@ -42,11 +44,12 @@ class PlannerLoop:
 
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S, log=None, run_key: bytes | None = None,
-                 objects: bool = False, send_command: Callable[[Twist], None] | None = None):
+                 objects: bool = False, send_command: Callable[[Twist], None] | None = None,
+                 want_state: Callable[[], bool] = lambda: True):
         check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
         check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])
         self.planner, self.realtime, self.use_objects = planner, realtime, objects
-        self.send_command = send_command
+        self.send_command, self.want_state = send_command, want_state
         self.stale_ns = int(stale_timeout_s * NS_PER_S)
         self.stale_s, self.pair_timeout_s = stale_timeout_s, pair_timeout_s
         self.log = log
@@ -144,6 +147,8 @@ class PlannerLoop:
         if self.send_command is not None:  # out now: the driver waits for it in lockstep
             self.send_command(cmd)
             out = []
+        if not self.want_state():
+            return [*out, ("planner/status", finish(False)[1])]
         state, status = finish()
         return [*out, ("planner/state", state), ("planner/status", status)]
 
@@ -153,9 +158,9 @@ class PlannerLoop:
         t = scan.stamp_ns
         state = "idle" if self.planner.goal is None else self.planner.state
         state = "driving" if state == "ready" else state
-        return [("cmd_vel", Twist(stamp_ns=t, v=0.0, w=0.0)),
-                ("planner/state", PlannerState(stamp_ns=t, algorithm=self.planner.strategy.name,
-                                               mode="stale")),
+        debug = [("planner/state", PlannerState(stamp_ns=t, algorithm=self.planner.strategy.name,
+                                                mode="stale"))] if self.want_state() else []
+        return [("cmd_vel", Twist(stamp_ns=t, v=0.0, w=0.0)), *debug,
                 ("planner/status", PlannerStatus(stamp_ns=t, state=state,
                                                  reason=f"stale odometry ({age}): stopped"))]
 
@@ -174,3 +179,36 @@ def _latest(buffer: OrderedDict):
 def _newest_upto(buffer: OrderedDict, t: int):
     older = [m for m in buffer.values() if m.stamp_ns <= t]
     return max(older, key=lambda m: m.stamp_ns) if older else None
+
+
+class HeldOdometry:
+    """Lockstep odometry kept off the main thread until a scan needs it.
+
+    Odometry comes at 50 Hz, scans at 10 Hz, and ``odom(t)`` nearly always arrives before
+    ``scan(t)``: waking the main thread for every odometry message (four in five of them
+    never paired) is wasted. :meth:`on_odom` (Zenoh's thread) keeps the message and wakes
+    the main thread only while a scan waits for its partner; the main thread hands every
+    kept message to the loop, in arrival order, before each inbox item (:meth:`feed`), and
+    again when a scan it just took still waits (:meth:`after`). Either that second look
+    finds the odometry or :meth:`on_odom` sees the waiting scan: no wake is lost.
+    """
+
+    def __init__(self, loop: PlannerLoop, wake: Callable[[], None]):
+        self.loop, self.wake = loop, wake
+        self.kept: deque[Odometry] = deque()
+
+    def on_odom(self, msg: Odometry) -> None:
+        self.kept.append(msg)
+        if self.loop.pending:   # a scan waits for odometry: this may be its partner
+            self.wake()
+
+    def feed(self, now: float) -> list:
+        """Every kept message to the loop (what it answered: scans now complete)."""
+        out = []
+        while self.kept:
+            out += self.loop.on_message("odom", self.kept.popleft(), now)
+        return out
+
+    def after(self, now: float) -> list:
+        """A second :meth:`feed` when a scan still waits (its odometry may have come meanwhile)."""
+        return self.feed(now) if self.loop.pending else []

@@ -7,7 +7,7 @@ import pytest
 import zenoh
 
 from common.transport import Node, alive_nodes, wait_alive, zenoh_config
-from schemas import Keys, Odometry, Twist
+from schemas import Keys, Odometry, PlannerState, Twist
 
 
 def test_router_without_scouting_delay_opens_and_serves_a_client():
@@ -57,3 +57,33 @@ def test_node_decodes_drops_garbage_and_declares_liveliness(router, session):
 def test_wait_alive_reports_missing(session):
     missing = wait_alive(session, Keys("nobody"), ["planner"], timeout_s=0.3)
     assert missing == {"planner"}
+
+
+def test_on_demand_topic_is_put_only_while_someone_subscribes(router, session):
+    """planner/state declared on demand: unencoded and not put while no subscriber matches
+    it; delivered once one does; dropped again when it leaves. Other topics always go out."""
+    keys = Keys("t2")
+    got = []
+    with zenoh.open(zenoh_config("client", [router])) as s2:
+        node = Node("probe", s2, keys, logging.getLogger("probe"))
+        node.declare_publishers("cmd_vel", on_demand=("planner/state",))
+        assert not node.listened("planner/state") and node.listened("cmd_vel")
+        encoded = []
+        state = PlannerState(stamp_ns=1, algorithm="apf", mode="drive")
+        original = PlannerState.to_bytes
+        PlannerState.to_bytes = lambda self: encoded.append(1) or original(self)
+        try:
+            node.publish("planner/state", state)
+            assert not encoded                 # nobody listens: not even encoded
+            sub = session.declare_subscriber(keys.key("planner/state"),
+                                             lambda s: got.append(s.payload.to_bytes()))
+            assert wait_for(lambda: node.listened("planner/state"))
+            node.publish("planner/state", state)
+            assert wait_for(lambda: got == [original(state)])
+            sub.undeclare()
+            assert wait_for(lambda: not node.listened("planner/state"))
+            node.publish("planner/state", state)
+            assert len(encoded) == 1
+        finally:
+            PlannerState.to_bytes = original
+        node.close()

@@ -6,7 +6,7 @@ import queue
 import sys
 
 from common.transport import wait_alive
-from schemas import BatteryState, Keys, Odometry, WheelStates
+from schemas import BatteryState, BatteryVoltage, Keys, Odometry, WheelStates
 
 DT_NS = 20_000_000   # 50 Hz, as the sim driver publishes
 
@@ -34,6 +34,8 @@ def test_node_process_meters_and_survives_garbage(router, session, spawn):
         for k in range(6):
             t = k * DT_NS
             if k == 3:   # garbage on both inputs must be dropped, not crash the node
+                session.put(keys.battery_measured,   # a voltage it cannot use: counted, dropped
+                            BatteryVoltage(stamp_ns=t, voltage=-1.0).to_bytes())
                 session.put(keys.odom, b"\xc1 not msgpack")
                 session.put(keys.wheels, wheels(t).to_bytes()[:-3])
                 session.put(keys.wheels, odom(t).to_bytes())

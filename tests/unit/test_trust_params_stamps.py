@@ -112,3 +112,22 @@ def test_planner_ignores_an_extreme_stamp_pair():
     statuses = [m.state for t, m in out if t == "planner/status"]
     assert statuses == ["ready", "driving", "driving"]
     assert sum(node.bad_messages.values()) == 4
+
+
+def test_planner_state_neither_built_nor_returned_when_nobody_listens():
+    """want_state false: the same commands and statuses, no planner/state (debug) at all."""
+    def run(want: bool) -> list:
+        loop = PlannerLoop(make_planner("apf"), want_state=lambda: want)
+        out = loop.on_message("goal", Goal(stamp_ns=0, x=5.0, y=0.0), 0.0)
+        for t in (0, 100_000_000, 200_000_000):
+            out += loop.on_message("odom", _odom(t), 0.0) + loop.on_message("scan", _scan(t), 0.0)
+        out += loop.on_message("scan", _scan(900_000_000), 0.0) + loop.poll(10.0)  # stale
+        out += loop.on_message("goal", Goal(stamp_ns=0, x=0.05, y=0.0), 0.0)  # within reach
+        t = 1_000_000_000
+        return out + loop.on_message("odom", _odom(t), 0.0) + loop.on_message("scan", _scan(t), 0.0)
+
+    full, lean = run(True), run(False)
+    assert [t for t, _ in full].count("planner/state") == 5
+    assert [m.state for t, m in lean if t == "planner/status"][-1] == "reached"
+    assert any(m.mode == "stale" for t, m in full if t == "planner/state")
+    assert [(t, m) for t, m in full if t != "planner/state"] == lean
