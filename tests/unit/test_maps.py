@@ -184,11 +184,11 @@ def test_start_and_goal_go_with_a_map(tmp_path, capsys):
 
 def test_papf_reaches_a_goal_through_a_door_offline(tmp_path):
     """The offline closed loop (LiDAR and footprint in pybullet) on a map made here."""
-    from papf.offline.plan import plan
+    from papf.offline.run import simulate
 
     save_map(OccupancyMap(map_gen.rooms(0.05), 0.05, (0.0, 0.0, 0.0)), tmp_path / "r.yaml",
              mode="scale", negate=True)
     world = load_world(map_world_file(str(tmp_path / "r.yaml"),
                                       "2.5,2.0", "6.5,3.5"))
-    result = plan(world, "papf", seed=1, max_time_s=120)
+    result = simulate(world, "papf", seed=1, max_time_s=120)
     assert (result.outcome, result.collisions) == ("reached", 0), result.reason
