@@ -20,6 +20,7 @@ from common.errors import ConfigError
 from common.transport import StopRequested, wait_alive, zenoh_config
 from papf.console.progress import RunProgress
 from papf.launch.outcome import RunMonitor, RunResult
+from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
 from papf.launch.sequence import STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use, wait_port
@@ -36,6 +37,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     prof = load_profile(opt.profile)
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
         raise ConfigError(f"profile {prof.name} drives a run: give --world W")
+    check_launch(opt, prof)   # ConfigError/WorldError before anything starts (one preflight)
     if prof.router and not opt.dry_run:
         opt = free_listen(prof, opt)
     graph = resolve(prof, opt)

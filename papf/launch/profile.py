@@ -30,7 +30,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
              "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
-             "view")
+             "view", "record_force")
 ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = ("iapf",)              # planners that use tracks: their default is truth
