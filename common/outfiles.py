@@ -70,11 +70,18 @@ def output(out: str | Path, inputs: Iterable[str | Path] = (), force: bool = Fal
                                     else suffix, dir=out.parent)
     os.close(fd)
     tmp = Path(tmp_name)
+    os.chmod(tmp, 0o666 & ~_umask())   # as open() would have made it (mkstemp: 0600)
     try:
         yield tmp
         _publish(tmp, out, force)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _publish(tmp: Path, out: Path, force: bool) -> None:

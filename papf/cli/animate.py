@@ -18,12 +18,13 @@ def register(sub) -> None:
                    help="sim seconds per video second (default 4)")
     p.add_argument("--world", help="world to draw (default: the recording's metadata)")
     p.add_argument("--dpi", type=int, default=80, help="resolution (default 80)")
+    p.add_argument("--force", action="store_true", help="replace OUT if it exists")
     p.set_defaults(func=cmd_animate)
 
 
 def cmd_animate(args: argparse.Namespace) -> int:
     from papf.report.animation import animate
 
-    n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi)
+    n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi, args.force)
     print(f"{args.out}: {n} frames at {args.fps:g} fps ({args.speed:g}x)")
     return 0

@@ -48,6 +48,7 @@ from mcap.records import (
 from mcap.stream_reader import breakup_chunk
 
 from common.errors import RecordingError
+from papf.recording.bounds import check_chunk
 
 MAGIC = b"\x89MCAP0\r\n"
 FRAME = struct.Struct("<BQ")       # record opcode, record length [bytes]
@@ -126,6 +127,7 @@ def _chunk_at(mm, pos: int, size: int) -> Chunk | None:
         return None
     try:
         chunk = _parse(Opcode.CHUNK, mm[pos + FRAME.size:pos + FRAME.size + length])
+        check_chunk(chunk, "chunk")
         breakup_chunk(chunk, validate_crc=True)
     except Exception:
         return None
@@ -194,6 +196,7 @@ def scan_records(f, stats: ScanStats) -> Iterator[object]:
             if isinstance(rec, Chunk):
                 counting_lost = False
                 try:
+                    check_chunk(rec, "chunk")   # a decompression bomb: skipped as damage
                     inner = breakup_chunk(rec, validate_crc=True)
                 except Exception:
                     stats.bad_chunks += 1
