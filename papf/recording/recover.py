@@ -84,7 +84,8 @@ class RecoverStats:
         """What was lost, in words ('' when nothing)."""
         sc, parts = self.scan, []
         if sc.bad_chunks:
-            parts.append(f"{sc.bad_chunks} damaged chunk(s) failed their CRC, did not decompress or claimed more than the size bound")
+            parts.append(f"{sc.bad_chunks} damaged chunk(s) failed their CRC, did not "
+                         "decompress or claimed more than the size bound")
         if sc.damaged_bytes:
             parts.append(f"{sc.damaged_bytes} damaged bytes skipped at byte(s) "
                          + ", ".join(map(str, sc.damage_at)))
