@@ -24,7 +24,7 @@ from nodes.planner.arapf import ARAPFStrategy
 from nodes.planner.core import Plan, Planner, ScanView
 from nodes.planner.iapf_strategy import IAPFStrategy
 from nodes.planner.papf import PAPFStrategy
-from nodes.planner.settings import specs_of
+from nodes.planner.settings import check_strength, specs_of
 from nodes.planner.wang import WangAPFStrategy, WangStrategy
 
 try:
@@ -103,6 +103,7 @@ def check_params(apf: APFParams, algo) -> None:
     """Every field of both parameter sets in range (the node checks what it is given)."""
     check_all(apf, specs_of(APFParams), "apf")
     check_all(algo, specs_of(type(algo)), type(algo).__name__)
+    check_strength(apf, algo)
 
 
 def _planner_class(planner: str) -> type:

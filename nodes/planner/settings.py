@@ -14,6 +14,7 @@ ranges fix the paper's signs: ``q_V, q_O, q_Q < 0 < q_G``.
 
 from __future__ import annotations
 
+from common.errors import ConfigError
 from common.params import FLAG, Spec, choice, integer, num, pos
 from common.robot import LIDAR_RANGE_MAX_M, V_MAX_M_S, W_MAX_RAD_S
 from nodes.planner.apf import APFParams
@@ -25,14 +26,29 @@ from nodes.planner.wang import WangAPFParams, WangParams
 MAX_BEAMS = 100_000      # [-] LiDAR points a planner is configured for
 MAX_GAIN = 1e4           # [-] largest force constant (defaults are 1 .. 10)
 
+# Safety floors, measured (docs/planners.md "Safety floors", docs/data/safety-floor.csv:
+# `papf experiment safety-floor`, offline on energy-blocking and papf-test-1): each the
+# smallest swept value at which no run of any planner collided, the others at their
+# defaults. A value just above zero switches avoidance off as surely as zero does.
+D_O_MIN_M = 0.25         # [m] repulsion range (0.2 collided on both worlds)
+K_VO_L_MIN = 1.0         # [-] k_VO * L (0.5 collided: PAPF on both worlds)
+CHARGE_MIN = 0.2         # [-] |q_V|, |q_O| (0.1 collided: PAPF on energy-blocking)
+K_RO_L_MIN = 0.5         # [-] AR-APF's k_RO * L (0.1 collided on papf-test-1)
+K_REP_L_MIN = 5.0        # [-] Wang's k_rep * L (1 collided on energy-blocking: the default is the floor)
+RHO_0_MIN_M = 0.5        # [m] Wang's influence radius (0.3 collided on energy-blocking)
+# The single floors do not compose: eq. 2 repels with the product k_VO q_V q_O, so it has a
+# floor of its own (each factor at its floor would be 250 times weaker than the default).
+REPULSION_MIN = 2.0      # [-] k_vo_l * q_v * q_o (1 collided: q_o = -0.1 with PAPF)
+AR_REPULSION_MIN = 0.5   # [-] AR-APF's k_ro_l * q_v * q_o
+
 APF: dict[str, Spec] = {
     "lidar_points": integer(1, MAX_BEAMS),
-    "q_v": num(-100.0, 0.0, hi_open=True, safety=True),
-    "q_o": num(-100.0, 0.0, hi_open=True, safety=True),
+    "q_v": num(-100.0, -CHARGE_MIN, safety=True),
+    "q_o": num(-100.0, -CHARGE_MIN, safety=True),
     "q_g": num(0.0, 100.0, lo_open=True),
     "k_vg": pos(MAX_GAIN),
-    "k_vo_l": pos(MAX_GAIN, safety=True),
-    "d_o": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "k_vo_l": num(K_VO_L_MIN, MAX_GAIN, safety=True),
+    "d_o": num(D_O_MIN_M, LIDAR_RANGE_MAX_M, "m", safety=True),
     "theta_err_max_deg": pos(180.0, "deg"),
     "v_max": pos(V_MAX_M_S, "m/s", safety=True),
     "k_theta": pos(100.0, "1/s"),
@@ -66,7 +82,7 @@ PAPF: dict[str, Spec] = {
 }
 
 ARAPF: dict[str, Spec] = {
-    "k_ro_l": pos(MAX_GAIN, safety=True),
+    "k_ro_l": num(K_RO_L_MIN, MAX_GAIN, safety=True),
     "k_virtual_factor": num(0.0, 1000.0),
     "alpha_deg": pos(180.0, "deg"),
     "d_min": pos(LIDAR_RANGE_MAX_M, "m"),
@@ -84,14 +100,15 @@ ARAPF: dict[str, Spec] = {
 
 WANG: dict[str, Spec] = {
     "k_att": pos(1000.0),
-    "k_rep_l": pos(MAX_GAIN, safety=True),
+    "k_rep_l": num(K_REP_L_MIN, MAX_GAIN, safety=True),
     "lidar_points": integer(1, MAX_BEAMS),
-    "rho_0": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "rho_0": num(RHO_0_MIN_M, LIDAR_RANGE_MAX_M, "m", safety=True),
     "r_0": num(0.0, 5.0, "m"),
     "control_offset_m": num(0.0, 1.0, "m"),
 }
 
-# Wang's traditional APF baseline (eqs. 1-5)
+# Wang's traditional APF baseline (eqs. 1-5): the paper's failing baseline, its floors not
+# measured (its default k_rep_l = 2 is below the improved planner's measured floor)
 WANG_APF: dict[str, Spec] = {
     "k_att": pos(1000.0),
     "k_rep_l": pos(MAX_GAIN, safety=True),
@@ -126,6 +143,18 @@ SPECS: dict[type, dict[str, Spec]] = {
     APFParams: APF, PAPFParams: PAPF, ARAPFParams: ARAPF, WangParams: WANG, IAPFParams: IAPF,
     WangAPFParams: WANG_APF,
 }
+
+
+def check_strength(apf: APFParams, algo) -> None:
+    """The products of eq. 2 above their floors (:data:`REPULSION_MIN`); ConfigError, one line."""
+    products = [("k_vo_l*q_v*q_o", apf.k_vo_l * apf.q_v * apf.q_o, REPULSION_MIN)]
+    if isinstance(algo, ARAPFParams):
+        products.append(("k_ro_l*q_v*q_o", algo.k_ro_l * apf.q_v * apf.q_o, AR_REPULSION_MIN))
+    for name, value, floor in products:
+        if not value >= floor:
+            raise ConfigError(f"{name} = {value:g}: the obstacle repulsion must be at least "
+                              f"{floor:g} (below it the robot collides; docs/planners.md "
+                              "\"Safety floors\")")
 
 
 def specs_of(params_cls: type) -> dict[str, Spec]:

@@ -6,8 +6,8 @@ value only just above zero does that as surely as zero (``d_o = 1e-9`` m repels 
 The floor is therefore the smallest swept value at which every planner on every world still
 avoided every obstacle (no collision); :mod:`nodes.planner.settings` takes its lower bounds
 from the table this writes (``docs/data/safety-floor.csv``, docs/planners.md "Safety floors").
-A last row per world runs every parameter at its floor together (their product, eq. 2's
-``k q_V q_O``, is what repels). Each finished run is appended to the CSV as it ends, and a
+The last rows per world (:data:`COMBOS`) reach the floor of eq. 2's product ``k q_V q_O``
+(what repels) through several factors at once. Each finished run is appended to the CSV as it ends, and a
 run already in the CSV is not run again (``--resume``).
 """
 
@@ -23,7 +23,7 @@ FIELDS = ("world", "planner", "param", "value", "outcome", "collisions", "min_cl
 
 # Each safety parameter: the planners it acts in, and the values swept (downwards from the default).
 SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
-    "d_o": (("apf", "papf"), (0.5, 0.3, 0.2, 0.15, 0.1, 0.05, 0.01)),
+    "d_o": (("apf", "papf"), (0.5, 0.3, 0.25, 0.2, 0.15, 0.1, 0.05, 0.01)),
     "k_vo_l": (("apf", "papf"), (10.0, 2.0, 1.0, 0.5, 0.1, 0.01)),
     "q_o": (("apf", "papf"), (-1.0, -0.5, -0.2, -0.1, -0.01, -0.001)),
     "k_ro_l": (("arapf",), (5.0, 1.0, 0.5, 0.1, 0.01)),
@@ -44,23 +44,36 @@ class Case:
 
     @property
     def key(self) -> tuple[str, str, str, str]:
-        return (self.world, self.planner, self.param, f"{self.value:g}")
+        return (self.world, self.planner, self.param, self.label)
+
+    @property
+    def label(self) -> str:
+        return " ".join(self.sets) if self.param == "combo" else f"{self.value:g}"
 
 
-def cases(worlds=WORLDS, floors: dict[str, float] | None = None) -> Iterator[Case]:
-    """Every (world, planner, parameter, value) of :data:`SWEEP`; then, with ``floors``,
-    each planner with all of its parameters at their floor."""
+def cases(worlds=WORLDS, combos: bool = False) -> Iterator[Case]:
+    """Every (world, planner, parameter, value) of :data:`SWEEP`; with ``combos``, the
+    runs of :data:`COMBOS` instead (the strength floor reached by several factors at once)."""
     for world in worlds:
+        if combos:
+            for planner, sets in COMBOS:
+                yield Case(world, planner, "combo", 0.0, sets)
+            continue
         for param, (planners, values) in SWEEP.items():
             for planner in planners:
                 for v in values:
                     yield Case(world, planner, param, v, (f"{param}={v!r}",))
-        if floors:
-            for planner in sorted({p for ps, _ in SWEEP.values() for p in ps}):
-                sets = tuple(f"{k}={v!r}" for k, v in floors.items() if planner in SWEEP.get(k, ((),))[0]
-                             or (k == "q_v" and planner in ("apf", "papf")))
-                if sets:
-                    yield Case(world, planner, "floors", 0.0, sets)
+
+
+# Eq. 2's obstacle force is k q_V q_O / d^2: the floors of the single factors do not compose
+# (each at its floor is 250 times weaker than the default). The product has its own floor
+# (nodes/planner/settings.py REPULSION_MIN): these runs reach it with d_o at its floor.
+COMBOS: tuple[tuple[str, tuple[str, ...]], ...] = tuple(
+    (planner, ("d_o=0.25", *sets)) for planner in ("apf", "papf") for sets in (
+        ("k_vo_l=2.0", "q_v=-1.0", "q_o=-1.0"), ("k_vo_l=10.0", "q_v=-1.0", "q_o=-0.2"),
+        ("k_vo_l=10.0", "q_v=-0.2", "q_o=-1.0"), ("k_vo_l=50.0", "q_v=-0.2", "q_o=-0.2"))
+) + (("arapf", ("k_ro_l=0.5", "q_v=-1.0", "q_o=-1.0")),
+     ("arapf", ("k_vo_l=50.0", "k_ro_l=12.5", "q_v=-0.2", "q_o=-0.2")))
 
 
 def done_keys(path: Path) -> set[tuple[str, str, str, str]]:
@@ -77,7 +90,7 @@ def run_case(case: Case, seed: int = 0) -> dict:
 
     s = plan(case.world, case.planner, params=list(case.sets), seed=seed, max_time_s=TIMEOUT_S).summary()
     return {"world": case.world, "planner": case.planner, "param": case.param,
-            "value": f"{case.value:g}", "outcome": s["outcome"], "collisions": s["collisions"],
+            "value": case.label, "outcome": s["outcome"], "collisions": s["collisions"],
             "min_clearance_m": round(s["min_clearance_m"], 3), "duration_s": round(s["duration_s"], 1),
             "path_length_m": round(s["path_length_m"], 2)}
 
@@ -99,17 +112,15 @@ def floors_of(rows: list[dict]) -> dict[str, float]:
 
 
 def run(out: Path, worlds=WORLDS, progress=print) -> dict[str, float]:
-    """Sweep into ``out`` (appending; runs already there skipped), then the floors together."""
+    """Sweep into ``out`` (appending; runs already there skipped), then :data:`COMBOS`;
+    returns the single-factor floors."""
     from bench.csvrows import write_rows
 
     rows = _read(out)
-    for phase in (None, "floors"):
-        floors = floors_of(rows) if phase else None
-        if phase:
-            floors["q_v"] = floors.get("q_o", -1.0)   # eq. 2: q_V q_O, the same sign and role
-        have = done_keys(out)
-        for case in cases(worlds, floors):
-            if (phase is None) == (case.param == "floors") or case.key in have:
+    have = done_keys(out)
+    for combos in (False, True):
+        for case in cases(worlds, combos):
+            if case.key in have:
                 continue
             row = run_case(case)
             write_rows(out, FIELDS, [row], append=True)   # each run on disk as it ends
