@@ -76,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
         for topic in ("scan", "odom", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
         node.declare_publishers("cmd_vel", "planner/state", "planner/status", "events")
+        params_check = runauth.RequestCheck(runauth.key_from_env())
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
             node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()
@@ -85,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         for topic, msg in node.messages(tick_s=0.05):
             now = time.monotonic()
             if topic == "planner/params":
-                _answer_params(node, args.planner, planner, msg, loop.last_stamp)
+                _answer_params(node, args.planner, planner, msg, loop.last_stamp, params_check)
                 continue
             out = loop.on_message(topic, msg, now) if topic else []
             for out_topic, out_msg in out + loop.poll(now):
@@ -98,10 +99,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _answer_params(node, name: str, planner, query, stamp_ns: int) -> None:
+def _answer_params(node, name: str, planner, query, stamp_ns: int, check) -> None:
     """Reply to a ``planner/params`` query; a change is logged and published as an event."""
     payload = query.payload.to_bytes() if query.payload is not None else b""
-    reply, changed = answer(name, planner, payload)
+    reply, changed = answer(name, planner, payload, check)
     query.reply(query.key_expr, json.dumps(reply).encode())
     if reply["error"]:
         node.log.warning("parameter change refused: %s", reply["error"])

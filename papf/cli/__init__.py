@@ -30,6 +30,7 @@ from papf.cli import (
     goal,
     info,
     launch,
+    param,
     plan,
     record,
     recover,
@@ -42,7 +43,7 @@ from papf.cli import (
     worlds,
 )
 
-COMMANDS = (run, worlds, launch, topic, goal, teleop, plan, experiment, report, record, replay,
+COMMANDS = (run, worlds, launch, topic, goal, param, teleop, plan, experiment, report, record, replay,
             recover, info, view, export, animate, bench, emulator, certs)
 
 

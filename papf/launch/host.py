@@ -50,7 +50,10 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     keys = Keys(opt.namespace)
     run_key = runauth.new_key() if prof.run else None
     if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
-        runauth.publish_key(opt.namespace, run_key)
+        try:
+            runauth.publish_key(opt.namespace, run_key)
+        except runauth.NamespaceTaken as exc:
+            raise ConfigError(str(exc)) from None
     try:
         return _launch(opt, prof, graph, stop, show, keys, run_key)
     finally:
