@@ -42,7 +42,8 @@ def check_sizes(uncompressed_size: int, compression: str, head: bytes, where: st
             pass
     if declared > MAX_CHUNK_BYTES:
         raise RecordingError(f"{where}: a chunk would decompress to {declared:,} bytes, more than "
-                             f"the {MAX_CHUNK_BYTES:,} any recording of ours needs; not read")
+                             f"the {MAX_CHUNK_BYTES:,} any recording of ours needs; not read (if the file is "
+                             f"damaged, papf recover {where} FIXED.mcap salvages the rest)")
 
 
 def check_chunk(chunk: Chunk, where: str) -> None:

@@ -232,8 +232,18 @@ def _read_summary(mm, pos: int, size: int, stats: ScanStats) -> None:
 
 
 def scan_file(path: str | Path) -> tuple[ScanStats, int]:
-    """(what a full scan of ``path`` finds, the number of intact messages)."""
+    """(what a full scan of ``path`` finds, the number of intact messages).
+
+    A message counts as intact as ``papf recover`` would keep it: readable, and on a channel
+    whose record came before it (a message whose channel record was lost cannot be read,
+    so ``info`` and ``recover`` report the same loss)."""
     stats = ScanStats()
+    channels: set[int] = set()
+    n = 0
     with open_regular(path) as f:
-        n = sum(1 for rec in scan_records(f, stats) if isinstance(rec, Message))
+        for rec in scan_records(f, stats):
+            if isinstance(rec, Channel):
+                channels.add(rec.id)
+            elif isinstance(rec, Message) and rec.channel_id in channels:
+                n += 1
     return stats, n
