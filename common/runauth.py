@@ -39,6 +39,7 @@ import msgpack
 
 ENV = "PAPF_RUN_KEY"          # environment variable that carries the key (hex)
 TAG_HEX = 32                  # [hex digits] 128-bit tag
+_HEX_TAG = re.compile(f"[0-9a-f]{{{TAG_HEX}}}")   # what a tag looks like (compare_digest: ASCII)
 
 
 def new_key() -> str:
@@ -133,7 +134,11 @@ def sign(msg, key: bytes | None):
 
 def verify(msg, key: bytes | None) -> bool:
     """True when ``msg`` carries the tag of ``key`` (always True without a key)."""
-    return key is None or hmac.compare_digest(getattr(msg, "auth", ""), _tag(msg, key))
+    if key is None:
+        return True
+    auth = getattr(msg, "auth", "")
+    return isinstance(auth, str) and bool(_HEX_TAG.fullmatch(auth)) and \
+        hmac.compare_digest(auth, _tag(msg, key))
 
 
 # -- live parameter changes: the same key signs a query's JSON request --------------------------
@@ -167,7 +172,8 @@ class RequestCheck:
         if self.key is None:
             return True
         auth, nonce = request.get("auth"), request.get("nonce")
-        if not (isinstance(auth, str) and isinstance(nonce, str) and len(nonce) <= 64):
+        if not (isinstance(auth, str) and _HEX_TAG.fullmatch(auth) and isinstance(nonce, str)
+                and len(nonce) <= 64):
             return False
         if not hmac.compare_digest(auth, _request_tag(request, self.key)) or nonce in self._seen:
             return False
