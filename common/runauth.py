@@ -15,13 +15,20 @@ An operator on the same host re-targets a running session with ``papf goal X Y``
 launcher leaves the key in a file only its user can read (:func:`publish_key`, mode 600
 in a mode-700 directory), ``papf goal`` signs with it, and the launcher then judges the
 run against that goal. Another user, host or stack has no key and stays ignored.
+
+A live parameter change (the query ``<ns>/planner/params``: ``papf param set``, the viewer's
+Parameters panel) is signed the same way (:func:`sign_request`): a planner with a key lists
+its settings to anyone but changes them only for a request with this run's tag and a nonce
+it has not seen (:class:`RequestCheck`).
 """
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import hashlib
 import hmac
+import json
 import os
 import re
 import secrets
@@ -32,6 +39,7 @@ import msgpack
 
 ENV = "PAPF_RUN_KEY"          # environment variable that carries the key (hex)
 TAG_HEX = 32                  # [hex digits] 128-bit tag
+_HEX_TAG = re.compile(f"[0-9a-f]{{{TAG_HEX}}}")   # what a tag looks like (compare_digest: ASCII)
 
 
 def new_key() -> str:
@@ -54,22 +62,52 @@ def key_file(namespace: str) -> Path:
     return base / f"papf-{os.getuid()}" / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', namespace)}.key"
 
 
+class NamespaceTaken(Exception):
+    """Another launcher of this user holds the namespace (its key file names a live process)."""
+
+
 def publish_key(namespace: str, key_hex: str) -> Path:
-    """Write the run key for this user's ``papf goal`` (see module doc)."""
+    """Write the run key (and this process id) for this user's ``papf goal`` (see module doc).
+
+    NamespaceTaken when a live launcher already holds ``namespace``: two launches in one
+    namespace would share every key of the bus, and the second would take the first's key
+    file (the first could no longer be steered)."""
     path = key_file(namespace)
     path.parent.mkdir(mode=0o700, exist_ok=True)
     os.chmod(path.parent, 0o700)
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    holder = _holder(path)
+    if holder is not None and holder != os.getpid():
+        raise NamespaceTaken(f"namespace {namespace!r} is in use by another launch of yours "
+                             f"(process {holder}); stop it, or give another --namespace")
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0), 0o600)
     with os.fdopen(fd, "w") as f:
-        f.write(key_hex)
+        f.write(f"{key_hex} {os.getpid()}\n")
     return path
+
+
+def _holder(path: Path) -> int | None:
+    """The live process id in the key file at ``path``, or None (no file, or its launcher died)."""
+    try:
+        parts = path.read_text().split()
+        pid = int(parts[1]) if len(parts) > 1 else None
+    except (OSError, ValueError):
+        return None
+    if pid is None:
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:
+        return pid
+    return pid
 
 
 def read_key(namespace: str) -> bytes | None:
     """The run key a launcher of ``namespace`` left for this user, or None."""
     try:
-        return bytes.fromhex(key_file(namespace).read_text().strip())
-    except (OSError, ValueError):
+        return bytes.fromhex(key_file(namespace).read_text().split()[0])
+    except (OSError, ValueError, IndexError):
         return None
 
 
@@ -77,7 +115,7 @@ def withdraw_key(namespace: str, key_hex: str) -> None:
     """Remove the key file if it still holds this run's key."""
     path = key_file(namespace)
     try:
-        if path.read_text().strip() == key_hex:
+        if path.read_text().split()[:1] == [key_hex]:
             path.unlink()
     except OSError:
         pass
@@ -96,4 +134,50 @@ def sign(msg, key: bytes | None):
 
 def verify(msg, key: bytes | None) -> bool:
     """True when ``msg`` carries the tag of ``key`` (always True without a key)."""
-    return key is None or hmac.compare_digest(getattr(msg, "auth", ""), _tag(msg, key))
+    if key is None:
+        return True
+    auth = getattr(msg, "auth", "")
+    return isinstance(auth, str) and bool(_HEX_TAG.fullmatch(auth)) and \
+        hmac.compare_digest(auth, _tag(msg, key))
+
+
+# -- live parameter changes: the same key signs a query's JSON request --------------------------
+NONCES_KEPT = 4096   # [-] request nonces a node remembers (a replayed request is refused)
+
+
+def _request_tag(request: dict, key: bytes) -> str:
+    body = json.dumps({k: v for k, v in request.items() if k != "auth"}, sort_keys=True,
+                      separators=(",", ":")).encode()
+    return hmac.new(key, body, hashlib.sha256).hexdigest()[:TAG_HEX]
+
+
+def sign_request(request: dict, key: bytes | None) -> dict:
+    """A parameter request (JSON object) with a fresh ``nonce`` and its ``auth`` tag
+    (unchanged without a key)."""
+    if key is None:
+        return dict(request)
+    out = {**request, "nonce": secrets.token_hex(8)}
+    return {**out, "auth": _request_tag(out, key)}
+
+
+class RequestCheck:
+    """A node's check of signed requests: the tag of its run key, each nonce once."""
+
+    def __init__(self, key: bytes | None):
+        self.key = key
+        self._seen: collections.OrderedDict[str, None] = collections.OrderedDict()
+
+    def ok(self, request: dict) -> bool:
+        """True when ``request`` may change the node (always True without a key)."""
+        if self.key is None:
+            return True
+        auth, nonce = request.get("auth"), request.get("nonce")
+        if not (isinstance(auth, str) and _HEX_TAG.fullmatch(auth) and isinstance(nonce, str)
+                and len(nonce) <= 64):
+            return False
+        if not hmac.compare_digest(auth, _request_tag(request, self.key)) or nonce in self._seen:
+            return False
+        self._seen[nonce] = None
+        while len(self._seen) > NONCES_KEPT:
+            self._seen.popitem(last=False)
+        return True

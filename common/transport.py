@@ -127,7 +127,8 @@ def open_session(args: argparse.Namespace, where: str = ""):
         session = zenoh.open(config_from_args(args))
     except zenoh.ZError as exc:
         first = str(exc).split(" at /")[0].strip()
-        raise ConfigError(f"cannot reach a Zenoh router at {where or args.connect}: {first}; "
+        where = where or ", ".join(getattr(args, "connect", None) or []) or DEFAULT_ENDPOINT
+        raise ConfigError(f"cannot reach a Zenoh router at {where}: {first}; "
                           "start the stack (or python -m papf.launch.router) or give --connect") from None
     with session:
         yield session
@@ -334,8 +335,7 @@ class Node:
 def open_node(name: str, args: argparse.Namespace, log: logging.Logger | None = None):
     """``with open_node("planner", args) as node:`` — session closed on exit, always."""
     log = log or setup_logging(name, getattr(args, "log_level", "INFO"))
-    conf = config_from_args(args)
-    with zenoh.open(conf) as session:
+    with open_session(args) as session:   # no router: one line (ConfigError), no traceback
         node = Node(name, session, Keys(args.namespace), log)
         try:
             yield node

@@ -17,12 +17,14 @@ from common.optional import tomllib
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
 from worlds.traffic import Motion, Road, state_at
+from worlds.validate import MAX_FILE_BYTES, check_document, check_text_size
 
 VEHICLES = ("rosbot", "car")  # [robot].vehicle: the ROSbot stack, or the IAPF paper's car model
 # [m] largest coordinate or size a world may use: the simulator works in single precision
 # in places (LiDAR ranges) and a planner's 1/r^2 field vanishes long before; 1 km is far
 # beyond any indoor robot's world
 MAX_COORD_M = 1000.0
+MAX_WORLD_ARG = 4096  # [chars] a world name or path given on the command line (PATH_MAX)
 CENTER_MATCH = 1e-6  # [m] a moving obstacle's center, if given, must be its track at t = 0
 
 
@@ -60,6 +62,9 @@ def packaged_worlds() -> list[str]:
 
 def world_path(name_or_path: str | Path) -> Path:
     """Resolve a packaged world name or a file path; WorldError says what exists."""
+    if len(str(name_or_path)) > MAX_WORLD_ARG:
+        raise WorldError(f"world name or path of {len(str(name_or_path)):,} characters; a packaged "
+                         f"world name or a path to a .toml file has at most {MAX_WORLD_ARG:,}")
     p = Path(name_or_path)
     # a directory of that name (e.g. an experiment's output "energy") is not a world file
     if p.suffix == ".toml" or p.is_file() or "/" in str(name_or_path):
@@ -84,15 +89,21 @@ def world_data(name_or_path: str | Path) -> dict:
     """A world file's decoded TOML, not yet validated (to derive variants: :func:`parse_world`)."""
     path = world_path(name_or_path)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        with path.open("rb") as fh:   # at most one byte past the limit is read
+            raw = fh.read(MAX_FILE_BYTES + 1)
+        check_text_size(len(raw) if len(raw) <= MAX_FILE_BYTES else path.stat().st_size, str(path))
+        return tomllib.loads(raw.decode("utf-8"))
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"cannot read world file {str(path)!r}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise WorldError(f"world file {str(path)!r} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise WorldError(f"world file {str(path)!r}: tables or arrays nested too deeply") from None
 
 
 def parse_world(data: dict, source: str = "<dict>") -> World:
-    """Validate a decoded TOML document as a world."""
+    """Validate a decoded TOML document as a world (keys and limits first: :mod:`worlds.validate`)."""
+    check_document(data, source)
     ctx = _Ctx(source)
     name = ctx.str(data, "name", default=Path(source).stem)
     robot = ctx.table(data, "robot", default={})

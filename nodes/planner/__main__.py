@@ -81,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
             node.subscribe(topic)
         node.subscribe("odom", handler=held.on_odom if held else None)
         node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
+        params_check = runauth.RequestCheck(runauth.key_from_env())
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
             node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()
@@ -90,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         for topic, msg in node.messages(tick_s=0.05):
             now = time.monotonic()
             if topic == "planner/params":
-                _answer_params(node, args.planner, planner, msg, loop.last_stamp)
+                _answer_params(node, args.planner, planner, msg, loop.last_stamp, params_check)
                 continue
             out = held.feed(now) if held else []
             out += loop.on_message(topic, msg, now) if topic else []
@@ -105,10 +106,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _answer_params(node, name: str, planner, query, stamp_ns: int) -> None:
+def _answer_params(node, name: str, planner, query, stamp_ns: int, check) -> None:
     """Reply to a ``planner/params`` query; a change is logged and published as an event."""
     payload = query.payload.to_bytes() if query.payload is not None else b""
-    reply, changed = answer(name, planner, payload)
+    reply, changed = answer(name, planner, payload, check)
     query.reply(query.key_expr, json.dumps(reply).encode())
     if reply["error"]:
         node.log.warning("parameter change refused: %s", reply["error"])

@@ -134,6 +134,11 @@ class Strategy:
     def warm_up(self, apf: APFParams) -> None:
         """Compile kernels before the node declares itself ready (none by default)."""
 
+    @classmethod
+    def check_strength(cls, apf: APFParams, params) -> None:
+        """ConfigError unless its own repulsion products are above their measured floors
+        (beyond each setting's range; none by default: docs/planners.md "Safety floors")."""
+
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
         """The force at ``pos`` [m] (world frame) and the debug geometry."""

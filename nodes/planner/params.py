@@ -7,7 +7,9 @@ algorithm's own. A change goes through :func:`nodes.planner.registry.load_params
 same parsing and validation as ``--set`` — on top of the current values, and takes effect
 at the next cycle; a refused change leaves every value as it was.
 
-Wire format (JSON): request ``{}`` (list) or ``{"set": ["apf.v_max=0.3", ...]}``; reply
+Wire format (JSON): request ``{}`` (list) or ``{"set": ["apf.v_max=0.3", ...], "nonce": N,
+"auth": TAG}`` (a change is signed with the run's key: :func:`common.runauth.sign_request`;
+a planner started without a key takes unsigned changes); reply
 ``{"planner": NAME, "params": {name: value}, "error": ""}`` (``error`` says why a change
 was refused).
 """
@@ -18,8 +20,11 @@ import dataclasses
 import json
 
 from common.errors import ConfigError
+from common.runauth import RequestCheck
 from nodes.planner.core import Planner
 from nodes.planner.registry import load_params
+
+MAX_REQUEST_BYTES = 64 * 1024   # [bytes] a request (every setting at once is ~3 KB)
 
 
 def current(name: str, planner: Planner) -> dict[str, object]:
@@ -44,14 +49,21 @@ def apply(name: str, planner: Planner, sets: list[str]) -> list[str]:
     return [k for k in after if after[k] != before[k]]
 
 
-def answer(name: str, planner: Planner, payload: bytes) -> tuple[dict, list[str]]:
-    """(reply, changed names) for one query payload (see the module doc)."""
+def answer(name: str, planner: Planner, payload: bytes,
+           check: RequestCheck | None = None) -> tuple[dict, list[str]]:
+    """(reply, changed names) for one query payload (see the module doc); ``check``: the
+    node's :class:`common.runauth.RequestCheck` (a change without this run's tag is refused)."""
     error, changed = "", []
     try:
+        if len(payload) > MAX_REQUEST_BYTES:
+            raise ConfigError(f"request of {len(payload):,} bytes; at most {MAX_REQUEST_BYTES:,}")
         request = json.loads(payload.decode("utf-8")) if payload else {}
         sets = request.get("set", []) if isinstance(request, dict) else None
         if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
             raise ConfigError('expected {"set": ["name=value", ...]}')
+        if sets and check is not None and not check.ok(request):
+            raise ConfigError("not signed with this run's key: parameters are changed only by "
+                              "papf param set (or the viewer) of the user who launched the run")
         if sets:
             changed = apply(name, planner, sets)
     except (ConfigError, UnicodeDecodeError, ValueError) as exc:

@@ -26,9 +26,10 @@ import nodes.planner as planner_package
 from common.errors import ConfigError
 from common.optional import tomllib
 from common.params import Spec, check_all, check_value, unknown_name
-from nodes.planner.core import Planner, Strategy
+from nodes.planner.core import NoParams, Planner, Strategy
 from nodes.planner.field import APFParams
 from nodes.planner.settings import APF as APF_SPECS
+from nodes.planner.settings import check_strength
 
 PRESETS = ("default", "paper")
 
@@ -138,6 +139,10 @@ def check_params(apf: APFParams, algo) -> None:
     """Every field of both parameter sets in range (the node checks what it is given)."""
     check_all(apf, specs_of(APFParams), "apf")
     check_all(algo, specs_of(type(algo)), type(algo).__name__)
+    check_strength(apf)
+    for cls in PLANNERS.values():
+        if isinstance(algo, cls.Params) and cls.Params is not NoParams:
+            cls.check_strength(apf, algo)
 
 
 def _planner_class(planner: str) -> type:

@@ -16,20 +16,33 @@ ranges fix the paper's signs: ``q_V, q_O, q_Q < 0 < q_G``.
 
 from __future__ import annotations
 
+from common.errors import ConfigError
 from common.params import FLAG, Spec, integer, num, pos
 from common.robot import LIDAR_RANGE_MAX_M, V_MAX_M_S, W_MAX_RAD_S
 
 MAX_BEAMS = 100_000      # [-] LiDAR points a planner is configured for
 MAX_GAIN = 1e4           # [-] largest force constant (defaults are 1 .. 10)
 
+# Safety floors, measured (docs/planners.md "Safety floors", docs/data/safety-floor.csv:
+# `papf experiment safety-floor`, offline on energy-blocking and papf-test-1): each the
+# smallest swept value at which no run of any planner collided, the others at their
+# defaults. A value just above zero switches avoidance off as surely as zero does.
+D_O_MIN_M = 0.25         # [m] repulsion range (0.2 collided on both worlds)
+K_VO_L_MIN = 1.0         # [-] k_VO * L (0.5 collided: PAPF on both worlds)
+CHARGE_MIN = 0.2         # [-] |q_V|, |q_O| (0.1 collided: PAPF on energy-blocking)
+# The single floors do not compose: eq. 2 repels with the product k_VO q_V q_O, so it has a
+# floor of its own (each factor at its floor would be 250 times weaker than the default).
+REPULSION_MIN = 2.0      # [-] k_vo_l * q_v * q_o (1 collided: q_o = -0.1 with PAPF)
+# The floors of a planner's own settings are in its folder's settings.py (arapf, wang).
+
 APF: dict[str, Spec] = {
     "lidar_points": integer(1, MAX_BEAMS),
-    "q_v": num(-100.0, 0.0, hi_open=True, safety=True),
-    "q_o": num(-100.0, 0.0, hi_open=True, safety=True),
+    "q_v": num(-100.0, -CHARGE_MIN, safety=True),
+    "q_o": num(-100.0, -CHARGE_MIN, safety=True),
     "q_g": num(0.0, 100.0, lo_open=True),
     "k_vg": pos(MAX_GAIN),
-    "k_vo_l": pos(MAX_GAIN, safety=True),
-    "d_o": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "k_vo_l": num(K_VO_L_MIN, MAX_GAIN, safety=True),
+    "d_o": num(D_O_MIN_M, LIDAR_RANGE_MAX_M, "m", safety=True),
     "theta_err_max_deg": pos(180.0, "deg"),
     "v_max": pos(V_MAX_M_S, "m/s", safety=True),
     "k_theta": pos(100.0, "1/s"),
@@ -47,3 +60,17 @@ NODE: dict[str, Spec] = {
     "stale_timeout": pos(2.0, "s", safety=True),
     "pair_timeout": pos(10.0, "s"),
 }
+
+
+def check_strength(apf) -> None:
+    """eq. 2's repulsion product ``k_vo_l*q_v*q_o`` above its floor (:data:`REPULSION_MIN`);
+    ConfigError, one line. A strategy adds its own products in ``Strategy.check_strength``."""
+    require_product("k_vo_l*q_v*q_o", apf.k_vo_l * apf.q_v * apf.q_o, REPULSION_MIN)
+
+
+def require_product(name: str, value: float, floor: float) -> None:
+    """ConfigError (one line) unless the repulsion product ``value`` is at least ``floor``."""
+    if not value >= floor:
+        raise ConfigError(f"{name} = {value:g}: the obstacle repulsion must be at least "
+                          f"{floor:g} (below it the robot collides; docs/planners.md "
+                          "\"Safety floors\")")

@@ -23,6 +23,7 @@ from pathlib import Path
 import zenoh
 
 from common.errors import ConfigError, PapfError, RecordingError
+from common.outfiles import check_output
 from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.recorder.ports import PORTS, VARIANTS
@@ -62,12 +63,14 @@ def drain(subscriber, writer: RunWriter, max_samples: int, watch: RunEndWatch | 
 
 def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str],
            compression: str = "zstd", flush_interval_s: float = FLUSH_INTERVAL_S,
-           queue_capacity: int = QUEUE_CAPACITY, close_on_run_ended: bool = False) -> WriterStats:
+           queue_capacity: int = QUEUE_CAPACITY, close_on_run_ended: bool = False,
+           force: bool = False) -> WriterStats:
     """Record until ``node.stop`` (or, with ``close_on_run_ended``, until the launcher's
     ``run_ended``); returns the writer's counts. The file is complete on return."""
     watch = RunEndWatch(node.keys.events) if close_on_run_ended else None
     meta = {"namespace": node.keys.ns, "keys": keys_expr, **metadata}
-    with RunWriter(out, meta, compression=compression, flush_interval_s=flush_interval_s) as writer:
+    with RunWriter(out, meta, compression=compression, flush_interval_s=flush_interval_s,
+                   force=force) as writer:
         sub = node.session.declare_subscriber(keys_expr, zenoh.handlers.FifoChannel(queue_capacity))
         try:
             node.ready()
@@ -89,6 +92,9 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
             sub.undeclare()
     node.log.info("closed %s: %d messages, %d bytes, %d channels", out, writer.stats.messages,
                   writer.stats.bytes, writer.stats.channels)
+    if writer.stats.dropped:
+        node.log.warning("dropped %d messages on %d keys beyond %d channels", writer.stats.dropped,
+                         writer.stats.dropped_keys, writer.stats.channels)
     return writer.stats
 
 
@@ -134,6 +140,8 @@ def add_recorder_args(parser: argparse.ArgumentParser, out_flag: bool = True) ->
         parser.add_argument("--close-on-run-ended", action="store_true",
                             help="close the file at the launcher's run_ended, then publish a "
                                  "recording_closed event (the launcher waits for it)")
+    parser.add_argument("--force", action="store_true",
+                        help="replace the recording if it exists (default: refuse)")
     parser.add_argument("--keys", metavar="EXPR",
                         help="key expression to record (default: <namespace>/**)")
     parser.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
@@ -150,12 +158,14 @@ def main(args: argparse.Namespace) -> int:
     log = setup_logging(NAME, args.log_level)
     try:
         meta = parse_meta(args.meta)
+        check_output(args.out, force=args.force)   # before the bus: refuse at once
         with open_node(NAME, args, log) as node:
             close = getattr(args, "close_on_run_ended", False)
             if close:
                 node.declare_publishers("events")   # up front: the one put must not be late
             record(node, args.out, args.keys or f"{args.namespace}/**", meta,
-                   args.compression, args.flush_interval, close_on_run_ended=close)
+                   args.compression, args.flush_interval, close_on_run_ended=close,
+                   force=args.force)
             if close and not node.stop:   # the file is closed: say so, then wait to be stopped
                 node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=NAME,
                                              detail=str(args.out)))

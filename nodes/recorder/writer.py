@@ -13,6 +13,10 @@ Layout of a recording (see docs/recording.md):
   ``publish_time`` = the wall-clock receive time [ns since the Unix epoch];
 - a metadata record named ``run`` (world, planner, seed, parameters, versions).
 
+Hostile keys: at most :data:`MAX_CHANNELS` channels; messages on further keys are counted
+(``stats.dropped``, and a ``dropped`` metadata record at the end), never recorded, so any
+number of distinct keys leaves a complete file with its footer.
+
 Crash safety: messages go into chunks that are closed and flushed to the OS at
 least every ``flush_interval_s`` of wall time (and when ``chunk_size`` bytes are
 buffered), so a SIGKILL loses at most that much; ``papf recover`` salvages the rest.
@@ -33,6 +37,7 @@ from mcap.writer import CompressionType, Writer
 
 import common
 from common.errors import RecordingError
+from common.outfiles import exclusive
 from schemas.base import Message
 from schemas.keys import TOPICS
 
@@ -45,6 +50,7 @@ PROFILE = "papf"  # MCAP header profile: our own conventions (this module's docs
 # Defaults. A chunk is closed at whichever limit comes first.
 FLUSH_INTERVAL_S = 0.2      # [s] wall time; bounds what a SIGKILL can lose
 CHUNK_SIZE = 512 * 1024     # [bytes] uncompressed
+MAX_CHANNELS = 10_000      # [-] distinct keys recorded (MCAP channel ids are 16-bit); more: dropped, counted
 PEEK_FULL_UNPACK_MAX = 256  # [bytes] below this, unpacking the whole map is the cheapest peek
 COMPRESSIONS = {"none": CompressionType.NONE, "lz4": CompressionType.LZ4,
                 "zstd": CompressionType.ZSTD}
@@ -121,6 +127,8 @@ class WriterStats:
     bytes: int = 0           # payload bytes
     unstamped: int = 0       # messages logged at their receive time (no stamp_ns)
     channels: int = 0
+    dropped: int = 0         # messages on keys beyond MAX_CHANNELS, not recorded
+    dropped_keys: int = 0    # distinct such keys seen (counted up to MAX_CHANNELS more)
 
 
 class RunWriter:
@@ -133,14 +141,15 @@ class RunWriter:
     def __init__(self, path: str | Path, metadata: Mapping[str, Any] | None = None, *,
                  compression: str = "zstd", chunk_size: int = CHUNK_SIZE,
                  flush_interval_s: float = FLUSH_INTERVAL_S,
-                 clock: Callable[[], float] = time.monotonic):
+                 clock: Callable[[], float] = time.monotonic, force: bool = False,
+                 max_channels: int | None = None):
         if compression not in COMPRESSIONS:
             raise RecordingError(f"compression {compression!r} is not one of {list(COMPRESSIONS)}")
         if flush_interval_s <= 0:
             raise RecordingError(f"flush interval {flush_interval_s} s must be > 0")
         self.path = Path(path)
-        try:
-            self._file = open(self.path, "wb")
+        try:   # a new file only: never over a user's file, never through a symlink
+            self._file = exclusive(self.path, force)
         except OSError as exc:
             raise RecordingError(f"cannot create recording {str(path)!r}: {exc}") from None
         self._mcap = Writer(self._file, chunk_size=chunk_size,
@@ -151,6 +160,8 @@ class RunWriter:
         self._file.flush()
         self._channels: dict[str, int] = {}
         self._schemas: dict[str, int] = {}
+        self._max_channels = MAX_CHANNELS if max_channels is None else max_channels
+        self._dropped_keys: set[str] = set()
         self._clock, self._interval = clock, flush_interval_s
         self._last_flush = clock()
         self._dirty = False
@@ -178,6 +189,9 @@ class RunWriter:
             receive_ns = time.time_ns()
         channel = self._channels.get(key)
         if channel is None:
+            if len(self._channels) >= self._max_channels:
+                self._drop(key)
+                return
             channel = self._add_channel(key, data)
         if log_time_ns is None:
             log_time_ns = peek_stamp(data)
@@ -192,6 +206,13 @@ class RunWriter:
         self._dirty = True
         if self._clock() - self._last_flush >= self._interval:
             self.flush()
+
+    def _drop(self, key: str) -> None:
+        """A message on a key past :data:`MAX_CHANNELS`: counted, not recorded."""
+        self.stats.dropped += 1
+        if len(self._dropped_keys) < self._max_channels and key not in self._dropped_keys:
+            self._dropped_keys.add(key)
+            self.stats.dropped_keys = len(self._dropped_keys)
 
     def write_message(self, key: str, msg: Message, receive_ns: int | None = None) -> None:
         """Record a typed message (tests, tools): same as ``write(key, msg.to_bytes())``."""
@@ -252,6 +273,10 @@ class RunWriter:
             return
         self.closed = True
         try:
+            if self.stats.dropped:
+                self._mcap.add_metadata("dropped", metadata_strings(
+                    {"messages": self.stats.dropped, "keys": self.stats.dropped_keys,
+                     "max_channels": self._max_channels}))
             self._mcap.finish()
         finally:
             self._file.close()

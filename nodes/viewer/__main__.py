@@ -25,6 +25,7 @@ import foxglove
 import zenoh
 from foxglove.websocket import Capability, Parameter, ParameterType
 
+from common import runauth
 from common.errors import PapfError
 from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
@@ -44,8 +45,8 @@ CLIENT = "__client__"    # inbox topic of what a Foxglove client published
 class Listener(foxglove.websocket.ServerListener):
     """Foxglove client -> stack: goals go to the node's inbox, parameters to the planner."""
 
-    def __init__(self, node: Node, log: logging.Logger):
-        self.node, self.log = node, log
+    def __init__(self, node: Node, log: logging.Logger, accept_params: bool = True):
+        self.node, self.log, self.accept_params = node, log, accept_params
         self.client_topics: dict[tuple[int, int], str] = {}
 
     def on_client_advertise(self, client, channel) -> None:
@@ -61,6 +62,11 @@ class Listener(foxglove.websocket.ServerListener):
     # -- parameters (answered on the SDK's thread: a blocking Zenoh query) --
     def _query(self, request: dict) -> dict | None:
         key = self.node.keys.key("planner/params")
+        if request.get("set"):
+            if not self.accept_params:
+                return {"params": {}, "error": "this viewer was started with --params refuse "
+                        "(papf run keeps its settings: runs stay comparable); use papf launch"}
+            request = runauth.sign_request(request, runauth.key_from_env())
         payload = json.dumps(request).encode()
         for reply in self.node.session.get(key, payload=payload, timeout=PARAMS_TIMEOUT_S):
             if reply.ok is not None:
@@ -109,6 +115,9 @@ def add_view_args(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--host", default="127.0.0.1", help="WebSocket address (default 127.0.0.1)")
     ap.add_argument("--port", type=int, default=8765, help="WebSocket port (default 8765)")
     ap.add_argument("--world", help="world to draw (packaged name or .toml path)")
+    ap.add_argument("--params", choices=("accept", "refuse"), default="accept",
+                    help="parameter changes from Foxglove: pass them to the planner, signed with "
+                         "the launcher's run key (default), or refuse them")
     ap.add_argument("--goals", choices=("accept", "refuse"), default="accept",
                     help="goals published from Foxglove: set them (default) or refuse them "
                          "with a log line (lockstep runs stay deterministic)")
@@ -120,6 +129,7 @@ class Viewer:
     def __init__(self, node: Node, core: ViewCore, channels: FoxgloveChannels, accept_goals: bool):
         self.node, self.core, self.channels = node, core, channels
         self.accept_goals = accept_goals
+        self.key = runauth.key_from_env()   # a launch's run key: goals signed like papf goal's
 
     def on_client(self, topic: str, data: bytes) -> None:
         if topic == "/params/refused":
@@ -145,7 +155,7 @@ class Viewer:
         else:
             goal = Goal(stamp_ns=core.last_ns, x=x, y=y,
                         tolerance=core.world.tolerance if core.world else 0.1)
-        self.node.publish("goal", goal)
+        self.node.publish("goal", runauth.sign(goal, self.key))   # the launcher's planner is keyed
         self._note(LOG_INFO, f"goal set from the viewer: ({x:.2f}, {y:.2f})")
 
     def _note(self, level: int, message: str) -> None:
@@ -176,7 +186,7 @@ def serve(args: argparse.Namespace, log: logging.Logger) -> int:
 
 
 def _serve(node: Node, args: argparse.Namespace, world, log: logging.Logger) -> int:
-    listener = Listener(node, log)
+    listener = Listener(node, log, args.params == "accept")
     context = foxglove.Context()
     channels = FoxgloveChannels(context)
     try:

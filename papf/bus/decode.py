@@ -143,12 +143,25 @@ def plain(value: Any) -> Any:
 
 
 # -- text -----------------------------------------------------------------------------------------
+MAX_TEXT_CHARS = 200   # [chars] of a string printed (the rest counted); --full: all
+
+
+def safe_text(text: str, max_chars: int | None = MAX_TEXT_CHARS) -> str:
+    """``text`` fit for a terminal: control and other non-printable characters escaped (a
+    peer's ESC sequences are shown, never run), cut at ``max_chars`` (None: whole)."""
+    cut = text if max_chars is None or len(text) <= max_chars else text[:max_chars]
+    shown = cut if cut.isprintable() else "".join(
+        c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in cut)
+    return shown + (f"… ({len(text):,} chars)" if len(cut) < len(text) else "")
+
+
 def _scalar(v: Any) -> str:
     if isinstance(v, float):
         return repr(v) if math.isfinite(v) else str(v)
     if isinstance(v, str):
+        v = safe_text(v)
         return repr(v) if (not v or v != v.strip() or ":" in v) else v
-    return str(v)
+    return safe_text(str(v))
 
 
 def as_text(value: Any, max_items: int | None = 8, indent: int = 0) -> str:
@@ -158,6 +171,7 @@ def as_text(value: Any, max_items: int | None = 8, indent: int = 0) -> str:
         return pad + _scalar(value)
     lines = []
     for k, v in value.items():
+        k = safe_text(str(k), 80)
         if isinstance(v, dict):
             lines.append(f"{pad}{k}:")
             lines.append(as_text(v, max_items, indent + 1))
@@ -180,12 +194,15 @@ def _short_dict(d: dict) -> str:
     return "{" + ", ".join(f"{k}: {_scalar(v)}" for k, v in d.items()) + "}"
 
 
-def json_safe(value: Any) -> Any:
-    """Non-finite floats as the strings "nan", "inf", "-inf" (JSON has no such numbers)."""
+def json_safe(value: Any, max_chars: int | None = None) -> Any:
+    """Non-finite floats as the strings "nan", "inf", "-inf" (JSON has no such numbers);
+    strings cut at ``max_chars`` (None: whole; json.dumps escapes control characters)."""
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)
+    if isinstance(value, str) and max_chars is not None and len(value) > max_chars:
+        return value[:max_chars] + f"… ({len(value):,} chars)"
     if isinstance(value, dict):
-        return {k: json_safe(v) for k, v in value.items()}
+        return {k: json_safe(v, max_chars) for k, v in value.items()}
     if isinstance(value, list):
-        return [json_safe(v) for v in value]
+        return [json_safe(v, max_chars) for v in value]
     return value

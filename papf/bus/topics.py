@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import zenoh
 
 from common.transport import alive_nodes
-from papf.bus.decode import Decoded, as_text, decode, json_safe, stamp_of
+from papf.bus.decode import MAX_TEXT_CHARS, Decoded, as_text, decode, json_safe, safe_text, stamp_of
 from papf.bus.stats import HzStats
 from schemas import Keys
 from schemas.keys import TOPICS
@@ -152,10 +152,11 @@ def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout
 def format_sample(key: str, d: Decoded, max_items: int | None, as_json: bool) -> str:
     if as_json:
         return json.dumps(json_safe({"key": key, "type": d.type_name, "encoding": d.encoding,
-                                     "message": d.value, **({"error": d.error} if d.error else {})}))
-    head = f"# {key}  [{d.type_name or '?'}, {d.encoding}]"
+                                     "message": d.value, **({"error": d.error} if d.error else {})},
+                                    None if max_items is None else MAX_TEXT_CHARS))
+    head = f"# {safe_text(key)}  [{safe_text(d.type_name or '?')}, {safe_text(d.encoding)}]"
     if d.error:
-        head += f"  INVALID: {d.error}"
+        head += f"  INVALID: {safe_text(d.error)}"
     return f"{head}\n{as_text(d.value, max_items)}\n---"
 
 

@@ -32,6 +32,7 @@ from papf.cli import (
     launch,
     new,
     node,
+    param,
     plan,
     record,
     recover,
@@ -44,8 +45,8 @@ from papf.cli import (
     worlds,
 )
 
-COMMANDS = (run, worlds, launch, topic, node, goal, teleop, plan, experiment, report, record, replay,
-            recover, info, view, export, animate, bench, emulator, certs, new)
+COMMANDS = (run, worlds, launch, topic, node, goal, param, teleop, plan, experiment, report, record,
+            replay, recover, info, view, export, animate, bench, emulator, certs, new)
 
 
 class _Parser(argparse.ArgumentParser):

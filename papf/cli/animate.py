@@ -21,6 +21,7 @@ def register(sub) -> None:
     p.add_argument("--world", help="world to draw (default: the recording's metadata)")
     p.add_argument("--dpi", type=int, default=80, help="resolution (default 80)")
     add_topics_option(p)
+    p.add_argument("--force", action="store_true", help="replace OUT if it exists")
     p.set_defaults(func=cmd_animate)
 
 
@@ -28,7 +29,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
     from papf.cli.report import topic_map
     from papf.report.animation import animate
 
-    n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi,
+    n = animate(args.src, args.out, args.fps, args.speed, args.world, args.dpi, args.force,
                 topics=topic_map(args))
     print(f"{args.out}: {n} frames at {args.fps:g} fps ({args.speed:g}x)")
     return 0

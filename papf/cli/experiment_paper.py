@@ -34,6 +34,14 @@ def _study(exp, name: str, summary: str, description: str, func):
 
 
 def add_paper_studies(exp) -> None:
+    f = exp.add_parser("safety-floor", help="the safety parameters' floors, measured offline",
+                       description="Each safety parameter (d_o, k_vo_l, q_o, k_ro_l, k_rep_l, "
+                                   "rho_0) swept downwards alone on energy-blocking and papf-test-1, "
+                                   "then their product at its floor; one CSV row per run, written "
+                                   "as it ends (a re-run skips the runs already in the CSV).")
+    f.add_argument("--out", default="safety-floor.csv", metavar="FILE.csv",
+                   help="the CSV (default safety-floor.csv; docs/data/safety-floor.csv in the docs)")
+    f.set_defaults(func=cmd_safety_floor)
     w = _study(exp, "wang", "Wang's Figs. 5-12: the published point simulation and the ROSbot",
                "Each of Wang's figures as published (a point stepping 0.5 along the force, J = 200, "
                "Table 1 gains) and with the wang-apf / wang planners offline; writes wang.md and "
@@ -121,4 +129,12 @@ def cmd_cases(args) -> int:
         raise ConfigError(f"--studies {args.studies!r}: unknown {bad}; valid: {list(STUDIES)} or all")
     run_cases(args.out, names)
     print(f"wrote {', '.join(n + '.csv' for n in names)} and cases-runs.csv into {args.out}")
+    return 0
+
+
+def cmd_safety_floor(args) -> int:
+    from papf.experiments.safety_floor import run
+
+    floors = run(Path(args.out), progress=lambda line: print(line, flush=True))
+    print("floors: " + ", ".join(f"{k}={v:g}" for k, v in floors.items()))
     return 0

@@ -22,6 +22,7 @@ def register(sub) -> None:
     f.add_argument("src", metavar="IN.mcap")
     f.add_argument("dst", metavar="OUT.mcap")
     f.add_argument("--world", help="world to draw (default: the recording's metadata)")
+    f.add_argument("--force", action="store_true", help="replace OUT.mcap if it exists")
     f.set_defaults(func=cmd_export_foxglove)
     r = formats.add_parser("ros2", help="a recording as a rosbag2 (ros2 bag play, rosbags, Foxglove)",
                            description="Write the new directory OUT_DIR: a rosbag2 (metadata.yaml "
@@ -72,7 +73,7 @@ def cmd_export_map(args: argparse.Namespace) -> int:
 def cmd_export_foxglove(args: argparse.Namespace) -> int:
     from papf.recording.foxglove_export import export_foxglove
 
-    stats = export_foxglove(args.src, args.dst, args.world)
+    stats = export_foxglove(args.src, args.dst, args.world, force=args.force)
     for note in stats.notes:
         print(f"papf export: {note}", file=sys.stderr)
     print(f"{args.dst}: {stats.written} Foxglove messages from {stats.read} recorded "

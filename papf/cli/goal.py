@@ -5,8 +5,14 @@ from __future__ import annotations
 import sys
 
 from common.errors import ConfigError
+from common.params import arg_type, num
 from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
+from worlds import MAX_COORD_M
+
+# A goal within the world's span (worlds.MAX_COORD_M): nan, inf or 1e308 are refused at once.
+GOAL_COORD = num(-MAX_COORD_M, MAX_COORD_M, "m")
+GOAL_TOLERANCE = num(0.0, 100.0, "m", lo_open=True)
 
 
 def register(sub) -> None:
@@ -16,14 +22,16 @@ def register(sub) -> None:
                                    "5 timeout, 6 failed or no planner. In a `papf launch` "
                                    "session this re-targets the running planner; with nodes "
                                    "started alone, --start-run also starts the run.")
-    p.add_argument("x", type=float, nargs="?", help="goal x [m] in the world frame")
-    p.add_argument("y", type=float, nargs="?", help="goal y [m]")
+    p.add_argument("x", type=arg_type("x", GOAL_COORD), nargs="?", help="goal x [m] in the world frame")
+    p.add_argument("y", type=arg_type("y", GOAL_COORD), nargs="?", help="goal y [m]")
     p.add_argument("--world", help="take the goal (and tolerance) of this world instead")
-    p.add_argument("--tolerance", type=float, help="[m] (default 0.1, or the world's)")
+    p.add_argument("--tolerance", type=arg_type("--tolerance", GOAL_TOLERANCE),
+                   help="[m] (default 0.1, or the world's)")
     p.add_argument("--start-run", action="store_true",
                    help="publish run_started after the acknowledgement (nodes started alone)")
     p.add_argument("--no-wait", action="store_true", help="return once the planner acknowledged")
-    p.add_argument("--timeout", type=float, default=0.0, metavar="S",
+    p.add_argument("--timeout", type=arg_type("--timeout", num(0.0, 1e6, "s")), default=0.0,
+                   metavar="S",
                    help="exit 5 without an outcome after S wall seconds (default: none)")
     add_zenoh_args(p)
     p.set_defaults(func=cmd_goal)

@@ -32,6 +32,7 @@ def register(sub) -> None:
                         "tracker node, or none (default for iapf: truth where a sim runs, "
                         "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
+    p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--energy-model", choices=("motor", "paper"))
     p.add_argument("--realtime", action="store_true",
                    help="sim profile: pace sim time to the wall clock (to watch, steer with "
@@ -63,7 +64,8 @@ def cmd_launch(args) -> int:
               "realtime": "1" if args.realtime else None,
               "objects": args.objects, "ros": args.ros, "cmd_vel_type": args.cmd_vel_type,
               "ros_domain": domain, "ros_face_domain": face_domain(args),
-              "ros_face": "1" if args.ros_face else None}
+              "ros_face": "1" if args.ros_face else None,
+              "record_force": "1" if args.force else None}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,

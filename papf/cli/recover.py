@@ -17,6 +17,7 @@ def register(sub) -> None:
     p.add_argument("fixed", metavar="FIXED.mcap", nargs="?",
                    help="output (default: BROKEN.recovered.mcap)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--force", action="store_true", help="replace FIXED.mcap if it exists")
     p.set_defaults(func=cmd_recover)
 
 
@@ -26,7 +27,7 @@ def cmd_recover(args) -> int:
     broken = Path(args.broken)
     fixed = Path(args.fixed) if args.fixed else broken.with_suffix(".recovered.mcap")
     try:
-        stats = recover(broken, fixed)
+        stats = recover(broken, fixed, force=args.force)
     except PapfError as exc:
         print(f"papf recover: {exc}", file=sys.stderr)
         return 2

@@ -9,11 +9,9 @@ from common.transport import (
     DEFAULT_ENDPOINT,
     StopRequested,
     add_zenoh_args,
-    alive_nodes,
     open_session,
 )
 from papf.cli.view import add_view_flag
-from schemas import Keys
 
 
 def register(sub) -> None:
@@ -84,15 +82,18 @@ PASSIVE = {"viewer"}   # nodes that only watch (replay --view starts one itself)
 
 
 def _refuse_live(session, namespaces: set[str], into_live: bool) -> None:
-    """A live stack in a target namespace would act on recorded messages: refuse."""
-    for ns in sorted(namespaces):
-        try:
-            alive = alive_nodes(session, Keys(ns)) - PASSIVE
-        except ValueError:
-            continue
-        if alive and not into_live:
+    """A live stack in a target namespace would act on recorded messages: refuse. One
+    liveliness query for every namespace (a recording may name thousands)."""
+    alive: dict[str, set[str]] = {}
+    for reply in session.liveliness().get("**/alive/*", timeout=1.0):
+        if reply.ok is not None:
+            ns, _, name = str(reply.ok.key_expr).rpartition("/alive/")
+            alive.setdefault(ns, set()).add(name)
+    for ns in sorted(namespaces & set(alive)):
+        live = alive[ns] - PASSIVE
+        if live and not into_live:
             raise ConfigError(f"a live stack runs in namespace {ns!r} (alive: "
-                              f"{', '.join(sorted(alive))}); replaying would feed it recorded "
+                              f"{', '.join(sorted(live))}); replaying would feed it recorded "
                               "messages. Replay under another --namespace, or give --into-live")
 
 

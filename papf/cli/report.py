@@ -7,6 +7,7 @@ Exit code 0 done, 2 bad input or an unreadable recording (a PapfError, printed b
 from __future__ import annotations
 
 import json
+import math
 
 
 def register(sub) -> None:
@@ -53,7 +54,7 @@ def cmd_report(args) -> int:
     report = build_report(args.inputs, args.out, args.energy_model, topics=topic_map(args))
     if args.json:
         for m in report.runs:
-            print(json.dumps(m.row()))
+            print(json.dumps(finite(m.row()), allow_nan=False))   # NaN -> null (JSON has no NaN)
         return 0
     print(f"{report.model_note}; {report.pose_note}")
     bags = [r for r in report.runs if r.outcome == BAG]
@@ -66,3 +67,14 @@ def cmd_report(args) -> int:
         print(summary_markdown([s for s in report.summaries if s.world == world], report.model))
     print(f"\nwrote {', '.join(str(f) for f in report.files)}")
     return 0
+
+
+def finite(obj):
+    """``obj`` with every non-finite float (NaN, inf) as None, in dicts and lists."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    return obj

@@ -21,6 +21,7 @@ def register(sub) -> None:
     p.add_argument("--seed", type=arg_type("--seed", SEED), default=0,
                    help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
+    p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit in seconds (default 300)")
     p.add_argument("--realtime", action="store_true", help="pace sim time to the wall clock")
@@ -60,7 +61,7 @@ def run_config(args):
         planner_args += ["--params", args.params]
     return RunConfig(world=args.world, planner=args.planner, seed=args.seed,
                      timeout_s=args.timeout, realtime=args.realtime, record=args.record,
-                     port=args.port, namespace=args.namespace, planner_args=planner_args,
+                     force=args.force, port=args.port, namespace=args.namespace, planner_args=planner_args,
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,

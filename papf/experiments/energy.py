@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 
 from common.errors import ConfigError
 from nodes.planner.registry import PLANNERS, one_with_role
+from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions
 
 if TYPE_CHECKING:  # heavy imports (zenoh, matplotlib, rich) wait until a run: `papf --help` stays fast
@@ -125,7 +126,7 @@ def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
 
     return RunConfig(world=exp.world, planner=spec.planner, seed=spec.seed,
                      planner_args=[a for kv in preset_sets(spec.preset) for a in ("--set", kv)],
-                     timeout_s=exp.timeout_s, record=str(spec.path), port=port,
+                     timeout_s=exp.timeout_s, record=str(spec.path), force=True, port=port,
                      energy_model=exp.energy_model, progress=False,
                      extra_node_args={"recorder": ["--meta", "experiment=energy"]})
 
@@ -251,8 +252,12 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     try:
         with Progress(*columns, console=console, transient=True) as progress:
             task = progress.add_task("runs", total=len(specs), live="")
+            journal = Journal(out)
             for spec in specs:
-                result = _one_run(exp, spec, progress, task, world.goal[:2], run_fn)
+                result = _resumed(journal, exp, spec)
+                if result is None:
+                    result = _one_run(exp, spec, progress, task, world.goal[:2], run_fn)
+                    journal.put(_spec_key(exp, spec), result.to_json())   # on disk as it ends
                 results.append((spec, result))
                 progress.advance(task)
                 console.print(_result_line(spec, result), highlight=False, soft_wrap=True)
@@ -296,6 +301,31 @@ def energy_job(job: tuple[EnergyExperiment, RunSpec, int]) -> tuple[RunResult, b
                                   namespace=run_namespace(index))
         result = run(cfg)
         return result, (local.path.read_bytes() if local.path.exists() else None)
+
+
+def _spec_key(exp: EnergyExperiment, spec: RunSpec) -> str:
+    from worlds import world_path
+
+    return run_key(world_path(exp.world).read_text(encoding="utf-8"), spec.planner, spec.seed,
+                   spec.preset, spec.path.name, exp.timeout_s, exp.energy_model)
+
+
+def _resumed(journal: Journal, exp: EnergyExperiment, spec: RunSpec) -> RunResult | None:
+    """A run finished before (its recording and its result on disk), or None."""
+    from papf.launch.outcome import RunResult
+
+    data = journal.get(_spec_key(exp, spec))
+    if data is None or not spec.path.is_file():
+        return None
+    try:
+        import dataclasses
+
+        names = {f.name for f in dataclasses.fields(RunResult)}
+        kw = {k: (math.nan if v is None else v) for k, v in data.items() if k in names}
+        kw["faults"] = tuple(kw.get("faults", ()))
+        return RunResult(**kw)
+    except (TypeError, ValueError):
+        return None
 
 
 def _warn_foreign_files(out: Path, specs: Sequence[RunSpec], console: Console) -> None:

@@ -69,12 +69,15 @@ def run_namespace(index: int) -> str:
 
 def map_runs(fn: Callable[[J], R], jobs: Sequence[J], opts: SweepOptions,
              label: Callable[[J], str] = str, title: str = "sweep",
-             line: Callable[[J, R], str] | None = None) -> list[R]:
+             line: Callable[[J, R], str] | None = None,
+             on_done: Callable[[J, R], None] | None = None) -> list[R]:
     """``[fn(job) for job in jobs]`` (job order), on Dask when ``opts`` asks; see module doc.
 
     ``fn`` and the jobs must pickle (a module-level function, dataclass jobs) when
     distributed; ``label(job)`` names a run on the progress bar; ``line(job, result)`` is
-    the line printed per finished run (default: label, outcome, wall time).
+    the line printed per finished run (default: label, outcome, wall time);
+    ``on_done(job, result)`` is called here the moment each run ends (to write it to disk:
+    :mod:`papf.experiments.journal`).
     """
     opts.validate()
     with SweepProgress(len(jobs), title, opts.progress, line) as progress:
@@ -83,12 +86,14 @@ def map_runs(fn: Callable[[J], R], jobs: Sequence[J], opts: SweepOptions,
             for job in jobs:
                 t0 = time.monotonic()
                 out.append(fn(job))
+                if on_done is not None:
+                    on_done(job, out[-1])
                 progress.done(job, label(job), out[-1], time.monotonic() - t0)
             return out
-        return _map_dask(fn, jobs, opts, label, progress)
+        return _map_dask(fn, jobs, opts, label, progress, on_done)
 
 
-def _map_dask(fn, jobs, opts: SweepOptions, label, progress: SweepProgress) -> list:
+def _map_dask(fn, jobs, opts: SweepOptions, label, progress: SweepProgress, on_done=None) -> list:
     from distributed import Client, LocalCluster, as_completed  # only when a sweep spreads
 
     # the scheduler of a LocalCluster runs here: its INFO lines would bury the progress bar
@@ -112,6 +117,8 @@ def _map_dask(fn, jobs, opts: SweepOptions, label, progress: SweepProgress) -> l
         for future in as_completed(futures):
             i = index[future.key]
             results[i], wall = future.result()   # a run's exception is raised here
+            if on_done is not None:
+                on_done(jobs[i], results[i])
             progress.done(jobs[i], label(jobs[i]), results[i], wall)
         return results
     finally:

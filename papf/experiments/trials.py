@@ -12,6 +12,7 @@ import csv
 import dataclasses
 import logging
 import math
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -22,6 +23,8 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from common.errors import RecordingError
+from common.outfiles import output
+from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions, map_runs
 from papf.launch.supervisor import free_port
 from worlds import World, load_world
@@ -253,12 +256,54 @@ def sweep_trials(jobs: Sequence[TrialJob], sweep: SweepOptions | None, progress:
     ``out/recordings/<world>-<planner>[-<preset>].mcap``.
     """
     opts = dataclasses.replace(sweep or SweepOptions(), progress=progress)
-    done = map_runs(run_job, jobs, opts, label=lambda j: j.label, title=title,
-                    line=lambda _j, r: trial_line(r[0]))
-    for job, (_trial, data) in zip(jobs, done, strict=True):
+    journal = Journal(out)
+    kept = {i: t for i, t in ((i, _resumed(journal, job)) for i, job in enumerate(jobs)) if t}
+    if kept:
+        print(f"{title}: {len(kept)} of {len(jobs)} runs finished before, taken from "
+              f"{journal.dir} (delete it to make them again)", file=sys.stderr)
+
+    def finished(job: TrialJob, result) -> None:   # on disk the moment the run ends
+        trial, data = result
         if data is not None:
-            stem = job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
-            rec = out / "recordings" / f"{stem}.mcap"
+            rec = out / "recordings" / f"{_stem(job)}.mcap"
             rec.parent.mkdir(parents=True, exist_ok=True)
-            rec.write_bytes(data)
-    return [trial for trial, _ in done]
+            with output(rec, force=True) as tmp:
+                tmp.write_bytes(data)
+        journal.put(_job_key(job), _trial_data(trial))
+
+    todo = [job for i, job in enumerate(jobs) if i not in kept]
+    done = iter(map_runs(run_job, todo, opts, label=lambda j: j.label, title=title,
+                         line=lambda _j, r: trial_line(r[0]), on_done=finished))
+    return [kept[i] if i in kept else next(done)[0] for i in range(len(jobs))]
+
+
+def _stem(job: TrialJob) -> str:
+    return job.world.name + "-" + job.planner + ("" if job.preset == "default" else "-" + job.preset)
+
+
+def _job_key(job: TrialJob) -> str:
+    return run_key(job.world, job.world_text, job.planner, job.seed, job.mode, job.timeout_s,
+                   job.sets, job.record, job.preset)
+
+
+def _trial_data(trial: Trial) -> dict:
+    d = {f.name: getattr(trial, f.name) for f in dataclasses.fields(trial) if f.name != "path"}
+    d = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+    return {**d, "path": np.asarray(trial.path, dtype=float).tolist()}
+
+
+def _resumed(journal: Journal, job: TrialJob) -> Trial | None:
+    """The Trial of a finished run of ``job``, or None (not finished, or its entry is not
+    a Trial: the run is made again)."""
+    data = journal.get(_job_key(job))
+    if data is None:
+        return None
+    try:
+        fields = {f.name for f in dataclasses.fields(Trial)} - {"path"}
+        kw = {k: (math.nan if v is None else v) for k, v in data.items() if k in fields}
+        path = np.asarray(data.get("path") or np.zeros((0, 2)), dtype=float)
+        if path.ndim != 2 or path.shape[1] not in (2, 3):
+            return None
+        return Trial(**kw, path=path)
+    except (TypeError, ValueError):
+        return None

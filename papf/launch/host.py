@@ -21,6 +21,7 @@ from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.outcome import RunMonitor, RunResult
+from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
 from papf.launch.sequence import STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use, wait_port
@@ -37,6 +38,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     prof = load_profile(opt.profile)
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
         raise ConfigError(f"profile {prof.name} drives a run: give --world W")
+    check_launch(opt, prof)   # ConfigError/WorldError before anything starts (one preflight)
     if prof.router and not opt.dry_run:
         opt = free_listen(prof, opt)
     graph = resolve(prof, opt)
@@ -49,7 +51,10 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     keys = Keys(opt.namespace)
     run_key = runauth.new_key() if prof.run else None
     if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
-        runauth.publish_key(opt.namespace, run_key)
+        try:
+            runauth.publish_key(opt.namespace, run_key)
+        except runauth.NamespaceTaken as exc:
+            raise ConfigError(str(exc)) from None
     try:
         return _launch(opt, prof, graph, stop, show, keys, run_key)
     finally:

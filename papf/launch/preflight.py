@@ -1,6 +1,7 @@
 """Every check of a run's options that can be made before anything starts.
 
-``papf run`` (and ``papf plan`` for what applies) call :func:`check_run` first: a wrong
+``papf run`` (and ``papf plan`` for what applies) call :func:`check_run` first, ``papf
+launch`` :func:`check_launch` (the same checks for what its profile starts): a wrong
 planner name (with a "did you mean"), a planner setting out of its range, a seed,
 timeout or port out of range, a port someone else listens on (another stack's router
 would receive our messages), a namespace that is not a plain key, a recording path in
@@ -14,9 +15,11 @@ from __future__ import annotations
 
 import difflib
 import os
+import re
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.outfiles import OutputError, check_output
 from common.params import PORT, SEED, TIMEOUT, Spec, check_value
 from nodes.planner.registry import PLANNERS, load_params
 from papf.launch.supervisor import port_in_use
@@ -24,7 +27,8 @@ from schemas import Keys
 from worlds import World
 from worlds.checks import check_runnable
 
-__all__ = ["SEED", "TIMEOUT", "PORT", "check_run", "planner_name", "namespace", "record_path"]
+__all__ = ["SEED", "TIMEOUT", "PORT", "check_run", "check_launch", "planner_name", "namespace",
+           "record_path", "endpoint"]
 
 
 def planner_name(name: str) -> str:
@@ -46,11 +50,17 @@ def namespace(ns: str) -> str:
     return ns
 
 
-def record_path(path: str | None) -> None:
-    """A recording can be created at ``path``: its directory exists and is writable."""
+def record_path(path: str | None, force: bool = False) -> None:
+    """A recording can be created at ``path``: its directory exists and is writable, and no
+    file is there unless ``force`` (:func:`common.outfiles.check_output`)."""
     if path is None:
         return
     p = Path(path)
+    if os.path.lexists(p) and not p.is_dir():
+        try:
+            check_output(p, (), force)
+        except OutputError as exc:
+            raise ConfigError(f"--record {exc}") from None
     if p.is_dir():
         raise ConfigError(f"--record {path!r} is a directory; give a file name (F.mcap)")
     parent = p.parent if str(p.parent) else Path(".")
@@ -85,16 +95,67 @@ def planner_settings(planner: str, planner_args: list[str]) -> None:
 
 def check_run(world: World, planner: str, seed: int, timeout_s: float, port: int | None,
               ns: str, record: str | None, planner_args: list[str],
-              spec_timeout: Spec = TIMEOUT) -> None:
+              spec_timeout: Spec = TIMEOUT, force: bool = False) -> None:
     """Every pre-start check of ``papf run`` (module doc)."""
     planner_name(planner)
     check_value("--seed", seed, SEED)
     check_value("--timeout", timeout_s, spec_timeout)
     planner_settings(planner, planner_args)
     namespace(ns)
-    record_path(record)
+    record_path(record, force)
     if world.dims != 2:
         raise ConfigError(f"world {world.name!r} is 3-D: papf run simulates the ROSbot on 2-D "
                           "worlds; plan 3-D worlds offline with papf plan")
     check_runnable(world)
     port_free(port)
+
+
+_ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws)/(?P<host>\[[0-9a-fA-F:.]+\]|[^/:\[\]#]+):(?P<port>[^#/]*)(#.*)?$")
+
+
+def endpoint(ep: str, flag: str) -> str:
+    """A Zenoh locator ``proto/HOST:PORT`` with a port in 0..65535 (unix sockets taken as given)."""
+    if ep.startswith("unixsock-stream/"):
+        return ep
+    m = _ENDPOINT.match(ep)
+    if m is None:
+        raise ConfigError(f"{flag} {_short(ep)}: must look like tcp/HOST:PORT (e.g. tcp/127.0.0.1:7447)")
+    port = m.group("port")
+    if not (port.isdigit() and int(port) <= 65535):
+        raise ConfigError(f"{flag} {_short(ep)}: port {_short(port)} must be an integer in [0, 65535]")
+    return ep
+
+
+def _short(text: str) -> str:
+    return repr(text if len(text) <= 60 else text[:57] + "...")
+
+
+def check_launch(opt, prof) -> None:
+    """Every pre-start check of ``papf launch`` — the same as ``papf run``'s (:func:`check_run`)
+    for what the profile starts: timeouts, namespace, endpoints, seed, planner and its
+    settings, the recording, and the world (runnable, 2-D). ``opt``: LaunchOptions."""
+    check_value("--timeout", opt.timeout_s, TIMEOUT)
+    check_value("--startup-timeout", opt.startup_timeout_s, TIMEOUT)
+    if opt.stall_s is not None:
+        check_value("--stall-timeout", opt.stall_s, TIMEOUT)
+    namespace(opt.namespace)
+    for flag, eps in (("--listen", opt.listen), ("--connect", opt.connect)):
+        for ep in eps:
+            endpoint(ep, flag)
+    values = {**prof.defaults, **opt.values}
+    if values.get("seed") is not None:
+        check_value("--seed", values["seed"], SEED)
+    modules = {spec.module for spec in prof.nodes}
+    if "nodes.planner" in modules or values.get("planner"):
+        planner = str(values.get("planner") or "apf")
+        planner_name(planner)
+        planner_settings(planner, opt.planner_args)
+    record_path(values.get("record"), bool(values.get("record_force")))
+    if values.get("world"):
+        from worlds import load_world
+
+        world = load_world(str(values["world"]))
+        if world.dims != 2:
+            raise ConfigError(f"world {world.name!r} is 3-D: the stack drives the ROSbot on 2-D "
+                              "worlds; plan 3-D worlds offline with papf plan")
+        check_runnable(world)

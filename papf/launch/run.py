@@ -41,6 +41,7 @@ class RunConfig:
     timeout_s: float = 300.0           # [s sim time]
     realtime: bool = False
     record: str | None = None
+    force: bool = False                # replace an existing recording
     port: int | None = None            # None: 7447, or a free port if 7447 is taken
     namespace: str = "rosbot"
     planner_args: list[str] = field(default_factory=list)   # e.g. ["--set", "v_max=0.3"]
@@ -61,6 +62,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
     """The ``sim`` profile's options for this run (``papf launch sim`` takes the same)."""
     values = {"world": cfg.world, "planner": cfg.planner, "seed": cfg.seed,
               "energy_model": cfg.energy_model, "record": cfg.record,
+              "record_force": "1" if cfg.force and cfg.record else None,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
               "objects": cfg.objects, "view": cfg.view,
@@ -87,7 +89,7 @@ def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = load_world(cfg.world)  # WorldError before anything starts
     check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
-              cfg.planner_args)   # ConfigError/WorldError before anything starts
+              cfg.planner_args, force=cfg.force)   # ConfigError/WorldError before anything starts
     port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
     if cfg.port is None and port != DEFAULT_PORT:
         log.warning("port %d is in use; the embedded router listens on %d instead",

@@ -42,6 +42,24 @@ class Child:
         return self.proc.poll()
 
 
+# Python 3.10 has no PYTHONSAFEPATH: the module is run by a bootstrap that drops the
+# working directory from sys.path first (what -P does from 3.11 on).
+_SAFE_BOOT = ("import runpy, sys; sys.path[:] = [p for p in sys.path if p not in ('', '.')]; "
+              "sys.argv[0] = sys.argv[1]; del sys.argv[1]; "
+              "runpy.run_module(sys.argv[0], run_name='__main__', alter_sys=True)")
+
+
+def safe_argv(argv: list[str]) -> list[str]:
+    """``argv`` so that the caller's working directory cannot shadow our packages: a
+    ``./worlds/`` or ``./common/__init__.py`` where papf is started must not be imported by
+    the nodes. ``python -m M`` puts the working directory first on sys.path; from 3.11 the
+    child's ``PYTHONSAFEPATH=1`` (set by :meth:`Supervisor.start`) stops that, on 3.10 a
+    bootstrap does."""
+    if sys.version_info >= (3, 11) or len(argv) < 3 or argv[1] != "-m":
+        return list(argv)
+    return [argv[0], "-c", _SAFE_BOOT, argv[2], *argv[3:]]
+
+
 class Supervisor:
     """Owns the node processes of one run. Use as a context manager."""
 
@@ -57,9 +75,10 @@ class Supervisor:
     def start(self, name: str, argv: list[str], env: dict | None = None) -> Child:
         """Start ``argv`` (e.g. ``[python, -m, nodes.planner, ...]``) as node ``name``."""
         proc = subprocess.Popen(
-            argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+            safe_argv(argv), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
             start_new_session=True, preexec_fn=_die_with_parent, text=True, bufsize=1,
-            env={**os.environ, "PYTHONUNBUFFERED": "1", **self.env, **(env or {})},
+            env={**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONSAFEPATH": "1", **self.env,
+                 **(env or {})},
         )
         child = Child(name, proc)
         self.children.append(child)

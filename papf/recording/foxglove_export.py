@@ -16,6 +16,7 @@ from pathlib import Path
 import foxglove
 
 from common.errors import PapfError, RecordingError
+from common.outfiles import check_output, output
 from nodes.viewer.core import ViewCore
 from nodes.viewer.sink import FoxgloveChannels
 from papf.recording.reader import Recording
@@ -62,12 +63,17 @@ def _world(meta: dict, world: str | World | None, stats: ExportStats) -> World |
         return None
 
 
-def export_foxglove(src: str | Path, dst: str | Path, world: str | World | None = None
-                    ) -> ExportStats:
-    """Write ``dst`` (overwritten) from the recording ``src``; returns the counts."""
+def export_foxglove(src: str | Path, dst: str | Path, world: str | World | None = None,
+                    force: bool = False) -> ExportStats:
+    """Write ``dst`` from the recording ``src`` (:func:`common.outfiles.output`: an existing
+    ``dst`` only with ``force``, never ``src`` itself); returns the counts."""
     src, dst = Path(src), Path(dst)
-    if src.resolve() == dst.resolve():
-        raise RecordingError(f"{dst}: the export must not overwrite its input")
+    check_output(dst, [src], force)   # before reading anything
+    with output(dst, [src], force) as tmp:
+        return _export(src, tmp, world)
+
+
+def _export(src: Path, dst: Path, world) -> ExportStats:
     stats = ExportStats()
     with Recording(src) as rec:
         meta = dict(rec.run_metadata)

@@ -21,6 +21,7 @@ from mcap.reader import make_reader
 
 from common.errors import RecordingError, SchemaError
 from nodes.recorder.writer import RUN_METADATA
+from papf.recording.bounds import check_file_chunks
 from papf.recording.scan import open_regular
 from schemas.base import Message
 from schemas.messages import BY_TYPE
@@ -88,6 +89,8 @@ class Recording:
             self._check_ends()
             self._reader = make_reader(self._file, validate_crcs=True)
             self.summary = self._reader.get_summary()
+            if self.summary is not None:   # before any chunk is decompressed
+                self._check_chunks()
             self.metadata = {m.name: dict(m.metadata) for m in self._reader.iter_metadata()}
         except RecordingError:
             self.close()
@@ -99,6 +102,15 @@ class Recording:
             self.close()
             raise RecordingError(f"{self.path}: MCAP has no summary section; "
                                  f"rewrite it with: papf recover {self.path} FIXED.mcap")
+
+    def _check_chunks(self) -> None:
+        """Every chunk within :data:`papf.recording.bounds.MAX_CHUNK_BYTES`, and indexed (the
+        library would read unindexed chunks one by one, unchecked)."""
+        stats, indexes = self.summary.statistics, self.summary.chunk_indexes
+        if stats is not None and stats.chunk_count > len(indexes):
+            raise RecordingError(f"{self.path}: {stats.chunk_count} chunks but {len(indexes)} "
+                                 f"indexed; rewrite it with: papf recover {self.path} FIXED.mcap")
+        check_file_chunks(self._file, indexes, str(self.path))
 
     def _check_ends(self) -> None:
         head = self._file.read(len(MAGIC))

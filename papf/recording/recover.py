@@ -14,7 +14,6 @@ complete: a full disk or a missing directory leaves no partial or empty file beh
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,6 +22,7 @@ from mcap.writer import Writer
 
 import papf
 from common.errors import RecordingError
+from common.outfiles import OutputError, check_output, output
 from nodes.recorder.writer import COMPRESSIONS
 from papf.recording.scan import ScanStats, open_regular, scan_records
 
@@ -84,7 +84,8 @@ class RecoverStats:
         """What was lost, in words ('' when nothing)."""
         sc, parts = self.scan, []
         if sc.bad_chunks:
-            parts.append(f"{sc.bad_chunks} damaged chunk(s) failed their CRC")
+            parts.append(f"{sc.bad_chunks} damaged chunk(s) failed their CRC, did not "
+                         "decompress or claimed more than the size bound")
         if sc.damaged_bytes:
             parts.append(f"{sc.damaged_bytes} damaged bytes skipped at byte(s) "
                          + ", ".join(map(str, sc.damage_at)))
@@ -155,27 +156,23 @@ class _Copier:
         s.last_receive_ns = t if s.last_receive_ns is None else max(s.last_receive_ns, t)
 
 
-def recover(broken: str | Path, fixed: str | Path, compression: str = "zstd") -> RecoverStats:
-    """Write every intact message of ``broken`` into a new, valid MCAP ``fixed``."""
+def recover(broken: str | Path, fixed: str | Path, compression: str = "zstd",
+            force: bool = False) -> RecoverStats:
+    """Write every intact message of ``broken`` into a new, valid MCAP ``fixed``
+    (:func:`common.outfiles.output`: an existing ``fixed`` only with ``force``, never ``broken``)."""
     broken, fixed = Path(broken), Path(fixed)
-    if broken.resolve() == fixed.resolve():
-        raise RecordingError(f"recover would overwrite its input {broken}; name another output")
-    if not fixed.parent.is_dir():
-        raise RecordingError(f"output directory {str(fixed.parent)!r} does not exist")
+    try:
+        check_output(fixed, [broken], force)
+    except OutputError as exc:
+        raise RecordingError(str(exc)) from None
     stats = RecoverStats()
     with open_regular(broken) as src:
-        tmp = fixed.with_name(f".{fixed.name}.partial")
         try:
-            with open(tmp, "wb") as out:
+            with output(fixed, [broken], force) as tmp, open(tmp, "wb") as out:
                 _copy_all(src, out, stats, compression)
-            os.replace(tmp, fixed)
         except OSError as exc:
-            tmp.unlink(missing_ok=True)
             raise RecordingError(f"cannot write {fixed}: {exc.strerror or exc}; nothing was "
                                  "written (free some space, or recover elsewhere)") from None
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
     return stats
 
 

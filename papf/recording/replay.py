@@ -78,16 +78,23 @@ def zenoh_key(topic: str) -> str | None:
     return key
 
 
-def target_namespaces(rec: Recording | BagRecording, keys=None,
-                      namespace: str | None = None) -> set[str]:
-    """Namespaces a replay of ``rec`` would publish under: ``namespace`` if given, else
-    the recorded one, else the first chunk of each replayed key."""
-    if namespace:
-        return {namespace}
-    ns = recorded_namespace(rec)
-    if ns:
-        return {ns}
-    return {k.split("/")[0] for k in map(zenoh_key, rec.keys(keys)) if k}
+def key_namespace(key: str) -> str:
+    """The namespace a key is under: the part before a stack topic (``lab/r1/scan`` ->
+    ``lab/r1``), else its first chunk."""
+    for suffix in sorted(TOPICS, key=len, reverse=True):
+        if key.endswith("/" + suffix) and len(key) > len(suffix) + 1:
+            return key[: -len(suffix) - 1]
+    return key.split("/")[0]
+
+
+def target_namespaces(rec: Recording | BagRecording, keys=None, namespace: str | None = None) -> set[str]:
+    """Namespaces a replay of ``rec`` would publish under, from the keys themselves as
+    :func:`replay` remaps them (a metadata namespace that differs from the keys must not
+    hide where the messages go)."""
+    old_ns = recorded_namespace(rec) if namespace else None
+    out = {key_namespace(k) for k in (zenoh_key(remap_key(k, old_ns, namespace))
+                                      for k in rec.keys(keys)) if k}
+    return out or ({namespace} if namespace else set())
 
 
 def check_rate(rate: float | None) -> None:

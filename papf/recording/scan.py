@@ -48,6 +48,7 @@ from mcap.records import (
 from mcap.stream_reader import breakup_chunk
 
 from common.errors import RecordingError
+from papf.recording.bounds import check_chunk
 
 MAGIC = b"\x89MCAP0\r\n"
 FRAME = struct.Struct("<BQ")       # record opcode, record length [bytes]
@@ -126,6 +127,7 @@ def _chunk_at(mm, pos: int, size: int) -> Chunk | None:
         return None
     try:
         chunk = _parse(Opcode.CHUNK, mm[pos + FRAME.size:pos + FRAME.size + length])
+        check_chunk(chunk, "chunk")
         breakup_chunk(chunk, validate_crc=True)
     except Exception:
         return None
@@ -194,6 +196,7 @@ def scan_records(f, stats: ScanStats) -> Iterator[object]:
             if isinstance(rec, Chunk):
                 counting_lost = False
                 try:
+                    check_chunk(rec, "chunk")   # a decompression bomb: skipped as damage
                     inner = breakup_chunk(rec, validate_crc=True)
                 except Exception:
                     stats.bad_chunks += 1
@@ -229,8 +232,18 @@ def _read_summary(mm, pos: int, size: int, stats: ScanStats) -> None:
 
 
 def scan_file(path: str | Path) -> tuple[ScanStats, int]:
-    """(what a full scan of ``path`` finds, the number of intact messages)."""
+    """(what a full scan of ``path`` finds, the number of intact messages).
+
+    A message counts as intact as ``papf recover`` would keep it: readable, and on a channel
+    whose record came before it (a message whose channel record was lost cannot be read,
+    so ``info`` and ``recover`` report the same loss)."""
     stats = ScanStats()
+    channels: set[int] = set()
+    n = 0
     with open_regular(path) as f:
-        n = sum(1 for rec in scan_records(f, stats) if isinstance(rec, Message))
+        for rec in scan_records(f, stats):
+            if isinstance(rec, Channel):
+                channels.add(rec.id)
+            elif isinstance(rec, Message) and rec.channel_id in channels:
+                n += 1
     return stats, n

@@ -23,6 +23,7 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from common.errors import ConfigError  # noqa: E402
+from common.outfiles import check_output, output
 from papf.plots.mind import (  # noqa: E402
     draw_footprint,
     draw_mind,
@@ -114,9 +115,11 @@ class Animator:
 
 
 def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 4.0,
-            world: str | None = None, dpi: int = 80, topics: TopicMap | None = None) -> int:
+            world: str | None = None, dpi: int = 80, force: bool = False,
+            topics: TopicMap | None = None) -> int:
     """Render ``src`` (a recording or a rosbag2, its topics mapped by ``topics``) into ``out``
-    (.gif or .mp4); returns the number of frames."""
+    (.gif or .mp4; :func:`common.outfiles.output`: an existing ``out`` only with ``force``,
+    never ``src`` itself); returns the number of frames."""
     out = Path(out)
     suffix = out.suffix.lower()
     if suffix not in (".gif", ".mp4"):
@@ -126,14 +129,14 @@ def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 
                           "write a .gif instead")
     if not (fps > 0 and speed > 0):
         raise ConfigError(f"--fps {fps} and --speed {speed} must be > 0")
+    check_output(out, [src], force)   # before reading the recording
     anim = Animator(load_track(src, world, topics), fps, speed)
     try:
         frames = anim.frames()
         writer = (animation.PillowWriter(fps=fps) if suffix == ".gif"
                   else animation.FFMpegWriter(fps=fps))
-        out.parent.mkdir(parents=True, exist_ok=True)
         anim.fig.tight_layout(rect=(0, 0, 1, 0.95))
-        with writer.saving(anim.fig, str(out), dpi):
+        with output(out, [src], force) as tmp, writer.saving(anim.fig, str(tmp), dpi):
             for t in frames:
                 anim.draw(float(t))
                 writer.grab_frame()

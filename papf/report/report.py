@@ -20,7 +20,10 @@ on the same files gives the same files.
 
 from __future__ import annotations
 
+import os
 import re
+import shutil
+import tempfile
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -148,11 +151,23 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     runs = collect(paths, energy_model, energy_params, topics)
     files = {Path(p).name: Path(p) for p in paths}
     report = Report(runs, tables.summarise(runs), out, suffix=suffix_for(runs, energy_model))
-    try:
-        _write(report, runs, files, out, topics)
+    stage = Path(tempfile.mkdtemp(prefix=".papf-report-", dir=out))
+    try:   # into a staging directory, moved into out only once every file is written
+        _write(report, runs, files, stage, topics)
+        report.files = [_move(f, out) for f in report.files]
     except OSError as exc:
-        raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}") from None
+        raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}; "
+                             "nothing was written") from None
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
     return report
+
+
+def _move(path: Path, out: Path) -> Path:
+    """A staged report file into ``out`` (replacing the previous report's file of that name)."""
+    dst = out / path.name
+    os.replace(path, dst)
+    return dst
 
 
 def _write(report: Report, runs: list, files: dict, out: Path,

@@ -26,9 +26,10 @@ is copied. Which file goes to which host: :data:`HOST_FILES` (also written to
 ``README.txt`` in the bundle). ``ca.key`` goes nowhere: keep it where the bundle was made.
 
 Access control (:func:`access_control`): default deny. Every authenticated identity may
-subscribe, query and hold liveliness tokens, and receive every publication; each role may
+subscribe and hold liveliness tokens, and receive every publication; each role may
 *put* only on the keys of :data:`ROLES`. Only ``planner`` may put on ``<ns>/cmd_vel`` and
-only ``robot`` (the base driver) on the bridge's ``cmd_vel``; ``observer`` puts nothing.
+only ``robot`` (the base driver) on the bridge's ``cmd_vel``; ``observer`` puts nothing and
+queries nothing (:data:`READ_ONLY`: a query on ``<ns>/planner/params`` can set parameters).
 Zenoh 1.x decides explicit deny > explicit allow > default, and a rule's key expression
 must include the message key, so "everything but cmd_vel" is written as the list of
 allowed keys, generated from this table.
@@ -77,6 +78,7 @@ BUNDLE_FILES = ("ca.pem", "ca.key", "robot.pem", "robot.key", "laptop.pem", "lap
                 "credentials.txt", "router.json5", "robot.json5", "laptop.json5",
                 "observer.json5", "README.txt")
 _LABEL = re.compile(r"^(?!-)[A-Za-z0-9-]{1,63}(?<!-)$")
+READ_ONLY = ("observer",)   # identities that watch: no puts, no queries (a query may set parameters)
 # every message type that is not a data write: declarations, queries, liveliness
 NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "liveliness_token",
            "liveliness_query", "declare_liveliness_subscriber")
@@ -87,7 +89,10 @@ def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None
     bridge = bridge or BridgeTopics()
     rules = [
         {"id": "talk", "permission": "allow", "flows": ["ingress", "egress"],
-         "messages": list(NON_PUT), "key_exprs": ["**"]},
+         "messages": [m for m in NON_PUT if m != "query"], "key_exprs": ["**"]},
+        # a query may change a node (planner/params set): not for a read-only identity
+        {"id": "query", "permission": "allow", "flows": ["ingress", "egress"],
+         "messages": ["query"], "key_exprs": ["**"]},
         {"id": "receive", "permission": "allow", "flows": ["egress"],
          "messages": ["put", "delete"], "key_exprs": ["**"]},
     ]
@@ -95,7 +100,7 @@ def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None
     for role, (ours, bridged) in ROLES.items():
         subjects.append({"id": role, "usernames": [role], **BINDINGS[role]})
         keys = [f"{namespace}/{t}" for t in ours] + [bridge.key(getattr(bridge, t)) for t in bridged]
-        names = ["talk", "receive"]
+        names = ["talk", "receive"] + ([] if role in READ_ONLY else ["query"])
         if keys:
             rules.append({"id": f"{role}-puts", "permission": "allow", "flows": ["ingress"],
                           "messages": ["put"], "key_exprs": keys})

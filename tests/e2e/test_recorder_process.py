@@ -38,7 +38,7 @@ def wait_until(pred, timeout_s: float = 10.0) -> bool:
 
 def recovered_count(path, tmp_path) -> int:
     """Messages a crash right now would leave (the file is still being written)."""
-    return recover(path, tmp_path / "probe.mcap").messages
+    return recover(path, tmp_path / "probe.mcap", force=True).messages   # a probe: replaced each time
 
 
 def test_sigkill_loses_at_most_the_last_second(router, spawn, session, tmp_path):

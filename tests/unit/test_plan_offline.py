@@ -64,12 +64,14 @@ def test_papf_escapes_the_dead_end():
 
 
 def test_collision_is_detected_and_ends_the_run():
-    # a wall across the corridor and an APF that ignores obstacles (d_o ~ 0) drives into it
-    world = corridor([{"kind": "wall", "from": [1.0, -0.75], "to": [1.0, 0.75], "thickness": 0.1}])
-    r = simulate(world, "apf", params={"d_o": 0.01, "v_max": 0.5})
+    # no setting switches avoidance off (safety floors), so a panel moving across the whole
+    # corridor at 3 m/s runs into the robot, whatever it does
+    world = corridor([{"kind": "box", "size": [0.2, 1.5],
+                       "motion": {"track": [[0.0, 2.0, 0.0], [1.0, -1.0, 0.0]]}}])
+    r = simulate(world, "apf")
     assert r.outcome == "collision" and r.collisions == 1
     assert r.min_clearance_m < 0
-    assert r.path[-1][0] < 1.0                  # stopped at the wall, not through it
+    assert r.sim_time_s < 1.5                   # the run ended at the collision
 
 
 def test_timeout_when_the_time_limit_is_short():

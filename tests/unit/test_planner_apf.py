@@ -161,7 +161,7 @@ def test_params_file_and_set_overrides(tmp_path):
     assert (apf.v_max, apf.d_o, apf.k_theta, apf.scale_to_scan) == (0.2, 0.8, 2.0, False)
     with pytest.raises(ConfigError, match="unknown apf setting 'nope'"):
         load_params("apf", None, ["nope=1"])
-    with pytest.raises(ConfigError, match=r"d_o=far: must be a finite number in \(0, 25\] m"):
+    with pytest.raises(ConfigError, match=r"d_o=far: must be a finite number in \[0.25, 25\] m"):
         load_params("apf", None, ["d_o=far"])
     with pytest.raises(ConfigError, match="unknown planner 'xyz'"):
         make_planner("xyz")

@@ -33,7 +33,7 @@ def test_parameter_cannot_switch_obstacle_avoidance_off(setting):
 def test_params_file_is_checked_like_set(tmp_path):
     f = tmp_path / "p.toml"
     f.write_text("d_o = nan\n")
-    with pytest.raises(ConfigError, match=r"d_o=nan: must be a finite number in \(0, 25\] m"):
+    with pytest.raises(ConfigError, match=r"d_o=nan: must be a finite number in \[0.25, 25\] m"):
         load_params("apf", f)
     f.write_text("[wang]\nrho_0 = -1.0\n")
     with pytest.raises(ConfigError, match="rho_0=-1.0"):

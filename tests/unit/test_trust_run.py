@@ -126,7 +126,7 @@ def papf(*args, timeout=60):
     (["--planner", "PAPF"], "did you mean 'papf'"),
     (["--set", "unknown=1"], "unknown apf setting 'unknown'"),
     (["--set", "vmax=0.3"], "did you mean 'v_max'"),
-    (["--set", "d_o=nan"], "d_o=nan: must be a finite number in (0, 25] m"),
+    (["--set", "d_o=nan"], "d_o=nan: must be a finite number in [0.25, 25] m"),
     (["--seed", "-1"], "--seed=-1: must be an integer in [0, 4294967295]"),
     (["--params", "/bin/ls"], "is not a readable TOML file"),
     (["--params", "/nonexistent.toml"], "no such file"),

@@ -6,8 +6,12 @@ from common.params import FLAG, Spec, choice, integer, num, pos
 from common.robot import LIDAR_RANGE_MAX_M
 from nodes.planner.settings import MAX_GAIN
 
+# Safety floors, measured as nodes/planner/settings.py's (docs/planners.md "Safety floors")
+K_RO_L_MIN = 0.5         # [-] AR-APF's k_RO * L (0.1 collided on papf-test-1)
+AR_REPULSION_MIN = 0.5   # [-] AR-APF's k_ro_l * q_v * q_o (the virtual obstacles' repulsion)
+
 ARAPF: dict[str, Spec] = {
-    "k_ro_l": pos(MAX_GAIN, safety=True),
+    "k_ro_l": num(K_RO_L_MIN, MAX_GAIN, safety=True),
     "k_virtual_factor": num(0.0, 1000.0),
     "alpha_deg": pos(180.0, "deg"),
     "d_min": pos(LIDAR_RANGE_MAX_M, "m"),

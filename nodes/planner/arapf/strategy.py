@@ -15,9 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from common.errors import ConfigError
-from nodes.planner.arapf.settings import ARAPF
+from nodes.planner.arapf.settings import AR_REPULSION_MIN, ARAPF
 from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
+from nodes.planner.settings import require_product
 
 PASSAGE_WIDTHS = ("opening", "gap")
 
@@ -184,6 +185,12 @@ class ARAPFStrategy(Strategy):
     #: passage measured bound to bound (docs/planners.md, "Presets").
     PAPER_PRESET = {"range_limited": False, "wall_range_limited": False, "follow": False,
                     "passage_width": "gap"}
+
+
+    @classmethod
+    def check_strength(cls, apf, params) -> None:
+        """The virtual obstacles' repulsion ``k_ro_l*q_v*q_o`` above its measured floor."""
+        require_product("k_ro_l*q_v*q_o", params.k_ro_l * apf.q_v * apf.q_o, AR_REPULSION_MIN)
 
     def __init__(self, params: ARAPFParams | None = None):
         self.params = params or ARAPFParams()

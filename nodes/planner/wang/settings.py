@@ -6,16 +6,21 @@ from common.params import Spec, integer, num, pos
 from common.robot import LIDAR_RANGE_MAX_M
 from nodes.planner.settings import MAX_BEAMS, MAX_GAIN
 
+# Safety floors, measured as nodes/planner/settings.py's (docs/planners.md "Safety floors")
+K_REP_L_MIN = 5.0        # [-] Wang's k_rep * L (1 collided on energy-blocking: the default is the floor)
+RHO_0_MIN_M = 0.5        # [m] Wang's influence radius (0.3 collided on energy-blocking)
+
 WANG: dict[str, Spec] = {
     "k_att": pos(1000.0),
-    "k_rep_l": pos(MAX_GAIN, safety=True),
+    "k_rep_l": num(K_REP_L_MIN, MAX_GAIN, safety=True),
     "lidar_points": integer(1, MAX_BEAMS),
-    "rho_0": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "rho_0": num(RHO_0_MIN_M, LIDAR_RANGE_MAX_M, "m", safety=True),
     "r_0": num(0.0, 5.0, "m"),
     "control_offset_m": num(0.0, 1.0, "m"),
 }
 
-# Wang's traditional APF baseline (eqs. 1-5)
+# Wang's traditional APF baseline (eqs. 1-5): the paper's failing baseline, its floors not
+# measured (its default k_rep_l = 2 is below the improved planner's measured floor)
 WANG_APF: dict[str, Spec] = {
     "k_att": pos(1000.0),
     "k_rep_l": pos(MAX_GAIN, safety=True),

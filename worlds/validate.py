@@ -1,0 +1,121 @@
+"""What a world file may contain, checked before it is read into a World (docs/worlds.md "Limits").
+
+A misspelt key is not ignored: ``hieght = 2.0`` on an obstacle or a ``[mapp]`` table would
+give a run in another world than the one the user wrote, so every key must be one the format
+knows — a WorldError names the entry and the closest valid key ("did you mean"). And every
+size a world can ask the stack to allocate or loop over is bounded, so a hostile file fails
+at once, in one line, before any process starts:
+
+- the file itself: :data:`MAX_FILE_BYTES` (read no further), TOML nesting :data:`MAX_DEPTH`;
+- strings: a name of :data:`MAX_NAME_CHARS`, a description of :data:`MAX_DESCRIPTION_CHARS`;
+- ``[road] lanes`` up to :data:`MAX_LANES`, a motion track of :data:`MAX_TRACK_POINTS`,
+  :data:`MAX_OBSTACLES` obstacles (the simulator's own, lower limit is
+  :data:`worlds.checks.MAX_SIM_OBSTACLES`).
+
+The key tables are data (:data:`TOP`, :data:`TABLES`, :data:`OBSTACLE_KEYS`): a new field of
+the format is one entry here.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+from common.errors import WorldError
+
+MAX_FILE_BYTES = 1024 * 1024     # [bytes] the largest packaged world is 3 KB
+MAX_DEPTH = 6                    # [-] tables/arrays nested (obstacles[].motion.track[][] is 5)
+MAX_NAME_CHARS = 100             # [chars]
+MAX_DESCRIPTION_CHARS = 4000     # [chars]
+MAX_LANES = 16                   # [-] a motorway has 4-5 per direction
+MAX_TRACK_POINTS = 10_000        # [-] samples of one obstacle's motion track
+MAX_OBSTACLES = 10_000           # [-] in a file (papf plan); the simulator takes fewer
+
+TOP = ("name", "description", "robot", "goal", "obstacles", "road")
+TABLES = {"robot": ("start", "vehicle"), "goal": ("position", "tolerance"),
+          "road": ("y_min", "lane_width", "lanes")}
+_MOVING = ("motion", "yaw")
+OBSTACLE_KEYS = {
+    "box": ("kind", "center", "size", "yaw", "height", "motion"),
+    "cylinder": ("kind", "center", "radius", "height", *_MOVING),
+    "wall": ("kind", "from", "to", "thickness", "height", *_MOVING),
+    "sphere": ("kind", "center", "radius", "height", "motion"),   # motion: the parser refuses it
+}
+MOTION_KEYS = ("track",)
+
+
+def check_text_size(size: int, source: str) -> None:
+    """A world file of ``size`` bytes may be read."""
+    if size > MAX_FILE_BYTES:
+        raise WorldError(f"world {source!r}: {size:,} bytes, more than the {MAX_FILE_BYTES:,} a "
+                         "world file may have")
+
+
+def check_document(data: dict, source: str) -> None:
+    """Every key known, every size within its limit (module doc); WorldError otherwise."""
+    _depth(data, source)
+    _keys(data, TOP, "", source)
+    for table, valid in TABLES.items():
+        if isinstance(data.get(table), dict):
+            _keys(data[table], valid, f"[{table}]", source)
+    for key, limit in (("name", MAX_NAME_CHARS), ("description", MAX_DESCRIPTION_CHARS)):
+        value = data.get(key)
+        if isinstance(value, str) and len(value) > limit:
+            _fail(source, key, f"{len(value):,} characters, more than {limit:,}")
+    road = data.get("road")
+    lanes = road.get("lanes") if isinstance(road, dict) else None
+    if isinstance(lanes, int) and not isinstance(lanes, bool) and lanes > MAX_LANES:
+        _fail(source, "road.lanes", f"{lanes} lanes, more than {MAX_LANES}")
+    _obstacles(data.get("obstacles"), source)
+
+
+def _obstacles(raw, source: str) -> None:
+    if not isinstance(raw, list):
+        return   # the parser says what an obstacles entry must be
+    if len(raw) > MAX_OBSTACLES:
+        _fail(source, "obstacles", f"{len(raw):,} obstacles, more than {MAX_OBSTACLES:,}")
+    for i, ob in enumerate(raw):
+        if not isinstance(ob, dict):
+            continue
+        where = f"obstacles[{i}]"
+        kind = ob.get("kind")
+        if kind in OBSTACLE_KEYS:
+            _keys(ob, OBSTACLE_KEYS[kind], where, source, f"a {kind}")
+        motion = ob.get("motion")
+        if isinstance(motion, dict):
+            _keys(motion, MOTION_KEYS, f"{where}.motion", source)
+            track = motion.get("track")
+            if isinstance(track, list) and len(track) > MAX_TRACK_POINTS:
+                _fail(source, f"{where}.motion.track",
+                      f"{len(track):,} points, more than {MAX_TRACK_POINTS:,}")
+
+
+def _keys(table: dict, valid: Iterable[str], where: str, source: str, what: str = "") -> None:
+    valid = tuple(valid)
+    for key in table:
+        if key in valid:
+            continue
+        close = difflib.get_close_matches(str(key), valid, n=1, cutoff=0.6)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        place = f"{where}.{key}" if where and not where.startswith("[") else \
+            f"{where} {key}" if where else f"[{key}]" if isinstance(table[key], dict) else key
+        has = f"{what} has" if what else "valid"
+        _fail(source, place, f"unknown key{hint} ({has}: {', '.join(valid)})")
+
+
+def _depth(node, source: str) -> None:
+    """Nesting of tables and arrays within :data:`MAX_DEPTH` (iterative: no recursion)."""
+    stack = [(node, 0)]
+    while stack:
+        item, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            _fail(source, "(file)", f"tables or arrays nested deeper than {MAX_DEPTH}")
+        if isinstance(item, dict):
+            stack.extend((v, depth + 1) for v in item.values() if isinstance(v, (dict, list)))
+        elif isinstance(item, list):
+            stack.extend((v, depth + 1) for v in item if isinstance(v, (dict, list)))
+
+
+def _fail(source: str, where: str, problem: str):
+    shown = source if len(source) <= 200 else source[:197] + "..."
+    raise WorldError(f"world {shown!r}: {where}: {problem}")
