@@ -9,11 +9,10 @@ at once, in one line, before any process starts:
 - the file itself: :data:`MAX_FILE_BYTES` (read no further), TOML nesting :data:`MAX_DEPTH`;
 - strings: a name of :data:`MAX_NAME_CHARS`, a description of :data:`MAX_DESCRIPTION_CHARS`;
 - ``[road] lanes`` up to :data:`MAX_LANES`, a motion track of :data:`MAX_TRACK_POINTS`,
-  :data:`MAX_OBSTACLES` obstacles (the simulator's own, lower limit is
-  :data:`worlds.checks.MAX_SIM_OBSTACLES`).
+  :data:`MAX_OBSTACLES` obstacles.
 
-The key tables are data (:data:`TOP`, :data:`TABLES`, :data:`OBSTACLE_KEYS`): a new field of
-the format is one entry here.
+The key tables are data (:data:`TOP`, :data:`TABLES`); an obstacle kind declares its own keys
+(``Kind.keys``, :mod:`worlds.kinds`), and a kind with a table of its own (``[map]``) adds it.
 """
 
 from __future__ import annotations
@@ -22,6 +21,7 @@ import difflib
 from collections.abc import Iterable
 
 from common.errors import WorldError
+from worlds.kinds import KINDS
 
 MAX_FILE_BYTES = 1024 * 1024     # [bytes] the largest packaged world is 3 KB
 MAX_DEPTH = 6                    # [-] tables/arrays nested (obstacles[].motion.track[][] is 5)
@@ -29,19 +29,17 @@ MAX_NAME_CHARS = 100             # [chars]
 MAX_DESCRIPTION_CHARS = 4000     # [chars]
 MAX_LANES = 16                   # [-] a motorway has 4-5 per direction
 MAX_TRACK_POINTS = 10_000        # [-] samples of one obstacle's motion track
-MAX_OBSTACLES = 10_000           # [-] in a file (papf plan); the simulator takes fewer
+MAX_OBSTACLES = 10_000           # [-] in a file
 
 TOP = ("name", "description", "robot", "goal", "obstacles", "road")
 TABLES = {"robot": ("start", "vehicle"), "goal": ("position", "tolerance"),
           "road": ("y_min", "lane_width", "lanes")}
-_MOVING = ("motion", "yaw")
-OBSTACLE_KEYS = {
-    "box": ("kind", "center", "size", "yaw", "height", "motion"),
-    "cylinder": ("kind", "center", "radius", "height", *_MOVING),
-    "wall": ("kind", "from", "to", "thickness", "height", *_MOVING),
-    "sphere": ("kind", "center", "radius", "height", "motion"),   # motion: the parser refuses it
-}
 MOTION_KEYS = ("track",)
+
+
+def _tables() -> dict[str, tuple]:
+    """:data:`TABLES` and the tables of the kinds that have their own (``[map]``)."""
+    return {**TABLES, **{k.name: k.keys for k in KINDS.values() if not k.listed}}
 
 
 def check_text_size(size: int, source: str) -> None:
@@ -54,8 +52,9 @@ def check_text_size(size: int, source: str) -> None:
 def check_document(data: dict, source: str) -> None:
     """Every key known, every size within its limit (module doc); WorldError otherwise."""
     _depth(data, source)
-    _keys(data, TOP, "", source)
-    for table, valid in TABLES.items():
+    tables = _tables()
+    _keys(data, (*TOP, *(t for t in tables if t not in TOP)), "", source)
+    for table, valid in tables.items():
         if isinstance(data.get(table), dict):
             _keys(data[table], valid, f"[{table}]", source)
     for key, limit in (("name", MAX_NAME_CHARS), ("description", MAX_DESCRIPTION_CHARS)):
@@ -78,9 +77,9 @@ def _obstacles(raw, source: str) -> None:
         if not isinstance(ob, dict):
             continue
         where = f"obstacles[{i}]"
-        kind = ob.get("kind")
-        if kind in OBSTACLE_KEYS:
-            _keys(ob, OBSTACLE_KEYS[kind], where, source, f"a {kind}")
+        kind = KINDS.get(ob.get("kind")) if isinstance(ob.get("kind"), str) else None
+        if kind is not None and kind.listed:
+            _keys(ob, ("kind", *kind.keys), where, source, f"a {kind.name}")
         motion = ob.get("motion")
         if isinstance(motion, dict):
             _keys(motion, MOTION_KEYS, f"{where}.motion", source)

@@ -25,7 +25,8 @@ from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, load_profile
 from papf.launch.supervisor import _SAFE_BOOT, safe_argv
 from worlds import load_world, parse_world, world_data, world_path
-from worlds.validate import MAX_LANES, MAX_TRACK_POINTS, OBSTACLE_KEYS, TOP
+from worlds.kinds import KINDS
+from worlds.validate import MAX_LANES, MAX_TRACK_POINTS, TOP
 
 SETTINGS = settings(max_examples=40, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -41,7 +42,7 @@ def _with(**top) -> dict:
 def test_any_unknown_obstacle_key_is_refused(key):
     data = _with()
     ob = data["obstacles"][1]   # a cylinder
-    if key in OBSTACLE_KEYS["cylinder"]:
+    if key in ("kind", *KINDS["cylinder"].keys):
         return
     ob[key] = 2.0
     with pytest.raises(WorldError, match=r"obstacles\[1\]\." + key + ": unknown key"):

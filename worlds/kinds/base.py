@@ -64,6 +64,7 @@ class Kind:
     round = False          # a circle/sphere of ``radius`` about ``center`` (Wang's point sims)
     listed = True          # written as ``[[obstacles]]`` (False: its own table, e.g. ``[map]``)
     trackable = True       # an object the ground-truth ``objects`` message reports
+    keys: tuple = ()       # the TOML keys its table may have besides ``kind`` (worlds/validate.py)
 
     def parse(self, ctx, table: dict, where: str) -> Obstacle:
         """The obstacle of one ``[[obstacles]]`` table; ``ctx`` raises WorldError (worlds._Ctx)."""

@@ -14,6 +14,7 @@ class Box(Kind):
     """A yawed rectangular footprint, ``height`` tall (walls too: :class:`worlds.kinds.wall.Wall`)."""
 
     name = "box"
+    keys = ("center", "size", "yaw", "height", "motion")
 
     def parse(self, ctx, table: dict, where: str) -> Obstacle:
         height = height_of(ctx, table, where)

@@ -17,6 +17,7 @@ class Cylinder(Kind):
     """A disc footprint, ``height`` tall."""
 
     name = "cylinder"
+    keys = ("center", "radius", "height", "motion", "yaw")
     round = True
 
     def parse(self, ctx, table: dict, where: str) -> Obstacle:

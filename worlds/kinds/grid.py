@@ -24,6 +24,7 @@ class Grid(Kind):
     """The walls of an occupancy map, ``height`` tall, in the map's frame (origin, yaw)."""
 
     name = "map"
+    keys = ("file", "height")
     listed = False
     trackable = False
     movable = False

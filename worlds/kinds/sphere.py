@@ -13,6 +13,7 @@ class Sphere(Cylinder):
     """A ball; in the plane (top views, 2-D rays) its footprint is its equator's disc."""
 
     name = "sphere"
+    keys = ("center", "radius", "height", "motion")   # motion: the parser refuses it
     world_dims = (3,)
     movable = False
 

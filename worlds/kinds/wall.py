@@ -15,6 +15,7 @@ class Wall(Box):
     """A wall is parsed into a box (centre, (length, thickness), yaw) and is one from then on."""
 
     name = "wall"
+    keys = ("from", "to", "thickness", "height", "motion", "yaw")
 
     def parse(self, ctx, table: dict, where: str) -> Obstacle:
         height = height_of(ctx, table, where)
