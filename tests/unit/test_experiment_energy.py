@@ -50,6 +50,7 @@ class FakeRuns:
         write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed)
         m = run_metrics(cfg.record)
         if len(self.configs) <= self.cut_first:  # the live run was whole; the file is not
+            Path(cfg.record).unlink()            # (recordings are never overwritten)
             write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed, total_k=80,
                             outcome=None, meta={"timeout_s": "300"})
         return RunResult(m.outcome, cfg.planner, "energy", cfg.seed, m.duration_s,

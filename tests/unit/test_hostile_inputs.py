@@ -26,7 +26,7 @@ from papf.launch.profile import LaunchOptions, load_profile
 from papf.launch.supervisor import _SAFE_BOOT, safe_argv
 from worlds import load_world, parse_world, world_data, world_path
 from worlds.kinds import KINDS
-from worlds.validate import MAX_LANES, MAX_TRACK_POINTS, TOP
+from worlds.validate import MAX_LANES, MAX_OBSTACLES, MAX_TRACK_POINTS, TOP
 
 SETTINGS = settings(max_examples=40, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -123,7 +123,7 @@ def test_launch_refuses_worlds_run_refuses(tmp_path):
     head = '[goal]\nposition = [{gx}, {gy}]\n'
     many = head.format(gx=10.0, gy=0.0) + "".join(
         f'[[obstacles]]\nkind = "cylinder"\ncenter = [{20.0 + i * 0.3}, 20.0]\nradius = 0.1\n'
-        for i in range(501))
+        for i in range(MAX_OBSTACLES + 1))
     inside = head.format(gx=5.0, gy=0.0) + \
         '[[obstacles]]\nkind = "cylinder"\ncenter = [5.0, 0.0]\nradius = 0.25\n'
     for text, match in ((many, "obstacles"), (inside, "goal")):

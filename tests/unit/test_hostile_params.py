@@ -14,7 +14,7 @@ from common import runauth
 from common.errors import ConfigError
 from nodes.planner import settings as S
 from nodes.planner.params import answer, current
-from nodes.planner.registry import load_params, make_planner
+from nodes.planner.registry import PLANNERS, load_params, make_planner
 from papf.cli import main
 from papf.robot.certs import access_control
 
@@ -53,16 +53,20 @@ def test_the_repulsion_product_has_its_own_floor(k, qv, qo):
 
 
 def test_every_swept_safety_range_starts_at_its_measured_floor():
-    measured = {"d_o": S.D_O_MIN_M, "k_vo_l": S.K_VO_L_MIN, "k_ro_l": S.K_RO_L_MIN,
-                "k_rep_l": S.K_REP_L_MIN, "rho_0": S.RHO_0_MIN_M}
-    for table in (S.APF, S.ARAPF, S.WANG):
+    from nodes.planner.arapf import settings as AR
+    from nodes.planner.wang import settings as W
+
+    measured = {"d_o": S.D_O_MIN_M, "k_vo_l": S.K_VO_L_MIN, "k_ro_l": AR.K_RO_L_MIN,
+                "k_rep_l": W.K_REP_L_MIN, "rho_0": W.RHO_0_MIN_M}
+    for table in (S.APF, AR.ARAPF, W.WANG):
         for name, floor in measured.items():
             if name in table:
                 assert table[name].safety and table[name].lo == floor and not table[name].lo_open
     for name in ("q_v", "q_o"):
         assert S.APF[name].hi == -S.CHARGE_MIN and not S.APF[name].hi_open
     apf, algo = load_params("arapf")
-    S.check_strength(apf, algo)
+    S.check_strength(apf)
+    PLANNERS["arapf"].check_strength(apf, algo)   # AR-APF's own product, at the defaults
 
 
 KEY = bytes.fromhex(runauth.new_key())

@@ -9,6 +9,8 @@ import jsonschema
 import msgpack
 import numpy as np
 import pytest
+
+from common.outfiles import OutputError
 from mcap.reader import make_reader
 
 from common.errors import ConfigError, RecordingError
@@ -163,7 +165,7 @@ def test_recover_a_complete_file_keeps_all_and_refuses_to_overwrite(tmp_path):
     stats = recover(path, tmp_path / "copy.mcap")
     assert stats.complete and stats.messages == len(ALL_MESSAGES)
     assert list(iter_messages(path)) == list(iter_messages(tmp_path / "copy.mcap"))
-    with pytest.raises(RecordingError, match="overwrite"):
+    with pytest.raises(RecordingError, match="same file"):
         recover(path, path)
     (tmp_path / "text.mcap").write_text("hello world, not an mcap")
     with pytest.raises(RecordingError, match="MCAP magic"):
@@ -195,7 +197,7 @@ def test_time_based_flush_makes_messages_survive_a_crash(tmp_path):
 def test_writer_rejects_bad_settings(tmp_path):
     with pytest.raises(RecordingError, match="compression"):
         RunWriter(tmp_path / "x.mcap", {}, compression="gzip")
-    with pytest.raises(RecordingError, match="cannot create"):
+    with pytest.raises(OutputError, match="does not exist"):
         RunWriter(tmp_path / "no" / "such" / "dir.mcap", {})
 
 

@@ -99,6 +99,7 @@ class Post(Box):
     """A square post: ``side`` [m] — a kind only this test knows."""
 
     name = "post"
+    keys = ("center", "side", "height")   # its TOML keys: the world check derives from them
 
     def parse(self, ctx, table, where):
         side = ctx.positive(table, "side", f"{where}.side")
