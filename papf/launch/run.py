@@ -10,6 +10,7 @@ figures at ``t_end`` -> run_ended) -> stop the nodes, the recorder, the router.
 from __future__ import annotations
 
 import logging
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -117,6 +118,14 @@ def run(cfg: RunConfig) -> RunResult:
     return result
 
 
+def view_line(port: int, realtime: bool) -> str:
+    """Where the live view is, printed once every node (the viewer too) is alive."""
+    pace = ("" if realtime else "; without --realtime the run goes as fast as the nodes "
+            "compute, add --realtime to watch it at the robot's pace")
+    return (f"papf run: live view on ws://127.0.0.1:{port} (Foxglove: Open connection, "
+            f"docs/foxglove-layout.json){pace}")
+
+
 def _drive(cfg: RunConfig, world: World, commands: dict[str, list[str]], sup: Supervisor,
            session: zenoh.Session, keys: Keys, seq: RunSequence) -> None:
     for name, argv in commands.items():
@@ -127,6 +136,8 @@ def _drive(cfg: RunConfig, world: World, commands: dict[str, list[str]], sup: Su
         seq.monitor.fail(sup.death_reason() or f"nodes not alive after "
                          f"{cfg.startup_timeout_s:g} s: {', '.join(sorted(missing))}")
         return
+    if cfg.view is not None:
+        print(view_line(cfg.view, cfg.realtime), file=sys.stderr, flush=True)
     if not seq.handshake(world):
         return
     seq.start(f"world={world.name} planner={cfg.planner} seed={cfg.seed}")

@@ -23,6 +23,7 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from common.errors import ConfigError  # noqa: E402
+from papf.console.progress import DecileProgress  # noqa: E402
 from papf.plots.mind import (  # noqa: E402
     draw_footprint,
     draw_mind,
@@ -131,10 +132,11 @@ def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 
                   else animation.FFMpegWriter(fps=fps))
         out.parent.mkdir(parents=True, exist_ok=True)
         anim.fig.tight_layout(rect=(0, 0, 1, 0.95))
-        with writer.saving(anim.fig, str(out), dpi):
-            for t in frames:
+        with writer.saving(anim.fig, str(out), dpi), DecileProgress(f"animate {out.name}") as bar:
+            for k, t in enumerate(frames, 1):
                 anim.draw(float(t))
                 writer.grab_frame()
+                bar.fraction(k / len(frames), f"frame {k}/{len(frames)}  t = {t:.1f} s")
     finally:
         plt.close(anim.fig)
     return len(frames)
