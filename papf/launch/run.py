@@ -106,6 +106,18 @@ def run(cfg: RunConfig) -> RunResult:
         monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
         return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
     run_key = runauth.new_key()    # to the nodes through their environment only
+    if cfg.realtime:   # this user's `papf goal` may steer a real-time run (common.runauth);
+        runauth.publish_key(cfg.namespace, run_key)   # a lockstep run stays reproducible
+    try:
+        return _run(cfg, world, graph, router, run_key, monitor, keys, wall0)
+    finally:
+        if cfg.realtime:
+            runauth.withdraw_key(cfg.namespace, run_key)
+
+
+def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
+         monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
+    """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key}) as sup:
         seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key))

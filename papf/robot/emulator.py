@@ -107,15 +107,8 @@ def run(args: argparse.Namespace) -> int:
         try:
             while not node.stop:
                 try:
-                    t_rx, data = node.inbox.get(timeout=max(0.0, (last + period - now) * 1e-9))
-                    try:
-                        v, w = cdr_to_twist(data)
-                    except SchemaError as exc:
-                        log.warning("dropped bad cmd_vel: %s", exc)
-                    else:
-                        robot.command(v, w, t_rx)
-                        if trace:
-                            trace.write(json.dumps({"t_ns": t_rx, "v": v, "w": w}) + "\n")
+                    _command(robot, *node.inbox.get(timeout=max(0.0, (last + period - now) * 1e-9)),
+                             trace, log)
                 except queue.Empty:
                     pass
                 now = time.monotonic_ns()
@@ -141,6 +134,20 @@ def run(args: argparse.Namespace) -> int:
                 lidar.close()
             log.info("stopped after %d commands; odom pose %s", robot.commands, robot.pose)
     return 0
+
+
+def _command(robot: EmulatedRosbot, t_rx: int | None, data: bytes | None, trace, log) -> None:
+    """A received CDR cmd_vel to the robot (and the trace); a bad one logged and dropped."""
+    if data is None:      # the stop request's wake-up (node.stop), not a command
+        return
+    try:
+        v, w = cdr_to_twist(data)
+    except SchemaError as exc:
+        log.warning("dropped bad cmd_vel: %s", exc)
+        return
+    robot.command(v, w, t_rx)
+    if trace:
+        trace.write(json.dumps({"t_ns": t_rx, "v": v, "w": w}) + "\n")
 
 
 def _scan_cdr(lidar, pose: Pose2D, wall_ns: int) -> bytes:
