@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
@@ -45,8 +46,8 @@ def _add_energy(exp) -> None:
     p.add_argument("--world", default=WORLD, help=f"world (default {WORLD})")
     p.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="S",
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
-    p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
-                   help="the live meter's model (default motor)")
+    p.add_argument("--energy-model", choices=sorted(MODELS), default=DEFAULT_MODEL,
+                   help=f"the live meter's model (default {DEFAULT_MODEL})")
     p.add_argument("--worlds", metavar="W1,W2",
                    help="several worlds, each into DIR/world-<name>/, plus DIR/energy-worlds.md/.csv "
                         "(e.g. energy,energy-blocking,energy-empty)")

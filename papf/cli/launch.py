@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.view import add_view_flag
 
 
@@ -30,7 +31,8 @@ def register(sub) -> None:
                         "tracker node, or none (default for iapf: truth where a sim runs, "
                         "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
-    p.add_argument("--energy-model", choices=("motor", "paper"))
+    p.add_argument("--energy-model", choices=sorted(MODELS),
+                   help=f"the live meter's model (default {DEFAULT_MODEL}, in every profile)")
     p.add_argument("--realtime", action="store_true",
                    help="sim profile: pace sim time to the wall clock (to watch, steer with "
                         "papf goal, or drive with papf teleop)")

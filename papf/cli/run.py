@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.options import add_planner_settings, add_world_and_planner
 from papf.cli.view import add_view_flag
 
@@ -30,7 +31,8 @@ def register(sub) -> None:
     p.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
                    help="nodes' Zenoh mode: peer (direct loopback links, the launcher's router "
                         "only for discovery; default) or client (all through the router)")
-    p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
+    p.add_argument("--energy-model", choices=sorted(MODELS), default=DEFAULT_MODEL,
+                   help=f"the live meter's model (default {DEFAULT_MODEL}; docs/energy.md)")
     add_planner_settings(p)
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper read "

@@ -18,6 +18,7 @@ import zenoh
 
 from common import runauth
 from common.transport import wait_alive, zenoh_config
+from nodes.energy_meter.models import DEFAULT_MODEL
 from papf.console.progress import RunProgress
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_run
@@ -44,7 +45,7 @@ class RunConfig:
     port: int | None = None            # None: 7447, or a free port if 7447 is taken
     namespace: str = "rosbot"
     planner_args: list[str] = field(default_factory=list)   # e.g. ["--set", "v_max=0.3"]
-    energy_model: str = "motor"
+    energy_model: str = DEFAULT_MODEL
     stop_on_collision: bool = True
     verbose: bool = False
     progress: bool | None = None       # None: when stderr is a terminal

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import RecordingError
+from nodes.energy_meter.models import DEFAULT_MODEL
 from papf.launch.outcome import NS, RunMonitor
 from papf.recording.reader import Recording
 from papf.report.remeter import Remeter, battery_at
@@ -182,7 +183,7 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
     with Recording(path) as rec:
         meta = rec.run_metadata
         ns = meta.get("namespace") or _guess_namespace(rec)
-        model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or "motor"
+        model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or DEFAULT_MODEL
         timeout_s = float(meta.get("timeout_s") or NO_TIMEOUT_S)
         col = _Collector(ns, timeout_s, Remeter(model, energy_params))
         for key, msg, _t in rec.messages(list(col.handlers)):
@@ -245,6 +246,28 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
         collisions=res.collisions,
         series=_series(col.poses, col.odom, t_end) if with_series else None,
     )
+
+
+def live_difference(m: RunMetrics, tol_mAh: float = 0.01) -> str:
+    """Why the report's charge of ``m`` differs from the live figure ("" when they agree).
+
+    The report's charge is the re-metered one at the outcome ``t_end_s``; the live figure
+    is the meter's last recorded message at or before it (``live_stamp_s``). The difference
+    splits into the charge drawn between the two stamps and the re-meter Δ at the live
+    stamp (messages the live meter and the recorder did not both see).
+    """
+    if m.energy_model != m.live_model or not (math.isfinite(m.charge_mAh)
+                                              and math.isfinite(m.live_charge_mAh)):
+        return ""
+    diff = m.charge_mAh - m.live_charge_mAh
+    if abs(diff) <= tol_mAh:
+        return ""
+    meter = m.remeter_diff_mAh if math.isfinite(m.remeter_diff_mAh) else 0.0
+    return (f"{m.file}: charge {m.charge_mAh:.2f} mAh here vs {m.live_charge_mAh:.2f} mAh live "
+            f"({diff:+.2f}): {diff - meter:+.2f} mAh drawn between the live meter's last figure "
+            f"({m.live_stamp_s:.2f} s) and the outcome ({m.t_end_s:.2f} s), {meter:+.2f} mAh "
+            "from re-metering the recorded messages (what the live meter received and the "
+            "recorder kept differ)")
 
 
 def _remeter_diff(states: list[BatteryState], live: BatteryState | None) -> float:
