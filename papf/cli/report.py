@@ -27,7 +27,7 @@ def register(sub) -> None:
 
 
 def cmd_report(args) -> int:
-    from papf.report.metrics import live_difference
+    from papf.report.metrics import live_difference, metadata_notes
     from papf.report.report import build_report  # matplotlib: only when reporting
     from papf.report.tables import summary_markdown
 
@@ -37,8 +37,10 @@ def cmd_report(args) -> int:
             print(json.dumps(m.row()))
         return 0
     print(f"{report.model_note}; {report.pose_note}")
-    for line in filter(None, (live_difference(m) for m in report.runs)):
-        print(line)
+    for m in report.runs:
+        for line in [*metadata_notes(m), live_difference(m)]:
+            if line:
+                print(line)
     for world in sorted({s.world for s in report.summaries}):
         print(f"\nworld {world}:")
         print(summary_markdown([s for s in report.summaries if s.world == world], report.model))

@@ -30,3 +30,27 @@ def test_a_difference_is_split_into_its_two_causes():
     assert "26.05 mAh here vs 25.27 mAh live (+0.78)" in text
     assert "+0.48 mAh drawn between" in text and "(98.00 s) and the outcome (100.96 s)" in text
     assert "+0.30 mAh from re-metering" in text
+
+
+def test_a_recording_without_metadata_started_mid_run(tmp_path):
+    """``papf record`` without --meta, started 20 s into a run: said as such."""
+    from nodes.recorder.writer import RunWriter
+    from papf.report.metrics import UNKNOWN_WORLD, metadata_notes, run_metrics
+    from schemas.messages import Clock, Odometry, PlannerStatus, WheelStates
+
+    path = tmp_path / "session.mcap"
+    with RunWriter(path) as w:
+        for k in range(200):                        # 20 s .. 24 s at 50 Hz
+            t = 20_000_000_000 + k * 20_000_000
+            w.write_message("rosbot/clock", Clock(stamp_ns=t))
+            w.write_message("rosbot/odom", Odometry(stamp_ns=t, x=2.0 + 0.002 * k, y=0.0,
+                                                    yaw=0.0, v=0.1, w=0.0))
+            w.write_message("rosbot/wheels", WheelStates(stamp_ns=t, speed=(1.2,) * 4,
+                                                         torque=(0.05,) * 4))
+        w.write_message("rosbot/planner/status", PlannerStatus(stamp_ns=t, state="reached"))
+    m = run_metrics(path)
+    assert m.world == UNKNOWN_WORLD and m.outcome == "partial"
+    assert "starts at 20.00 s" in m.reason
+    assert math.isclose(m.mean_power_W, m.energy_J / (m.t_end_s - 20.0), rel_tol=1e-9)
+    notes = metadata_notes(m)
+    assert any("world unknown" in n for n in notes) and any("first message" in n for n in notes)
