@@ -21,6 +21,7 @@ unit test ``tests/unit/test_docs_examples.py`` checks each is one of the known t
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -51,6 +52,8 @@ SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
     ("experiment", "traffic"): (["--worlds", "road-stopped", "--planners", "apf",
                                  "--timeout", "5"], {0}),
     ("replay",): (["--rate", "0"], {0}),
+    ("plan",): ([], {0, 3, 4, 5}),     # its exit code is the run's outcome (docs: the papers'
+                                       # collisions and stagnations are examples too)
     ("make-certs",): (["--force"], {0}),
 }
 WHY_MINUTES = "takes minutes (tests/e2e/test_progress_piped.py runs its first steps)"
@@ -164,6 +167,10 @@ class Session:
                 self.needs_robot = False
                 self.start(Example(ex.file, 0, "papf rosbot-emulator", -1, True),
                            [PY, "-m", "papf", "rosbot-emulator", "--connect", self.endpoint])
+        log = self.cwd / f"bg-{len(self.background) - 1}.log"
+        deadline = time.monotonic() + 30.0   # its first log line: imported and started
+        while not log.read_text().strip() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
         time.sleep(2.0)   # the server's nodes come up (the next line finds them alive)
 
     def stop(self) -> None:
@@ -231,9 +238,9 @@ def test_docs_block_runs(block, tmp_path):
     _prepare(tmp_path, examples_)
     uses_router = any(session.argv(e)[1:3] == ["-m", "papf"] and
                       session.argv(e)[3] in ("topic", "goal", "record", "replay") for e in runnable)
-    starts_router = any(e.background or "papf.launch.router" in e.text or
-                        e.text.startswith("papf launch robot") for e in runnable)
-    session.needs_robot = "<robot>" in " ".join(e.text for e in examples_) and \
+    starts_router = any("papf.launch.router" in e.text or e.text.startswith("papf launch robot")
+                        or (e.background and e.text.startswith("papf run")) for e in runnable)
+    session.needs_robot = re.search(r"<robot(-ip)?>", " ".join(e.text for e in examples_)) and \
         not any("rosbot-emulator" in e.text for e in examples_)
     if session.needs_robot and not starts_router:     # the rehearsal's robot side
         session.start(Example(block, 0, "papf launch robot", -1, True),
