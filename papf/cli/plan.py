@@ -67,6 +67,11 @@ def cmd_plan(args) -> int:
             from papf.plots.mind import plot_plan
 
             plot_plan(world, result, args.plot, title)
+        elif world.vehicle == "car":     # a road: lanes, traffic over time, the finish line
+            from papf.plots.road import plot_road_run
+
+            plot_road_run(world, args.planner, result.outcome, result.path[:, :2], result.times,
+                          args.plot, title)
         else:
             from papf.plots.paths import plot_paths
 

@@ -136,12 +136,13 @@ def draw_traffic(ax, world: World, t_end_s: float) -> list:
     """Road lines, and each moving obstacle's track and outlines over ``[0, t_end_s]``."""
     out = draw_road(ax, world)
     times = np.arange(0.0, max(t_end_s, 0.0) + 1e-9, TRAFFIC_EVERY_S)
-    for ob in world.obstacles:
-        if ob.motion is None:
-            continue
+    movers = [ob for ob in world.obstacles if ob.motion is not None]
+    for n, ob in enumerate(movers):
         track = np.array([ob.at(float(t)).center[:2] for t in np.linspace(0, t_end_s, 60)])
+        label = (f"moving obstacle: track, every {TRAFFIC_EVERY_S:g} s (darker: later), "
+                 f"at {t_end_s:.1f} s" if n == 0 else None)
         out += ax.plot(track[:, 0], track[:, 1], color=rgba("moving", 0.9), lw=0.8, ls=":",
-                       zorder=3)
+                       zorder=3, label=label)
         for k, t in enumerate(times):
             alpha = 0.15 + 0.45 * k / max(len(times) - 1, 1)
             out.append(_outline(ax, ob.at(float(t)), alpha))

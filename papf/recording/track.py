@@ -15,7 +15,7 @@ import numpy as np
 from common.errors import ConfigError, PapfError
 from papf.recording.foxglove_export import stack_topic
 from papf.recording.reader import Recording
-from schemas.messages import BatteryState, Odometry, PlannerState
+from schemas.messages import BatteryState, Odometry, PlannerState, Scan
 from worlds import World, load_world
 
 
@@ -33,6 +33,16 @@ class RunTrack:
     q: np.ndarray = field(default_factory=lambda: np.zeros(0))      # [mAh]
     states: list[PlannerState] = field(default_factory=list)
     state_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    scan_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # LiDAR scan times
+    scans: list[np.ndarray] = field(default_factory=list)   # (n, 2) [m]: angle [rad], range
+
+
+def scan_points(scan: Scan) -> np.ndarray:
+    """(n, 2) bearing [rad, robot frame] and range [m] of a scan's finite readings."""
+    r = np.asarray(scan.ranges, dtype=float)
+    a = scan.angle_min + scan.angle_increment * np.arange(r.size)
+    ok = np.isfinite(r) & (r >= scan.range_min) & (r <= scan.range_max)
+    return np.column_stack([a[ok], r[ok]])
 
 
 def load_track(path: str | Path, world: str | None = None) -> RunTrack:
@@ -40,6 +50,7 @@ def load_track(path: str | Path, world: str | None = None) -> RunTrack:
     poses: dict[str, list[Odometry]] = {"sim/pose": [], "odom": []}
     batt: list[BatteryState] = []
     states: list[PlannerState] = []
+    scans: list[Scan] = []
     with Recording(path) as rec:
         meta = rec.run_metadata
         for key, msg, _ in rec.messages():
@@ -50,6 +61,8 @@ def load_track(path: str | Path, world: str | None = None) -> RunTrack:
                 batt.append(msg)
             elif topic == "planner/state" and isinstance(msg, PlannerState):
                 states.append(msg)
+            elif topic == "scan" and isinstance(msg, Scan):
+                scans.append(msg)
     name = world or meta.get("world")
     w = None
     if name:
@@ -70,4 +83,5 @@ def load_track(path: str | Path, world: str | None = None) -> RunTrack:
         v_t=np.array([m.stamp_ns for m in odom]) / 1e9, v=np.array([m.v for m in odom]),
         q_t=np.array([b.stamp_ns for b in batt]) / 1e9,
         q=np.array([b.charge_used_mAh for b in batt]),
-        states=states, state_t=np.array([s.stamp_ns for s in states]) / 1e9)
+        states=states, state_t=np.array([s.stamp_ns for s in states]) / 1e9,
+        scan_t=np.array([s.stamp_ns for s in scans]) / 1e9, scans=[scan_points(s) for s in scans])
