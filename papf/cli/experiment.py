@@ -42,7 +42,9 @@ def _add_energy(exp) -> None:
     p.add_argument("--planners", default="apf,papf", help="comma-separated (default apf,papf)")
     p.add_argument("--out", default="energy-experiment", metavar="DIR",
                    help="directory for the recordings and the report (default energy-experiment)")
-    p.add_argument("--seed", type=int, default=0, help="base seed S: run k uses S+k (default 0)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="base seed S: runs are numbered 1..N and run k uses S+k (default 0); kept "
+                        "1-based so the committed figures of docs/data reproduce seed for seed")
     p.add_argument("--world", default=WORLD, help=f"world (default {WORLD})")
     p.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="S",
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
