@@ -29,7 +29,7 @@ PLACEHOLDERS = {"<robot>": "127.0.0.1", "<robot-ip>": "127.0.0.1", "<this-host>"
                 "<this repository>": "papf-stack"}
 WORDS = {"W": "energy", "DIR": "out", "F": "out.csv", "F.mcap": "run.mcap", "N": "1", "S": "1",
          "W1,W2": "energy", "S1,S2": "0", "P1,P2": "default", "PORT": "8765", "NAME=VALUE": "v_max=0.2",
-         "FILES...": "run.mcap", "DIR|FILES...": "run.mcap"}
+         "FILES...": "run.mcap", "DIR|FILES...": "energy-experiment"}
 
 
 @dataclass(frozen=True)

@@ -130,7 +130,8 @@ class Session:
                 "--listen" not in args:
             extra = [*extra, "--listen", f"tcp/127.0.0.1:{port}" if args[1] == "sim"
                      else self.endpoint]
-        elif args[0] in ("topic", "goal", "record", "replay", "rosbot-emulator", "launch") and \
+        elif args[0] in ("topic", "goal", "record", "replay", "rosbot-emulator", "launch",
+                         "view") and \
                 "--connect" not in args and "--zenoh-config" not in args:
             extra = [*extra, "--connect", self.endpoint]
         return [*args, *extra]
@@ -140,7 +141,8 @@ class Session:
         if argv is None:
             return
         papf_args = argv[3:] if argv[1:3] == ["-m", "papf"] else []
-        if ex.background or _match(papf_args, SERVERS) or (argv[1:2] == ["-m"] and
+        if ex.background or (_match(papf_args, SERVERS) and "--layout" not in argv) or (
+                argv[1:2] == ["-m"] and
                                                            argv[2].startswith(("nodes.", "papf.launch.router"))
                                                            and "--help" not in argv):
             self.start(ex, argv)
@@ -213,6 +215,7 @@ BLOCKS = _blocks()
 def _prepare(cwd: Path, block: list[Example]) -> None:
     """What the block's examples take as given: a recording, a broken one, a result dir."""
     text = " ".join(e.text for e in block)
+    (cwd / "docs").mkdir(exist_ok=True)    # paths of the docs are relative to the repository
     needs_run = any(w in text for w in ("run.mcap", "first.mcap")) and \
         not any("--record run.mcap" in e.text for e in block)
     if needs_run or "broken.mcap" in text or "energy-exp" in text:
