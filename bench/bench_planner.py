@@ -34,6 +34,7 @@ import math
 import os
 import platform
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -137,6 +138,8 @@ def main() -> None:
         ap.error("--cycles must be >= 1")
     print(json.dumps({"machine": platform.processor() or platform.machine(),
                       "python": platform.python_version()}))
+    for line in left_out(cases, scenes):   # a case the scenes exclude is named, not dropped
+        print(line, file=sys.stderr, flush=True)
     rows = []
     for label, name, sets in CASES:
         for scene in ONLY.get(name, SCENES):
@@ -160,6 +163,18 @@ def _commit() -> str:
     except (OSError, subprocess.SubprocessError):
         return ""
     return done.stdout.strip() if done.returncode == 0 else ""
+
+
+def left_out(cases: list[str], scenes: list[str]) -> list[str]:
+    """One line per kept case that none of ``scenes`` can run, and why."""
+    out = []
+    for label, name, _sets in CASES:
+        only = ONLY.get(name)
+        if label in cases and only and not set(only) & set(scenes):
+            out.append(f"bench planner: {label} left out: it runs only on scene(s) "
+                       f"{', '.join(only)} (IAPF needs a road and obstacle tracks); "
+                       f"add --scenes {','.join(only)}")
+    return out
 
 
 def _pick(ap: argparse.ArgumentParser, option: str, text: str | None, valid: list[str]) -> list[str]:

@@ -9,4 +9,6 @@
 Imports point down only: ``schemas`` and ``common`` ← ``nodes`` ← ``papf`` (docs/architecture.md).
 """
 
-__version__ = "0.2.0"
+# the one version of papf-stack: the package metadata (pyproject.toml reads it), `papf --version`,
+# recordings' headers and metadata all take it from here
+__version__ = "0.3.0"

@@ -1,3 +1,5 @@
 """papf-stack: the launcher, CLI and transport around the nodes (see README.md)."""
 
-__version__ = "0.2.0"
+from common import __version__  # the one version (common/__init__.py)
+
+__all__ = ["__version__"]

@@ -23,7 +23,7 @@ key                         type                  dir  what
 ``<b>/battery``             CDR sensor_msgs/      in   pack voltage
                             BatteryState
 ``<ns>/odom``               Odometry              out  robot odometry in the run's world frame,
-                                                       every tick while a run is on
+                                                       every tick while a run is on, 10 Hz between runs
 ``<ns>/wheels``             WheelStates           out  derived from odometry (rosbot.wheel_states)
 ``<ns>/clock``              Clock                 out  run time: wall time since ``run_started``
 ``<ns>/battery/measured``   BatteryVoltage        out  the robot's voltage (``info`` Event with
@@ -33,8 +33,10 @@ key                         type                  dir  what
 
 Time: the driver owns the clock here too. A run's time is wall time since the driver saw
 ``run_started``, on a tick grid of ``--odom-hz`` (default 50 Hz: 20 ms), and every
-odom/wheels/clock of a tick carries the same stamp. Before a run nothing is published on
-our keys, but commands are forwarded (with limits and watchdog) at any time. During a run,
+odom/wheels/clock of a tick carries the same stamp. Between runs only ``odom`` is published,
+at :data:`IDLE_ODOM_HZ`, stamped with the last run's last tick (0 before the first run), so
+that ``papf teleop`` shows where the robot is; commands are forwarded (with limits and
+watchdog) at any time. During a run,
 a command whose stamp (the scan it answers) is older than the watchdog is dropped as late:
 after a network outage TCP delivers queued commands in a burst, and they are stale.
 Odometry: at ``run_started`` the robot's current pose becomes the world's start pose
@@ -78,6 +80,7 @@ NAME = "base_driver"
 ROS_NODE = "papf_base_driver"    # our ROS 2 node name on rmw_zenoh
 ZERO_HOLD_NS = 1_000_000_000     # [ns] zeros keep going out this long after a stop, then silence
 ODOM_TIMEOUT_NS = 500_000_000    # [ns] robot odometry older than this is not republished
+IDLE_ODOM_HZ = 10.0              # [Hz] odom between runs (teleop's pose line)
 EXIT_ZEROS = 3                   # zero commands sent when the node stops
 BatteryVoltage = getattr(messages, "BatteryVoltage", None)   # schemas change requested (issue 5)
 
@@ -131,6 +134,8 @@ class RosbotDriver:
         self.bad: Counter[str] = Counter()   # undecodable robot messages, per bridge topic
         self.late = 0                        # commands dropped as older than the watchdog
         self.last_run_ns = 0
+        self.last_stamp_ns = 0              # [ns] stamp of the last run tick (idle odom's stamp)
+        self.idle_ticks = 0
 
     # -- inputs ---------------------------------------------------------------------------
     def on_command(self, msg: Twist, now: int) -> None:
@@ -201,10 +206,11 @@ class RosbotDriver:
 
     def on_tick(self, now: int) -> None:
         self.send(now)
-        if self.t0 is None:
-            return
-        stamp = self.tick * self.period_ns
         fresh = self.robot is not None and now - self.robot_rx_ns <= ODOM_TIMEOUT_NS
+        if self.t0 is None:
+            self.idle_odom(now, fresh)
+            return
+        stamp = self.last_stamp_ns = self.tick * self.period_ns
         if fresh:
             odom = self.frame.to_world(self.robot, stamp)
             self.node.publish("odom", odom)
@@ -218,6 +224,13 @@ class RosbotDriver:
             self.event("node_fault", f"no robot odometry on {self.topics.odometry} "
                        f"for > {ODOM_TIMEOUT_NS * 1e-9:g} s: odom not published")
         self.node.publish("clock", Clock(stamp_ns=stamp))
+
+    def idle_odom(self, now: int, fresh: bool) -> None:
+        """Between runs: fresh robot odometry every 1/IDLE_ODOM_HZ, no wheels, no clock."""
+        every = max(1, round(1e9 / IDLE_ODOM_HZ / self.period_ns))
+        self.idle_ticks += 1
+        if fresh and self.idle_ticks % every == 0:
+            self.node.publish("odom", self.frame.to_world(self.robot, self.last_stamp_ns))
 
     def next_tick_at(self, now: int) -> int:
         """Monotonic ns of the next tick (run ticks on the run's grid; skipped ones dropped)."""
@@ -272,6 +285,8 @@ class RosbotDriver:
             except queue.Empty:
                 continue
             now = time.monotonic_ns()
+            if topic is None:         # the stop request's wake-up (node.stop): not a message
+                continue
             if topic == "cmd_vel":
                 self.on_command(msg, now)
             elif topic == "events":

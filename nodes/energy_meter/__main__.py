@@ -22,7 +22,7 @@ from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from nodes.energy_meter.ports import PORTS, VARIANTS
 
 from .core import EnergyMeter
-from .models import MODELS
+from .models import DEFAULT_MODEL, MODELS
 
 NODE_NAME = "energy_meter"
 
@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
                                      description=plain(__doc__.splitlines()[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=describe(PORTS, VARIANTS))
-    parser.add_argument("--model", choices=sorted(MODELS), default="motor",
+    parser.add_argument("--model", choices=sorted(MODELS), default=DEFAULT_MODEL,
                         help="power model: motor (DC motors, default) or paper (eq. 6)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override a pack or model constant (repeatable)")

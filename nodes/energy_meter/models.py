@@ -212,6 +212,9 @@ class MotorModel:
 
 
 MODELS = {"paper": (PaperModel, PaperParams), "motor": (MotorModel, MotorParams)}
+# the one default of the whole stack: the sim and laptop profiles, papf run, experiments, the
+# meter and the report (the motor model needs wheel torques: the rosbot driver estimates them)
+DEFAULT_MODEL = "motor"
 
 
 def make_model(name: str, settings: Mapping[str, object] | None = None):

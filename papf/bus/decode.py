@@ -128,7 +128,7 @@ def plain(value: Any) -> Any:
     """rosbags messages, numpy arrays, bytes and tuples -> dicts, lists and scalars."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)
-                if not f.name.startswith("__")}
+                if not f.name.startswith("__") and not f.name.isupper()}   # UPPER: a ROS 2 constant
     if isinstance(value, np.ndarray):
         return value.astype(float).tolist() if value.dtype.kind == "f" else value.tolist()
     if isinstance(value, np.generic):

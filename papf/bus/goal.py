@@ -80,14 +80,13 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
     """See the module doc. ``timeout_s`` 0: wait for an outcome as long as it takes."""
     watch = _Watch(session, keys)
     try:
+        key = runauth.read_key(keys.ns)   # a launched session's key, if any
         goal = runauth.sign(Goal(stamp_ns=0, x=float(x), y=float(y), tolerance=float(tolerance)),
-                            runauth.read_key(keys.ns))   # a launched session's key, if any
-        if not _handshake(session, keys, goal, watch, stop):
+                            key)
+        acked, heard = _handshake(session, keys, goal, watch, stop)
+        if not acked:
             return GoalResult("interrupted" if stop() else "no_planner",
-                              "interrupted" if stop() else
-                              f"no planner answered on {keys.planner_status} within "
-                              f"{HANDSHAKE_S:g} s (is one running? papf launch …, "
-                              "python -m nodes.planner)", math.nan)
+                              "interrupted" if stop() else _unanswered(keys, heard, key), math.nan)
         out(f"goal ({x:g}, {y:g}) ±{tolerance:g} m acknowledged by the planner")
         if start_run:
             session.put(keys.events, Event(stamp_ns=0, kind="run_started", source="papf-goal",
@@ -100,16 +99,33 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
         watch.close()
 
 
-def _handshake(session, keys: Keys, goal: Goal, watch: _Watch, stop) -> bool:
+def _handshake(session, keys: Keys, goal: Goal, watch: _Watch, stop) -> tuple[bool, bool]:
+    """(the planner acknowledged the goal, a planner's status was heard at all)."""
     deadline = time.monotonic() + HANDSHAKE_S
+    heard = False
     while time.monotonic() < deadline and not stop():
         session.put(keys.goal, goal.to_bytes())
         t_next = time.monotonic() + REPEAT_S
         while (left := t_next - time.monotonic()) > 0:
             msg = watch.next(min(left, 0.05))
+            heard = heard or isinstance(msg, PlannerStatus)
             if isinstance(msg, PlannerStatus) and msg.state == "ready":
-                return True
-    return False
+                return True, heard
+    return False, heard
+
+
+def _unanswered(keys: Keys, heard: bool, key: bytes | None) -> str:
+    """Why no planner acknowledged the goal, and what to do."""
+    if not heard:
+        return (f"no planner answered on {keys.planner_status} within {HANDSHAKE_S:g} s "
+                "(is one running? papf launch …, python -m nodes.planner)")
+    if key is None:
+        return (f"the planner on {keys.planner_status} is running but ignores goals not signed "
+                f"with its run's key, and this user has none for namespace {keys.ns!r} "
+                f"({runauth.key_file(keys.ns)}): steer runs started by this user with "
+                "papf run --realtime or papf launch (a lockstep papf run takes no new goal)")
+    return (f"the planner on {keys.planner_status} is running but ignored the goal: the key in "
+            f"{runauth.key_file(keys.ns)} is not its run's (a run of another launcher?)")
 
 
 def _follow(watch: _Watch, goal: Goal, timeout_s: float, out, progress: bool | None,

@@ -20,6 +20,11 @@ def open_session(args: argparse.Namespace) -> zenoh.Session:
         where = ", ".join(args.connect) or (args.zenoh_config and f"the endpoints of "
                                             f"{args.zenoh_config}") or DEFAULT_ENDPOINT
         reason = str(exc).split(" at /")[0].split("\n")[0]
+        if any(ep.startswith(("tls/", "quic/")) for ep in args.connect) and not args.zenoh_config:
+            raise ConfigError(f"cannot open a session with {where} ({reason}): a TLS router "
+                              "authenticates its clients, and this command has no certificate "
+                              "or credentials; give --zenoh-config with this host's config "
+                              "(papf make-certs writes laptop.json5, docs/robot.md)") from None
         raise ConfigError(f"cannot reach the bus at {where} ({reason}); is a stack running "
                           "(papf run, papf launch, python -m papf.launch.router)? Else give "
                           "--connect ENDPOINT") from None

@@ -19,6 +19,7 @@ import os
 import signal
 import sys
 
+from common import __version__
 from common.errors import PapfError
 from papf.cli import (
     animate,
@@ -58,6 +59,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="papf", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"papf-stack {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in COMMANDS:
         module.register(sub)

@@ -19,7 +19,8 @@ def register(sub) -> None:
     p.add_argument("--speed", type=float, default=4.0,
                    help="sim seconds per video second (default 4)")
     p.add_argument("--world", help="world to draw (default: the recording's metadata)")
-    p.add_argument("--dpi", type=int, default=80, help="resolution (default 80)")
+    p.add_argument("--dpi", type=int, default=110,
+                   help="resolution [dots per inch] (default 110: 1210 x 616 pixels)")
     add_topics_option(p)
     p.add_argument("--force", action="store_true", help="replace OUT if it exists")
     p.set_defaults(func=cmd_animate)

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS, car_variants, declared, with_role
 from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import PAPER_PAIR, TIMEOUT_S, WORLD
@@ -43,12 +44,14 @@ def _add_energy(exp) -> None:
                    help=f"comma-separated (default {','.join(PAPER_PAIR)})")
     p.add_argument("--out", default="energy-experiment", metavar="DIR",
                    help="directory for the recordings and the report (default energy-experiment)")
-    p.add_argument("--seed", type=int, default=0, help="base seed S: run k uses S+k (default 0)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="base seed S: runs are numbered 1..N and run k uses S+k (default 0); kept "
+                        "1-based so the committed figures of docs/data reproduce seed for seed")
     p.add_argument("--world", default=WORLD, help=f"world (default {WORLD})")
     p.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="S",
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
-    p.add_argument("--energy-model", choices=("motor", "paper"), default="motor",
-                   help="the live meter's model (default motor)")
+    p.add_argument("--energy-model", choices=sorted(MODELS), default=DEFAULT_MODEL,
+                   help=f"the live meter's model (default {DEFAULT_MODEL})")
     p.add_argument("--worlds", metavar="W1,W2",
                    help="several worlds, each into DIR/world-<name>/, plus DIR/energy-worlds.md/.csv "
                         "(e.g. energy,energy-blocking,energy-empty)")

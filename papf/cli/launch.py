@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS
 from papf.cli.view import add_view_flag
 
@@ -33,7 +34,8 @@ def register(sub) -> None:
                         "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
-    p.add_argument("--energy-model", choices=("motor", "paper"))
+    p.add_argument("--energy-model", choices=sorted(MODELS),
+                   help=f"the live meter's model (default {DEFAULT_MODEL}, in every profile)")
     p.add_argument("--realtime", action="store_true",
                    help="sim profile: pace sim time to the wall clock (to watch, steer with "
                         "papf goal, or drive with papf teleop)")

@@ -88,6 +88,12 @@ def _plot(world, result, args) -> None:
 
         plot_plan(world, result, args.plot, f"{world.name}: {args.planner} (offline, seed {args.seed})")
         return
+    if world.vehicle == "car":     # a road: lanes, traffic over time, the finish line
+        from papf.plots.road import plot_road_run
+
+        plot_road_run(world, args.planner, result.outcome, result.path[:, :2], result.times,
+                      args.plot, f"{world.name}: {args.planner} (offline, seed {args.seed})")
+        return
     from papf.plots.paths import plot_paths
 
     label = f"{args.planner} ({result.outcome})"

@@ -47,7 +47,7 @@ def topic_map(args):
 
 
 def cmd_report(args) -> int:
-    from papf.report.metrics import BAG
+    from papf.report.metrics import BAG, live_difference, metadata_notes
     from papf.report.report import build_report  # matplotlib: only when reporting
     from papf.report.tables import bags_markdown, summary_markdown
 
@@ -57,6 +57,10 @@ def cmd_report(args) -> int:
             print(json.dumps(finite(m.row()), allow_nan=False))   # NaN -> null (JSON has no NaN)
         return 0
     print(f"{report.model_note}; {report.pose_note}")
+    for m in report.runs:
+        for line in [*metadata_notes(m), live_difference(m)]:
+            if line:
+                print(line)
     bags = [r for r in report.runs if r.outcome == BAG]
     if bags:
         print("\nbags recorded on the robot:")

@@ -6,6 +6,7 @@ import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from common.ros_link import add_face_args, face_domain
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.options import add_planner_settings, add_world_and_planner, resolve_world
 from papf.cli.view import add_view_flag
 
@@ -32,7 +33,8 @@ def register(sub) -> None:
     p.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
                    help="nodes' Zenoh mode: peer (direct loopback links, the launcher's router "
                         "only for discovery; default) or client (all through the router)")
-    p.add_argument("--energy-model", choices=("motor", "paper"), default="motor")
+    p.add_argument("--energy-model", choices=sorted(MODELS), default=DEFAULT_MODEL,
+                   help=f"the live meter's model (default {DEFAULT_MODEL}; docs/energy.md)")
     add_planner_settings(p)
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper read "

@@ -4,6 +4,8 @@
   share of the start distance covered). Piped (a file, CI, ``| tee``), it prints a line
   each time the job passes another 10 %, plus one every ``HEARTBEAT_S`` of wall time
   without one (so a stuck job still says it is alive).
+- :class:`StepProgress` — a job of N steps (the runs of a study): a live bar on a
+  terminal; piped, one line per finished step (``wang: 3/16  fig 6 wang-apf reached``).
 - :class:`RunProgress` — a run of the stack: the share of the straight-line distance
   from the start to the goal covered (the closest the robot has been), sim time, charge
   and the planner's state.
@@ -81,6 +83,45 @@ class DecileProgress:
         if self._start_distance is None:
             self._start_distance = max(remaining_m, 1e-9)
         self.fraction(1.0 - remaining_m / self._start_distance, text)
+
+
+class StepProgress:
+    """``with StepProgress("wang", total=16) as p: p.step("fig 5 reached")`` (see module doc).
+
+    ``enabled``: None = the live bar when stderr is a terminal, else one line per step;
+    True = the live bar; False = nothing. ``out`` receives the piped lines.
+    """
+
+    def __init__(self, label: str, total: int, enabled: bool | None = None,
+                 out: Callable[[str], None] | None = None):
+        self.label, self.total, self.done, self.out = label, max(int(total), 1), 0, out or _err
+        live = sys.stderr.isatty() if enabled is None else enabled
+        self.quiet = enabled is False
+        self._bar = Progress(TextColumn(f"[bold]{label}[/]"), BarColumn(),
+                             TextColumn("{task.completed}/{task.total}  {task.fields[text]}"),
+                             TimeElapsedColumn(), console=Console(stderr=True),
+                             transient=True) if live and not self.quiet else None
+        self._task = None
+
+    def __enter__(self) -> StepProgress:
+        if self._bar is not None:
+            self._bar.start()
+            self._task = self._bar.add_task(self.label, total=self.total, text="")
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+    def step(self, text: str = "") -> None:
+        """One more step done; ``text`` says what it was (a run's outcome)."""
+        self.done += 1
+        if self.quiet:
+            return
+        if self._bar is not None:
+            self._bar.update(self._task, completed=self.done, text=text)
+            return
+        self.out(f"{self.label}: {self.done}/{self.total}" + (f"  {text}" if text else ""))
 
 
 class RunProgress:

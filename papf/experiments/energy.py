@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from common.errors import ConfigError
+from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS, one_with_role
 from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions
@@ -54,7 +55,7 @@ class EnergyExperiment:
     seed: int = 0
     world: str = WORLD
     timeout_s: float = TIMEOUT_S
-    energy_model: str = "motor"
+    energy_model: str = DEFAULT_MODEL
     presets: tuple[str, ...] = ("default",)
     sweep: SweepOptions = SweepOptions()   # how the runs are spread (papf.experiments.sweep)
 
@@ -102,7 +103,7 @@ def validate(exp: EnergyExperiment) -> None:
     bad = [p for p in exp.presets if p not in PRESETS]
     if bad or not exp.presets:
         raise ConfigError(f"--presets {','.join(exp.presets)}: unknown {bad}; valid: {list(PRESETS)}")
-    if exp.energy_model not in ("motor", "paper"):
+    if exp.energy_model not in MODELS:
         raise ConfigError(f"energy model {exp.energy_model!r} is not one of motor, paper")
     if not exp.timeout_s > 0:
         raise ConfigError(f"timeout {exp.timeout_s} s must be > 0")

@@ -57,28 +57,37 @@ def _turning(headings: np.ndarray) -> float:
 def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORIZONS,
                 world: str = HORIZON_WORLD) -> list[dict]:
     """PAPF with each horizon (both presets) and APF on ``world``; write horizon.csv/.md."""
+    from papf.console.progress import StepProgress
     from papf.experiments.trials import markdown_table, write_csv
-    from papf.offline.run import simulate
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     runs = [(APF, "default", None)] + [(PAPF, pre, h) for pre in ("default", "paper")
                                          for h in horizons]
     rows = []
-    for planner, preset, h in runs:
-        sets = (["preset=paper"] if preset == "paper" else []) + ([f"horizon_m={h}"] if h else [])
-        r = simulate(world, planner, params=sets, seed=seed, keep_states=True)
-        cyc = np.array([s.compute_ns for s in r.states], float) / 1e6
-        rows.append({"planner": planner, "preset": preset, "horizon_m": "" if h is None else h,
-                     "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
-                     "path_m": round(r.length_m, 2), "turning_rad": round(_turning(r.headings), 2),
-                     "min_clearance_m": round(r.min_clearance_m, 2),
-                     "cycle_ms_p50": round(float(np.median(cyc)), 2) if cyc.size else "",
-                     "cycle_ms_p99": round(float(np.percentile(cyc, 99)), 2) if cyc.size else ""})
+    with StepProgress("horizon", len(runs)) as progress:
+        for planner, preset, h in runs:
+            rows.append(_horizon_row(world, planner, preset, h, seed))
+            progress.step(f"{planner} {preset} lambda {h or '-'} m: {rows[-1]['outcome']}")
     write_csv(rows, out / "horizon.csv")
     (out / "horizon.md").write_text(f"# Horizon of prediction on {world} (offline, seed {seed})\n\n"
                                     + markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
     return rows
+
+
+def _horizon_row(world: str, planner: str, preset: str, h: float | None, seed: int) -> dict:
+    """One run of the horizon study as its table row."""
+    from papf.offline.run import simulate
+
+    sets = (["preset=paper"] if preset == "paper" else []) + ([f"horizon_m={h}"] if h else [])
+    r = simulate(world, planner, params=sets, seed=seed, keep_states=True)
+    cyc = np.array([s.compute_ns for s in r.states], float) / 1e6
+    return {"planner": planner, "preset": preset, "horizon_m": "" if h is None else h,
+            "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
+            "path_m": round(r.length_m, 2), "turning_rad": round(_turning(r.headings), 2),
+            "min_clearance_m": round(r.min_clearance_m, 2),
+            "cycle_ms_p50": round(float(np.median(cyc)), 2) if cyc.size else "",
+            "cycle_ms_p99": round(float(np.percentile(cyc, 99)), 2) if cyc.size else ""}
 
 
 def _variants(both: bool = False) -> list[tuple[str, list[str]]]:
@@ -109,8 +118,9 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
 
     ``part = (k, K)``: only every K-th variant from the k-th, written to
     ``deviations-<k>.csv`` (split a long study over processes; concatenate the CSVs)."""
+    from papf.console.progress import StepProgress
     from papf.experiments.paper_tests import PAPF_WORLDS, table2_check
-    from papf.experiments.trials import markdown_table, progress_bar, run_offline, write_csv
+    from papf.experiments.trials import markdown_table, run_offline, write_csv
     from papf.offline.world_gen import generate_solvable
 
     out = Path(out)
@@ -119,19 +129,18 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
     k, parts = part
     variants = _variants(both)[k::parts]
     rows = []
-    with progress_bar() as bar:
-        task = bar.add_task("deviations", total=len(variants) * (len(worlds) + len(PAPF_WORLDS)))
+    with StepProgress("deviations", len(variants) * (len(worlds) + len(PAPF_WORLDS))) as bar:
         for label, sets in variants:
             rand = []
             for w in worlds:
                 rand.append(run_offline(w, PAPF, seed, timeout_s, params=sets))
-                bar.advance(task)
+                bar.step(f"{label} on {w.name}: {rand[-1].outcome}")
             paper = []
             for w in PAPF_WORLDS:
                 t = run_offline(w, PAPF, 0, timeout_s, params=sets)
                 t.preset = "paper"   # table2_check looks rows up by label: give them one
                 paper.append(t)
-                bar.advance(task)
+                bar.step(f"{label} on {w}: {t.outcome}")
             _reached, dur, path = table2_check(paper, "papf (paper)")
             rows.append({"variant": label, "group": _group(label),
                          "random_reached_pct": round(100.0 * sum(t.outcome == "reached" for t in rand) / len(rand), 1),

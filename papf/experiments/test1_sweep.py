@@ -115,7 +115,8 @@ def _summary(side, along, offset, runs) -> dict:
 def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seeds=SEEDS,
               timeout_s: float = 300.0) -> tuple[list[dict], dict | None]:
     """APF over the grid; write the CSVs and the Markdown; return (summary rows, chosen)."""
-    from papf.experiments.trials import markdown_table, progress_bar, write_csv
+    from papf.console.progress import StepProgress
+    from papf.experiments.trials import markdown_table, write_csv
     from papf.offline.run import simulate
 
     out = Path(out)
@@ -123,8 +124,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
     grid = [(s, a, o) for s in sides for a in alongs for o in offsets
             if box_clearance(s, a, o) >= FREE_M]
     runs, rows = [], []
-    with progress_bar() as bar:
-        task = bar.add_task("test1-sweep", total=len(grid) * len(seeds))
+    with StepProgress("test1-sweep", len(grid) * len(seeds)) as bar:
         for side, along, offset in grid:
             these = []
             for seed in seeds:
@@ -132,7 +132,8 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
                 these.append({"side_m": side, "along_m": along, "offset_m": offset, "seed": seed,
                               "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
                               "path_m": round(r.length_m, 3)})
-                bar.advance(task)
+                bar.step(f"side {side} m, {along} m along, {offset} m right, seed {seed}: "
+                         f"{r.outcome} {r.length_m:.2f} m")
             runs += these
             rows.append(_summary(side, along, offset, these))
     chosen, path_only = choose(rows), choose(rows, duration_band_pct=None)

@@ -47,18 +47,22 @@ HEADER = ["figure", "world", "method", "paper", "fixed step (as published)", "it
 
 def run_wang(out: str | Path, seed: int = 0, timeout_s: float = 300.0) -> list[dict]:
     """Run every figure both ways; write ``wang.md`` and ``wang.csv`` into ``out``."""
+    from papf.console.progress import StepProgress
     from papf.offline.run import simulate
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
-    for fig, world, method, paper in FIGURES:
-        fs = simulate(world, PLANNER[method], motion="fixed-step")
-        robot = simulate(world, PLANNER[method], seed=seed, max_time_s=timeout_s)
-        rows.append({"figure": fig, "world": world, "method": method, "paper": paper,
-                     "fixed_step": fs.outcome, "iterations": fs.cycles,
-                     "min_clearance": round(fs.min_clearance_m * fs.units_per_m, 3), "planner": PLANNER[method],
-                     "rosbot": robot.outcome, "rosbot_path_m": round(robot.length_m, 2)})
+    with StepProgress("wang", len(FIGURES)) as progress:
+        for fig, world, method, paper in FIGURES:
+            fs = simulate(world, PLANNER[method], motion="fixed-step")
+            robot = simulate(world, PLANNER[method], seed=seed, max_time_s=timeout_s)
+            progress.step(f"fig {fig} {method}: published {fs.outcome}, rosbot {robot.outcome}")
+            rows.append({"figure": fig, "world": world, "method": method, "paper": paper,
+                         "fixed_step": fs.outcome, "iterations": fs.cycles,
+                         "min_clearance": round(fs.min_clearance_m * fs.units_per_m, 3),
+                         "planner": PLANNER[method],
+                         "rosbot": robot.outcome, "rosbot_path_m": round(robot.length_m, 2)})
     write_csv(rows, out / "wang.csv")
     table = markdown_table(HEADER, [list(r.values()) for r in rows])
     (out / "wang.md").write_text(f"# Wang's figures (seed {seed})\n\n{table}")

@@ -10,6 +10,7 @@ figures at ``t_end`` -> run_ended) -> stop the nodes, the recorder, the router.
 from __future__ import annotations
 
 import logging
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -17,6 +18,7 @@ import zenoh
 
 from common import runauth
 from common.transport import wait_alive, zenoh_config
+from nodes.energy_meter.models import DEFAULT_MODEL
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.outcome import RunMonitor, RunResult
@@ -45,7 +47,7 @@ class RunConfig:
     port: int | None = None            # None: 7447, or a free port if 7447 is taken
     namespace: str = "rosbot"
     planner_args: list[str] = field(default_factory=list)   # e.g. ["--set", "v_max=0.3"]
-    energy_model: str = "motor"
+    energy_model: str = DEFAULT_MODEL
     stop_on_collision: bool = True
     verbose: bool = False
     progress: bool | None = None       # None: when stderr is a terminal
@@ -111,6 +113,18 @@ def run(cfg: RunConfig) -> RunResult:
         monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
         return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
     run_key = runauth.new_key()    # to the nodes through their environment only
+    if cfg.realtime:   # this user's `papf goal` may steer a real-time run (common.runauth);
+        runauth.publish_key(cfg.namespace, run_key)   # a lockstep run stays reproducible
+    try:
+        return _run(cfg, world, graph, router, run_key, monitor, keys, wall0)
+    finally:
+        if cfg.realtime:
+            runauth.withdraw_key(cfg.namespace, run_key)
+
+
+def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
+         monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
+    """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key}) as sup:
         seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key))
@@ -123,6 +137,14 @@ def run(cfg: RunConfig) -> RunResult:
     return result
 
 
+def view_line(port: int, realtime: bool) -> str:
+    """Where the live view is, printed once every node (the viewer too) is alive."""
+    pace = ("" if realtime else "; without --realtime the run goes as fast as the nodes "
+            "compute, add --realtime to watch it at the robot's pace")
+    return (f"papf run: live view on ws://127.0.0.1:{port} (Foxglove: Open connection, "
+            f"docs/foxglove-layout.json){pace}")
+
+
 def _drive(cfg: RunConfig, world: World, commands: dict[str, list[str]], sup: Supervisor,
            session: zenoh.Session, keys: Keys, seq: RunSequence) -> None:
     for name, argv in commands.items():
@@ -133,6 +155,8 @@ def _drive(cfg: RunConfig, world: World, commands: dict[str, list[str]], sup: Su
         seq.monitor.fail(sup.death_reason() or f"nodes not alive after "
                          f"{cfg.startup_timeout_s:g} s: {', '.join(sorted(missing))}")
         return
+    if cfg.view is not None:
+        print(view_line(cfg.view, cfg.realtime), file=sys.stderr, flush=True)
     if not seq.handshake(world):
         return
     seq.start(f"world={world.name} planner={cfg.planner} seed={cfg.seed}")

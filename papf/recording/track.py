@@ -18,7 +18,7 @@ from common.errors import ConfigError, PapfError
 from nodes.energy_meter.core import EnergyMeter
 from papf.recording.foxglove_export import stack_topic
 from papf.recording.rosbag import NS, BagRecording, TopicMap, open_run
-from schemas.messages import BatteryState, BatteryVoltage, Odometry, PlannerState, WheelStates
+from schemas.messages import BatteryState, BatteryVoltage, Odometry, PlannerState, Scan, WheelStates
 from worlds import World, load_world
 
 
@@ -36,6 +36,16 @@ class RunTrack:
     q: np.ndarray = field(default_factory=lambda: np.zeros(0))      # [mAh]
     states: list[PlannerState] = field(default_factory=list)
     state_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    scan_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # LiDAR scan times
+    scans: list[np.ndarray] = field(default_factory=list)   # (n, 2) [m]: angle [rad], range
+
+
+def scan_points(scan: Scan) -> np.ndarray:
+    """(n, 2) bearing [rad, robot frame] and range [m] of a scan's finite readings."""
+    r = np.asarray(scan.ranges, dtype=float)
+    a = scan.angle_min + scan.angle_increment * np.arange(r.size)
+    ok = np.isfinite(r) & (r >= scan.range_min) & (r <= scan.range_max)
+    return np.column_stack([a[ok], r[ok]])
 
 
 BAG_KEYS = [f"{NS}/odom", f"{NS}/wheels", f"{NS}/battery/measured"]
@@ -59,6 +69,7 @@ def load_track(path: str | Path, world: str | None = None,
     poses: dict[str, list[Odometry]] = {"sim/pose": [], "odom": []}
     batt: list[BatteryState] = []
     states: list[PlannerState] = []
+    scans: list[Scan] = []
     with open_run(path, topics) as rec:
         meta = rec.run_metadata
         bag = isinstance(rec, BagRecording)
@@ -73,6 +84,8 @@ def load_track(path: str | Path, world: str | None = None,
                 batt.append(msg)
             elif topic == "planner/state" and isinstance(msg, PlannerState):
                 states.append(msg)
+            elif topic == "scan" and isinstance(msg, Scan):
+                scans.append(msg)
     name = world or (None if bag else meta.get("world"))
     w = None
     if name:
@@ -93,4 +106,5 @@ def load_track(path: str | Path, world: str | None = None,
         v_t=np.array([m.stamp_ns for m in odom]) / 1e9, v=np.array([m.v for m in odom]),
         q_t=np.array([b.stamp_ns for b in batt]) / 1e9,
         q=np.array([b.charge_used_mAh for b in batt]),
-        states=states, state_t=np.array([s.stamp_ns for s in states]) / 1e9)
+        states=states, state_t=np.array([s.stamp_ns for s in states]) / 1e9,
+        scan_t=np.array([s.stamp_ns for s in scans]) / 1e9, scans=[scan_points(s) for s in scans])

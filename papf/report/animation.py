@@ -21,9 +21,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 
 from common.errors import ConfigError  # noqa: E402
 from common.outfiles import check_output, output
+from papf.console.progress import DecileProgress  # noqa: E402
 from papf.plots.mind import (  # noqa: E402
     draw_footprint,
     draw_mind,
@@ -36,6 +39,7 @@ from papf.recording.rosbag import TopicMap  # noqa: E402
 from papf.recording.track import RunTrack, load_track  # noqa: E402
 
 MAX_FRAMES = 1500
+LIDAR_COLOUR = "tab:red"
 
 
 def _at(times: np.ndarray, t: float) -> int:
@@ -57,6 +61,7 @@ class Animator:
         self.ax_q = self.fig.add_subplot(grid[1, 1], sharex=self.ax_v)
         self.dynamic: list = []
         self._static()
+        self._legend()
 
     def _static(self) -> None:
         tr, ax = self.track, self.ax
@@ -91,6 +96,35 @@ class Animator:
         times = t0 + self.step_s * np.arange(n)
         return times if times[-1] >= t1 - 1e-9 else np.append(times, t1)   # end on the last pose
 
+    def _lidar(self, t: float) -> list:
+        """The latest scan at or before ``t``, as points in the world from the pose then."""
+        tr = self.track
+        if not tr.scans or tr.scan_t[0] > t + 1e-9:
+            return []
+        pts = tr.scans[_at(tr.scan_t, t)]
+        x, y, yaw = tr.xyyaw[_at(tr.t, float(tr.scan_t[_at(tr.scan_t, t)]))]
+        ang = yaw + pts[:, 0]
+        return [self.ax.scatter(x + pts[:, 1] * np.cos(ang), y + pts[:, 1] * np.sin(ang),
+                                s=3, color=LIDAR_COLOUR, lw=0, zorder=4)]
+
+    def _legend(self) -> None:
+        """What the top view's marks are (static: the frames' artists come and go)."""
+        handles = [Line2D([], [], color=rgba("robot", 1.0), lw=1.6, label="path so far"),
+                   Patch(facecolor=rgba("robot"), edgecolor=rgba("robot", 1.0), label="robot"),
+                   Line2D([], [], marker="o", ls="", ms=3, color=LIDAR_COLOUR,
+                          label="LiDAR points"),
+                   Line2D([], [], color=rgba("prediction"), lw=2.0, label="prediction"),
+                   Line2D([], [], color=rgba("abandoned"), lw=0.9, ls="--", label="abandoned"),
+                   Line2D([], [], marker="o", ls="", color=rgba("quark"), mec="k",
+                          label="top quark"),
+                   Line2D([], [], marker="D", ls="", color=rgba("temporary_goal"), mec="k",
+                          label="temporary goal")]
+        if self.track.world is not None and any(
+                ob.motion is not None for ob in self.track.world.obstacles):
+            handles.append(Patch(color=rgba("moving"), label="moving obstacle"))
+        self.ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.34), ncol=4,
+                       fontsize=7, frameon=False)
+
     def draw(self, t: float) -> list:
         for artist in self.dynamic:
             artist.remove()
@@ -102,6 +136,7 @@ class Animator:
             s = tr.states[_at(tr.state_t, t)]
             if s.stamp_ns / 1e9 <= t + 1e-9:
                 out += draw_mind(ax, s, labels=False)
+        out += self._lidar(t)
         out += draw_footprint(ax, *tr.xyyaw[k])
         if tr.world is not None and tr.world.dims == 2:
             out += draw_moving(ax, tr.world, t)
@@ -115,7 +150,7 @@ class Animator:
 
 
 def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 4.0,
-            world: str | None = None, dpi: int = 80, force: bool = False,
+            world: str | None = None, dpi: int = 110, force: bool = False,
             topics: TopicMap | None = None) -> int:
     """Render ``src`` (a recording or a rosbag2, its topics mapped by ``topics``) into ``out``
     (.gif or .mp4; :func:`common.outfiles.output`: an existing ``out`` only with ``force``,
@@ -135,11 +170,13 @@ def animate(src: str | Path, out: str | Path, fps: float = 10.0, speed: float = 
         frames = anim.frames()
         writer = (animation.PillowWriter(fps=fps) if suffix == ".gif"
                   else animation.FFMpegWriter(fps=fps))
-        anim.fig.tight_layout(rect=(0, 0, 1, 0.95))
-        with output(out, [src], force) as tmp, writer.saving(anim.fig, str(tmp), dpi):
-            for t in frames:
+        anim.fig.tight_layout(rect=(0, 0.02, 1, 0.95))
+        with output(out, [src], force) as tmp, writer.saving(anim.fig, str(tmp), dpi), \
+                DecileProgress(f"animate {out.name}") as bar:
+            for k, t in enumerate(frames, 1):
                 anim.draw(float(t))
                 writer.grab_frame()
+                bar.fraction(k / len(frames), f"frame {k}/{len(frames)}  t = {t:.1f} s")
     finally:
         plt.close(anim.fig)
     return len(frames)

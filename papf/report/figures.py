@@ -16,6 +16,7 @@ and one world per trajectory / motion figure: runs on different worlds never sha
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,6 +29,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nodes.planner.registry import declared  # noqa: E402
+from papf.plots.moment import draw_traffic, static_world  # noqa: E402
 from papf.plots.world import (  # noqa: E402
     LINESTYLES,
     MARKERS,
@@ -91,7 +93,9 @@ def trajectories_png(runs: Sequence[RunMetrics], world: World | None, path: Path
     fig, (ax, ax_y) = plt.subplots(2, 1, figsize=(10.0, h_world + 4.2), layout="constrained",
                                    height_ratios=(h_world, 2.4))
     if world is not None:
-        draw_world(ax, world)
+        draw_world(ax, static_world(world))
+        t_end = max((r.t_end_s for r in runs if math.isfinite(r.t_end_s)), default=0.0)
+        draw_traffic(ax, world, t_end)    # road lines; each moving obstacle over the runs
     style = run_styles(runs)
     for r in runs:
         if r.series is None or r.series.x.size == 0:

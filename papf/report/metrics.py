@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import RecordingError
+from nodes.energy_meter.models import DEFAULT_MODEL
 from papf.launch.outcome import MOVING_SPEED, NS, RunMonitor
 from papf.recording.reader import Recording
 from papf.recording.rosbag import BagRecording, TopicMap, measured_charge_mAh, open_run
@@ -53,6 +54,9 @@ class Series:
     v: np.ndarray            # [m/s] odometry forward speed
     w: np.ndarray            # [rad/s] odometry yaw rate
 
+UNKNOWN_WORLD = "unknown"   # a recording without the launcher's metadata (papf record, no --meta)
+MID_RUN_NS = 1_000_000_000  # [ns] a recording whose first stamp is later began mid-run
+
 
 @dataclass
 class RunMetrics:
@@ -69,7 +73,8 @@ class RunMetrics:
     path_length_m: float        # [m] ground-truth path up to t_end
     charge_mAh: float           # [mAh] re-metered with ``energy_model`` at t_end
     energy_J: float             # [J] re-metered
-    mean_power_W: float         # [W] energy_J / t_end_s (the meter integrates from t = 0)
+    mean_power_W: float         # [W] energy_J over the recorded time: from t = 0, or from the
+                                #     first message of a recording started mid-run
     live_charge_mAh: float      # [mAh] last recorded live battery with stamp <= t_end (nan: none)
     live_energy_J: float        # [J]
     live_stamp_s: float         # [s] its stamp (< t_end when the recorder stopped before the
@@ -142,6 +147,8 @@ class _Collector:
         self.odom: list[Odometry] = []
         self.poses: list[Odometry] = []
         self.ground_truth = False       # poses came from sim/pose (else from odom)
+        self.first_ns: int | None = None   # [ns] earliest stamp recorded
+        self.run_started = False        # the recording holds the run's run_started event
         m = self.monitor
         self.handlers = {f"{ns}/clock": (Clock, m.on_clock),
                          f"{ns}/planner/status": (PlannerStatus, m.on_status),
@@ -168,7 +175,16 @@ class _Collector:
     def feed(self, key: str, msg: object) -> None:
         msg_type, handler = self.handlers[key]
         if isinstance(msg, msg_type):  # undecodable payloads arrive as bytes: skip them
+            stamp = msg.stamp_ns
+            self.first_ns = stamp if self.first_ns is None else min(self.first_ns, stamp)
+            self.run_started = self.run_started or (isinstance(msg, Event)
+                                                    and msg.kind == "run_started")
             handler(msg)
+
+    @property
+    def mid_run(self) -> bool:
+        """The recording began after the run did (no run_started, first stamp past 0)."""
+        return not self.run_started and (self.first_ns or 0) > MID_RUN_NS
 
     def finish(self) -> None:
         """No outcome message: the run ended at its last clock (or odometry) stamp."""
@@ -198,7 +214,7 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
     with open_run(path, topics) as rec:
         meta = rec.run_metadata
         ns = meta.get("namespace") or _guess_namespace(rec)
-        model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or "motor"
+        model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or DEFAULT_MODEL
         timeout_s = float(meta.get("timeout_s") or NO_TIMEOUT_S)
         col = _Collector(ns, timeout_s, Remeter(model, energy_params))
         for key, msg, _t in rec.messages(list(col.handlers)):
@@ -248,10 +264,15 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
               with_series: bool) -> RunMetrics:
     m = col.monitor
     t_end = m.t_end_ns or 0
-    planner = meta.get("planner", "?")
+    planner = meta.get("planner", "unknown")
     if "preset=paper" in meta.get("planner_args", ""):
         planner += " (paper)"            # the variant label of papf.experiments.trials
-    res = m.result(planner, meta.get("world", "?"), int(meta.get("seed", -1)), 0.0)
+    res = m.result(planner, meta.get("world", UNKNOWN_WORLD), int(meta.get("seed", -1)), 0.0)
+    t0 = col.first_ns if col.mid_run else 0      # [ns] where the recorded figures start
+    if col.mid_run and res.outcome == "reached":
+        res.outcome = "partial"
+        res.reason = (f"the recording starts at {t0 / NS:.2f} s, after the run began: the goal "
+                      "was reached, but path, duration and charge cover only the recorded part")
     remetered = battery_at(col.remeter.states, t_end)
     live = m.battery_at_end()
     start_ns = m.motion_start_ns()
@@ -266,7 +287,7 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
         outcome=res.outcome, reason=res.reason, t_end_s=t_end / NS,
         duration_s=res.duration_s, path_length_m=res.path_length_m,
         charge_mAh=remetered.charge_used_mAh if remetered else math.nan, energy_J=energy,
-        mean_power_W=energy / (t_end / NS) if t_end > 0 else math.nan,
+        mean_power_W=energy / ((t_end - t0) / NS) if t_end > t0 else math.nan,
         live_charge_mAh=live.charge_used_mAh if live else math.nan,
         live_energy_J=live.energy_J if live else math.nan,
         live_stamp_s=live.stamp_ns / NS if live else math.nan,
@@ -277,6 +298,39 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
         collisions=res.collisions,
         series=_series(col.poses, col.odom, t_end) if with_series else None,
     )
+
+
+def metadata_notes(m: RunMetrics) -> list[str]:
+    """What the report of ``m`` cannot know, said plainly (empty for a launcher's recording)."""
+    notes = []
+    if m.world == UNKNOWN_WORLD:
+        notes.append(f"{m.file}: world unknown: recorded without the launcher's metadata "
+                     "(papf record FILE --meta world=W --meta planner=P names them)")
+    if m.outcome == "partial":
+        notes.append(f"{m.file}: {m.reason}; mean power from its first message")
+    return notes
+
+
+def live_difference(m: RunMetrics, tol_mAh: float = 0.01) -> str:
+    """Why the report's charge of ``m`` differs from the live figure ("" when they agree).
+
+    The report's charge is the re-metered one at the outcome ``t_end_s``; the live figure
+    is the meter's last recorded message at or before it (``live_stamp_s``). The difference
+    splits into the charge drawn between the two stamps and the re-meter Δ at the live
+    stamp (messages the live meter and the recorder did not both see).
+    """
+    if m.energy_model != m.live_model or not (math.isfinite(m.charge_mAh)
+                                              and math.isfinite(m.live_charge_mAh)):
+        return ""
+    diff = m.charge_mAh - m.live_charge_mAh
+    if abs(diff) <= tol_mAh:
+        return ""
+    meter = m.remeter_diff_mAh if math.isfinite(m.remeter_diff_mAh) else 0.0
+    return (f"{m.file}: charge {m.charge_mAh:.2f} mAh here vs {m.live_charge_mAh:.2f} mAh live "
+            f"({diff:+.2f}): {diff - meter:+.2f} mAh drawn between the live meter's last figure "
+            f"({m.live_stamp_s:.2f} s) and the outcome ({m.t_end_s:.2f} s), {meter:+.2f} mAh "
+            "from re-metering the recorded messages (what the live meter received and the "
+            "recorder kept differ)")
 
 
 def _remeter_diff(states: list[BatteryState], live: BatteryState | None) -> float:

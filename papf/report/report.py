@@ -28,13 +28,14 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from common.errors import ConfigError, PapfError, RecordingError
-from papf.plots.mind import first_runs, mind_png
+from papf.plots.moment import MomentPanel, moment_png
 from papf.recording.rosbag import TopicMap, is_rosbag
-from papf.recording.track import load_track
 from papf.report import figures, tables
 from papf.report.markdown import markdown
-from papf.report.metrics import RunMetrics, run_metrics
+from papf.report.metrics import RunMetrics, run_metrics, seed_text
 from worlds import World, load_world
 
 MODELS = ("paper", "motor")
@@ -188,13 +189,29 @@ def _write(report: Report, runs: list, files: dict, out: Path,
         report.pngs[("trajectories", world_name)] = traj
         report.pngs[("motion", world_name)] = motion
         mind = report.name("mind", world_name)
-        firsts = {pl: (r, load_track(files[r.file], topics=topics)) for pl, r in first_runs(mine).items()}
-        report.files.append(mind_png(firsts, _world(world_name), out / mind))
+        report.files.append(mind_figure(mine, files, _world(world_name), out / mind, topics))
         report.pngs[("mind", world_name)] = mind
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
     tables.write_csv(csv_path, runs, report.summaries)
     md_path.write_text(markdown(report))
     report.files += [csv_path, md_path]
+
+
+def mind_figure(runs: Sequence[RunMetrics], files: dict, world: World | None, out: Path,
+                topics: TopicMap | None = None) -> Path:
+    """``mind.png``: the first run of each planner at the moment its planner acted."""
+    from papf.recording.track import load_track
+
+    firsts: dict[str, RunMetrics] = {}
+    for r in runs:
+        firsts.setdefault(r.planner, r)
+    panels = []
+    for planner, r in firsts.items():
+        track = load_track(files[r.file], topics=topics)
+        v = np.interp(track.t, track.v_t, track.v) if len(track.v_t) else np.zeros(len(track.t))
+        panels.append(MomentPanel(f"{planner} seed {seed_text(r.seed)} ({r.outcome})",
+                                  planner.split(" ")[0], track.t, track.xyyaw, v, track.states))
+    return moment_png(panels, world, out)
 
 
 def _world(name: str) -> World | None:

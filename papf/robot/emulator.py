@@ -132,6 +132,8 @@ def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, 
     while not node.stop:
         try:
             t_rx, data = node.inbox.get(timeout=max(0.0, (last + period - now) * 1e-9))
+            if data is None:      # the stop request's wake-up (node.stop), not a command
+                continue
             try:
                 v, w = cdr_to_twist(data, cmd_type)
             except SchemaError as exc:

@@ -234,3 +234,13 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
                            capture_output=True, text=True, timeout=60)
         assert r.returncode == 2 and "cannot reach the bus" in r.stderr, (cmd, r.stderr)
         assert "Traceback" not in r.stderr
+
+
+
+def test_tls_without_credentials_names_the_authentication():
+    from papf.launch.supervisor import free_port
+
+    r = subprocess.run([sys.executable, "-m", "papf", "topic", "list", "--connect",
+                        f"tls/127.0.0.1:{free_port()}"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert "authenticates its clients" in r.stderr and "--zenoh-config" in r.stderr, r.stderr

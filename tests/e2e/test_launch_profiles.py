@@ -11,8 +11,11 @@ import time
 from pathlib import Path
 
 import pytest
+import zenoh
 
+from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
+from schemas import Keys
 
 PY = sys.executable
 WORLD = """name = "short"
@@ -125,3 +128,35 @@ def test_sim_profile_reaches_the_goal(world):
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert (result["outcome"], out.returncode) == ("reached", 0), out.stderr[-2000:]
     assert not _leftovers("t5sim")
+
+
+@pytest.mark.e2e
+@pytest.mark.parametrize("bridge", ["", "bot"])
+def test_ctrl_c_on_the_robot_profile_stops_without_a_traceback(tmp_path, bridge):
+    """Ctrl-C (SIGINT to the foreground process group) on `papf launch robot`, with and
+    without a bridge namespace, against the emulator: every node stops, no traceback."""
+    ns, port = f"t5stop{bridge}", free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    bridged = ["--bridge-namespace", bridge] if bridge else []
+    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
+                              "--namespace", ns, *bridged], start_new_session=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    emulator = None
+    try:
+        assert wait_port(port, 30.0), "the robot's router did not come up"
+        emulator = subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
+                                     "--namespace", ns, *bridged], start_new_session=True,
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with zenoh.open(zenoh_config("client", [endpoint])) as session:
+            assert not wait_alive(session, Keys(ns), ["base_driver", "lidar_sim"], 60.0)
+        time.sleep(1.0)                           # battery and odometry flowing to the driver
+        os.killpg(robot.pid, signal.SIGINT)
+        _, err = robot.communicate(timeout=60)
+    finally:
+        for proc in (emulator, robot):
+            if proc is not None and proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(timeout=30)
+    assert robot.returncode in (0, 130), err[-2000:]
+    assert "Traceback" not in err and "Error" not in err, err[-3000:]
+    assert not _leftovers(ns)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -48,6 +49,12 @@ def _drain(fd: int, sink: list[bytes]) -> None:
         sink.append(data)
 
 
+def _shown_x(screen: list[bytes]) -> float:
+    """The x [m] of the last complete ``odom x +0.12 y`` pose line on the teleop's screen."""
+    found = re.findall(rb"odom x ([+-]\d+\.\d+) y", b"".join(screen))
+    return float(found[-1]) if found else float("nan")
+
+
 def test_teleop_drives_through_the_driver_and_the_watchdog_stops_a_killed_teleop(
         router, session, spawn, tmp_path):
     trace = tmp_path / "commands.jsonl"
@@ -66,6 +73,8 @@ def test_teleop_drives_through_the_driver_and_the_watchdog_stops_a_killed_teleop
         _wait(lambda: b"papf teleop on rosbot/cmd_vel" in b"".join(screen), "teleop banner")
         os.write(master, b"ww")
         _wait(lambda: any(c["v"] == pytest.approx(0.1) for c in _trace(trace)), "v = 0.1 at the robot")
+        # no run started: the driver still publishes odometry, so the pose line shows it
+        _wait(lambda: _shown_x(screen) > 0.01, "the robot moving in the odometry on screen")
         os.write(master, b"\x1b[C")                  # right arrow: turn clockwise
         _wait(lambda: _trace(trace)[-1]["w"] < 0, "w < 0 at the robot")
         os.kill(teleop.pid, signal.SIGKILL)          # no goodbye zeros: only the watchdog

@@ -1,6 +1,7 @@
 """Planner presets (``--preset paper|default``) and PAPF's deviations, each switchable alone."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -119,3 +120,20 @@ def test_quarks_capped_at_m_per_goal_switches_alone():
     loop, kern = predict(np.zeros(2), goal, ring, APF, cap), predict(np.zeros(2), goal, ring, APF, PAPFParams())
     np.testing.assert_array_equal(loop.path, kern.path)
     np.testing.assert_array_equal(loop.quarks, kern.quarks)
+
+
+def test_one_energy_model_by_default_everywhere():
+    """Every packaged profile, papf run, the experiments and the meter default to one model."""
+    from nodes.energy_meter.models import DEFAULT_MODEL
+    from papf.cli import build_parser
+    from papf.experiments.energy import EnergyExperiment
+    from papf.launch.profile import load_profile, packaged_profiles
+    from papf.launch.run import RunConfig
+
+    for name in packaged_profiles():
+        model = load_profile(name).defaults.get("energy_model")
+        assert model in (None, DEFAULT_MODEL), f"profile {name}: energy_model {model}"
+    assert build_parser().parse_args(["run", "--world", "open"]).energy_model == DEFAULT_MODEL
+    assert build_parser().parse_args(["experiment", "energy"]).energy_model == DEFAULT_MODEL
+    assert RunConfig(world="open").energy_model == DEFAULT_MODEL
+    assert EnergyExperiment(out=Path(".")).energy_model == DEFAULT_MODEL

@@ -9,11 +9,10 @@ import jsonschema
 import msgpack
 import numpy as np
 import pytest
-
-from common.outfiles import OutputError
 from mcap.reader import make_reader
 
 from common.errors import ConfigError, RecordingError
+from common.outfiles import OutputError
 from papf.recording import (
     RunWriter,
     iter_messages,

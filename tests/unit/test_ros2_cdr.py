@@ -185,3 +185,12 @@ def test_bad_bytes_raise_cdr_error(data):
         cdr_to_twist(data)
     with pytest.raises(SchemaError):
         laserscan_to_scan(data, 0)
+
+
+def test_echo_prints_a_messages_fields_not_its_constants():
+    from papf.bus.decode import decode
+
+    data = ros2.encode(ros2.battery_state(1, 11.9), ros2.BATTERY_STATE)
+    shown = decode("battery", data).value
+    assert shown["voltage"] == pytest.approx(11.9)
+    assert not [k for k in shown if k.isupper()], shown.keys()   # POWER_SUPPLY_STATUS_… gone

@@ -170,3 +170,28 @@ def test_run_clock_odometry_wheels_and_late_commands():
     d.on_bridge("battery", ros2.encode(ros2.battery_state(1, 11.9), ros2.BATTERY_STATE), 0)
     d.on_bridge("battery", b"garbage", 0)
     assert d.bad["battery"] == 1
+
+
+def test_odometry_between_runs_for_teleop():
+    node, d = _driver()
+    odom_cdr = ros2.encode(ros2.odometry(1, 1.0, 2.0, 0.0, 0.2, 0.0), ros2.ODOMETRY)
+    for k in range(1, 11):                              # 200 ms of ticks before any run
+        d.on_bridge("odometry", odom_cdr, k * 20 * MS)
+        d.on_tick(k * 20 * MS)
+    idle = node.of("odom")
+    assert len(idle) == 2 and all(o.stamp_ns == 0 and o.x == pytest.approx(1.0) for o in idle)
+    assert node.of("wheels") == [] and node.of("clock") == []   # no run: no clock, no energy
+
+
+def test_stop_wake_up_is_not_a_robot_message():
+    """Ctrl-C puts ``(None, None)`` in the inbox to wake the loop: the driver just stops."""
+    node, d = _driver()
+
+    class _StopWhenWoken:
+        def __bool__(self):
+            return node.inbox.empty()
+
+    node.stop = _StopWhenWoken()
+    node.inbox.put((None, None))
+    d.run()                                            # returned: no TypeError from a None
+    assert d.bad == {}

@@ -1,0 +1,255 @@
+"""The planner's mind at the moment it acted, and traffic over time (the report's pictures).
+
+- :func:`planner_events` — the cycles where the planner *did* something: a quark placed,
+  the temporary goal moved, a lane change, a prediction abandoned, a virtual wall raised;
+- :func:`telling_moment` — the first of those once the robot moves (None: nothing to show);
+- :func:`draw_traffic` — road lines and every moving obstacle over ``[0, t_end]``: its
+  track, outlines every :data:`TRAFFIC_EVERY_S` fading with time, where it was at the end;
+- :func:`moment_png` — one panel per run: world, the path (solid up to the moment), the
+  robot, the moving obstacles then, and the mind, zoomed to the moment; one legend under
+  the panels, never over an obstacle.
+
+Takes arrays and messages only (the caller reads the recording). Colours: the live view's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Circle, Patch, Polygon  # noqa: E402
+
+from papf.plots.mind import draw_footprint, draw_mind, draw_moving, draw_road, rgba  # noqa: E402
+from papf.plots.world import colour_for, draw_world  # noqa: E402
+from schemas.messages import PlannerState  # noqa: E402
+from worlds import World  # noqa: E402
+
+GOAL_MOVE_M = 0.10        # [m] a temporary goal that jumps further than this "moved"
+MIN_HALF_M = 1.2          # [m] smallest half-width of a zoomed panel
+TRAFFIC_EVERY_S = 2.0     # [s] between outlines of a moving obstacle
+MOVING_S = 0.02           # [m/s] the robot "moves" above this speed
+
+
+@dataclass(frozen=True)
+class Event:
+    index: int     # into the states
+    t_s: float     # [s] the cycle's stamp
+    what: str      # "a quark placed", "temporary goal moved", …
+
+
+def _xy(p) -> tuple[float, float] | None:
+    return (float(p[0]), float(p[1])) if len(p) >= 2 else None
+
+
+def planner_events(states: Sequence[PlannerState]) -> list[Event]:
+    """Every cycle where the planner changed its mind, in time order (see module doc)."""
+    out, prev = [], None
+    for i, s in enumerate(states):
+        what = _change(prev, s)
+        if what:
+            out.append(Event(i, s.stamp_ns / 1e9, what))
+        prev = s
+    return out
+
+
+def _change(prev: PlannerState | None, s: PlannerState) -> str:
+    before = prev if prev is not None else PlannerState(stamp_ns=0, algorithm=s.algorithm)
+    if len(s.top_quarks) > len(before.top_quarks):
+        return "a quark placed"
+    lane, lane0 = s.lane_goal_y, before.lane_goal_y
+    if math.isfinite(lane) and not (math.isfinite(lane0) and abs(lane - lane0) < 1e-6):
+        return f"lane change to y = {lane:.1f} m"
+    tg, tg0 = _xy(s.temporary_goal), _xy(before.temporary_goal)
+    if tg is not None and (tg0 is None or math.dist(tg, tg0) > GOAL_MOVE_M):
+        return "temporary goal moved" if tg0 is not None else "temporary goal set"
+    if len(s.virtual_walls) > len(before.virtual_walls):
+        return "a virtual wall raised"
+    if len(s.abandoned_paths) > len(before.abandoned_paths):
+        return "a prediction abandoned"
+    return ""
+
+
+PRIORITY = ("a quark placed", "lane change", "temporary goal moved", "a virtual wall raised",
+            "a prediction abandoned", "temporary goal set")
+
+
+def telling_moment(states: Sequence[PlannerState], t_moving_s: float) -> Event | None:
+    """The first event of the most telling kind (:data:`PRIORITY`) at or after the robot's
+    first motion ``t_moving_s`` [s]; None when the planner did none of them."""
+    events = [e for e in planner_events(states) if e.t_s >= t_moving_s]
+    for kind in PRIORITY:
+        for e in events:
+            if e.what.startswith(kind):
+                return e
+    return None
+
+
+def slowest_moment(states: Sequence[PlannerState], t_moving_s: float,
+                        drop: float = 0.8) -> Event | None:
+    """The cycle with the lowest target speed after the first motion (IAPF's speed
+    adaptation, eq. 26; APF stalling), when below ``drop`` times the highest (else None)."""
+    idx = [i for i, s in enumerate(states) if s.stamp_ns / 1e9 >= t_moving_s and s.v_target > 0]
+    if not idx:
+        return None
+    top = max(states[i].v_target for i in idx)
+    low = min(idx, key=lambda i: states[i].v_target)
+    if states[low].v_target >= drop * top:
+        return None
+    return Event(low, states[low].stamp_ns / 1e9,
+                 f"slowest: target speed {states[low].v_target:.2f} m/s")
+
+
+def closest_to_traffic(world: World, t: np.ndarray, xy: np.ndarray) -> tuple[int, float] | None:
+    """(pose index, distance [m]) where the robot came closest to a moving obstacle's centre."""
+    moving = [ob for ob in world.obstacles if ob.motion is not None]
+    if not moving or not len(t):
+        return None
+    d = np.full(len(t), np.inf)
+    for ob in moving:
+        centres = np.array([ob.at(float(ti)).center[:2] for ti in t])
+        d = np.minimum(d, np.hypot(*(centres - xy).T))
+    k = int(np.argmin(d))
+    return k, float(d[k])
+
+
+def first_motion_s(t: np.ndarray, v: np.ndarray) -> float:
+    """[s] first time the speed exceeds :data:`MOVING_S` (the last time if never)."""
+    moving = np.flatnonzero(np.abs(v) > MOVING_S)
+    return float(t[moving[0]]) if moving.size else (float(t[-1]) if len(t) else 0.0)
+
+
+def static_world(world: World) -> World:
+    """``world`` without its moving obstacles (they are drawn where they are at a time)."""
+    return replace(world, obstacles=tuple(ob for ob in world.obstacles if ob.motion is None))
+
+
+def draw_traffic(ax, world: World, t_end_s: float) -> list:
+    """Road lines, and each moving obstacle's track and outlines over ``[0, t_end_s]``."""
+    out = draw_road(ax, world)
+    times = np.arange(0.0, max(t_end_s, 0.0) + 1e-9, TRAFFIC_EVERY_S)
+    movers = [ob for ob in world.obstacles if ob.motion is not None]
+    for n, ob in enumerate(movers):
+        track = np.array([ob.at(float(t)).center[:2] for t in np.linspace(0, t_end_s, 60)])
+        label = (f"moving obstacle: track, every {TRAFFIC_EVERY_S:g} s (darker: later), "
+                 f"at {t_end_s:.1f} s" if n == 0 else None)
+        out += ax.plot(track[:, 0], track[:, 1], color=rgba("moving", 0.9), lw=0.8, ls=":",
+                       zorder=3, label=label)
+        for k, t in enumerate(times):
+            alpha = 0.15 + 0.45 * k / max(len(times) - 1, 1)
+            out.append(_outline(ax, ob.at(float(t)), alpha))
+        out += draw_moving(ax, world, t_end_s)
+    return out
+
+
+def _outline(ax, here, alpha: float):
+    style = {"fill": False, "edgecolor": rgba("moving", alpha), "lw": 0.8, "zorder": 3}
+    patch = (Polygon(here.corners(), closed=True, **style) if here.shape == "box"
+             else Circle(here.center[:2], here.radius, **style))
+    ax.add_patch(patch)
+    return patch
+
+
+@dataclass
+class MomentPanel:
+    """One run's picture: its path, the planner's states and the label."""
+
+    label: str                  # "papf seed 0 (reached)"
+    planner: str
+    t: np.ndarray               # [s] pose times
+    xyyaw: np.ndarray           # (n, 3) [m, m, rad]
+    v: np.ndarray               # [m/s] at the pose times (for the first motion)
+    states: list[PlannerState]
+
+
+def _window(points: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and half-width [m] of a square view on ``centre`` holding ``points``."""
+    pts = np.vstack([points, centre[None, :]]) if len(points) else centre[None, :]
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    return mid, max(MIN_HALF_M, 0.5 * float(np.max(hi - lo)) + 0.5)
+
+
+def _mind_points(s: PlannerState) -> np.ndarray:
+    parts = [np.asarray(s.predicted_path, float).reshape(-1, 2),
+             np.asarray(s.top_quarks, float).reshape(-1, 2),
+             np.asarray(s.virtual_obstacles, float).reshape(-1, 2)]
+    if len(s.temporary_goal) >= 2:
+        parts.append(np.asarray(s.temporary_goal[:2], float).reshape(1, 2))
+    return np.vstack(parts)
+
+
+def _draw_panel(ax, p: MomentPanel, world: World | None) -> str:
+    """Draw one panel; returns its title."""
+    colour = colour_for(p.planner, 0)
+    event = telling_moment(p.states, first_motion_s(p.t, p.v))
+    near = closest_to_traffic(world, p.t, p.xyyaw[:, :2]) if world is not None else None
+    event = event or slowest_moment(p.states, first_motion_s(p.t, p.v))
+    if event is None and near is not None:
+        k = near[0]
+        i = max(int(np.searchsorted([s.stamp_ns / 1e9 for s in p.states], p.t[k],
+                                    side="right")) - 1, 0)
+        event = Event(i, float(p.t[k]), f"closest to a moving obstacle ({near[1]:.2f} m)")
+    t_m = event.t_s if event else float(p.t[-1])
+    k = max(int(np.searchsorted(p.t, t_m, side="right")) - 1, 0)
+    if world is not None and world.dims == 2:
+        draw_world(ax, static_world(world))
+        draw_road(ax, world)
+        draw_moving(ax, world, t_m)
+    xy = p.xyyaw[:, :2]
+    ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=1.0, alpha=0.35, zorder=3)
+    ax.plot(xy[: k + 1, 0], xy[: k + 1, 1], color=colour, lw=1.8, zorder=3)
+    draw_footprint(ax, *p.xyyaw[k])
+    if event is None or not p.states:
+        ax.set_title(f"{p.label}\nno prediction to show: the whole path", fontsize=9)
+        return ""
+    state = p.states[event.index]
+    draw_mind(ax, state, labels=False)
+    mid, half = _window(_mind_points(state), xy[k])
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_title(f"{p.label}: t = {event.t_s:.1f} s, {event.what}", fontsize=9)
+    return event.what
+
+
+def _legend_handles(world: World | None) -> list:
+    handles = [Line2D([], [], color="0.3", lw=1.8, label="path so far (faint: after)"),
+               Patch(facecolor=rgba("robot"), edgecolor=rgba("robot", 1.0), label="robot then"),
+               Line2D([], [], color=rgba("prediction"), lw=2.0, label="prediction"),
+               Line2D([], [], color=rgba("abandoned"), lw=0.9, ls="--",
+                      label="abandoned prediction"),
+               Line2D([], [], marker="o", ls="", color=rgba("quark"), mec="k", label="top quark"),
+               Line2D([], [], marker="D", ls="", color=rgba("temporary_goal"), mec="k",
+                      label="temporary goal"),
+               Patch(color="0.35", label="obstacle")]
+    if world is not None and any(ob.motion is not None for ob in world.obstacles):
+        handles.append(Patch(color=rgba("moving"), label="moving obstacle then"))
+    if world is not None and world.road is not None:
+        handles.append(Line2D([], [], color=rgba("road"), lw=1.5, label="road lines"))
+    return handles
+
+
+def moment_png(panels: Sequence[MomentPanel], world: World | None, out_png: str | Path) -> Path:
+    """The report's ``mind.png`` (see module doc): one panel per run in ``panels``."""
+    n = max(len(panels), 1)
+    fig, axes = plt.subplots(1, n, figsize=(5.6 * n, 5.8), squeeze=False, layout="constrained")
+    try:
+        for ax, p in zip(axes[0], panels, strict=False):
+            _draw_panel(ax, p, world)
+            ax.set_aspect("equal", adjustable="box")
+        fig.legend(handles=_legend_handles(world), loc="outside lower center", ncol=2 + n,
+                   fontsize=8, frameon=False)
+        out = Path(out_png)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=110)
+    finally:
+        plt.close(fig)
+    return out

@@ -1,0 +1,51 @@
+"""``papf plan --plot`` on a car-scale road world: the road, the traffic over the run, the
+path and the finish line — a road world's goal is "pass x = X" (papf/offline/road.py), so
+the picture draws that line where the run ends, not a star in one lane.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle, Polygon  # noqa: E402
+
+from papf.plots.moment import draw_traffic, static_world  # noqa: E402
+from papf.plots.world import GOAL_COLOUR, OBSTACLE_COLOUR, START_COLOUR, colour_for  # noqa: E402
+from worlds import World  # noqa: E402
+
+
+def plot_road_run(world: World, planner: str, outcome: str, path: np.ndarray,
+                  times: np.ndarray, out_png: str | Path, title: str) -> Path:
+    """One road run: world, traffic over ``times``, the path (N, 2) [m] and the finish line."""
+    fig, ax = plt.subplots(figsize=(11.0, 3.4), layout="constrained")
+    try:
+        for ob in static_world(world).obstacles:
+            patch = (Polygon(ob.corners(), closed=True, color=OBSTACLE_COLOUR, lw=0)
+                     if ob.shape == "box" else Circle(ob.center[:2], ob.radius,
+                                                      color=OBSTACLE_COLOUR, lw=0))
+            ax.add_patch(patch)
+        draw_traffic(ax, world, float(times[-1]) if len(times) else 0.0)
+        ax.plot(*world.start[:2], "o", color=START_COLOUR, ms=7, label="start", zorder=5)
+        ax.axvline(world.goal[0], color=GOAL_COLOUR, lw=1.5, ls="--", zorder=4,
+                   label=f"goal: the finish line x = {world.goal[0]:g} m")
+        ax.plot(path[:, 0], path[:, 1], color=colour_for(planner, 0), lw=2.0, zorder=5,
+                label=f"{planner} ({outcome}, {times[-1]:.1f} s)" if len(times) else planner)
+        ax.plot(path[-1, 0], path[-1, 1], "o", color=colour_for(planner, 0), mec="k", zorder=6)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.grid(True, lw=0.3, alpha=0.5)
+        ax.set_title(title)
+        fig.legend(loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+        out = Path(out_png)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=110)
+    finally:
+        plt.close(fig)
+    return out

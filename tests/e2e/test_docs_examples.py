@@ -1,0 +1,258 @@
+"""Every command example of README.md and docs/*.md runs (papf/doctools/examples.py).
+
+Each code block runs as one session in a fresh directory, its lines in order, against a
+router on a free loopback port (``7447`` in a line becomes that port; a command that would
+use the default router gets ``--connect``/``--listen``/``--port`` for it). A block with a
+``<robot>`` placeholder has ``papf rosbot-emulator`` standing in for the robot. Per command:
+
+- a *server* (a line ending in ``&``, ``papf launch robot``, a node started alone, a
+  recorder until Ctrl-C, …) is started in the background and must still be running at the
+  end of its block, then stop on SIGINT without a traceback;
+- a *short* command runs in a smaller variant (:data:`SHORT`: fewer runs, a sim-time
+  limit) and must exit with one of its accepted codes;
+- a command that cannot run here (:data:`HELP`: it needs the robot, a second host, a
+  terminal, or it takes many minutes) runs with ``--help``; the reason is in the table;
+- any other papf command runs as written and must exit 0.
+
+Programs other than papf (``ros2``, ``zenoh-bridge-ros2dds``, ``git``, …) are not run: the
+unit test ``tests/unit/test_docs_examples.py`` checks each is one of the known tools.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from papf.doctools.examples import ROOT, Example, concrete, examples
+from papf.launch.supervisor import free_port, wait_port
+
+pytestmark = pytest.mark.e2e
+
+PY = sys.executable
+FAST = ["--set", "v_max=0.5"]
+# first words of a papf command -> (extra arguments of its short variant, accepted exit codes)
+SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
+    ("run",): (["--timeout", "8"], {0, 3, 5}),
+    ("launch", "laptop"): (["--timeout", "8", *FAST], {0, 3, 5}),
+    ("launch", "hil-laptop"): (["--timeout", "8", *FAST], {0, 3, 5}),
+    ("launch", "sim"): (["--timeout", "8"], {0, 3, 5}),
+    ("experiment", "energy"): (["--runs", "1", "--timeout", "4"], {0, 6}),
+    ("experiment", "paper-tests"): (["--offline", "--worlds", "papf-test-4", "--planners", "apf",
+                                     "--timeout", "30"], {0}),
+    ("experiment", "random"): (["--n", "1", "--planners", "apf", "--timeout", "30"], {0}),
+    ("experiment", "iapf"): (["--cases", "a", "--planners", "iapf", "--no-horizon"], {0}),
+    ("experiment", "traffic"): (["--worlds", "road-stopped", "--planners", "apf",
+                                 "--timeout", "5"], {0}),
+    ("replay",): (["--rate", "0"], {0}),
+    ("plan",): ([], {0, 3, 4, 5}),     # its exit code is the run's outcome (docs: the papers'
+                                       # collisions and stagnations are examples too)
+    ("make-certs",): (["--force"], {0}),
+}
+WHY_MINUTES = "takes minutes (tests/e2e/test_progress_piped.py runs its first steps)"
+HELP: dict[tuple[str, ...], str] = {
+    ("teleop",): "reads the keyboard (tests/e2e/test_teleop_robot.py drives it in a pty)",
+    ("bench",): "a benchmark, measured quietly by hand (docs/performance.md)",
+    ("experiment", "wang"): WHY_MINUTES,
+    ("experiment", "horizon"): WHY_MINUTES,
+    ("experiment", "deviations"): WHY_MINUTES,
+    ("experiment", "test1-sweep"): WHY_MINUTES,
+    ("experiment", "cases"): "takes an hour (docs/data/README.md)",
+}
+HELP_IF = (("--scheduler", "needs a Dask cluster on other hosts (docs/sweeps.md)"),
+           ("/opt/papf/certs", "needs the robot's certificates under /opt/papf"),
+           ("laptop.json5", "connects by TLS to the robot's address in the certificate"),
+           ("--view", "the viewer is served until Ctrl-C: tests/e2e/test_viewer_protocol.py"))
+SERVERS = (("launch", "robot"), ("launch", "hil-robot"), ("rosbot-emulator",), ("view",),
+           ("record",))
+MAKE_DRY = {"demo", "test", "setup"}      # `make -n`: the recipe exists and expands
+
+
+def _match(argv: list[str], table) -> tuple | None:
+    for key in sorted(table, key=len, reverse=True):
+        if tuple(argv[:len(key)]) == key:
+            return key
+    return None
+
+
+class Session:
+    """A block's commands, in one directory, against one router port."""
+
+    def __init__(self, cwd: Path, port: int):
+        self.cwd, self.port = cwd, port
+        self.endpoint = f"tcp/127.0.0.1:{port}"
+        self.background: list[tuple[str, subprocess.Popen]] = []
+        self.log: list[str] = []
+        self.needs_robot = False      # start the emulator once a router listens
+
+    def argv(self, ex: Example) -> list[str] | None:
+        """The command to run for ``ex`` (None: not a program this test runs)."""
+        text = ex.text.replace("7447", str(self.port))
+        argv = concrete(Example(ex.file, ex.line, text, ex.block, ex.background))
+        name = Path(argv[0]).name
+        if name == "papf":
+            return [PY, "-m", "papf", *self._papf(argv[1:], ex.background)]
+        if name in ("python", "python3") and argv[1:2] == ["-m"] and argv[2] != "venv":
+            return [PY, *argv[1:], *self._zenoh(argv[2:])]
+        if name == "make" and argv[1] in MAKE_DRY:
+            return ["make", "-n", "-C", str(ROOT), argv[1]]
+        return None
+
+    def _zenoh(self, rest: list[str]) -> list[str]:
+        if "--help" in rest or any(a.startswith(("--connect", "--listen")) for a in rest):
+            return []
+        if rest[0] == "papf.launch.router":
+            return ["--listen", self.endpoint]
+        return ["--connect", self.endpoint]
+
+    def _papf(self, args: list[str], background: bool) -> list[str]:
+        for needle, _why in HELP_IF:
+            if needle in " ".join(args):
+                return [*args[:_subcommand_len(args)], "--help"]
+        if _match(args, HELP):
+            return [*args[:_subcommand_len(args)], "--help"]
+        short = _match(args, SHORT)
+        extra = SHORT[short][0] if short and not background else []
+        if "--help" in args or "--dry-run" in args:
+            return args
+        # a run in the foreground has a router of its own; one in the background is the block's
+        port = self.port if background else free_port()
+        if args[0] == "run" and "--port" not in args:
+            extra = [*extra, "--port", str(port)]
+        elif args[0] == "launch" and args[1] in ("robot", "hil-robot", "sim") and \
+                "--listen" not in args:
+            extra = [*extra, "--listen", f"tcp/127.0.0.1:{port}" if args[1] == "sim"
+                     else self.endpoint]
+        elif args[0] in ("topic", "goal", "record", "replay", "rosbot-emulator", "launch",
+                         "view") and \
+                "--connect" not in args and "--zenoh-config" not in args:
+            extra = [*extra, "--connect", self.endpoint]
+        return [*args, *extra]
+
+    def run(self, ex: Example) -> None:
+        argv = self.argv(ex)
+        if argv is None:
+            return
+        papf_args = argv[3:] if argv[1:3] == ["-m", "papf"] else []
+        if ex.background or (_match(papf_args, SERVERS) and "--layout" not in argv) or (
+                argv[1:2] == ["-m"] and
+                                                           argv[2].startswith(("nodes.", "papf.launch.router"))
+                                                           and "--help" not in argv):
+            self.start(ex, argv)
+            return
+        short = _match(papf_args, SHORT)
+        ok = SHORT[short][1] if short and "--help" not in argv else {0}
+        proc = subprocess.run(argv, cwd=self.cwd, capture_output=True, text=True, timeout=600,
+                              stdin=subprocess.DEVNULL)
+        self.log.append(f"$ {' '.join(argv[2:])}  -> {proc.returncode}")
+        assert proc.returncode in ok, (f"{ex.where}: {ex.text}\n-> {' '.join(argv)} exited "
+                                       f"{proc.returncode}\n{proc.stderr[-3000:]}")
+        assert "Traceback" not in proc.stderr, f"{ex.where}: {proc.stderr[-3000:]}"
+
+    def start(self, ex: Example, argv: list[str]) -> None:
+        proc = subprocess.Popen(argv, cwd=self.cwd, stdout=subprocess.DEVNULL,
+                                stderr=(self.cwd / f"bg-{len(self.background)}.log").open("w"),
+                                start_new_session=True, stdin=subprocess.DEVNULL)
+        self.background.append((ex.where, proc))
+        self.log.append(f"$ {' '.join(argv[2:])} &")
+        if argv[2:3] == ["papf.launch.router"] or argv[3:5] == ["launch", "robot"] or \
+                argv[3:4] == ["run"]:
+            assert wait_port(self.port, 60.0), f"{ex.where}: nothing listens on {self.endpoint}"
+            if self.needs_robot and "rosbot-emulator" not in " ".join(argv):
+                self.needs_robot = False
+                self.start(Example(ex.file, 0, "papf rosbot-emulator", -1, True),
+                           [PY, "-m", "papf", "rosbot-emulator", "--connect", self.endpoint])
+        log = self.cwd / f"bg-{len(self.background) - 1}.log"
+        deadline = time.monotonic() + 30.0   # its first log line: imported and started
+        while not log.read_text().strip() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(2.0)   # the server's nodes come up (the next line finds them alive)
+
+    def stop(self) -> None:
+        """Stop the background processes (last first): each still running, no traceback."""
+        errors = []
+        for k, (where, proc) in reversed(list(enumerate(self.background))):
+            if proc.poll() is not None and proc.returncode != 0:
+                errors.append(f"{where}: exited {proc.returncode} before the end of its block")
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                try:
+                    proc.wait(timeout=40)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait(timeout=30)
+                    errors.append(f"{where}: did not stop on SIGINT")
+            err = (self.cwd / f"bg-{k}.log").read_text()
+            if "Traceback" in err:
+                errors.append(f"{where}: traceback on stop\n{err[-2000:]}")
+        assert not errors, "\n".join(errors)
+
+
+def _subcommand_len(args: list[str]) -> int:
+    """How many leading words name the command (``experiment wang``: 2; ``run``: 1)."""
+    if args[0] in ("experiment", "topic", "export", "bench", "launch"):
+        return 2
+    return 1
+
+
+def _blocks() -> dict[str, list[Example]]:
+    blocks: dict[str, list[Example]] = {}
+    for ex in examples():
+        blocks.setdefault(f"{ex.file}#{ex.block}", []).append(ex)
+    return blocks
+
+
+BLOCKS = _blocks()
+
+
+def _prepare(cwd: Path, block: list[Example]) -> None:
+    """What the block's examples take as given: a recording, a broken one, a result dir."""
+    text = " ".join(e.text for e in block)
+    (cwd / "docs").mkdir(exist_ok=True)    # paths of the docs are relative to the repository
+    needs_run = any(w in text for w in ("run.mcap", "first.mcap")) and \
+        not any("--record run.mcap" in e.text for e in block)
+    if needs_run or "broken.mcap" in text or "energy-exp" in text:
+        port = free_port()
+        subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
+                        "--record", "run.mcap", "--port", str(port), "--timeout", "6"],
+                       cwd=cwd, capture_output=True, timeout=300, check=False)
+        assert (cwd / "run.mcap").exists()
+    if "broken.mcap" in text:
+        data = (cwd / "run.mcap").read_bytes()
+        (cwd / "broken.mcap").write_bytes(data[: len(data) * 2 // 3])
+    if "first.mcap" in text and "--record first.mcap" not in text:
+        shutil.copy(cwd / "run.mcap", cwd / "first.mcap")
+
+
+@pytest.mark.parametrize("block", sorted(BLOCKS))
+def test_docs_block_runs(block, tmp_path):
+    examples_ = BLOCKS[block]
+    session = Session(tmp_path, free_port())
+    runnable = [e for e in examples_ if session.argv(e) is not None]
+    if not runnable:
+        pytest.skip("no command of this block runs here (the unit test checks each program)")
+    _prepare(tmp_path, examples_)
+    uses_router = any(session.argv(e)[1:3] == ["-m", "papf"] and
+                      session.argv(e)[3] in ("topic", "goal", "record", "replay") for e in runnable)
+    starts_router = any("papf.launch.router" in e.text or e.text.startswith("papf launch robot")
+                        or (e.background and e.text.startswith("papf run")) for e in runnable)
+    session.needs_robot = re.search(r"<robot(-ip)?>", " ".join(e.text for e in examples_)) and \
+        not any("rosbot-emulator" in e.text for e in examples_)
+    if session.needs_robot and not starts_router:     # the rehearsal's robot side
+        session.start(Example(block, 0, "papf launch robot", -1, True),
+                      [PY, "-m", "papf", "launch", "robot", "--listen", session.endpoint])
+    elif uses_router and not starts_router:
+        session.start(Example(block, 0, "python -m papf.launch.router", -1, True),
+                      [PY, "-m", "papf.launch.router", "--listen", session.endpoint])
+    try:
+        for ex in examples_:
+            session.run(ex)
+    finally:
+        session.stop()

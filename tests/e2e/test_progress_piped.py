@@ -1,0 +1,94 @@
+"""Every command that can take more than a few seconds says how far it is, piped too.
+
+Each command runs with its output piped (not a terminal), and its progress lines must come
+while it is still working: the long studies are stopped after their first progress line
+(they take minutes); ``papf animate`` runs to the end and its progress lines must come
+before its last line.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from nodes.recorder.writer import RunWriter
+from papf.launch.supervisor import free_port
+from schemas.messages import BatteryState, Odometry
+
+pytestmark = pytest.mark.e2e
+
+NS = 1_000_000_000
+
+
+def _first_progress(argv: list[str], pattern: str, cwd, timeout_s: float = 240.0) -> str:
+    """Start ``papf argv`` piped; return its first stderr line matching ``pattern`` while it
+    is still running, then stop it."""
+    proc = subprocess.Popen([sys.executable, "-m", "papf", *argv], cwd=cwd, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    seen: list[str] = []
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            line = proc.stderr.readline()
+            if not line:
+                break
+            seen.append(line.rstrip())
+            if re.search(pattern, line):
+                assert proc.poll() is None, "the progress line came only at the end"
+                return line.strip()
+        raise AssertionError(f"no progress line /{pattern}/ from papf {' '.join(argv)}: "
+                             f"{seen[-10:]}")
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(timeout=30)
+        proc.stdout.close()
+        proc.stderr.close()
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["experiment", "wang"], r"^wang: 1/\d+  fig "),
+    (["experiment", "horizon"], r"^horizon: 1/9  apf default"),
+    (["experiment", "deviations", "--n", "1"], r"^deviations: 1/\d+  default on "),
+    (["experiment", "test1-sweep", "--seeds", "0"], r"^test1-sweep: 1/\d+  side "),
+])
+def test_studies_print_a_line_per_run(tmp_path, argv, pattern):
+    _first_progress([*argv, "--out", str(tmp_path / "out")], pattern, tmp_path)
+
+
+def test_run_view_prints_the_url_without_realtime(tmp_path):
+    port = free_port()
+    line = _first_progress(["run", "--world", "open", "--view", str(port), "--timeout", "20"],
+                           r"live view on ws://", tmp_path)
+    assert f"ws://127.0.0.1:{port}" in line and "--realtime" in line
+
+
+def test_animate_prints_progress_before_its_last_line(tmp_path):
+    rec, out = tmp_path / "run.mcap", tmp_path / "run.gif"
+    with RunWriter(rec, {"world": "open", "planner": "apf", "seed": 0}) as w:
+        for k in range(100):
+            t = k * 20_000_000
+            w.write_message("rosbot/odom", Odometry(stamp_ns=t, x=0.1 * t / NS, y=0.0, yaw=0.0,
+                                                    v=0.1, w=0.0))
+            w.write_message("rosbot/battery", BatteryState(stamp_ns=t, voltage=12.0, current=1.0,
+                                                           power=12.0, charge_used_mAh=t / NS,
+                                                           energy_J=12 * t / NS))
+    proc = subprocess.run([sys.executable, "-m", "papf", "animate", str(rec), str(out),
+                           "--speed", "0.5", "--fps", "10"], cwd=tmp_path, text=True,
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=240)
+    lines = proc.stdout.strip().splitlines()
+    assert proc.returncode == 0, lines[-10:]
+    progress = [n for n, line in enumerate(lines) if line.startswith("animate run.gif: ")]
+    assert len(progress) >= 5 and progress[-1] < len(lines) - 1, lines
+    assert lines[-1].startswith(f"{out}: 41 frames")

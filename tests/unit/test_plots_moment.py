@@ -1,0 +1,44 @@
+"""The planner's-mind figure picks the moment the planner acted (papf/plots/moment.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from papf.plots.moment import MomentPanel, moment_png, planner_events, telling_moment
+from schemas.messages import PlannerState
+from worlds import load_world
+
+S = 1_000_000_000
+
+
+def _state(t_s: float, **kw) -> PlannerState:
+    return PlannerState(stamp_ns=int(t_s * S), algorithm="papf", **kw)
+
+
+STATES = [_state(0.0, temporary_goal=(1.0, 0.0)),            # set at start: not telling
+          _state(1.0, temporary_goal=(1.02, 0.0)),           # moved 2 cm: not a move
+          _state(2.0, temporary_goal=(1.5, 0.3)),            # moved
+          _state(3.0, temporary_goal=(1.5, 0.3), top_quarks=((2.0, 0.5),)),   # a quark placed
+          _state(4.0, temporary_goal=(1.5, 0.3), top_quarks=((2.0, 0.5),))]
+
+
+def test_events_are_what_the_planner_did():
+    assert [(e.t_s, e.what) for e in planner_events(STATES)] == [
+        (0.0, "temporary goal set"), (2.0, "temporary goal moved"), (3.0, "a quark placed")]
+
+
+def test_the_quark_beats_the_goal_move_and_nothing_before_motion_counts():
+    assert telling_moment(STATES, t_moving_s=0.5).what == "a quark placed"
+    assert telling_moment(STATES[:3], t_moving_s=0.5).t_s == 2.0
+    assert telling_moment(STATES[:2], t_moving_s=0.5) is None
+
+
+def test_moment_png_draws_one_panel_per_run(tmp_path):
+    t = np.linspace(0.0, 4.0, 41)
+    xyyaw = np.column_stack([0.5 * t, np.zeros_like(t), np.zeros_like(t)])
+    panel = MomentPanel("papf seed 0 (reached)", "papf", t, xyyaw, np.full_like(t, 0.5), STATES)
+    out = moment_png([panel, panel], load_world("energy"), tmp_path / "mind.png")
+    from PIL import Image
+
+    with Image.open(out) as im:
+        assert im.size[0] > 1000 and im.size[1] > 500
