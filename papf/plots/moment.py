@@ -26,10 +26,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.patches import Circle, Patch, Polygon  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 
 from papf.plots.mind import draw_footprint, draw_mind, draw_moving, draw_road, rgba  # noqa: E402
-from papf.plots.world import colour_for, draw_world  # noqa: E402
+from papf.plots.world import colour_for, draw_obstacle, draw_world  # noqa: E402
 from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -151,11 +151,7 @@ def draw_traffic(ax, world: World, t_end_s: float) -> list:
 
 
 def _outline(ax, here, alpha: float):
-    style = {"fill": False, "edgecolor": rgba("moving", alpha), "lw": 0.8, "zorder": 3}
-    patch = (Polygon(here.corners(), closed=True, **style) if here.shape == "box"
-             else Circle(here.center[:2], here.radius, **style))
-    ax.add_patch(patch)
-    return patch
+    return draw_obstacle(ax, here, color=rgba("moving", alpha), zorder=3, fill=False, lw=0.8)
 
 
 @dataclass

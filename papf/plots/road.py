@@ -13,10 +13,9 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.patches import Circle, Polygon  # noqa: E402
 
 from papf.plots.moment import draw_traffic, static_world  # noqa: E402
-from papf.plots.world import GOAL_COLOUR, OBSTACLE_COLOUR, START_COLOUR, colour_for  # noqa: E402
+from papf.plots.world import GOAL_COLOUR, START_COLOUR, colour_for, draw_obstacle  # noqa: E402
 from worlds import World  # noqa: E402
 
 
@@ -26,10 +25,7 @@ def plot_road_run(world: World, planner: str, outcome: str, path: np.ndarray,
     fig, ax = plt.subplots(figsize=(11.0, 3.4), layout="constrained")
     try:
         for ob in static_world(world).obstacles:
-            patch = (Polygon(ob.corners(), closed=True, color=OBSTACLE_COLOUR, lw=0)
-                     if ob.shape == "box" else Circle(ob.center[:2], ob.radius,
-                                                      color=OBSTACLE_COLOUR, lw=0))
-            ax.add_patch(patch)
+            draw_obstacle(ax, ob, lw=0)
         draw_traffic(ax, world, float(times[-1]) if len(times) else 0.0)
         ax.plot(*world.start[:2], "o", color=START_COLOUR, ms=7, label="start", zorder=5)
         ax.axvline(world.goal[0], color=GOAL_COLOUR, lw=1.5, ls="--", zorder=4,

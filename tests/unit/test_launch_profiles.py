@@ -77,7 +77,7 @@ def test_laptop_profile_plan_and_errors(world):
     assert list(cmds) == ["recorder", "energy_meter", "planner"] and connect == opt.connect
     assert cmds["planner"][-4:] == ["--connect", "tcp/10.0.0.2:7447", "--namespace", "r7"]
     assert "--realtime" in cmds["planner"] and "v_max=0.5" in cmds["planner"]
-    assert cmds["energy_meter"][cmds["energy_meter"].index("--model") + 1] == "paper"
+    assert cmds["energy_meter"][cmds["energy_meter"].index("--model") + 1] == "motor"   # one model everywhere
     assert "recorder" not in plan(prof, LaunchOptions("laptop", connect=["tcp/h:1"]))[0]
     with pytest.raises(ConfigError, match="give --connect"):
         plan(prof, LaunchOptions("laptop"))
