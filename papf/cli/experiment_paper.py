@@ -41,6 +41,9 @@ def add_paper_studies(exp) -> None:
                                    "as it ends (a re-run skips the runs already in the CSV).")
     f.add_argument("--out", default="safety-floor.csv", metavar="FILE.csv",
                    help="the CSV (default safety-floor.csv; docs/data/safety-floor.csv in the docs)")
+    f.add_argument("--car", action="store_true",
+                   help="instead: the car planner's obstacle field (obstacle_gain, a_x, a_y) on "
+                        "the IAPF paper's cases A-D (docs/data/safety-floor-iapf.csv)")
     f.set_defaults(func=cmd_safety_floor)
     w = _study(exp, "wang", "Wang's Figs. 5-12: the published point simulation and the ROSbot",
                "Each of Wang's figures as published (a point stepping 0.5 along the force, J = 200, "
@@ -135,6 +138,6 @@ def cmd_cases(args) -> int:
 def cmd_safety_floor(args) -> int:
     from papf.experiments.safety_floor import run
 
-    floors = run(Path(args.out), progress=lambda line: print(line, flush=True))
+    floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car)
     print("floors: " + ", ".join(f"{k}={v:g}" for k, v in floors.items()))
     return 0

@@ -21,7 +21,7 @@ from pathlib import Path
 from common.errors import ConfigError
 from common.outfiles import OutputError, check_output
 from common.params import PORT, SEED, TIMEOUT, Spec, check_value
-from nodes.planner.registry import PLANNERS, load_params
+from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, load_params
 from papf.launch.supervisor import port_in_use
 from schemas import Keys
 from worlds import World
@@ -147,7 +147,7 @@ def check_launch(opt, prof) -> None:
         check_value("--seed", values["seed"], SEED)
     modules = {spec.module for spec in prof.nodes}
     if "nodes.planner" in modules or values.get("planner"):
-        planner = str(values.get("planner") or "apf")
+        planner = str(values.get("planner") or DEFAULT_PLANNER)
         planner_name(planner)
         planner_settings(planner, opt.planner_args)
     record_path(values.get("record"), bool(values.get("record_force")))

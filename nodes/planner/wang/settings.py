@@ -19,11 +19,13 @@ WANG: dict[str, Spec] = {
     "control_offset_m": num(0.0, 1.0, "m"),
 }
 
-# Wang's traditional APF baseline (eqs. 1-5): the paper's failing baseline, its floors not
-# measured (its default k_rep_l = 2 is below the improved planner's measured floor)
+# Wang's traditional APF baseline (eqs. 1-5): the paper's failing baseline. Its floors are
+# the paper's own values (Table 1's K_rep = 2 spread over the beams; rho_0 as the improved
+# planner's measured floor): below them it is no reading of the paper, only a weaker field.
+K_REP_L_BASELINE_MIN = 2.0   # [-] Table 1
 WANG_APF: dict[str, Spec] = {
     "k_att": pos(1000.0),
-    "k_rep_l": pos(MAX_GAIN, safety=True),
+    "k_rep_l": num(K_REP_L_BASELINE_MIN, MAX_GAIN, safety=True),
     "lidar_points": integer(1, MAX_BEAMS),
-    "rho_0": pos(LIDAR_RANGE_MAX_M, "m", safety=True),
+    "rho_0": num(RHO_0_MIN_M, LIDAR_RANGE_MAX_M, "m", safety=True),
 }
