@@ -99,6 +99,8 @@ class Session:
         name = Path(argv[0]).name
         if name == "papf":
             return [PY, "-m", "papf", *self._papf(argv[1:], ex.background)]
+        if name in ("python", "python3") and argv[1:2] == ["-m"] and argv[2] == "pytest":
+            return None   # the test commands: the suite does not run itself
         if name in ("python", "python3") and argv[1:2] == ["-m"] and argv[2] != "venv":
             return [PY, *argv[1:], *self._zenoh(argv[2:])]
         if name == "make" and argv[1] in MAKE_DRY:
@@ -130,8 +132,8 @@ class Session:
                 "--listen" not in args:
             extra = [*extra, "--listen", f"tcp/127.0.0.1:{port}" if args[1] == "sim"
                      else self.endpoint]
-        elif args[0] in ("topic", "goal", "record", "replay", "rosbot-emulator", "launch",
-                         "view") and \
+        elif args[0] in ("topic", "node", "param", "goal", "record", "replay",
+                         "rosbot-emulator", "launch", "view") and \
                 "--connect" not in args and "--zenoh-config" not in args:
             extra = [*extra, "--connect", self.endpoint]
         return [*args, *extra]
@@ -197,7 +199,7 @@ class Session:
 
 def _subcommand_len(args: list[str]) -> int:
     """How many leading words name the command (``experiment wang``: 2; ``run``: 1)."""
-    if args[0] in ("experiment", "topic", "export", "bench", "launch"):
+    if args[0] in ("experiment", "topic", "export", "bench", "launch", "node", "param", "new"):
         return 2
     return 1
 
@@ -216,19 +218,30 @@ def _prepare(cwd: Path, block: list[Example]) -> None:
     """What the block's examples take as given: a recording, a broken one, a result dir."""
     text = " ".join(e.text for e in block)
     (cwd / "docs").mkdir(exist_ok=True)    # paths of the docs are relative to the repository
-    needs_run = any(w in text for w in ("run.mcap", "first.mcap")) and \
-        not any("--record run.mcap" in e.text for e in block)
+    records_run = any("--record run.mcap" in e.text for e in block)
+    needs_run = any(w in text for w in ("run.mcap", "first.mcap")) and not records_run
+    # a block that records run.mcap itself gets its other inputs from a recording of its own
+    # (recordings are never overwritten: the block's run would refuse an existing run.mcap)
+    prep = cwd / ("prep.mcap" if records_run else "run.mcap")
     if needs_run or "broken.mcap" in text or "energy-exp" in text:
         port = free_port()
         subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
-                        "--record", "run.mcap", "--port", str(port), "--timeout", "6"],
+                        "--record", prep.name, "--port", str(port), "--timeout", "6"],
                        cwd=cwd, capture_output=True, timeout=300, check=False)
-        assert (cwd / "run.mcap").exists()
+        assert prep.exists()
     if "broken.mcap" in text:
-        data = (cwd / "run.mcap").read_bytes()
+        data = prep.read_bytes()
         (cwd / "broken.mcap").write_bytes(data[: len(data) * 2 // 3])
     if "first.mcap" in text and "--record first.mcap" not in text:
-        shutil.copy(cwd / "run.mcap", cwd / "first.mcap")
+        shutil.copy(prep, cwd / "first.mcap")
+    if "lab-run" in text:   # a rosbag2 as the ROSbot records it (`ros2 bag record` cannot run here)
+        from tests.support.bags import write_bag
+
+        write_bag(cwd / "lab-run")
+    if "other-bag" in text:   # a robot whose topics have other names (the --topics example)
+        from tests.support.bags import write_bag
+
+        write_bag(cwd / "other-bag", names={"odom": "/odom", "battery": "/battery_state"})
 
 
 @pytest.mark.parametrize("block", sorted(BLOCKS))
@@ -240,7 +253,8 @@ def test_docs_block_runs(block, tmp_path):
         pytest.skip("no command of this block runs here (the unit test checks each program)")
     _prepare(tmp_path, examples_)
     uses_router = any(session.argv(e)[1:3] == ["-m", "papf"] and
-                      session.argv(e)[3] in ("topic", "goal", "record", "replay") for e in runnable)
+                      session.argv(e)[3] in ("topic", "node", "param", "goal", "record", "replay")
+                      for e in runnable)
     starts_router = any("papf.launch.router" in e.text or e.text.startswith("papf launch robot")
                         or (e.background and e.text.startswith("papf run")) for e in runnable)
     session.needs_robot = re.search(r"<robot(-ip)?>", " ".join(e.text for e in examples_)) and \
