@@ -34,7 +34,7 @@ key                         type                  dir  what
 Time: the driver owns the clock here too. A run's time is wall time since the driver saw
 ``run_started``, on a tick grid of ``--odom-hz`` (default 50 Hz: 20 ms), and every
 odom/wheels/clock of a tick carries the same stamp. Between runs only ``odom`` is published,
-at :data:`IDLE_ODOM_HZ`, stamped with the last run's last tick (0 before the first run), so
+at :data:`IDLE_ODOM_HZ`, stamped on from the last run's last tick (0 before the first run), so
 that ``papf teleop`` shows where the robot is; commands are forwarded (with limits and
 watchdog) at any time. During a run,
 a command whose stamp (the scan it answers) is older than the watchdog is dropped as late:
@@ -230,6 +230,8 @@ class RosbotDriver:
         every = max(1, round(1e9 / IDLE_ODOM_HZ / self.period_ns))
         self.idle_ticks += 1
         if fresh and self.idle_ticks % every == 0:
+            if self.last_stamp_ns:   # after a run: its clock goes on (a stamp is never repeated)
+                self.last_stamp_ns += every * self.period_ns
             self.node.publish("odom", self.frame.to_world(self.robot, self.last_stamp_ns))
 
     def next_tick_at(self, now: int) -> int:

@@ -183,6 +183,25 @@ def test_odometry_between_runs_for_teleop():
     assert node.of("wheels") == [] and node.of("clock") == []   # no run: no clock, no energy
 
 
+def test_odometry_after_a_run_never_repeats_a_stamp():
+    """A recording that goes on after ``run_ended`` holds each odom stamp once, in order."""
+    node, d = _driver()
+    odom_cdr = ros2.encode(ros2.odometry(1, 1.0, 2.0, 0.0, 0.0, 0.0), ros2.ODOMETRY)
+    d.on_bridge("odometry", odom_cdr, 0)
+    d.on_event(Event(stamp_ns=0, kind="run_started", source="test"), 0)
+    now = 0
+    for now in range(20 * MS, 400 * MS, 20 * MS):
+        d.on_bridge("odometry", odom_cdr, now)
+        d.next_tick_at(now)                             # the loop's tick grid
+        d.on_tick(now)
+    d.on_event(Event(stamp_ns=0, kind="run_ended", source="test"), now)
+    for now in range(now + 20 * MS, now + 600 * MS, 20 * MS):   # idle: 10 Hz odometry
+        d.on_bridge("odometry", odom_cdr, now)
+        d.on_tick(now)
+    stamps = [o.stamp_ns for o in node.of("odom")]
+    assert len(stamps) > 20 and stamps == sorted(stamps) and len(set(stamps)) == len(stamps)
+
+
 def test_stop_wake_up_is_not_a_robot_message():
     """Ctrl-C puts ``(None, None)`` in the inbox to wake the loop: the driver just stops."""
     node, d = _driver()
