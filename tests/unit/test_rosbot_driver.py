@@ -194,8 +194,9 @@ def test_odometry_after_a_run_never_repeats_a_stamp():
         d.on_bridge("odometry", odom_cdr, now)
         d.next_tick_at(now)                             # the loop's tick grid
         d.on_tick(now)
-    d.on_event(Event(stamp_ns=0, kind="run_ended", source="test"), now)
-    for now in range(now + 20 * MS, now + 600 * MS, 20 * MS):   # idle: 10 Hz odometry
+    end = now
+    d.on_event(Event(stamp_ns=0, kind="run_ended", source="test"), end)
+    for now in range(end + 20 * MS, end + 600 * MS, 20 * MS):   # idle: 10 Hz odometry
         d.on_bridge("odometry", odom_cdr, now)
         d.on_tick(now)
     stamps = [o.stamp_ns for o in node.of("odom")]
