@@ -2,35 +2,11 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from papf.recording import (
     open_recording,
 )
 from schemas import Keys, Odometry
-
-VALUES = {"int": 123, "float": 1.5, "bool": True, "floats": (1.0, 2.0),
-          "points": ((1.0, 2.0), (3.0, 4.0)), "paths": (((0.0, 1.0), (2.0, 3.0)),),
-          "strs": ("a", "b")}
-
-
-def sample(msg_type, stamp_ns: int = 1_000_000):
-    """One valid instance of any message type, built from its field table."""
-    kwargs = {}
-    for name, kind, md in msg_type._FIELDS:
-        if name == "stamp_ns":
-            kwargs[name] = stamp_ns
-        elif kind == "str":
-            kwargs[name] = md["choices"][0] if md.get("choices") else "x"
-        elif kind == "f32array":
-            kwargs[name] = np.arange(8, dtype=np.float32)
-        elif kind == "items":
-            kwargs[name] = (sample(md["item"], stamp_ns),)
-        elif kind == "floats" and md.get("length"):
-            kwargs[name] = tuple(float(i) for i in range(md["length"]))
-        else:
-            kwargs[name] = VALUES[kind]
-    return msg_type(**kwargs)
+from tests.support.recordings import sample
 
 
 def test_recorder_closes_its_file_at_run_ended_and_says_so(tmp_path):
