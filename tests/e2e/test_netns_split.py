@@ -170,7 +170,11 @@ def test_split_over_netns_survives_a_link_cut(netns, tmp_path):
         odom = [(m.publish_time_ns, m.log_time_ns) for m in rec.raw(f"{ns}/odom")]  # (wall rx, stamp)
         status = [m.message.state for m in rec.messages(f"{ns}/planner/status")]
     assert any(t < cut_wall for t, _ in odom) and any(t > restore_wall for t, _ in odom)
-    stamps = [s for _, s in odom]
+    # the run's own odometry: the driver's idle odometry before run_started is stamped 0, as
+    # is the run's first tick; every stamp 0 came before the cut (the clock never restarted)
+    zeros = [i for i, (_, s) in enumerate(odom) if s == 0]
+    assert zeros and all(odom[i][0] < cut_wall for i in zeros)
+    stamps = [s for _, s in odom[zeros[-1]:]]
     assert stamps == sorted(stamps) and len(set(stamps)) == len(stamps)
     assert "reached" in status
     assert robot.returncode == 0
