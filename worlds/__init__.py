@@ -14,6 +14,7 @@ from pathlib import Path
 
 from common.errors import WorldError
 from common.optional import tomllib
+from worlds.fleet import PersonSpec, RobotSpec, parse_people, parse_robots
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
 from worlds.traffic import Motion, Road, state_at
@@ -39,6 +40,14 @@ class World:
     source: str = ""                             # file it came from
     road: Road | None = None                     # the optional ``[road]``
     vehicle: str = "rosbot"                      # ``[robot].vehicle``: rosbot | car (IAPF cases)
+    robots: tuple[RobotSpec, ...] = ()           # ``[[robots]]`` (start/goal are the first's)
+    people: tuple[PersonSpec, ...] = ()          # ``[[people]]``
+
+    @property
+    def fleet(self) -> tuple[RobotSpec, ...]:
+        """Every robot: ``[[robots]]``, or the one of ``[robot]``/``[goal]`` (name "")."""
+        return self.robots or (RobotSpec(name="", start=tuple(self.start[:3]),
+                                         goal=tuple(self.goal[:2]), tolerance=self.tolerance),)
 
     @property
     def dims(self) -> int:
@@ -106,6 +115,18 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
     check_document(data, source)
     ctx = _Ctx(source)
     name = ctx.str(data, "name", default=Path(source).stem)
+    robots = people = ()
+    if "robots" in data:
+        for table in ("robot", "goal"):
+            if table in data:
+                ctx.fail(f"[{table}]", "a world with [[robots]] gives each robot its start and goal "
+                         "there; remove [robot] and [goal]")
+        robots = parse_robots(ctx, data["robots"])
+        first = robots[0]
+        data = {**data, "robot": {"start": list(first.start)},
+                "goal": {"position": list(first.goal), "tolerance": first.tolerance}}
+    if "people" in data:
+        people = parse_people(ctx, data["people"])
     robot = ctx.table(data, "robot", default={})
     start = ctx.vec(robot, "start", (2, 3), "robot.start", default=[0.0, 0.0, 0.0])
     vehicle = ctx.str(robot, "vehicle", "robot.vehicle", default="rosbot")
@@ -127,10 +148,13 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
     road = _road(ctx, data["road"]) if "road" in data else None
     if road is not None and len(goal) != 2:
         ctx.fail("[road]", "a road needs a 2-D world (goal.position with 2 numbers)")
+    if (robots or people) and (len(goal) != 2 or vehicle != "rosbot"):
+        ctx.fail("[[robots]]" if robots else "[[people]]",
+                 "several robots and people share a 2-D world of ROSbots")
     return World(name=name, description=ctx.str(data, "description", default=""),
                  start=tuple(start), goal=tuple(goal), tolerance=tolerance,
                  obstacles=tuple(obstacles), source=source, road=road,
-                 vehicle=vehicle)
+                 vehicle=vehicle, robots=robots, people=people)
 
 
 def _road(ctx: _Ctx, t) -> Road:

@@ -21,6 +21,7 @@ import difflib
 from collections.abc import Iterable
 
 from common.errors import WorldError
+from worlds.fleet import PERSON_KEYS, ROBOT_KEYS
 from worlds.kinds import KINDS
 
 MAX_FILE_BYTES = 1024 * 1024     # [bytes] the largest packaged world is 3 KB
@@ -31,7 +32,7 @@ MAX_LANES = 16                   # [-] a motorway has 4-5 per direction
 MAX_TRACK_POINTS = 10_000        # [-] samples of one obstacle's motion track
 MAX_OBSTACLES = 10_000           # [-] in a file
 
-TOP = ("name", "description", "robot", "goal", "obstacles", "road")
+TOP = ("name", "description", "robot", "goal", "obstacles", "road", "robots", "people")
 TABLES = {"robot": ("start", "vehicle"), "goal": ("position", "tolerance"),
           "road": ("y_min", "lane_width", "lanes")}
 MOTION_KEYS = ("track",)
@@ -66,6 +67,11 @@ def check_document(data: dict, source: str) -> None:
     if isinstance(lanes, int) and not isinstance(lanes, bool) and lanes > MAX_LANES:
         _fail(source, "road.lanes", f"{lanes} lanes, more than {MAX_LANES}")
     _obstacles(data.get("obstacles"), source)
+    for array, valid in (("robots", ROBOT_KEYS), ("people", PERSON_KEYS)):
+        entries = data.get(array)
+        for i, entry in enumerate(entries if isinstance(entries, list) else ()):
+            if isinstance(entry, dict):
+                _keys(entry, valid, f"{array}[{i}]", source)
 
 
 def _obstacles(raw, source: str) -> None:
