@@ -44,12 +44,15 @@ FIELDS = ("label", "world", "obstacles", "cells", "start_s", "sim_s", "wall_s", 
           "cpu_ms_per_cycle", "rss_mb", "load_avg_1min")
 CYCLE_S = 0.1      # [s] the lockstep cycle (one scan, one command)
 RES_M = 0.05       # [m/cell] of the map halls
+CLEAR_M = 7.0      # [m] around the start, free of cylinders (the arc reaches 6 m + the robot)
 
 
 def cylinders_world(folder: Path, n: int) -> Path:
-    """``n`` cylinders (r 0.1 m) scattered over 100 x 100 m, none within 3 m of the start."""
+    """``n`` cylinders (r 0.1 m) scattered over 100 x 100 m, none within :data:`CLEAR_M` of the
+    start: the bench's arc (0.3 m/s, 0.1 rad/s: a 3 m circle through the start) never touches
+    one, so each cycle pays for what the robot sees (a run ends at its first contact)."""
     xy = np.random.default_rng(11).uniform(-50, 50, (n * 2, 2))
-    xy = xy[np.hypot(xy[:, 0], xy[:, 1]) > 3.0][:n]
+    xy = xy[np.hypot(xy[:, 0], xy[:, 1]) > CLEAR_M][:n]
     lines = ['[robot]\nstart = [0.0, 0.0, 0.0]\n[goal]\nposition = [40.0, 0.0]\n']
     lines += [f'[[obstacles]]\nkind = "cylinder"\ncenter = [{x:.3f}, {y:.3f}]\nradius = 0.1\n'
               for x, y in xy]

@@ -17,6 +17,8 @@ Only pybullet is imported here; the caller owns the client (``p.connect(p.DIRECT
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from common.quiet import import_quietly
@@ -38,11 +40,12 @@ def build_world(client_id: int, world: World, owners: dict[int, int] | None = No
     body (a map is several; :data:`MERGED` for a mesh of many obstacles)."""
     merged = _mergeable(world)
     ids = [-1] * len(world.obstacles)
-    for body in _merged_bodies(client_id, [world.obstacles[i] for i in merged]):
-        for i in merged:
-            ids[i] = body if ids[i] < 0 else ids[i]
-        if owners is not None:
-            owners[body] = MERGED
+    for tile in _by_tile(world, sorted(merged)):
+        for body, members in _meshes(client_id, world, tile):
+            for i in members:
+                ids[i] = body
+            if owners is not None:
+                owners[body] = MERGED
     for i, ob in enumerate(world.obstacles):
         if i in merged:
             continue
@@ -60,6 +63,7 @@ def build_world(client_id: int, world: World, owners: dict[int, int] | None = No
 MERGE_MIN = 64        # [-] static obstacles from which they are merged into meshes
 MESH_VERTICES = 32768  # [-] vertices per merged mesh
 MERGED = -1           # owners' value for a mesh of many obstacles
+TILE_M = 10.0         # [m] side of the square places whose obstacles share meshes
 
 
 def _mergeable(world: World) -> set[int]:
@@ -71,22 +75,38 @@ def _mergeable(world: World) -> set[int]:
     return idx if len(idx) > MERGE_MIN else set()
 
 
-def _merged_bodies(client_id: int, obstacles) -> list[int]:
-    """Static triangle-mesh bodies holding ``obstacles``' solids, :data:`MESH_VERTICES` each."""
-    bodies, verts, faces, count = [], [], [], 0
-    for k, ob in enumerate(obstacles):
+def _by_tile(world: World, indices: list[int]) -> list[list[int]]:
+    """Obstacle ``indices`` grouped by the :data:`TILE_M` square their bounding box's centre
+    lies in (file order within a tile), so that each mesh covers one compact place: a ray or
+    the robot then meets only the meshes of the tiles it crosses, not every mesh."""
+    tiles: dict[tuple[int, int], list[int]] = {}
+    for i in indices:
+        ob = world.obstacles[i]
+        x0, y0, x1, y1 = ob.model.bounds(ob)
+        key = (math.floor((x0 + x1) / 2 / TILE_M), math.floor((y0 + y1) / 2 / TILE_M))
+        tiles.setdefault(key, []).append(i)
+    return [tiles[k] for k in sorted(tiles)]
+
+
+def _meshes(client_id: int, world: World, indices: list[int]) -> list[tuple[int, list[int]]]:
+    """Static triangle-mesh bodies holding the solids of obstacles ``indices``, about
+    :data:`MESH_VERTICES` each: (body id, the obstacle indices it holds) per mesh."""
+    out, verts, faces, members, count = [], [], [], [], 0
+    for k, i in enumerate(indices):
+        ob = world.obstacles[i]
         v, f = ob.model.triangles(ob)
         verts.append(v)
         faces.append(f + count)
+        members.append(i)
         count += len(v)
-        if count >= MESH_VERTICES or k == len(obstacles) - 1:
+        if count >= MESH_VERTICES or k == len(indices) - 1:
             shape = p.createCollisionShape(p.GEOM_MESH, vertices=np.vstack(verts).tolist(),
                                            indices=np.vstack(faces).ravel().tolist(),
                                            physicsClientId=client_id)
-            bodies.append(p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
-                                            physicsClientId=client_id))
-            verts, faces, count = [], [], 0
-    return bodies
+            out.append((p.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=shape,
+                                          physicsClientId=client_id), members))
+            verts, faces, members, count = [], [], [], 0
+    return out
 
 
 class MovingBodies:

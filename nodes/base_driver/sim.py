@@ -50,6 +50,7 @@ from common.quiet import import_quietly
 from schemas.messages import WHEEL_NAMES, Odometry, WheelStates
 from worlds import World
 from worlds.bullet import MERGED, MovingBodies, add_ground, build_world
+from worlds.index import StaticIndex
 
 p = import_quietly("pybullet")   # no build banner on stderr (common/quiet.py)
 # the calls made every physics step, looked up once
@@ -172,6 +173,7 @@ class SimBase:
         self.ground = add_ground(cid)
         self._obstacle_index: dict[int, int] = {}               # body id -> obstacle index
         self.obstacles = build_world(cid, world, self._obstacle_index)
+        self._static_index: StaticIndex | None = None            # on the first mesh contact
         self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
         self.robot = self._build_robot(start)
         for _ in range(SETTLE_STEPS):
@@ -299,12 +301,9 @@ class SimBase:
 
     def _nearest_static(self, x: float, y: float) -> int | None:
         """Index of the static obstacle nearest to (x, y) [m] (a contact with a merged mesh)."""
-        best = None
-        for i, ob in enumerate(self.world.obstacles):
-            if ob.motion is None:
-                d = float(ob.model.distance(ob, np.array([[x, y]]))[0])
-                best = (d, i) if best is None or d < best[0] else best
-        return best[1] if best else None
+        if self._static_index is None:   # built on the first contact with a mesh
+            self._static_index = StaticIndex(self.world)
+        return self._static_index.nearest(x, y)
 
     def close(self) -> None:
         if self.cid is not None and p.isConnected(self.cid):

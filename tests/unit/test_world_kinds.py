@@ -143,7 +143,7 @@ def test_many_static_obstacles_are_merged_into_meshes_that_rays_and_contacts_see
     rays see the same obstacles (cylinders as circumscribed 16-gons) and a contact with a
     mesh names the obstacle touched."""
     from nodes.base_driver.sim import SimBase
-    from worlds.bullet import MERGE_MIN, MERGED
+    from worlds.bullet import MERGE_MIN, MERGED, TILE_M
 
     rng = np.random.default_rng(3)
     obs = [{"kind": "cylinder", "center": [float(x), float(y)], "radius": 0.15}
@@ -160,7 +160,14 @@ def test_many_static_obstacles_are_merged_into_meshes_that_rays_and_contacts_see
         hits = p.rayTestBatch([(0.0, 0.0, 0.2)] * len(ends), ends, physicsClientId=cid)
     finally:
         p.disconnect(cid)
-    assert set(owners.values()) == {MERGED} and len(set(ids)) == len(owners) == 1
+    # one mesh per 10 m tile the obstacles' centres fall in (2..12 m: tiles 0 and 1 each way)
+    tiles = {(math.floor(o["center"][0] / TILE_M), math.floor(o["center"][1] / TILE_M)) for o in obs}
+    assert set(owners.values()) == {MERGED} and set(ids) == set(owners) and len(owners) == len(tiles)
+    for ob, body in zip(obs, ids, strict=True):   # each obstacle in the mesh of its own tile
+        same = [b for o, b in zip(obs, ids, strict=True)
+                if math.floor(o["center"][0] / TILE_M) == math.floor(ob["center"][0] / TILE_M)
+                and math.floor(o["center"][1] / TILE_M) == math.floor(ob["center"][1] / TILE_M)]
+        assert set(same) == {body}
     seen = np.array([h[2] * 15 if h[0] >= 0 else np.inf for h in hits])
     both = np.isfinite(exact) & np.isfinite(seen)
     assert both.sum() > 50 and (np.isfinite(exact) == np.isfinite(seen)).mean() > 0.97
