@@ -58,6 +58,7 @@ class Spec:
         return f"{what} in {left}{lo}, {hi}{right}" + (f" {self.unit}" if self.unit else "")
 
     def contains(self, value: float) -> bool:
+        """Whether ``value`` lies in the range (open ends excluded)."""
         if self.lo is not None and (value < self.lo or (self.lo_open and value == self.lo)):
             return False
         return not (self.hi is not None and (value > self.hi or (self.hi_open and value == self.hi)))
@@ -75,6 +76,7 @@ def pos(hi: float, unit: str = "", *, safety: bool = False) -> Spec:
 
 
 def integer(lo: int | None, hi: int | None, unit: str = "") -> Spec:
+    """A Spec of an integer in [lo, hi] (None: unbounded) in ``unit``."""
     return Spec(int, lo, hi, unit=unit)
 
 
@@ -85,6 +87,7 @@ PORT = Spec(int, 1, 65535)       # a TCP port
 
 
 def choice(*values: str) -> Spec:
+    """A Spec of a string, one of ``values``."""
     return Spec(str, choices=tuple(values))
 
 

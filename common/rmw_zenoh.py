@@ -80,10 +80,12 @@ def type_hash(typename: str) -> str:
 
 
 def mangle(name: str) -> str:
+    """A ROS name as one key-expression chunk (``/`` -> ``%``, rmw_zenoh's mangling)."""
     return name.replace("/", "%")
 
 
 def demangle(name: str) -> str:
+    """Undo :func:`mangle` (``%`` -> ``/``)."""
     return name.replace("%", "/")
 
 
@@ -99,6 +101,7 @@ def topic_key(domain: int, topic: str, typename: str) -> str:
 
 
 def check_domain(domain: int) -> int:
+    """``domain`` as an int; ConfigError unless 0..DOMAIN_MAX."""
     if not 0 <= int(domain) <= DOMAIN_MAX:
         raise ConfigError(f"ROS domain {domain} is out of range: give 0..{DOMAIN_MAX}")
     return int(domain)
@@ -172,6 +175,7 @@ class Qos:
                    lease=(n(comps[5][1], d.lease[0]), n(comps[5][2], d.lease[1])))
 
     def describe(self) -> str:
+        """The QoS in words: ``reliable, volatile, keep last 10``."""
         rel = {1: "reliable", 2: "best effort"}.get(self.reliability, str(self.reliability))
         dur = {1: "transient local", 2: "volatile"}.get(self.durability, str(self.durability))
         hist = f"keep last {self.depth}" if self.history == 1 else "keep all"
@@ -203,6 +207,7 @@ class Entity:
     qos: Qos | None = None
 
     def token(self) -> str:
+        """The liveliness token key of this entity (rmw_zenoh's ``Entity::liveliness_keyexpr``)."""
         parts = [ADMIN_SPACE, str(self.domain), self.zid, str(self.node_id), str(self.entity_id),
                  self.kind, mangle(self.enclave), mangle(self.namespace), mangle(self.node)]
         if self.kind != NODE:
@@ -212,6 +217,7 @@ class Entity:
 
     @property
     def gid(self) -> bytes:
+        """The entity's 16-byte GID (derived from its token)."""
         return gid(self.token())
 
     @classmethod
@@ -237,6 +243,7 @@ class Entity:
 
     @property
     def fq_node(self) -> str:
+        """The node's fully qualified name (``/namespace/node``)."""
         return topic_name(self.node, self.namespace)
 
 
@@ -261,12 +268,14 @@ class Attachment:
     gid: bytes                 # 16 bytes, the publisher's
 
     def encode(self) -> bytes:
+        """The 33-byte attachment: int64 sequence, int64 stamp [ns], 0x10 and the GID."""
         if len(self.gid) != GID_SIZE:
             raise ValueError(f"GID of {len(self.gid)} bytes, expected {GID_SIZE}")
         return struct.pack("<qqB", self.sequence_number, self.source_timestamp, GID_SIZE) + self.gid
 
     @classmethod
     def decode(cls, data: bytes | memoryview | None) -> Attachment:
+        """A sample's attachment -> Attachment; AttachmentError unless 33 well-formed bytes."""
         data = bytes(data or b"")
         if len(data) != ATTACHMENT_SIZE or data[16] != GID_SIZE:
             raise AttachmentError(f"attachment of {len(data)} bytes ({data[:20].hex()}…): expected "

@@ -68,6 +68,7 @@ def deserialize(data: bytes | memoryview, typename: str):
 
 # -- pieces ---------------------------------------------------------------------------------------
 def time_msg(stamp_ns: int):
+    """A builtin_interfaces/Time of ``stamp_ns`` [ns]."""
     sec, nanosec = divmod(int(stamp_ns), NS)
     return _cls("builtin_interfaces/msg/Time")(sec=sec, nanosec=nanosec)
 
@@ -78,6 +79,7 @@ def stamp_of(header) -> int:
 
 
 def header(stamp_ns: int, frame_id: str):
+    """A std_msgs/Header at ``stamp_ns`` [ns] in ``frame_id``."""
     return _cls("std_msgs/msg/Header")(stamp=time_msg(stamp_ns), frame_id=frame_id)
 
 

@@ -72,6 +72,7 @@ def ros_domain(args: argparse.Namespace) -> int:
 
 
 def cmd_vel_type(args: argparse.Namespace) -> str:
+    """The ROS type name of cmd_vel chosen by ``--cmd-vel-type``; ConfigError if unknown."""
     name = getattr(args, "cmd_vel_type", "twist")
     if name not in CMD_VEL_TYPES:
         raise ConfigError(f"--cmd-vel-type {name!r}: give one of {', '.join(CMD_VEL_TYPES)}")
@@ -88,9 +89,11 @@ class RosLink:
         self._declared: list = []
 
     def key(self, topic: str, typename: str) -> str:
+        """The Zenoh key of ROS ``topic`` of type ``typename`` (each link's own mapping)."""
         raise NotImplementedError
 
     def close(self) -> None:
+        """Undeclare every publisher, subscriber and token, newest first."""
         for thing in reversed(self._declared):
             try:
                 thing.undeclare()
@@ -109,13 +112,16 @@ class BridgeLink(RosLink):
     middleware = "bridge"
 
     def key(self, topic: str, typename: str = "") -> str:
+        """The bridge's key of ``topic``: under the bridge's namespace (no type in it)."""
         topic = topic.strip("/")
         return f"{self.namespace}/{topic}" if self.namespace else topic
 
     def publisher(self, topic: str, typename: str, qos: rz.Qos = rz.RELIABLE_10):
+        """A publisher of ``topic`` (plain CDR; ``typename`` and ``qos`` unused)."""
         return self._keep(self.session.declare_publisher(self.key(topic)))
 
     def subscribe(self, topic: str, typename: str, callback, qos: rz.Qos = rz.RELIABLE_10):
+        """Call ``callback(cdr_bytes)`` for each message on ``topic``."""
         return self._keep(self.session.declare_subscriber(
             self.key(topic), lambda s: callback(s.payload.to_bytes())))
 
@@ -155,6 +161,7 @@ class RmwZenohLink(RosLink):
         self._token(self.node_entity)
 
     def key(self, topic: str, typename: str) -> str:
+        """The rmw_zenoh key of ``topic`` of ``typename`` in this domain and namespace."""
         return rz.topic_key(self.domain, rz.topic_name(topic, self.namespace), typename)
 
     def _entity(self, kind: str, topic: str, typename: str, qos: rz.Qos) -> rz.Entity:

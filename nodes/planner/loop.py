@@ -198,6 +198,7 @@ class HeldOdometry:
         self.kept: deque[Odometry] = deque()
 
     def on_odom(self, msg: Odometry) -> None:
+        """Keep an odometry message; wake the loop if a scan waits for its partner."""
         self.kept.append(msg)
         if self.loop.pending:   # a scan waits for odometry: this may be its partner
             self.wake()

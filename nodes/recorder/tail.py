@@ -48,6 +48,7 @@ class RunEndWatch:
         self.waiting: set[str] = set()      # live keys without a stamp >= end_ns yet
 
     def arrived(self, key: str, payload: bytes, now_ns: int) -> None:
+        """Note a sample on ``key`` received at ``now_ns`` [ns] (wall), to tell the tail's end."""
         if self.seen:
             if key in self.waiting:
                 if _reached(stamp_of(payload), self.end_ns):

@@ -65,6 +65,7 @@ class FaceCore:
                 ("robot_description", rc.serialize(rc.string(rosbot_urdf()), rc.STRING))]
 
     def on_message(self, topic: str, msg) -> list[tuple[str, bytes]]:
+        """One of our messages -> the (ROS topic, CDR bytes) to publish for it."""
         self.last_ns = max(self.last_ns, getattr(msg, "stamp_ns", 0))
         if topic == "scan":
             return [("scan", rc.serialize(rc.laser_scan(msg), rc.LASER_SCAN))]

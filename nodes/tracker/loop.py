@@ -30,6 +30,7 @@ class TrackerLoop:
         self.unpaired = 0
 
     def on_message(self, topic: str, msg, now: float) -> list:
+        """Take one message at ``now`` [s] (odometry kept, a scan paired); the outputs."""
         if topic == "odom" and isinstance(msg, Odometry):
             self.odoms[msg.stamp_ns] = msg
             self.odoms.move_to_end(msg.stamp_ns)

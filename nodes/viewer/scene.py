@@ -67,6 +67,7 @@ FORCE_MIN_M, FORCE_MAX_M = 0.15, 0.8   # [m] drawn length of the force arrow (lo
 
 
 def c(name: str) -> dict:
+    """The foxglove.Color of the mind layer ``name`` (:data:`MIND_COLOURS`)."""
     return colour(*MIND_COLOURS[name])
 
 

@@ -38,6 +38,7 @@ class GoalResult:
 
     @property
     def exit_code(self) -> int:
+        """``papf goal``'s exit code of this outcome (0 acknowledged, else EXIT_CODES)."""
         if self.outcome == "superseded":
             return 6
         if self.outcome == "acknowledged":

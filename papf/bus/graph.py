@@ -55,10 +55,12 @@ def ros_entities(session, domain: int, timeout_s: float = 1.0) -> list[rz.Entity
 
 
 def ros_nodes(entities: list[rz.Entity]) -> list[str]:
+    """The fully qualified names of the ROS nodes among ``entities``, sorted."""
     return sorted({e.fq_node for e in entities if e.kind == rz.NODE})
 
 
 def ros_node_info(entities: list[rz.Entity], fq_node: str) -> dict[str, list[rz.Entity]]:
+    """The publishers and subscriptions of ROS node ``fq_node``, by topic."""
     mine = [e for e in entities if e.fq_node == fq_node and e.kind != rz.NODE]
     return {"publishers": sorted((e for e in mine if e.kind == rz.PUBLISHER), key=lambda e: e.topic),
             "subscriptions": sorted((e for e in mine if e.kind == rz.SUBSCRIPTION),
@@ -66,6 +68,7 @@ def ros_node_info(entities: list[rz.Entity], fq_node: str) -> dict[str, list[rz.
 
 
 def ros_topic_info(entities: list[rz.Entity], topic: str) -> dict[str, list[rz.Entity]]:
+    """The publishers and subscriptions of ROS ``topic``."""
     mine = [e for e in entities if e.topic == topic]
     return {"publishers": [e for e in mine if e.kind == rz.PUBLISHER],
             "subscriptions": [e for e in mine if e.kind == rz.SUBSCRIPTION]}
@@ -87,6 +90,7 @@ def our_topic_info(session, keys: Keys, suffix: str) -> dict[str, list[str]]:
 
 
 def describe_port(port: Port, ns: str) -> str:
+    """One line of ``papf node info``: direction, key (a bridged one as ``<ros>/...``), type."""
     direction, key, msg_type = port
     shown = f"<ros>/{key[len(BRIDGE):]}" if key.startswith(BRIDGE) else f"{ns}/{key}"
     return f"{direction:<4} {shown:<32} {msg_type}"

@@ -96,6 +96,7 @@ class TeleopState:
         return action is not None
 
     def status(self) -> str:
+        """The command on screen: ``v +0.10 m/s  w -0.50 rad/s``."""
         return f"v {self.v:+.2f} m/s  w {self.w:+.2f} rad/s"
 
 

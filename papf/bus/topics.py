@@ -52,12 +52,14 @@ class Inbox:
             self.q.put((str(sample.key_expr), sample.payload.to_bytes(), time.monotonic()))
 
     def get(self, timeout_s: float):
+        """The next sample within ``timeout_s`` [s], else None."""
         try:
             return self.q.get(timeout=max(timeout_s, 0.0))
         except queue.Empty:
             return None
 
     def close(self) -> None:
+        """Undeclare the subscriber."""
         self.sub.undeclare()
 
 
@@ -71,6 +73,7 @@ class TopicRow:
 
     @property
     def count(self) -> int:
+        """Messages seen on the topic."""
         return self.stats.count
 
 
@@ -150,6 +153,7 @@ def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout
 
 
 def format_sample(key: str, d: Decoded, max_items: int | None, as_json: bool) -> str:
+    """A decoded sample as ``papf topic echo`` prints it (text or a JSON line)."""
     if as_json:
         return json.dumps(json_safe({"key": key, "type": d.type_name, "encoding": d.encoding,
                                      "message": d.value, **({"error": d.error} if d.error else {})},

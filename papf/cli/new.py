@@ -8,6 +8,7 @@ from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS
 
 
 def register(sub) -> None:
+    """Add ``papf new planner`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("new", help="scaffold a new planner (its folder, its test)",
                        description="Scaffold a new part of the stack in this checkout.")
     kinds = p.add_subparsers(dest="kind", required=True, metavar="KIND")
@@ -23,6 +24,7 @@ def register(sub) -> None:
 
 
 def cmd_new_planner(args) -> int:
+    """``papf new planner``: scaffold a planner plug-in in this checkout; the exit code."""
     from nodes.planner.scaffold import new_planner, repo_root
 
     root = repo_root()

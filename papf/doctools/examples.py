@@ -44,14 +44,17 @@ class Example:
 
     @property
     def where(self) -> str:
+        """``file:line`` of the example."""
         return f"{self.file}:{self.line}"
 
     @property
     def program(self) -> str:
+        """The command's program (its first word)."""
         return self.text.split()[0]
 
 
 def doc_files(root: Path = ROOT) -> list[Path]:
+    """The docs whose examples are checked: README.md and docs/*.md."""
     return [root / "README.md", *sorted((root / "docs").glob("*.md"))]
 
 

@@ -101,6 +101,7 @@ def render(text: str, base: Path) -> str:
 
 
 def doc_files(root: Path = ROOT) -> list[Path]:
+    """The docs whose tables are rendered: README.md and docs/*.md."""
     return [root / "README.md", *sorted((root / "docs").glob("*.md"))]
 
 

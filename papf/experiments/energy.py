@@ -70,6 +70,7 @@ class RunSpec:
 
     @property
     def name(self) -> str:
+        """The experiment's name (its file's stem)."""
         return self.path.stem
 
 
@@ -122,6 +123,7 @@ def plan(exp: EnergyExperiment) -> list[RunSpec]:
 
 
 def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
+    """The RunConfig of one run of ``exp`` (world, planner, preset, seed) on router ``port``."""
     from nodes.planner.registry import preset_sets
     from papf.launch.run import RunConfig
 
@@ -164,11 +166,13 @@ class LiveFigures:
         return True
 
     def text(self, goal: tuple[float, float]) -> str:
+        """The progress line: sim time [s], distance to ``goal`` [m], charge [mAh]."""
         dist = math.hypot(self.xy[0] - goal[0], self.xy[1] - goal[1])
         to_goal = f"{dist:5.2f} m to goal" if math.isfinite(dist) else "starting"
         return f"sim {self.sim_s:6.1f} s  {to_goal}  {self.charge_mAh:6.2f} mAh"
 
     def close(self) -> None:
+        """Undeclare the subscribers and close the session (the run's router may be gone)."""
         with contextlib.suppress(Exception):  # the run's router is gone by now
             for sub in self._subs:
                 sub.undeclare()

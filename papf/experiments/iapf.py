@@ -130,6 +130,7 @@ def write_vehicles(out: Path, case: str, world, duration: float, step_s: float) 
 
 
 def markdown(rows: list[dict]) -> str:
+    """The IAPF experiment's table (Markdown), our figures beside the paper's."""
     head = ["case", "planner", "case time [s]", "collisions", "min clearance [m]", "left road",
             "lane changes", "speed min-max [km/h]", "final [km/h]", "step CPU p50 / p99 [ms]",
             "case calc. [s]", "T = 5 s plan [ms]", "paper: case calc. [s]", "paper: plan [ms]",

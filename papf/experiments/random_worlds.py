@@ -70,6 +70,7 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
 def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected: int) -> str:
 
+    """The random-worlds table (Markdown): outcomes [%] per planner, by kind and width."""
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
               *[f"reached: {k} [%]" for k in KINDS],
               f"reached: bottleneck >= {WIDE_M} m [%]", f"reached: bottleneck < {WIDE_M} m [%]"]

@@ -62,10 +62,12 @@ class Case:
 
     @property
     def key(self) -> tuple[str, str, str, str]:
+        """The case's identity: (world, planner, parameter, value label)."""
         return (self.world, self.planner, self.param, self.label)
 
     @property
     def label(self) -> str:
+        """The value as shown: the number, or the combination's settings."""
         return " ".join(self.sets) if self.param == "combo" else f"{self.value:g}"
 
 

@@ -59,6 +59,7 @@ class SweepOptions:
 
     @property
     def distributed(self) -> bool:
+        """Whether runs are spread over workers or a scheduler."""
         return self.workers > 1 or self.scheduler is not None
 
 
@@ -159,6 +160,7 @@ class SweepProgress:
         return self
 
     def done(self, job, label: str, result, wall_s: float) -> None:
+        """Count a finished job and show its line (above the progress bar when there is one)."""
         self.count += 1
         text = (self.line(job, result) if self.line else
                 f"{label}: {getattr(result, 'outcome', 'done')} ({wall_s:.1f} s wall)")

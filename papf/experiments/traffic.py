@@ -71,6 +71,7 @@ def road_row(world_name: str, planner: str, objects: str, trial, mcap: Path) -> 
 
 
 def table(rows: Sequence[dict]) -> str:
+    """The traffic experiment's table (Markdown), one row per run."""
     def num(x, nd=2):
         return f"{x:.{nd}f}" if isinstance(x, float) and math.isfinite(x) else str(x)
 

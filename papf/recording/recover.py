@@ -64,6 +64,7 @@ class RecoverStats:
 
     @property
     def stopped_at(self) -> str:
+        """Where the scan stopped (``end of file``, or what it met at which byte)."""
         return self.scan.stopped_at
 
     @property
@@ -100,6 +101,7 @@ class RecoverStats:
         return f"{head}: " + "; ".join(parts + ([cut] if cut else []))
 
     def summary(self) -> str:
+        """One line of what was kept and what was lost."""
         total = f" of {self.scan.expected_messages}" if self.scan.expected_messages is not None \
             else ""
         text = (f"kept {self.messages}{total} messages on {self.channels} channels, "
@@ -109,6 +111,7 @@ class RecoverStats:
         return f"{text}; {lost}" if lost else f"{text}; the file was complete, nothing lost"
 
     def to_json(self, output: str) -> dict:
+        """The outcome as ``papf recover --json`` prints it."""
         sc = self.scan
         return {"output": output, "messages": self.messages, "log_span_s": self.log_span_s,
                 "receive_span_s": self.receive_span_s, "channels": self.channels,

@@ -98,6 +98,7 @@ def target_namespaces(rec: Recording | BagRecording, keys=None, namespace: str |
 
 
 def check_rate(rate: float | None) -> None:
+    """RecordingError unless ``rate`` is None, 0 (as fast as possible) or a finite number > 0."""
     if rate is not None and not (math.isfinite(rate) and rate >= 0):
         raise RecordingError(f"replay rate {rate} must be a finite number > 0 "
                              "(or 0 for as fast as possible)")

@@ -133,6 +133,7 @@ class BagRecording:
         self.close()
 
     def close(self) -> None:
+        """Close the bag."""
         if self._reader.stack is not None:
             self._reader.close()
 
@@ -182,6 +183,7 @@ class BagRecording:
     # -- as one of our recordings ---------------------------------------------------------------
     @property
     def run_metadata(self) -> dict[str, str]:
+        """The run's metadata (as a recording of ours would carry it)."""
         return self.metadata["run"]
 
     def counts(self) -> dict[str, int]:
@@ -193,11 +195,13 @@ class BagRecording:
         return out
 
     def keys(self, expr: str | Iterable[str] | None = None) -> list[str]:
+        """Our keys in the bag, those matching ``expr`` if given."""
         exprs = [expr] if isinstance(expr, str) else expr
         keys = sorted(self.counts())
         return keys if exprs is None else [k for k in keys if any(key_matches(e, k) for e in exprs)]
 
     def time_span_ns(self) -> tuple[int, int]:
+        """(0, span of the bag [ns]) relative to its first message."""
         return 0, max(self._reader.end_time - self.t0_ns, 0)
 
     def messages(self, keys: str | Iterable[str] | None = None,

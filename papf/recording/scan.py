@@ -81,9 +81,11 @@ class ScanStats:
 
     @property
     def damaged(self) -> bool:
+        """Whether the scan met bad chunks or damaged bytes."""
         return bool(self.bad_chunks or self.damaged_bytes)
 
     def note_damage(self, pos: int) -> None:
+        """Note damage at byte ``pos`` (the first ten kept)."""
         if len(self.damage_at) < 10:
             self.damage_at.append(pos)
 

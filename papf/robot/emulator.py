@@ -63,6 +63,7 @@ class EmulatedRosbot:
         self.commands = 0
 
     def command(self, v: float, w: float, t_ns: int) -> None:
+        """Take a cmd_vel (``v`` [m/s], ``w`` [rad/s]) received at ``t_ns`` [ns]."""
         self.commands += 1
         self.gate.command(v, w, t_ns)
 
@@ -74,9 +75,11 @@ class EmulatedRosbot:
 
     @property
     def world_pose(self) -> Pose2D:
+        """The robot's pose in the world (start composed with odometry): x, y [m], yaw [rad]."""
         return compose(self.start, self.pose)
 
     def odometry_cdr(self, stamp_ns: int) -> bytes:
+        """The odometry at ``stamp_ns`` [ns] as CDR nav_msgs/Odometry."""
         x, y, yaw = self.pose
         return ros2.encode(ros2.odometry(stamp_ns, x, y, yaw, self.v, self.w), ros2.ODOMETRY)
 
