@@ -1,15 +1,8 @@
 """``papf experiment energy``: the PAPF paper's 3-run energy experiment (IV-C), in sim.
 
-World ``energy`` (goal (10, 0) m, three obstacles); each planner × ``runs``; run k
-(1-based) of every planner uses seed ``seed + k`` (the same noise for the k-th run of
-each planner: paired runs); each run goes through the full process stack
-(:func:`papf.launch.run.run`) recorded to ``OUT/<planner>-<k>.mcap``; then the report
-(:func:`papf.report.report.build_report`) from those files alone, in ``OUT``.
-
-While a run goes, a progress bar over the runs shows its live figures (sim time,
-distance to the goal, charge), read from the run's own router by a Zenoh subscriber
-of this process; each run's result is printed as it finishes. The run's summary
-(live) and the report's figures for it (from the file) are compared at the end.
+Each planner × ``runs`` on world ``energy`` through the full process stack, recorded,
+then the report (:func:`papf.report.report.build_report`) from the files alone.
+Details: :func:`run_experiment`.
 """
 
 from __future__ import annotations
@@ -224,6 +217,17 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     """Run every planner × runs through the stack, recorded, then write the report.
 
     ``run_fn``: how one run is made (default :func:`papf.launch.run.run`; tests substitute).
+
+    World ``energy`` (goal (10, 0) m, three obstacles); each planner × ``runs``; run k
+    (1-based) of every planner uses seed ``seed + k`` (the same noise for the k-th run of
+    each planner: paired runs); each run goes through the full process stack
+    (:func:`papf.launch.run.run`) recorded to ``OUT/<planner>-<k>.mcap``; then the report
+    (:func:`papf.report.report.build_report`) from those files alone, in ``OUT``.
+
+    While a run goes, a progress bar over the runs shows its live figures (sim time,
+    distance to the goal, charge), read from the run's own router by a Zenoh subscriber
+    of this process; each run's result is printed as it finishes. The run's summary
+    (live) and the report's figures for it (from the file) are compared at the end.
     """
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
