@@ -1,15 +1,8 @@
 """Declared type and valid range of a node setting, and the one check of a value against it.
 
-Every setting of every node (planner parameters, energy-meter constants, driver, LiDAR
-and planner-node options) has a :class:`Spec`. :func:`check_value` is the only place a
-value is accepted: ``--set name=value``, a ``--params`` TOML file, command-line options
-(:func:`arg_type`) and any live-parameter path (e.g. a viewer's parameter panel) call it,
-and the node that uses the setting checks its whole parameter set again with
-:func:`check_all` before acting on it.
-
-Safety settings (``safety=True``, e.g. the repulsion range ``d_o`` or the command
-watchdog) have ranges that exclude every value that would switch the protection off:
-zero, negative, ``nan`` and ``inf`` are refused.
+Every setting of every node has a :class:`Spec`; :func:`check_value` is the only place a
+value is accepted (``--set``, ``--params``, options, live parameters). Safety settings'
+ranges exclude every value that switches the protection off.
 """
 
 from __future__ import annotations
@@ -96,6 +89,17 @@ def check_value(name: str, value: Any, spec: Spec) -> Any:
 
     ``value`` may be text (``--set``, command line) or already typed (TOML, a live
     parameter). An int is accepted for a float setting; a bool never counts as a number.
+
+    Every setting of every node (planner parameters, energy-meter constants, driver, LiDAR
+    and planner-node options) has a :class:`Spec`. :func:`check_value` is the only place a
+    value is accepted: ``--set name=value``, a ``--params`` TOML file, command-line options
+    (:func:`arg_type`) and any live-parameter path (e.g. a viewer's parameter panel) call it,
+    and the node that uses the setting checks its whole parameter set again with
+    :func:`check_all` before acting on it.
+
+    Safety settings (``safety=True``, e.g. the repulsion range ``d_o`` or the command
+    watchdog) have ranges that exclude every value that would switch the protection off:
+    zero, negative, ``nan`` and ``inf`` are refused.
     """
     typed = _typed(value, spec.kind)
     ok = typed is not None

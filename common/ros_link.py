@@ -1,17 +1,9 @@
 """The robot's ROS 2 middleware on a Zenoh session: the bridge or rmw_zenoh (thin, no maths).
 
-``--ros bridge`` (default): ``zenoh-bridge-ros2dds`` maps ROS topic ``/t`` to key
-``[<ns>/]t``; we put and take bare CDR. ``--ros rmw_zenoh``: we are ROS 2 nodes on
-rmw_zenoh's own wire format (:mod:`common.rmw_zenoh`): the key with domain, DDS type name
-and RIHS01 hash, a liveliness token for our node and for each publisher and subscription
-(so ``ros2 node list`` / ``ros2 topic info -v`` on the robot see us) and each sample's
-attachment (sequence number, source timestamp, GID).
-
-A link hands out publishers (``put(cdr)``) and subscriptions (callback with the CDR
-bytes) by ROS topic and type; :meth:`RosLink.close` undeclares all of it.
-
-``--cmd-vel-type twist|twist_stamped``: Jazzy's diff-drive controller can take
-``geometry_msgs/TwistStamped``; the ROSbot's default stays ``Twist``.
+``--ros bridge`` (default, ``zenoh-bridge-ros2dds``) or ``--ros rmw_zenoh`` (we are ROS 2
+nodes, :mod:`common.rmw_zenoh`). :func:`open_link` gives a :class:`RosLink` that hands
+out publishers and subscriptions by ROS topic and type. Used by the base driver, the
+ROS 2 face and ``papf rosbot-emulator``.
 """
 
 from __future__ import annotations
@@ -80,7 +72,21 @@ def cmd_vel_type(args: argparse.Namespace) -> str:
 
 
 class RosLink:
-    """Common part: remember what was declared, undeclare it on :meth:`close`."""
+    """Common part: remember what was declared, undeclare it on :meth:`close`.
+
+    ``--ros bridge`` (default): ``zenoh-bridge-ros2dds`` maps ROS topic ``/t`` to key
+    ``[<ns>/]t``; we put and take bare CDR. ``--ros rmw_zenoh``: we are ROS 2 nodes on
+    rmw_zenoh's own wire format (:mod:`common.rmw_zenoh`): the key with domain, DDS type name
+    and RIHS01 hash, a liveliness token for our node and for each publisher and subscription
+    (so ``ros2 node list`` / ``ros2 topic info -v`` on the robot see us) and each sample's
+    attachment (sequence number, source timestamp, GID).
+
+    A link hands out publishers (``put(cdr)``) and subscriptions (callback with the CDR
+    bytes) by ROS topic and type; :meth:`RosLink.close` undeclares all of it.
+
+    ``--cmd-vel-type twist|twist_stamped``: Jazzy's diff-drive controller can take
+    ``geometry_msgs/TwistStamped``; the ROSbot's default stays ``Twist``.
+    """
 
     middleware = ""
 

@@ -1,24 +1,9 @@
 """A rosbag2 recorded on the ROSbot, read as one of our recordings (docs/recording.md "Bags").
 
-``open_run(path)`` gives :class:`BagRecording` for a rosbag2 (its directory with
-``metadata.yaml``, its ``.mcap`` with ``cdr`` messages, or its sqlite3 ``.db3``) and our
-:class:`~papf.recording.reader.Recording` for anything else; both answer ``messages()``,
-``raw()``, ``counts()``, ``keys()`` and ``run_metadata`` alike, so ``papf report``,
-``animate`` and ``replay`` take either. The bag is read with rosbags' ``AnyReader``
-(message definitions from the bag, else ROS 2 Jazzy's) and converted back to our messages
-on our keys (namespace ``rosbot``):
-
-- ``/odometry/filtered`` -> ``odom`` and ``wheels`` (wheel speeds and torques from the
-  odometry, as the live ROSbot driver derives them: :func:`nodes.base_driver.rosbot.wheel_states`);
-- ``/battery`` -> ``battery/measured`` (its voltage, as the live driver publishes it); its
-  current, where it carries one, is the measured charge (:func:`measured_charge_mAh`);
-- ``/cmd_vel`` -> ``cmd_vel``; ``/scan`` -> ``scan`` (the LiDAR at its mount, common.robot);
-  ``/tf`` (optional) is only counted.
-
-Stamps: a message's header stamp (the bag's receive time for ``/cmd_vel``, and for a
-topic whose header stamps are unset or more than a minute from the receive time: another
-clock), in ns since the bag's first stamp, so a bag's time starts near 0 like a run's.
-``--topics odom=/odom,battery=/battery_state`` maps another robot's names.
+:func:`open_run` gives :class:`BagRecording` for a rosbag2 and our
+:class:`~papf.recording.reader.Recording` for anything else; both answer alike, so
+``papf report``, ``animate`` and ``replay`` take either. Topic mapping and stamps:
+:class:`BagRecording`.
 """
 
 from __future__ import annotations
@@ -106,7 +91,28 @@ def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | Ba
 
 
 class BagRecording:
-    """A rosbag2 as a read-only recording of our messages on ``rosbot/...`` keys."""
+    """A rosbag2 as a read-only recording of our messages on ``rosbot/...`` keys.
+
+    ``open_run(path)`` gives :class:`BagRecording` for a rosbag2 (its directory with
+    ``metadata.yaml``, its ``.mcap`` with ``cdr`` messages, or its sqlite3 ``.db3``) and our
+    :class:`~papf.recording.reader.Recording` for anything else; both answer ``messages()``,
+    ``raw()``, ``counts()``, ``keys()`` and ``run_metadata`` alike, so ``papf report``,
+    ``animate`` and ``replay`` take either. The bag is read with rosbags' ``AnyReader``
+    (message definitions from the bag, else ROS 2 Jazzy's) and converted back to our messages
+    on our keys (namespace ``rosbot``):
+
+    - ``/odometry/filtered`` -> ``odom`` and ``wheels`` (wheel speeds and torques from the
+      odometry, as the live ROSbot driver derives them: :func:`nodes.base_driver.rosbot.wheel_states`);
+    - ``/battery`` -> ``battery/measured`` (its voltage, as the live driver publishes it); its
+      current, where it carries one, is the measured charge (:func:`measured_charge_mAh`);
+    - ``/cmd_vel`` -> ``cmd_vel``; ``/scan`` -> ``scan`` (the LiDAR at its mount, common.robot);
+      ``/tf`` (optional) is only counted.
+
+    Stamps: a message's header stamp (the bag's receive time for ``/cmd_vel``, and for a
+    topic whose header stamps are unset or more than a minute from the receive time: another
+    clock), in ns since the bag's first stamp, so a bag's time starts near 0 like a run's.
+    ``--topics odom=/odom,battery=/battery_state`` maps another robot's names.
+    """
 
     def __init__(self, path: str | Path, topics: TopicMap | None = None):
         self.path = Path(path)
