@@ -1,25 +1,8 @@
 """Republish a recording with its timing: ``papf replay run.mcap --rate 2`` (docs/recording.md).
 
-Payloads are put back on their recorded keys (or the same topics under another
-namespace) byte for byte, in log-time order. Message ``i`` goes out
-``(log_i - log_0) / rate`` seconds after the first; ``rate`` None or 0 sends as fast
-as possible. Log time is the messages' ``stamp_ns`` (sim time), so a lockstep run
-that took 5 s of wall time for 60 s of sim time replays over 60 s at rate 1.
-
-Recorded keys that are not Zenoh keys are mapped the way ``zenoh-bridge-ros2dds`` maps
-ROS 2 topic names (``/some/topic`` -> ``some/topic``); a key that still is not one
-(empty chunks, wildcards) is skipped and counted, never a crash.
-
-A jump in log time longer than ``max_gap_s`` (e.g. from sim-time stamps to messages
-stamped with their wall-clock receive time, which had no ``stamp_ns``) is replayed
-as ``max_gap_s``, so one odd stamp cannot stall a replay for decades.
-
-A rosbag2 from the robot (:mod:`papf.recording.rosbag`) is replayed as our messages on
-our keys, msgpack-encoded, so the stack's nodes take it (the energy meter re-meters it,
-the viewer shows it).
-
-Pure: the caller passes a publish function ``(key, payload) -> None`` or anything
-with ``declare_publisher(key)`` (a Zenoh session); no Zenoh import here.
+:func:`replay` puts payloads back on their recorded keys (or another namespace's) byte for
+byte, in log-time order, paced by ``rate``; a rosbag2 from the robot is replayed as our
+messages. Pure: the caller passes the publish function. Used by ``papf replay``.
 """
 
 from __future__ import annotations
@@ -187,6 +170,27 @@ def replay(path: str | Path, target: Publish | Any, rate: float | None = 1.0,
     ``namespace``: publish under this namespace instead of the recorded one;
     ``progress(done, total)`` is called about ten times a second; ``stop()`` aborts;
     ``topics``: a rosbag2's topic names (it is replayed as our messages on our keys).
+
+    Payloads are put back on their recorded keys (or the same topics under another
+    namespace) byte for byte, in log-time order. Message ``i`` goes out
+    ``(log_i - log_0) / rate`` seconds after the first; ``rate`` None or 0 sends as fast
+    as possible. Log time is the messages' ``stamp_ns`` (sim time), so a lockstep run
+    that took 5 s of wall time for 60 s of sim time replays over 60 s at rate 1.
+
+    Recorded keys that are not Zenoh keys are mapped the way ``zenoh-bridge-ros2dds`` maps
+    ROS 2 topic names (``/some/topic`` -> ``some/topic``); a key that still is not one
+    (empty chunks, wildcards) is skipped and counted, never a crash.
+
+    A jump in log time longer than ``max_gap_s`` (e.g. from sim-time stamps to messages
+    stamped with their wall-clock receive time, which had no ``stamp_ns``) is replayed
+    as ``max_gap_s``, so one odd stamp cannot stall a replay for decades.
+
+    A rosbag2 from the robot (:mod:`papf.recording.rosbag`) is replayed as our messages on
+    our keys, msgpack-encoded, so the stack's nodes take it (the energy meter re-meters it,
+    the viewer shows it).
+
+    Pure: the caller passes a publish function ``(key, payload) -> None`` or anything
+    with ``declare_publisher(key)`` (a Zenoh session); no Zenoh import here.
     """
     check_rate(rate)
     stats = ReplayStats()
