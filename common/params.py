@@ -32,7 +32,7 @@ class Spec:
     hi_open: bool = False
     choices: tuple[str, ...] = ()    # str settings: the valid values
     unit: str = ""
-    safety: bool = False             # the range keeps a protection switched on (module doc)
+    safety: bool = False             # the range keeps a protection switched on (check_value)
 
     def describe(self) -> str:
         """The valid values in words, e.g. ``a number in (0, 5] m``."""

@@ -27,7 +27,7 @@ _F32 = np.dtype("<f4")
 
 def meta(unit: str = "", doc: str = "", *, choices: tuple[str, ...] | None = None,
          nonfinite: bool = False, length: int | None = None) -> dict:
-    """Field metadata: unit, description and constraints (see module doc)."""
+    """Field metadata: unit, description and constraints (see :class:`Message`)."""
     return {"unit": unit, "doc": doc, "choices": choices, "nonfinite": nonfinite,
             "length": length}
 

@@ -43,7 +43,7 @@ def apply(name: str, planner: Planner, sets: list[str]) -> list[str]:
 
 def answer(name: str, planner: Planner, payload: bytes,
            check: RequestCheck | None = None) -> tuple[dict, list[str]]:
-    """(reply, changed names) for one query payload (see the module doc); ``check``: the
+    """(reply, changed names) for one query payload; ``check``: the
     node's :class:`common.runauth.RequestCheck` (a change without this run's tag is refused).
 
     Names are ``table.name`` as ``--set`` takes them: ``apf.<field>`` for

@@ -28,7 +28,7 @@ MESSAGE_ENCODING = "msgpack"
 RAW_ENCODING = "application/octet-stream"
 SCHEMA_ENCODING = "jsonschema"
 RUN_METADATA = "run"
-PROFILE = "papf"  # MCAP header profile: our own conventions (this module's docstring)
+PROFILE = "papf"  # MCAP header profile: our own conventions (RunWriter's docstring)
 
 # Defaults. A chunk is closed at whichever limit comes first.
 FLUSH_INTERVAL_S = 0.2      # [s] wall time; bounds what a SIGKILL can lose

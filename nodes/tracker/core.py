@@ -97,7 +97,7 @@ def scan_points(scan: Scan, odom: Odometry, max_range: float) -> ScanPoints:
 
 def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
     """(order, starts): the points rotated so that no segment crosses the array's end, and
-    the index in ``order`` where each segment starts (see module doc, step 2)."""
+    the index in ``order`` where each segment starts (:class:`Tracker`, step 2)."""
     n = len(sp.beams)
     nxt = np.arange(1, n + 1)
     nxt[-1] = 0                                           # the seam: last point -> first
@@ -119,7 +119,7 @@ def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
 
 
 def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
-    """Index arrays (into ``sp.xy``) of the scan-order segments (see module doc, step 2)."""
+    """Index arrays (into ``sp.xy``) of the scan-order segments (:class:`Tracker`, step 2)."""
     if len(sp.beams) == 0:
         return []
     order, starts = _breaks(sp, p)
@@ -127,7 +127,7 @@ def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
 
 
 def cluster_points(sp: ScanPoints, p: TrackerParams) -> list[Cluster]:
-    """Object-sized clusters of a scan (see module doc, step 2), in scan order.
+    """Object-sized clusters of a scan (:class:`Tracker`, step 2), in scan order.
 
     With numba (and ``use_numba``) one compiled pass (:mod:`nodes.tracker.kernels`),
     else :func:`_breaks` and :func:`_measure` for all segments at once in numpy.

@@ -73,7 +73,7 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
               start_run: bool = False, wait: bool = True, timeout_s: float = 0.0,
               out: Callable[[str], None] = print, progress: bool | None = None,
               stop: Callable[[], bool] = lambda: False) -> GoalResult:
-    """See the module doc. ``timeout_s`` 0: wait for an outcome as long as it takes.
+    """Send a goal to ``x``, ``y`` [m] and follow it. ``timeout_s`` 0: wait as long as it takes.
 
     The same handshake as the launcher's (docs/architecture.md, "Start and end of a run"):
     publish ``<ns>/goal`` every 0.5 s until the planner answers ``planner/status`` ``ready``;

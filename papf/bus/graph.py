@@ -1,12 +1,9 @@
 """Who is on the bus: our nodes and their ports, ROS 2 nodes from rmw_zenoh's tokens.
 
-``papf node list|info`` and ``papf topic info`` (what ``ros2 node`` / ``ros2 topic info``
-show). Our nodes announce themselves with ``<ns>/alive/<node>`` (:mod:`common.transport`)
-and declare their ports as data (``nodes/<node>/ports.py``, :mod:`common.ports`); a node
-whose ports depend on its options shows each variant. ROS 2 nodes on rmw_zenoh announce
-themselves and each publisher and subscription with a liveliness token
-(:mod:`common.rmw_zenoh`); the bridge announces no ROS graph on Zenoh, so ROS 2 nodes
-behind it are listed by ``ros2 node list`` on the robot, not here.
+Our nodes by their liveliness tokens (:mod:`common.transport`) and declared ports
+(:func:`node_ports`); ROS 2 nodes on rmw_zenoh by theirs (:func:`ros_entities`; nodes behind
+the bridge announce nothing on Zenoh: ``ros2 node list`` on the robot shows them). Used by
+``papf node list|info`` and ``papf topic info``.
 """
 
 from __future__ import annotations

@@ -55,7 +55,7 @@ def map_runs(fn: Callable[[J], R], jobs: Sequence[J], opts: SweepOptions,
              label: Callable[[J], str] = str, title: str = "sweep",
              line: Callable[[J, R], str] | None = None,
              on_done: Callable[[J, R], None] | None = None) -> list[R]:
-    """``[fn(job) for job in jobs]`` (job order), on Dask when ``opts`` asks; see module doc.
+    """``[fn(job) for job in jobs]`` (job order), on Dask when ``opts`` asks.
 
     ``fn`` and the jobs must pickle (a module-level function, dataclass jobs) when
     distributed; ``label(job)`` names a run on the progress bar; ``line(job, result)`` is

@@ -67,7 +67,7 @@ def _change(g: dict) -> float:
 
 def choose(rows: Sequence[dict], tie_m: float = 0.02,
            duration_band_pct: float | None = DURATION_BAND_PCT) -> dict | None:
-    """The geometry the selection rule of the module docstring picks (None: none qualifies);
+    """The geometry the selection rule (:func:`run_sweep`) picks (None: none qualifies);
     ``duration_band_pct=None``: the path alone (the first rule)."""
     ok = [r for r in rows if r["reached"] == r["runs"] and r["runs"] > 0]
     if duration_band_pct is not None:

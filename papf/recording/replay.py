@@ -19,7 +19,7 @@ from papf.recording.reader import Recording
 from papf.recording.rosbag import BagRecording, TopicMap, open_run
 from schemas.keys import TOPICS
 
-MAX_GAP_S = 5.0         # [s] of log time; longest pause replayed (see module doc)
+MAX_GAP_S = 5.0         # [s] of log time; longest pause replayed (see replay())
 STOP_POLL_S = 0.1       # [s] longest sleep between checks of stop()
 PROGRESS_EVERY_S = 0.1  # [s] wall time between progress calls
 
@@ -164,7 +164,7 @@ def replay(path: str | Path, target: Publish | Any, rate: float | None = 1.0,
            clock: Callable[[], float] = time.monotonic,
            sleep: Callable[[float], None] = time.sleep,
            topics: TopicMap | None = None) -> ReplayStats:
-    """Republish ``path`` on ``target``; see the module doc.
+    """Republish ``path`` on ``target``.
 
     ``keys``: key expression(s) of the recorded keys to replay (default all);
     ``namespace``: publish under this namespace instead of the recorded one;

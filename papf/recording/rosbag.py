@@ -86,7 +86,7 @@ def is_rosbag(path: str | Path, topics: TopicMap | None = None) -> bool:
 
 
 def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | BagRecording:
-    """Our recording, or a rosbag2 read as one (see the module doc)."""
+    """Our recording, or a rosbag2 read as one (:class:`BagRecording`)."""
     return BagRecording(path, topics) if is_rosbag(path, topics) else Recording(path)
 
 
@@ -169,7 +169,7 @@ class BagRecording:
                 for r in ROLE_TYPES if getattr(self.topics, r) in have}
 
     def _uses_header(self, conns: list) -> bool:
-        """Whether a topic's header stamps are on the bag's clock (see the module doc)."""
+        """Whether a topic's header stamps are on the bag's clock (see the class doc)."""
         if not conns or conns[0].msgtype in (rc.TWIST, rc.TF_MESSAGE):
             return False
         for conn, log_ns, data in self._reader.messages(connections=conns):

@@ -155,7 +155,7 @@ def _read_at(mm, pos: int, size: int):
 
 
 def scan_records(f, stats: ScanStats) -> Iterator[object]:
-    """Intact records of the data section of the open file ``f`` (see module doc).
+    """Intact records of the data section of the open file ``f``.
 
     :func:`scan_records` yields every record of the data section that is intact — the
     records inside a chunk only when the chunk decompresses and passes its CRC. Damage is

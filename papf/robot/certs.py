@@ -56,7 +56,7 @@ NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "livelin
 
 
 def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None) -> dict:
-    """The ``access_control`` section for the robot's router (see module doc).
+    """The ``access_control`` section for the robot's router.
 
     Access control (:func:`access_control`): default deny. Every authenticated identity may
     subscribe and hold liveliness tokens, and receive every publication; each role may
@@ -157,7 +157,7 @@ def make_certs(out: Path, robot_hosts: list[str], days: int = CERT_DAYS) -> None
 
 
 def _tls(who: str) -> dict:
-    """TLS settings naming the bundle's files relative to the config (module doc)."""
+    """TLS settings naming the bundle's files relative to the config (:func:`write_bundle`)."""
     return {"root_ca_certificate": "ca.pem", "enable_mtls": True,
             "connect_private_key": f"{who}.key", "connect_certificate": f"{who}.pem"}
 
@@ -165,7 +165,7 @@ def _tls(who: str) -> dict:
 def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosbot",
                  bridge: BridgeTopics | None = None, local_port: int = LOCAL_PORT,
                  tls_port: int = TLS_PORT, force: bool = False) -> Bundle:
-    """Certificates, credentials and the four Zenoh configs (module doc) in directory ``out``.
+    """Certificates, credentials and the four Zenoh configs in directory ``out``.
 
     An existing bundle in ``out`` (its CA and passwords) is replaced only with ``force``.
 
