@@ -1,17 +1,9 @@
 """Every file we write goes through here: never over a user's file unless told, never over an input.
 
-The rule (docs/architecture.md "Files we write"):
-
-- an existing output is refused unless ``force`` (the CLI's ``--force``);
-- an output that *is* one of the inputs (same inode and device: a hard link, a symlink, a
-  ``./`` spelling) is refused even with ``force``;
-- a symlink as output is never followed: with ``force`` the link itself is replaced;
-- the content is written to a temporary file beside the output and renamed onto it at the
-  end, so a failure leaves the old file (or nothing), never half a file.
-
-:func:`output` yields the temporary path (for libraries that take a file name: matplotlib,
-foxglove, imageio); :func:`exclusive` creates a file that must not exist (the recorder, which
-writes in place so that a killed run's recording stays on disk for ``papf recover``).
+An existing output is refused unless ``force``, an output that is an input always, and the
+content is written beside and renamed into place (docs/architecture.md "Files we write").
+:func:`output` for whole files, :func:`exclusive` for the recorder's file; used by every
+command that writes.
 """
 
 from __future__ import annotations
@@ -63,6 +55,19 @@ def output(out: str | Path, inputs: Iterable[str | Path] = (), force: bool = Fal
 
     ``suffix``: the temporary file's (default ``out``'s, so libraries that pick a format by
     suffix still do). Without ``force`` the rename refuses a file that appeared meanwhile.
+
+    The rule (docs/architecture.md "Files we write"):
+
+    - an existing output is refused unless ``force`` (the CLI's ``--force``);
+    - an output that *is* one of the inputs (same inode and device: a hard link, a symlink, a
+      ``./`` spelling) is refused even with ``force``;
+    - a symlink as output is never followed: with ``force`` the link itself is replaced;
+    - the content is written to a temporary file beside the output and renamed onto it at the
+      end, so a failure leaves the old file (or nothing), never half a file.
+
+    :func:`output` yields the temporary path (for libraries that take a file name: matplotlib,
+    foxglove, imageio); :func:`exclusive` creates a file that must not exist (the recorder, which
+    writes in place so that a killed run's recording stays on disk for ``papf recover``).
     """
     inputs = list(inputs)
     out = check_output(out, inputs, force)

@@ -1,15 +1,8 @@
 """Declared type and valid range of a node setting, and the one check of a value against it.
 
-Every setting of every node (planner parameters, energy-meter constants, driver, LiDAR
-and planner-node options) has a :class:`Spec`. :func:`check_value` is the only place a
-value is accepted: ``--set name=value``, a ``--params`` TOML file, command-line options
-(:func:`arg_type`) and any live-parameter path (e.g. a viewer's parameter panel) call it,
-and the node that uses the setting checks its whole parameter set again with
-:func:`check_all` before acting on it.
-
-Safety settings (``safety=True``, e.g. the repulsion range ``d_o`` or the command
-watchdog) have ranges that exclude every value that would switch the protection off:
-zero, negative, ``nan`` and ``inf`` are refused.
+Every setting of every node has a :class:`Spec`; :func:`check_value` is the only place a
+value is accepted (``--set``, ``--params``, options, live parameters). Safety settings'
+ranges exclude every value that switches the protection off.
 """
 
 from __future__ import annotations
@@ -39,7 +32,7 @@ class Spec:
     hi_open: bool = False
     choices: tuple[str, ...] = ()    # str settings: the valid values
     unit: str = ""
-    safety: bool = False             # the range keeps a protection switched on (module doc)
+    safety: bool = False             # the range keeps a protection switched on (check_value)
 
     def describe(self) -> str:
         """The valid values in words, e.g. ``a number in (0, 5] m``."""
@@ -58,6 +51,7 @@ class Spec:
         return f"{what} in {left}{lo}, {hi}{right}" + (f" {self.unit}" if self.unit else "")
 
     def contains(self, value: float) -> bool:
+        """Whether ``value`` lies in the range (open ends excluded)."""
         if self.lo is not None and (value < self.lo or (self.lo_open and value == self.lo)):
             return False
         return not (self.hi is not None and (value > self.hi or (self.hi_open and value == self.hi)))
@@ -75,6 +69,7 @@ def pos(hi: float, unit: str = "", *, safety: bool = False) -> Spec:
 
 
 def integer(lo: int | None, hi: int | None, unit: str = "") -> Spec:
+    """A Spec of an integer in [lo, hi] (None: unbounded) in ``unit``."""
     return Spec(int, lo, hi, unit=unit)
 
 
@@ -85,6 +80,7 @@ PORT = Spec(int, 1, 65535)       # a TCP port
 
 
 def choice(*values: str) -> Spec:
+    """A Spec of a string, one of ``values``."""
     return Spec(str, choices=tuple(values))
 
 
@@ -93,6 +89,17 @@ def check_value(name: str, value: Any, spec: Spec) -> Any:
 
     ``value`` may be text (``--set``, command line) or already typed (TOML, a live
     parameter). An int is accepted for a float setting; a bool never counts as a number.
+
+    Every setting of every node (planner parameters, energy-meter constants, driver, LiDAR
+    and planner-node options) has a :class:`Spec`. :func:`check_value` is the only place a
+    value is accepted: ``--set name=value``, a ``--params`` TOML file, command-line options
+    (:func:`arg_type`) and any live-parameter path (e.g. a viewer's parameter panel) call it,
+    and the node that uses the setting checks its whole parameter set again with
+    :func:`check_all` before acting on it.
+
+    Safety settings (``safety=True``, e.g. the repulsion range ``d_o`` or the command
+    watchdog) have ranges that exclude every value that would switch the protection off:
+    zero, negative, ``nan`` and ``inf`` are refused.
     """
     typed = _typed(value, spec.kind)
     ok = typed is not None

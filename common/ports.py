@@ -1,21 +1,9 @@
 """A node's ports as data: what it subscribes to and what it publishes.
 
-Each node declares its ports in ``nodes/<node>/ports.py`` as tuples
-``(direction, key, message type)``:
-
-- direction ``"in"`` (the node needs it), ``"in?"`` (optional: used when something
-  publishes it) or ``"out"``;
-- key: the suffix under the robot namespace (``"scan"`` is ``<ns>/scan``); ``"**"`` is every
-  key (the recorder); a ``bridge:`` prefix names a key of the zenoh-bridge-ros2dds
-  namespace — the real robot's ROS 2 topics, published and consumed outside this stack;
-- message type: the schema class name (``"Scan"``, see :data:`schemas.keys.TOPICS`) or, on
-  bridge keys, the ROS 2 type (CDR).
-
-A node whose ports depend on an option declares ``VARIANTS``: ``{(option, value): ports}``
-(they replace ``PORTS``), and ``EXTRAS``: ``{option: ports}`` for flags that add ports to
-whichever set applies (e.g. ``--truth-objects`` adds the ``objects`` output).
-``python -m nodes.<node> --help`` prints them (:func:`describe`), and the launch profiles
-are checked against them (tests/unit/test_node_graph.py).
+Each node declares ``PORTS`` in ``nodes/<node>/ports.py`` as ``(direction, key, message
+type)`` tuples (:data:`Port`), and ``VARIANTS`` / ``EXTRAS`` where options change them
+(:func:`select`). ``python -m nodes.<node> --help`` prints them (:func:`describe`), ``papf
+node info`` shows them, and tests/unit/test_node_graph.py checks the launch profiles.
 """
 
 from __future__ import annotations
@@ -23,6 +11,14 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping, Sequence
 
+# (direction, key, message type):
+# - direction "in" (the node needs it), "in?" (optional: used when something publishes it)
+#   or "out";
+# - key: the suffix under the robot namespace ("scan" is <ns>/scan); "**" is every key (the
+#   recorder); a "bridge:" prefix names a key of the zenoh-bridge-ros2dds namespace — the
+#   real robot's ROS 2 topics, published and consumed outside this stack;
+# - message type: the schema class name ("Scan", see schemas.keys.TOPICS) or, on bridge
+#   keys, the ROS 2 type (CDR).
 Port = tuple[str, str, str]
 DIRECTIONS = ("in", "in?", "out")
 BRIDGE = "bridge:"
@@ -31,7 +27,12 @@ BRIDGE = "bridge:"
 def select(ports: Sequence[Port], variants: Mapping[tuple[str, str], Sequence[Port]],
            argv: Sequence[str], extras: Mapping[str, Sequence[Port]] = {}) -> tuple[Port, ...]:
     """The ports of a node started with ``argv``: the first variant whose option it sets
-    (else ``ports``), plus the extras of the flags it sets."""
+    (else ``ports``), plus the extras of the flags it sets.
+
+    ``VARIANTS``: ``{(option, value): ports}`` (they replace ``PORTS``); ``EXTRAS``:
+    ``{option: ports}`` for flags that add ports to whichever set applies (e.g.
+    ``--truth-objects`` adds the ``objects`` output).
+    """
     argv = list(argv)
     pairs = set(zip(argv, argv[1:], strict=False)) | {tuple(a.split("=", 1)) for a in argv
                                                         if a.startswith("--") and "=" in a}

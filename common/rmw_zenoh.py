@@ -1,30 +1,10 @@
 """rmw_zenoh's wire format, pure (no session): keys, liveliness tokens, GIDs, attachments.
 
-``rmw_zenoh_cpp`` (ROS 2 Jazzy and later) puts every ROS 2 topic straight on Zenoh; what
-it writes, read from its sources (ros2/rmw_zenoh, ``rmw_zenoh_cpp/src/detail/``):
-
-- Topic key (``liveliness_utils.cpp``, ``TopicInfo::TopicInfo``):
-  ``<domain>/<topic without leading/trailing "/">/<dds type>/<type hash>``, e.g.
-  ``0/cmd_vel/geometry_msgs::msg::dds_::Twist_/RIHS01_9c45…``. The DDS type name is the
-  type support's ``get_name()`` (``pkg::msg::dds_::Name_``); the hash is REP-2011's
-  RIHS01 (sha256 of the type description), computed here by ``rosbags``.
-- Liveliness token (``Entity::Entity``):
-  ``@ros2_lv/<domain>/<zid>/<node id>/<entity id>/<NN|MP|MS|SS|SC>/<enclave>/<namespace>/
-  <node>[/<topic>/<dds type>/<type hash>/<qos>]`` with every "/" inside a name mangled
-  to "%" (``mangle_name``), so the root namespace is ``%`` and ``/cmd_vel`` is ``%cmd_vel``.
-- QoS in a token (``qos_to_keyexpr``): ``R:D:H,depth:dl_s,dl_ns:ls_s,ls_ns:L,lease_s,lease_ns``
-  where a field equal to rmw_zenoh's default (``qos.cpp``: reliable, volatile, keep last
-  42, infinite deadline/lifespan/lease, automatic liveliness) is left empty.
-- GID (``Entity::Entity``): XXH3-128 of the token string, low 64 bits then high 64 bits,
-  little endian (16 bytes).
-- Attachment of each sample (``attachment_helpers.cpp``, ``serialize_to_zbytes``): zenoh-ext
-  serialization of int64 sequence number (from 1), int64 source timestamp (system time,
-  ns), std::array<uint8_t, 16> GID — i.e. ``<q`` ``<q`` then the array as a sequence: its
-  LEB128 length (16 -> ``0x10``) and the 16 bytes; 33 bytes in all.
-- Payload: CDR with the 4-byte encapsulation header, as for the bridge (:mod:`common.ros2`).
-
-Humble has no type hashes and no rmw_zenoh binary release: Humble robots stay on
-``zenoh-bridge-ros2dds`` (docs/robot.md).
+What ``rmw_zenoh_cpp`` (ROS 2 Jazzy and later) writes, read from its sources
+(ros2/rmw_zenoh, ``rmw_zenoh_cpp/src/detail/``); each function and class names the source
+it follows. Payloads are CDR as on the bridge (:mod:`common.ros2`); Humble robots stay on
+``zenoh-bridge-ros2dds`` (no type hashes, no rmw_zenoh release; docs/robot.md). Used by
+:mod:`common.ros_link`, the ROS 2 face and ``papf node``/``topic`` with ``--ros rmw_zenoh``.
 """
 
 from __future__ import annotations
@@ -80,10 +60,12 @@ def type_hash(typename: str) -> str:
 
 
 def mangle(name: str) -> str:
+    """A ROS name as one key-expression chunk (``/`` -> ``%``, rmw_zenoh's mangling)."""
     return name.replace("/", "%")
 
 
 def demangle(name: str) -> str:
+    """Undo :func:`mangle` (``%`` -> ``/``)."""
     return name.replace("%", "/")
 
 
@@ -94,11 +76,19 @@ def topic_name(topic: str, namespace: str = "") -> str:
 
 
 def topic_key(domain: int, topic: str, typename: str) -> str:
-    """The Zenoh key rmw_zenoh publishes ``topic`` of ``typename`` on in ``domain``."""
+    """The Zenoh key rmw_zenoh publishes ``topic`` of ``typename`` on in ``domain``.
+
+    Topic key (``liveliness_utils.cpp``, ``TopicInfo::TopicInfo``):
+    ``<domain>/<topic without leading/trailing "/">/<dds type>/<type hash>``, e.g.
+    ``0/cmd_vel/geometry_msgs::msg::dds_::Twist_/RIHS01_9c45…``. The DDS type name is the
+    type support's ``get_name()`` (``pkg::msg::dds_::Name_``); the hash is REP-2011's
+    RIHS01 (sha256 of the type description), computed here by ``rosbags``.
+    """
     return f"{domain}/{topic.strip('/')}/{dds_type_name(typename)}/{type_hash(typename)}"
 
 
 def check_domain(domain: int) -> int:
+    """``domain`` as an int; ConfigError unless 0..DOMAIN_MAX."""
     if not 0 <= int(domain) <= DOMAIN_MAX:
         raise ConfigError(f"ROS domain {domain} is out of range: give 0..{DOMAIN_MAX}")
     return int(domain)
@@ -120,7 +110,12 @@ def default_domain(environ=os.environ) -> int:
 @dataclass(frozen=True)
 class Qos:
     """An rmw QoS profile (rmw enum values: reliable 1 / best effort 2, transient local 1 /
-    volatile 2, keep last 1 / keep all 2, liveliness automatic 1); times in (s, ns)."""
+    volatile 2, keep last 1 / keep all 2, liveliness automatic 1); times in (s, ns).
+
+    QoS in a token (``qos_to_keyexpr``): ``R:D:H,depth:dl_s,dl_ns:ls_s,ls_ns:L,lease_s,lease_ns``
+    where a field equal to rmw_zenoh's default (``qos.cpp``: reliable, volatile, keep last
+    42, infinite deadline/lifespan/lease, automatic liveliness) is left empty.
+    """
 
     reliability: int = 1
     durability: int = 2
@@ -172,6 +167,7 @@ class Qos:
                    lease=(n(comps[5][1], d.lease[0]), n(comps[5][2], d.lease[1])))
 
     def describe(self) -> str:
+        """The QoS in words: ``reliable, volatile, keep last 10``."""
         rel = {1: "reliable", 2: "best effort"}.get(self.reliability, str(self.reliability))
         dur = {1: "transient local", 2: "volatile"}.get(self.durability, str(self.durability))
         hist = f"keep last {self.depth}" if self.history == 1 else "keep all"
@@ -187,7 +183,13 @@ LATCHED = Qos(durability=1, depth=1)                       # transient local, e.
 # -- liveliness tokens ------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Entity:
-    """One node, publisher or subscription as rmw_zenoh announces it (a liveliness token)."""
+    """One node, publisher or subscription as rmw_zenoh announces it (a liveliness token).
+
+    Liveliness token (``Entity::Entity``):
+    ``@ros2_lv/<domain>/<zid>/<node id>/<entity id>/<NN|MP|MS|SS|SC>/<enclave>/<namespace>/
+    <node>[/<topic>/<dds type>/<type hash>/<qos>]`` with every "/" inside a name mangled
+    to "%" (``mangle_name``), so the root namespace is ``%`` and ``/cmd_vel`` is ``%cmd_vel``.
+    """
 
     domain: int
     zid: str
@@ -203,6 +205,7 @@ class Entity:
     qos: Qos | None = None
 
     def token(self) -> str:
+        """The liveliness token key of this entity (rmw_zenoh's ``Entity::liveliness_keyexpr``)."""
         parts = [ADMIN_SPACE, str(self.domain), self.zid, str(self.node_id), str(self.entity_id),
                  self.kind, mangle(self.enclave), mangle(self.namespace), mangle(self.node)]
         if self.kind != NODE:
@@ -212,6 +215,7 @@ class Entity:
 
     @property
     def gid(self) -> bytes:
+        """The entity's 16-byte GID (derived from its token)."""
         return gid(self.token())
 
     @classmethod
@@ -237,11 +241,16 @@ class Entity:
 
     @property
     def fq_node(self) -> str:
+        """The node's fully qualified name (``/namespace/node``)."""
         return topic_name(self.node, self.namespace)
 
 
 def gid(token: str) -> bytes:
-    """The 16-byte GID rmw_zenoh derives from a liveliness token (XXH3-128, low then high, LE)."""
+    """The 16-byte GID rmw_zenoh derives from a liveliness token (XXH3-128, low then high, LE).
+
+    GID (``Entity::Entity``): XXH3-128 of the token string, low 64 bits then high 64 bits,
+    little endian (16 bytes).
+    """
     import xxhash
 
     h = xxhash.xxh3_128_intdigest(token.encode())
@@ -256,17 +265,25 @@ def liveliness_subscription(domain: int) -> str:
 # -- attachments ------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Attachment:
+    """
+    Attachment of each sample (``attachment_helpers.cpp``, ``serialize_to_zbytes``): zenoh-ext
+    serialization of int64 sequence number (from 1), int64 source timestamp (system time,
+    ns), std::array<uint8_t, 16> GID — i.e. ``<q`` ``<q`` then the array as a sequence: its
+    LEB128 length (16 -> ``0x10``) and the 16 bytes; 33 bytes in all.
+    """
     sequence_number: int       # from 1, per publisher
     source_timestamp: int      # [ns] system time at publication
     gid: bytes                 # 16 bytes, the publisher's
 
     def encode(self) -> bytes:
+        """The 33-byte attachment: int64 sequence, int64 stamp [ns], 0x10 and the GID."""
         if len(self.gid) != GID_SIZE:
             raise ValueError(f"GID of {len(self.gid)} bytes, expected {GID_SIZE}")
         return struct.pack("<qqB", self.sequence_number, self.source_timestamp, GID_SIZE) + self.gid
 
     @classmethod
     def decode(cls, data: bytes | memoryview | None) -> Attachment:
+        """A sample's attachment -> Attachment; AttachmentError unless 33 well-formed bytes."""
         data = bytes(data or b"")
         if len(data) != ATTACHMENT_SIZE or data[16] != GID_SIZE:
             raise AttachmentError(f"attachment of {len(data)} bytes ({data[:20].hex()}…): expected "

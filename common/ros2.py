@@ -44,6 +44,7 @@ def typestore():
 
 
 def msg_class(typename: str):
+    """The rosbags message class of ``typename`` (``geometry_msgs/msg/Twist``)."""
     return typestore().types[typename]
 
 
@@ -78,6 +79,7 @@ def stamp_ns(header) -> int:
 
 
 def header(stamp: int, frame_id: str):
+    """A std_msgs/Header at ``stamp`` [ns] in ``frame_id``."""
     return msg_class("std_msgs/msg/Header")(stamp=time_msg(stamp), frame_id=frame_id)
 
 
@@ -87,6 +89,7 @@ def yaw_of(q) -> float:
 
 
 def quaternion_of_yaw(yaw: float):
+    """A geometry_msgs/Quaternion of a rotation by ``yaw`` [rad] about z."""
     half = 0.5 * yaw
     return msg_class("geometry_msgs/msg/Quaternion")(x=0.0, y=0.0, z=math.sin(half),
                                                      w=math.cos(half))

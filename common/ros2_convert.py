@@ -1,15 +1,9 @@
 """Our messages <-> ROS 2 messages (rosbags' ROS 2 Jazzy typestore) and CDR bytes.
 
-The ROS 2 face and ``papf export ros2`` publish these; ``papf report`` of a rosbag2 reads
-the other way. Pure functions, no transport. Frames (REP 105): ``odom`` is the world
-frame our poses are in, ``base_link`` the robot (x forward, z up), ``laser`` the LiDAR at
-its mount (:mod:`common.robot`, the URDF of :mod:`common.urdf`). Stamps are our
-``stamp_ns`` (sim time in sim runs). Sign conventions that differ: ROS's
-``BatteryState.current`` is negative while discharging (ours positive), and NaN there
-means "not measured".
-
-Typestore: ``Stores.ROS2_JAZZY`` (rosbags >= 0.10 has it). The four types the robot bridge
-uses (:mod:`common.ros2`, Humble) have the same definitions and CDR in both.
+Pure functions, no transport. Used by the ROS 2 face and ``papf export ros2`` (ours -> ROS)
+and ``papf report`` of a rosbag2 (ROS -> ours). Frames follow REP 105 (``odom`` our world,
+``base_link``, ``laser``); stamps are our ``stamp_ns``. ROS's ``BatteryState.current`` is
+negative while discharging (ours positive), NaN there means "not measured".
 """
 
 from __future__ import annotations
@@ -48,7 +42,12 @@ MARKER_NS = "mind"
 
 @lru_cache(maxsize=1)
 def typestore():
-    """The ROS 2 Jazzy type store (built once; read-only afterwards)."""
+    """The ROS 2 Jazzy type store (built once; read-only afterwards).
+
+    ``Stores.ROS2_JAZZY`` (rosbags >= 0.10 has it). The four types the robot bridge uses
+    (:mod:`common.ros2`, Humble) have the same definitions and CDR in both. Frames: ``laser``
+    is the LiDAR at its mount (:mod:`common.robot`, the URDF of :mod:`common.urdf`).
+    """
     return get_typestore(STORE)
 
 
@@ -68,6 +67,7 @@ def deserialize(data: bytes | memoryview, typename: str):
 
 # -- pieces ---------------------------------------------------------------------------------------
 def time_msg(stamp_ns: int):
+    """A builtin_interfaces/Time of ``stamp_ns`` [ns]."""
     sec, nanosec = divmod(int(stamp_ns), NS)
     return _cls("builtin_interfaces/msg/Time")(sec=sec, nanosec=nanosec)
 
@@ -78,6 +78,7 @@ def stamp_of(header) -> int:
 
 
 def header(stamp_ns: int, frame_id: str):
+    """A std_msgs/Header at ``stamp_ns`` [ns] in ``frame_id``."""
     return _cls("std_msgs/msg/Header")(stamp=time_msg(stamp_ns), frame_id=frame_id)
 
 

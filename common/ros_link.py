@@ -1,17 +1,9 @@
 """The robot's ROS 2 middleware on a Zenoh session: the bridge or rmw_zenoh (thin, no maths).
 
-``--ros bridge`` (default): ``zenoh-bridge-ros2dds`` maps ROS topic ``/t`` to key
-``[<ns>/]t``; we put and take bare CDR. ``--ros rmw_zenoh``: we are ROS 2 nodes on
-rmw_zenoh's own wire format (:mod:`common.rmw_zenoh`): the key with domain, DDS type name
-and RIHS01 hash, a liveliness token for our node and for each publisher and subscription
-(so ``ros2 node list`` / ``ros2 topic info -v`` on the robot see us) and each sample's
-attachment (sequence number, source timestamp, GID).
-
-A link hands out publishers (``put(cdr)``) and subscriptions (callback with the CDR
-bytes) by ROS topic and type; :meth:`RosLink.close` undeclares all of it.
-
-``--cmd-vel-type twist|twist_stamped``: Jazzy's diff-drive controller can take
-``geometry_msgs/TwistStamped``; the ROSbot's default stays ``Twist``.
+``--ros bridge`` (default, ``zenoh-bridge-ros2dds``) or ``--ros rmw_zenoh`` (we are ROS 2
+nodes, :mod:`common.rmw_zenoh`). :func:`open_link` gives a :class:`RosLink` that hands
+out publishers and subscriptions by ROS topic and type. Used by the base driver, the
+ROS 2 face and ``papf rosbot-emulator``.
 """
 
 from __future__ import annotations
@@ -72,6 +64,7 @@ def ros_domain(args: argparse.Namespace) -> int:
 
 
 def cmd_vel_type(args: argparse.Namespace) -> str:
+    """The ROS type name of cmd_vel chosen by ``--cmd-vel-type``; ConfigError if unknown."""
     name = getattr(args, "cmd_vel_type", "twist")
     if name not in CMD_VEL_TYPES:
         raise ConfigError(f"--cmd-vel-type {name!r}: give one of {', '.join(CMD_VEL_TYPES)}")
@@ -79,7 +72,21 @@ def cmd_vel_type(args: argparse.Namespace) -> str:
 
 
 class RosLink:
-    """Common part: remember what was declared, undeclare it on :meth:`close`."""
+    """Common part: remember what was declared, undeclare it on :meth:`close`.
+
+    ``--ros bridge`` (default): ``zenoh-bridge-ros2dds`` maps ROS topic ``/t`` to key
+    ``[<ns>/]t``; we put and take bare CDR. ``--ros rmw_zenoh``: we are ROS 2 nodes on
+    rmw_zenoh's own wire format (:mod:`common.rmw_zenoh`): the key with domain, DDS type name
+    and RIHS01 hash, a liveliness token for our node and for each publisher and subscription
+    (so ``ros2 node list`` / ``ros2 topic info -v`` on the robot see us) and each sample's
+    attachment (sequence number, source timestamp, GID).
+
+    A link hands out publishers (``put(cdr)``) and subscriptions (callback with the CDR
+    bytes) by ROS topic and type; :meth:`RosLink.close` undeclares all of it.
+
+    ``--cmd-vel-type twist|twist_stamped``: Jazzy's diff-drive controller can take
+    ``geometry_msgs/TwistStamped``; the ROSbot's default stays ``Twist``.
+    """
 
     middleware = ""
 
@@ -88,9 +95,11 @@ class RosLink:
         self._declared: list = []
 
     def key(self, topic: str, typename: str) -> str:
+        """The Zenoh key of ROS ``topic`` of type ``typename`` (each link's own mapping)."""
         raise NotImplementedError
 
     def close(self) -> None:
+        """Undeclare every publisher, subscriber and token, newest first."""
         for thing in reversed(self._declared):
             try:
                 thing.undeclare()
@@ -109,13 +118,16 @@ class BridgeLink(RosLink):
     middleware = "bridge"
 
     def key(self, topic: str, typename: str = "") -> str:
+        """The bridge's key of ``topic``: under the bridge's namespace (no type in it)."""
         topic = topic.strip("/")
         return f"{self.namespace}/{topic}" if self.namespace else topic
 
     def publisher(self, topic: str, typename: str, qos: rz.Qos = rz.RELIABLE_10):
+        """A publisher of ``topic`` (plain CDR; ``typename`` and ``qos`` unused)."""
         return self._keep(self.session.declare_publisher(self.key(topic)))
 
     def subscribe(self, topic: str, typename: str, callback, qos: rz.Qos = rz.RELIABLE_10):
+        """Call ``callback(cdr_bytes)`` for each message on ``topic``."""
         return self._keep(self.session.declare_subscriber(
             self.key(topic), lambda s: callback(s.payload.to_bytes())))
 
@@ -155,6 +167,7 @@ class RmwZenohLink(RosLink):
         self._token(self.node_entity)
 
     def key(self, topic: str, typename: str) -> str:
+        """The rmw_zenoh key of ``topic`` of ``typename`` in this domain and namespace."""
         return rz.topic_key(self.domain, rz.topic_name(topic, self.namespace), typename)
 
     def _entity(self, kind: str, topic: str, typename: str, qos: rz.Qos) -> rz.Entity:

@@ -1,25 +1,10 @@
 """A run's secret: the goal and the planner's status are signed, so each side acts only on
 messages of the run that set them up.
 
-The launcher of a run makes a fresh key (:func:`new_key`) and hands it to the processes
-it starts through the environment (:data:`ENV`, never on the bus or a command line).
-It signs the goal; the planner accepts only goals that verify, and signs its status
-messages; the launcher accepts only statuses that verify. A goal put on the bus by
-anyone else (another stack, a replay, a hostile peer) is dropped and counted, and so is a
-forged ``reached``. A planner started without a key (alone, for tests) accepts any goal.
-
-The tag is HMAC-SHA256 (RFC 2104) over the message's msgpack form without its ``auth``
-field, truncated to 128 bits.
-
-An operator on the same host re-targets a running session with ``papf goal X Y``: the
-launcher leaves the key in a file only its user can read (:func:`publish_key`, mode 600
-in a mode-700 directory), ``papf goal`` signs with it, and the launcher then judges the
-run against that goal. Another user, host or stack has no key and stays ignored.
-
-A live parameter change (the query ``<ns>/planner/params``: ``papf param set``, the viewer's
-Parameters panel) is signed the same way (:func:`sign_request`): a planner with a key lists
-its settings to anyone but changes them only for a request with this run's tag and a nonce
-it has not seen (:class:`RequestCheck`).
+The launcher makes a fresh key (:func:`new_key`) and hands it to its processes through the
+environment (:data:`ENV`, never the bus or a command line); goals, statuses and live
+parameter changes carry an HMAC tag (:func:`sign`, :func:`sign_request`). Used by the
+launcher, the planner node, ``papf goal`` and ``papf param``.
 """
 
 from __future__ import annotations
@@ -67,11 +52,17 @@ class NamespaceTaken(Exception):
 
 
 def publish_key(namespace: str, key_hex: str) -> Path:
-    """Write the run key (and this process id) for this user's ``papf goal`` (see module doc).
+    """Write the run key (and this process id) for this user's ``papf goal``.
 
     NamespaceTaken when a live launcher already holds ``namespace``: two launches in one
     namespace would share every key of the bus, and the second would take the first's key
-    file (the first could no longer be steered)."""
+    file (the first could no longer be steered).
+
+    An operator on the same host re-targets a running session with ``papf goal X Y``: the
+    launcher leaves the key in a file only its user can read (mode 600 in a mode-700
+    directory), ``papf goal`` signs with it, and the launcher then judges the run against that
+    goal. Another user, host or stack has no key and stays ignored.
+    """
     path = key_file(namespace)
     path.parent.mkdir(mode=0o700, exist_ok=True)
     os.chmod(path.parent, 0o700)
@@ -128,7 +119,16 @@ def _tag(msg, key: bytes) -> str:
 
 
 def sign(msg, key: bytes | None):
-    """``msg`` with its ``auth`` tag set (unchanged without a key)."""
+    """``msg`` with its ``auth`` tag set (unchanged without a key).
+
+    The launcher signs the goal; the planner accepts only goals that verify, and signs its
+    status messages; the launcher accepts only statuses that verify. A goal put on the bus by
+    anyone else (another stack, a replay, a hostile peer) is dropped and counted, and so is a
+    forged ``reached``. A planner started without a key (alone, for tests) accepts any goal.
+
+    The tag is HMAC-SHA256 (RFC 2104) over the message's msgpack form without its ``auth``
+    field, truncated to 128 bits.
+    """
     return msg if key is None else dataclasses.replace(msg, auth=_tag(msg, key))
 
 
@@ -161,7 +161,13 @@ def sign_request(request: dict, key: bytes | None) -> dict:
 
 
 class RequestCheck:
-    """A node's check of signed requests: the tag of its run key, each nonce once."""
+    """A node's check of signed requests: the tag of its run key, each nonce once.
+
+    A live parameter change (the query ``<ns>/planner/params``: ``papf param set``, the
+    viewer's Parameters panel) is signed like a goal (:func:`sign_request`): a planner with a
+    key lists its settings to anyone but changes them only for a request with this run's tag
+    and a nonce it has not seen.
+    """
 
     def __init__(self, key: bytes | None):
         self.key = key

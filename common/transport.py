@@ -115,6 +115,7 @@ def _resolve_paths(node, base: Path) -> None:
 
 
 def config_from_args(args: argparse.Namespace) -> zenoh.Config:
+    """The Zenoh config of the bus options in ``args`` (mode, connect, listen, scouting, file)."""
     return zenoh_config(args.mode, args.connect, args.listen, args.multicast_scouting,
                         args.zenoh_config)
 
@@ -162,6 +163,7 @@ def exit_fast(code: int | None) -> None:
 
 
 def setup_logging(name: str, level: str = "INFO") -> logging.Logger:
+    """The node's logger, its lines stamped with the time and ``name``."""
     logging.basicConfig(level=level, format=f"%(asctime)s {name:>12} %(levelname)-7s %(message)s",
                         datefmt="%H:%M:%S")
     return logging.getLogger(name)
@@ -318,6 +320,7 @@ class Node:
         self.log.info("ready as %s", self.keys.alive(self.name))
 
     def close(self) -> None:
+        """Undeclare the node's liveliness token and subscribers."""
         if self._token is not None:
             self._token.undeclare()
         for sub in self._subscribers:

@@ -51,6 +51,7 @@ class StampGuard:
         self.last: dict[str, int] = {}
 
     def check(self, topic: str, msg) -> str:
+        """What is wrong with ``msg`` on ``topic`` (stamp out of range or back); "" if nothing."""
         stamp = getattr(msg, "stamp_ns", 0)
         if not stamp_ok(stamp):
             return f"stamp {stamp!r} ns is outside [0, {MAX_STAMP_NS}]"

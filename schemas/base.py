@@ -1,26 +1,8 @@
 """Message base: frozen dataclasses <-> msgpack, validation and JSON Schema.
 
-A message class declares its fields with type annotations; the annotation
-decides the wire form and the checks (docs/architecture.md "Messages"):
-
-==============================  =====================================  ======================
-annotation                      wire form (msgpack)                    check
-==============================  =====================================  ======================
-``int``                         int                                    integer, no bool
-``float``                       float                                  finite unless ``nonfinite``
-``str``                         str                                    in ``choices`` if given
-``bool``                        bool                                   bool
-``Floats`` (tuple of float)     array of float                         finite, ``length`` if given
-``Points`` (tuple of (x, y))    array of [x, y]                        finite pairs
-``Paths`` (tuple of Points)     array of array of [x, y]               finite pairs
-``Strs`` (tuple of str)         array of str
-``np.ndarray``                  bytes, little-endian float32           length multiple of 4
-``tuple[M, ...]`` (M a Message) array of M's maps (with ``_type``)     each one as M checks
-==============================  =====================================  ======================
-
-Field metadata (``meta(unit=..., doc=..., choices=..., nonfinite=..., length=...)``)
-carries units and constraints; they land in the derived JSON Schema too.
-Every encoded map carries ``"_type": "papf/<Name>/v<N>"``; decoding checks it.
+A message class declares its fields with type annotations; the annotation decides the wire
+form and the checks (:class:`Message`, docs/architecture.md "Messages"). Every encoded map
+carries ``"_type": "papf/<Name>/v<N>"``. Used by every message of :mod:`schemas`.
 """
 
 from __future__ import annotations
@@ -45,7 +27,7 @@ _F32 = np.dtype("<f4")
 
 def meta(unit: str = "", doc: str = "", *, choices: tuple[str, ...] | None = None,
          nonfinite: bool = False, length: int | None = None) -> dict:
-    """Field metadata: unit, description and constraints (see module doc)."""
+    """Field metadata: unit, description and constraints (see :class:`Message`)."""
     return {"unit": unit, "doc": doc, "choices": choices, "nonfinite": nonfinite,
             "length": length}
 
@@ -72,7 +54,30 @@ def _kind(annotation: Any) -> str:
 
 
 class Message:
-    """Base of all messages. Subclasses are ``@message("Name", version)`` dataclasses."""
+    """Base of all messages. Subclasses are ``@message("Name", version)`` dataclasses.
+
+    A message class declares its fields with type annotations; the annotation
+    decides the wire form and the checks (docs/architecture.md "Messages"):
+
+    ==============================  =====================================  ======================
+    annotation                      wire form (msgpack)                    check
+    ==============================  =====================================  ======================
+    ``int``                         int                                    integer, no bool
+    ``float``                       float                                  finite unless ``nonfinite``
+    ``str``                         str                                    in ``choices`` if given
+    ``bool``                        bool                                   bool
+    ``Floats`` (tuple of float)     array of float                         finite, ``length`` if given
+    ``Points`` (tuple of (x, y))    array of [x, y]                        finite pairs
+    ``Paths`` (tuple of Points)     array of array of [x, y]               finite pairs
+    ``Strs`` (tuple of str)         array of str
+    ``np.ndarray``                  bytes, little-endian float32           length multiple of 4
+    ``tuple[M, ...]`` (M a Message) array of M's maps (with ``_type``)     each one as M checks
+    ==============================  =====================================  ======================
+
+    Field metadata (``meta(unit=..., doc=..., choices=..., nonfinite=..., length=...)``)
+    carries units and constraints; they land in the derived JSON Schema too.
+    Every encoded map carries ``"_type": "papf/<Name>/v<N>"``; decoding checks it.
+    """
 
     TYPE: ClassVar[str] = ""
     _FIELDS: ClassVar[tuple[tuple[str, str, dict], ...]] = ()

@@ -56,6 +56,7 @@ class Keys:
                              "(no empty parts, no spaces, no * $ ? #)")
 
     def key(self, suffix: str) -> str:
+        """The key of ``suffix`` in this namespace."""
         return f"{self.ns}/{suffix}"
 
     def alive(self, node: str = "*") -> str:

@@ -1,19 +1,9 @@
 """The planner core: scan + odometry -> velocity command (pure; no zenoh).
 
-:class:`Planner` owns what every algorithm shares — obstacle points from the scan (world
-frame), the goal, the motion law (eqs. 3 and 5 of the PAPF paper + our heading
-controller), goal reached, the stagnation watch, and the messages. The algorithm itself
-is a small *strategy* (:class:`Strategy`) that turns the situation into a force and the
-debug geometry the papers drew in RViz; strategies are looked up by name in
-:mod:`nodes.planner.registry`.
-
-What the run tells the planner beyond scan and odometry: the **road** comes with the
-goal (:attr:`Planner.road`, from the ``Goal`` message's ``road_*`` fields — the planner
-never reads a world file) and the **obstacle tracks** of the cycle come as an optional
-``Objects`` message paired with the scan (:meth:`Planner.step`), kept as
-:attr:`Planner.objects`; :meth:`Strategy.observe` receives them before each ``plan``.
-
-Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
+:class:`Planner` owns what every algorithm shares (scan points, goal, the motion law of
+PAPF eqs. 3 and 5, goal reached, stagnation, messages); the algorithm is a
+:class:`Strategy` found by name in :mod:`nodes.planner.registry`. Used by the planner
+node's loop (:mod:`nodes.planner.loop`) and the offline simulations (papf/offline/).
 """
 
 from __future__ import annotations
@@ -167,7 +157,16 @@ def _paths(paths) -> tuple:
 
 
 class Planner:
-    """Goal, motion law, status and messages around one :class:`Strategy`."""
+    """Goal, motion law, status and messages around one :class:`Strategy`.
+
+    What the run tells the planner beyond scan and odometry: the **road** comes with the
+    goal (:attr:`road`, from the ``Goal`` message's ``road_*`` fields — the planner never
+    reads a world file) and the **obstacle tracks** of the cycle come as an optional
+    ``Objects`` message paired with the scan (:meth:`step`), kept as :attr:`objects`;
+    :meth:`Strategy.observe` receives them before each ``plan``.
+
+    Deterministic: outputs depend only on the inputs (``compute_ns`` excepted).
+    """
 
     def __init__(self, strategy: Strategy, apf: APFParams | None = None):
         self.strategy = strategy

@@ -1,21 +1,10 @@
 """The shared Artificial Potential Field core (PAPF paper, Szczepanski 2022, Sec. II).
 
-N-dimensional and vectorised: positions are ``(D,)`` arrays, point sets ``(K, D)``.
-Every planner of this package (APF, PAPF, AR-APF, Wang) builds on these functions.
-
-- :func:`coulomb_sum` — sum of ``r / |r|^3`` over points within a range (eq. 1 geometry).
-- :func:`apf_force` — eq. 2 (goal attraction + obstacle repulsion within ``d_o``) plus
-  optional extra repulsors with their own constants (top quarks, eq. 7; virtual walls and
-  obstacles, AR-APF eqs. 3-4).
-- :func:`heading_ref` (eq. 3), :func:`speed_ref` (eq. 5), :func:`turn_rate` (our heading
-  controller, documented in docs/planners.md).
-
-Sign convention of eq. 2: ``F = -k q_V q_X / |r|^2 * r_hat`` with ``r`` from the vehicle to
-the particle X; with Table 1 charges (q_V = q_O = -1, q_G = +1) the goal pulls and the
-obstacles push.
-
-Summation is sequential (``cumsum``) and the per-point arithmetic is written out, so the
-numba kernels in :mod:`nodes.planner.papf.kernels` give bit-identical results.
+Eq. 2's force (:func:`apf_force`, with extra repulsors: quarks eq. 7, AR-APF eqs. 3-4),
+eq. 3's heading (:func:`heading_ref`), eq. 5's speed (:func:`speed_ref`) and our heading
+controller (:func:`turn_rate`), N-dimensional and vectorised. Every planner of
+``nodes/planner/`` builds on it; the numba kernels match it bit for bit. The reading of
+eq. 2's signs: docs/planners.md, "The algorithms in the code".
 """
 
 from __future__ import annotations

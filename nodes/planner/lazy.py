@@ -1,13 +1,9 @@
 """Modules loaded on first use: the numba kernels, only in a process whose planner runs them.
 
-Importing numba costs about half a second of CPU, and its first compiled call (even from
-the on-disk cache) about as much again. Classic APF, AR-APF and Wang's planners run no
-kernel, and neither does the launcher (``papf run`` checks planner names and settings
-through :mod:`nodes.planner.registry`). So :mod:`nodes.planner.papf.strategy` and
-:mod:`nodes.planner.iapf.algorithm` bind their kernel modules with :func:`lazy_module`: the module
-object is there at import, its code (and numba's import) runs at the first attribute
-read — when a PAPF or IAPF planner is built. :data:`HAVE_NUMBA`
-(:mod:`common.optional`) says whether numba is installed without importing it.
+Importing numba and its first compiled call cost about a second of CPU; APF, AR-APF,
+Wang and the launcher run no kernel. :mod:`nodes.planner.papf.strategy` and
+:mod:`nodes.planner.iapf.algorithm` bind their kernel modules with :func:`lazy_module`:
+the module's code (and numba's import) runs at its first attribute read.
 """
 
 from __future__ import annotations
@@ -24,6 +20,12 @@ def lazy_module(name: str) -> ModuleType:
     """The module ``name``, executed at its first attribute access (``importlib.util.LazyLoader``).
 
     Already imported: that module. Later ``import name`` statements get the same object.
+
+    Importing numba costs about half a second of CPU, and its first compiled call (even from
+    the on-disk cache) about as much again. Classic APF, AR-APF and Wang's planners run no
+    kernel, and neither does the launcher (``papf run`` checks planner names and settings
+    through :mod:`nodes.planner.registry`). :data:`HAVE_NUMBA` (:mod:`common.optional`) says
+    whether numba is installed without importing it.
     """
     if name in sys.modules:
         return sys.modules[name]

@@ -1,25 +1,8 @@
 """Input pairing and staleness for the planner process (pure; no zenoh; wall time injected).
 
-:class:`PlannerLoop` takes the node's inbox items and returns what to publish, as
-``[(topic, message), ...]`` — the protocol of docs/architecture.md:
-
-- **lockstep** (default): ``scan(t)`` is paired with ``odom(t)`` (same stamp), and with
-  ``objects(t)`` when the loop takes obstacle tracks (``objects=True``). Whichever
-  arrives last triggers the cycle. A scan whose partners have not arrived after
-  ``pair_timeout_s`` of wall time is answered with the newest older odometry (objects)
-  if it is fresh (``<= stale_timeout_s`` of sim time older), else with a zero command
-  (objects: none).
-- **realtime**: each scan is paired with the latest odometry (and objects); odometry older than
-  ``stale_timeout_s`` (vs the scan stamp) -> zero command. No scan for ``stale_timeout_s``
-  of wall time -> a zero command every ``STALE_REPEAT_S``.
-- A goal -> :meth:`Planner.set_goal` and a ``ready`` status with the goal's stamp. With a
-  run key (:mod:`common.runauth`), only a goal signed with it counts (others are dropped
-  and counted in ``rejected_goals``), and every status is signed.
-- Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
-  and ``planner/status``. With ``send_command`` the command goes out through it as soon as
-  it exists (before the debug state is built; the returned list then holds the rest).
-  With ``want_state`` (e.g. :meth:`common.transport.Node.listened`) false, ``planner/state``
-  is neither built nor returned: a debug topic nobody subscribes to costs nothing.
+:class:`PlannerLoop` takes the node's inbox items (scan, odometry, tracks, goal) and
+returns what to publish as ``[(topic, message), ...]``, in lockstep or realtime (the
+protocol of docs/architecture.md). Used by the planner node (``nodes/planner/__main__.py``).
 """
 
 from __future__ import annotations
@@ -40,7 +23,27 @@ STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are sta
 
 
 class PlannerLoop:
-    """Pairs scans with odometry (and tracks), drops stale input, runs the :class:`Planner` (pure; no zenoh)."""
+    """Pairs scans with odometry (and tracks), drops stale input, runs the :class:`Planner` (pure; no zenoh).
+
+    - **lockstep** (default): ``scan(t)`` is paired with ``odom(t)`` (same stamp), and with
+      ``objects(t)`` when the loop takes obstacle tracks (``objects=True``). Whichever
+      arrives last triggers the cycle. A scan whose partners have not arrived after
+      ``pair_timeout_s`` of wall time is answered with the newest older odometry (objects)
+      if it is fresh (``<= stale_timeout_s`` of sim time older), else with a zero command
+      (objects: none).
+    - **realtime**: each scan is paired with the latest odometry (and objects); odometry
+      older than ``stale_timeout_s`` (vs the scan stamp) -> zero command. No scan for
+      ``stale_timeout_s`` of wall time -> a zero command every ``STALE_REPEAT_S``.
+    - A goal -> :meth:`Planner.set_goal` and a ``ready`` status with the goal's stamp. With a
+      run key (:mod:`common.runauth`), only a goal signed with it counts (others are dropped
+      and counted in ``rejected_goals``), and every status is signed.
+    - Every answered scan publishes ``cmd_vel`` (stamp = scan stamp), then ``planner/state``
+      and ``planner/status``. With ``send_command`` the command goes out through it as soon as
+      it exists (before the debug state is built; the returned list then holds the rest).
+      With ``want_state`` (e.g. :meth:`common.transport.Node.listened`) false,
+      ``planner/state`` is neither built nor returned: a debug topic nobody subscribes to
+      costs nothing.
+    """
 
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S, log=None, run_key: bytes | None = None,
@@ -198,6 +201,7 @@ class HeldOdometry:
         self.kept: deque[Odometry] = deque()
 
     def on_odom(self, msg: Odometry) -> None:
+        """Keep an odometry message; wake the loop if a scan waits for its partner."""
         self.kept.append(msg)
         if self.loop.pending:   # a scan waits for odometry: this may be its partner
             self.wake()

@@ -1,17 +1,9 @@
 """The planner's settings at run time (pure): list them, change them through ``--set``'s rules.
 
-The planner node answers Zenoh queries on ``<ns>/planner/params`` with :func:`answer`
-(the viewer's Parameters panel uses it). Names are ``table.name`` as ``--set`` takes them:
-``apf.<field>`` for :class:`~nodes.planner.field.APFParams`, ``<planner>.<field>`` for the
-algorithm's own. A change goes through :func:`nodes.planner.registry.load_params` — the
-same parsing and validation as ``--set`` — on top of the current values, and takes effect
-at the next cycle; a refused change leaves every value as it was.
-
-Wire format (JSON): request ``{}`` (list) or ``{"set": ["apf.v_max=0.3", ...], "nonce": N,
-"auth": TAG}`` (a change is signed with the run's key: :func:`common.runauth.sign_request`;
-a planner started without a key takes unsigned changes); reply
-``{"planner": NAME, "params": {name: value}, "error": ""}`` (``error`` says why a change
-was refused).
+The planner node answers Zenoh queries on ``<ns>/planner/params`` with :func:`answer`;
+the viewer's Parameters panel and ``papf param`` ask. A change is parsed and checked by
+:func:`nodes.planner.registry.load_params`, as ``--set`` is, and takes effect at the next
+cycle; a refused change leaves every value as it was.
 """
 
 from __future__ import annotations
@@ -51,8 +43,17 @@ def apply(name: str, planner: Planner, sets: list[str]) -> list[str]:
 
 def answer(name: str, planner: Planner, payload: bytes,
            check: RequestCheck | None = None) -> tuple[dict, list[str]]:
-    """(reply, changed names) for one query payload (see the module doc); ``check``: the
-    node's :class:`common.runauth.RequestCheck` (a change without this run's tag is refused)."""
+    """(reply, changed names) for one query payload; ``check``: the
+    node's :class:`common.runauth.RequestCheck` (a change without this run's tag is refused).
+
+    Names are ``table.name`` as ``--set`` takes them: ``apf.<field>`` for
+    :class:`~nodes.planner.field.APFParams`, ``<planner>.<field>`` for the algorithm's own.
+    Wire format (JSON): request ``{}`` (list) or ``{"set": ["apf.v_max=0.3", ...], "nonce": N,
+    "auth": TAG}`` (a change is signed with the run's key: :func:`common.runauth.sign_request`;
+    a planner started without a key takes unsigned changes); reply
+    ``{"planner": NAME, "params": {name: value}, "error": ""}`` (``error`` says why a change
+    was refused).
+    """
     error, changed = "", []
     try:
         if len(payload) > MAX_REQUEST_BYTES:

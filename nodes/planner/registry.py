@@ -1,18 +1,11 @@
 """Planner plug-ins by name, and their settings (TOML file + ``--set name=value``).
 
-The registry is the one list of planners: it finds every package under ``nodes/planner/``
-that exports ``STRATEGIES`` (classes of :class:`~nodes.planner.core.Strategy`), ordered by
-their declared ``rank``; :data:`PLANNERS` maps the ``--planner`` name to the class. Whatever
-the rest of the house needs to know about planners (CLI choices, colours, experiments'
-planner lists, which need obstacle tracks, ...) is derived here from the strategies'
-declarations (:func:`with_role`, :func:`declared`, :func:`car_variants`). Adding one:
-``papf new planner NAME`` (docs/architecture.md, "Extending").
-
-Settings: :class:`~nodes.planner.field.APFParams` (shared field and motion law) plus the
-algorithm's own ``Params``. A TOML file may give them at top level or in ``[apf]`` /
-``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``. Every
-value is checked against its declared type and range (the strategy's ``SPECS``) by
+The one list of planners: every package under ``nodes/planner/`` that exports
+``STRATEGIES``, ordered by ``rank`` (:data:`PLANNERS`). What the rest of the house needs
+to know about planners (CLI choices, colours, experiments' lists, ...) is derived here
+(:func:`with_role`, :func:`declared`, :func:`car_variants`); settings are checked by
 :func:`check_setting`, the one check for ``--set``, ``--params`` and live parameters.
+Used by the planner node, ``papf run``/``plan``/``new`` and the experiments.
 """
 
 from __future__ import annotations
@@ -193,6 +186,11 @@ def load_params(planner: str, file: str | Path | None = None, sets: list[str] = 
     ``sets``; every value checked against its declared range (:mod:`nodes.planner.settings`).
 
     ``preset=NAME`` (in the file or as a ``--set``; :data:`PRESETS`) selects a preset.
+
+    Settings: :class:`~nodes.planner.field.APFParams` (shared field and motion law) plus the
+    algorithm's own ``Params``. A TOML file may give them at top level or in ``[apf]`` /
+    ``[<planner>]`` tables; ``--set`` takes ``name=value`` or ``table.name=value``. Every
+    value is checked against its declared type and range (the strategy's ``SPECS``).
     """
     apf, algo = APFParams(), _planner_class(planner).Params()
     items: list[tuple[str, str, object]] = []

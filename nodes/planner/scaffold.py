@@ -1,11 +1,9 @@
 """``papf new planner NAME --from P``: a new planner plug-in, copied from an existing one.
 
-Writes ``nodes/planner/NAME/`` (P's folder, its strategy class renamed and given the
-new name; its settings and kernels) and ``tests/unit/test_planner_NAME.py``. The registry
-finds the folder by itself (:mod:`nodes.planner.registry`), so nothing else changes. The
-copy drops P's claims on paper comparisons (``roles``), colours and car variants and
-declares ``roles = ("compared",)``: the new planner joins the comparison experiments.
-Nothing is overwritten: every check runs before the first file is written.
+Writes ``nodes/planner/NAME/`` (P's folder, its strategy renamed, ``roles = ("compared",)``)
+and ``tests/unit/test_planner_NAME.py``; the registry finds the folder by itself, so
+nothing else changes. Nothing is overwritten: every check runs before the first write.
+Used by :mod:`papf.cli.new`.
 """
 
 from __future__ import annotations
@@ -126,7 +124,11 @@ def plan_files(name: str, source: str, root: Path) -> dict[Path, str]:
 
 
 def new_planner(name: str, source: str = "apf", root: Path | None = None) -> list[Path]:
-    """Scaffold planner ``name`` from ``source`` under ``root``; the files written."""
+    """Scaffold planner ``name`` from ``source`` under ``root``; the files written.
+
+    The copy drops P's claims on paper comparisons (``roles``), colours and car variants and
+    declares ``roles = ("compared",)``: the new planner joins the comparison experiments.
+    """
     root = root or repo_root()
     check_name(name, root)
     files = plan_files(name, source, root)

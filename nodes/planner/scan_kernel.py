@@ -1,11 +1,8 @@
 """Scan beams -> world-frame points (the non-trigonometric part of :func:`nodes.planner.core.scan_view`).
 
-:func:`scan_points` takes each beam's range and the cosine and sine of its world-frame
-angle (numpy's own ``cos``/``sin``: their rounding is numpy's) and returns the ranges with
-invalid returns as ``inf``, the points ``origin + r (cos, sin)`` of the valid beams in
-scan order, and the valid mask. With numba it is one compiled loop; without, the numpy
-expressions it replaces. Both give the same values bit for bit (a product and a sum per
-coordinate; tests/unit/test_papf_kernel.py).
+:func:`scan_points`: one compiled loop with numba, the numpy expressions it replaces
+without; both bit for bit the same (tests/unit/test_papf_kernel.py). Used by the planner
+core's scan view.
 """
 
 from __future__ import annotations
@@ -64,6 +61,11 @@ def scan_points(ranges: np.ndarray, cos_a: np.ndarray, sin_a: np.ndarray, range_
 
     A return is valid when finite and within [range_min, range_max]; ``ranges``, ``cos_a``,
     ``sin_a`` are float64 arrays of one length, ``origin`` the sensor position (2,).
+
+    Each beam's range and the cosine and sine of its world-frame angle (numpy's own
+    ``cos``/``sin``: their rounding is numpy's) -> the ranges with invalid returns as ``inf``,
+    the points ``origin + r (cos, sin)`` of the valid beams in scan order, and the valid mask
+    (a product and a sum per coordinate).
     """
     finite = bool(np.isfinite(range_min) and np.isfinite(range_max))
     if use_numba and HAVE_NUMBA:

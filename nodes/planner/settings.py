@@ -1,17 +1,10 @@
 """Declared type and valid range of every planner parameter (see :mod:`common.params`).
 
-This module holds the shared table (:data:`APF`, for
-:class:`~nodes.planner.field.APFParams`) and the node's own (:data:`NODE`); each planner's
-table lies in its folder (``nodes/planner/<name>/settings.py``) and its strategy declares it
-as ``SPECS``. A test checks that every field has a spec and every default lies in it. Safety parameters
-(``safety=True``) are those that keep obstacle avoidance and the speed limits on:
-a repulsion range, gain or charge of the wrong sign, a zero or infinite range, or a
-speed above the ROSbot's limits is refused, so no setting can switch avoidance off.
-
-Charges: the PAPF paper's force between two charges is ``-k q_a q_b / d^2`` along the
-line (eq. 2), so obstacles repel only while ``q_V`` and ``q_O`` (and the quark charge
-``q_Q``) share a sign, and the goal attracts only while ``q_G`` has the other one. The
-ranges fix the paper's signs: ``q_V, q_O, q_Q < 0 < q_G``.
+The shared table (:data:`APF`, for :class:`~nodes.planner.field.APFParams`) and the node's
+own (:data:`NODE`); each planner's table lies in its folder and its strategy declares it
+as ``SPECS``. Safety parameters (``safety=True``) keep avoidance and the speed limits on;
+the charges' ranges fix eq. 2's signs, ``q_V, q_O, q_Q < 0 < q_G`` (docs/planners.md,
+"The algorithms in the code"). Used by the registry's checks of every setting.
 """
 
 from __future__ import annotations

@@ -1,14 +1,8 @@
 """The end of a run in a recording: ``run_ended`` and the samples still on their way.
 
-The launcher puts ``run_ended`` (stamp ``T``, the run's last instant) on its own link; the
-samples of ``T`` come from the nodes on theirs, and Zenoh orders samples per link only. So
-``run_ended`` can reach the recorder before, say, the scan of ``T`` (seen under load: 119 of
-120 scans recorded). :class:`RunEndWatch` therefore does not close at ``run_ended`` but
-opens a tail: every key that was live when ``run_ended`` came (a sample within
-:data:`LIVE_S` of wall time before it) and whose latest sample was stamped before ``T`` is
-recorded until it has delivered a stamp ``>= T``
-(or a payload without one: ROS 2 CDR, foreign data), at most :data:`TAIL_MAX_S` — a node
-that died at the end delivers nothing more, and the file must still close.
+Zenoh orders samples per link only, so ``run_ended`` can reach the recorder before the
+nodes' last samples; :class:`RunEndWatch` keeps recording the live keys until each has
+delivered the run's last stamp (at most :data:`TAIL_MAX_S`). Used by the recorder node.
 """
 
 from __future__ import annotations
@@ -38,7 +32,18 @@ def _reached(stamp: int | None, end_ns: int) -> bool:
 
 class RunEndWatch:
     """Notices the launcher's ``run_ended`` on ``events_key`` and then says when the tail
-    is complete. ``arrived(key, payload, now_ns)`` is called for every recorded sample."""
+    is complete. ``arrived(key, payload, now_ns)`` is called for every recorded sample.
+
+    The launcher puts ``run_ended`` (stamp ``T``, the run's last instant) on its own link; the
+    samples of ``T`` come from the nodes on theirs, and Zenoh orders samples per link only. So
+    ``run_ended`` can reach the recorder before, say, the scan of ``T`` (seen under load: 119 of
+    120 scans recorded). :class:`RunEndWatch` therefore does not close at ``run_ended`` but
+    opens a tail: every key that was live when ``run_ended`` came (a sample within
+    :data:`LIVE_S` of wall time before it) and whose latest sample was stamped before ``T`` is
+    recorded until it has delivered a stamp ``>= T``
+    (or a payload without one: ROS 2 CDR, foreign data), at most :data:`TAIL_MAX_S` — a node
+    that died at the end delivers nothing more, and the file must still close.
+    """
 
     def __init__(self, events_key: str, live_s: float = LIVE_S):
         self.key, self.live_ns = events_key, int(live_s * 1e9)
@@ -48,6 +53,7 @@ class RunEndWatch:
         self.waiting: set[str] = set()      # live keys without a stamp >= end_ns yet
 
     def arrived(self, key: str, payload: bytes, now_ns: int) -> None:
+        """Note a sample on ``key`` received at ``now_ns`` [ns] (wall), to tell the tail's end."""
         if self.seen:
             if key in self.waiting:
                 if _reached(stamp_of(payload), self.end_ns):

@@ -1,25 +1,8 @@
 """Write a run to MCAP, crash-safe (docs/recording.md). Pure: no Zenoh here.
 
-Layout of a recording (see docs/recording.md):
-
-- one channel per Zenoh key (topic = the full key, e.g. ``rosbot/scan``), message
-  encoding ``msgpack``; keys of the stack (``schemas.keys.TOPICS``) get a schema
-  record named after the message type (``papf/Scan/v1``, encoding ``jsonschema``,
-  data = ``Message.json_schema()`` as JSON); any other key is recorded raw with no
-  schema (id 0) and encoding ``msgpack`` if its first payload is msgpack, else
-  ``application/octet-stream``;
-- ``log_time`` = the message's ``stamp_ns`` (sim time in sim runs; the receive wall
-  time when the payload has none), so log times may go backwards across channels;
-  ``publish_time`` = the wall-clock receive time [ns since the Unix epoch];
-- a metadata record named ``run`` (world, planner, seed, parameters, versions).
-
-Hostile keys: at most :data:`MAX_CHANNELS` channels; messages on further keys are counted
-(``stats.dropped``, and a ``dropped`` metadata record at the end), never recorded, so any
-number of distinct keys leaves a complete file with its footer.
-
-Crash safety: messages go into chunks that are closed and flushed to the OS at
-least every ``flush_interval_s`` of wall time (and when ``chunk_size`` bytes are
-buffered), so a SIGKILL loses at most that much; ``papf recover`` salvages the rest.
+:class:`RunWriter` writes one channel per key (schemas for the stack's messages), log
+time = the message's stamp, a ``run`` metadata record; chunks are flushed often so a
+SIGKILL loses little (``papf recover`` salvages the rest). Used by the recorder node.
 """
 
 from __future__ import annotations
@@ -45,7 +28,7 @@ MESSAGE_ENCODING = "msgpack"
 RAW_ENCODING = "application/octet-stream"
 SCHEMA_ENCODING = "jsonschema"
 RUN_METADATA = "run"
-PROFILE = "papf"  # MCAP header profile: our own conventions (this module's docstring)
+PROFILE = "papf"  # MCAP header profile: our own conventions (RunWriter's docstring)
 
 # Defaults. A chunk is closed at whichever limit comes first.
 FLUSH_INTERVAL_S = 0.2      # [s] wall time; bounds what a SIGKILL can lose
@@ -136,6 +119,27 @@ class RunWriter:
 
     ``RunWriter(path, {"world": "energy", "planner": planner, "seed": 1})`` then
     ``write(key, payload)`` for every received sample; ``maybe_flush()`` on idle ticks.
+
+    Layout of a recording (see docs/recording.md):
+
+    - one channel per Zenoh key (topic = the full key, e.g. ``rosbot/scan``), message
+      encoding ``msgpack``; keys of the stack (``schemas.keys.TOPICS``) get a schema
+      record named after the message type (``papf/Scan/v1``, encoding ``jsonschema``,
+      data = ``Message.json_schema()`` as JSON); any other key is recorded raw with no
+      schema (id 0) and encoding ``msgpack`` if its first payload is msgpack, else
+      ``application/octet-stream``;
+    - ``log_time`` = the message's ``stamp_ns`` (sim time in sim runs; the receive wall
+      time when the payload has none), so log times may go backwards across channels;
+      ``publish_time`` = the wall-clock receive time [ns since the Unix epoch];
+    - a metadata record named ``run`` (world, planner, seed, parameters, versions).
+
+    Hostile keys: at most :data:`MAX_CHANNELS` channels; messages on further keys are counted
+    (``stats.dropped``, and a ``dropped`` metadata record at the end), never recorded, so any
+    number of distinct keys leaves a complete file with its footer.
+
+    Crash safety: messages go into chunks that are closed and flushed to the OS at
+    least every ``flush_interval_s`` of wall time (and when ``chunk_size`` bytes are
+    buffered), so a SIGKILL loses at most that much; ``papf recover`` salvages the rest.
     """
 
     def __init__(self, path: str | Path, metadata: Mapping[str, Any] | None = None, *,

@@ -40,6 +40,7 @@ GUARDED = "cmd_vel"                  # a foreign subscriber of this face topic: 
 
 
 def parse_args(argv=None) -> argparse.Namespace:
+    """The face's command line: ROS domain, namespace and the bus options."""
     ap = argparse.ArgumentParser(prog="python -m nodes.ros_face", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS))
@@ -90,11 +91,13 @@ class Face:
         self.bad_goals = 0
 
     def publish(self, outputs) -> None:
+        """Put each (ROS topic, CDR bytes) of ``outputs`` on its publisher and count it."""
         for topic, data in outputs:
             self.pubs[topic].put(data)
             self.sent[topic] += 1
 
     def on_goal_pose(self, data: bytes) -> None:
+        """A ``/goal_pose`` from ROS -> our goal; a malformed one is logged and dropped."""
         try:
             goal = self.core.goal_from_pose(data)
         except SchemaError as exc:
@@ -109,6 +112,7 @@ class Face:
         self.log.info("goal set from /goal_pose: (%.2f, %.2f)", goal.x, goal.y)
 
     def run(self) -> None:
+        """Publish the static messages, then translate every message until the node stops."""
         self.publish(self.core.static())
         for topic, msg in self.node.messages(tick_s=0.1):
             if topic == GOAL_IN:
@@ -117,11 +121,13 @@ class Face:
                 self.publish(self.core.on_message(topic, msg))
 
     def close(self) -> None:
+        """Undeclare the ROS links' publishers and subscribers."""
         for link in self.links:
             link.close()
 
 
 def serve(args: argparse.Namespace, log) -> int:
+    """Run the face; ConfigError if another ROS node subscribes the guarded topic."""
     domain = ros_domain(args)
     with open_node(NAME, args, log) as node:
         others = foreign_subscribers(node.session, domain, rz.topic_name(GUARDED, args.ros_namespace))
@@ -148,6 +154,7 @@ def serve(args: argparse.Namespace, log) -> int:
 
 
 def main(argv=None) -> int:
+    """``python -m nodes.ros_face``: run the face; the exit code (2 on a bad setting)."""
     args = parse_args(argv)
     log = setup_logging(NAME, args.log_level)
     try:

@@ -1,14 +1,8 @@
 """The ROS 2 face, pure: our messages -> the ROS 2 topics tools expect, ``/goal_pose`` -> Goal.
 
-No transport here (the process is :mod:`nodes.ros_face.__main__`). Conversions are
-:mod:`common.ros2_convert`'s (rosbags, ROS 2 Jazzy types); the URDF is
-:mod:`common.urdf`'s. Each ROS topic is presented by the ROS 2 node that stands for the
-stack node it comes from (:data:`FACE_TOPICS`), so ``ros2 node info /papf_planner``
-lists ``/cmd_vel``, ``/plan`` and ``/markers``.
-
-Frames (REP 105): ``odom`` is the run's world frame, ``base_link`` the robot, ``laser`` the
-LiDAR; ``/tf`` carries odom -> base_link with each odometry sample, ``/tf_static``
-base_link -> laser once, transient local (as ``robot_description``).
+:class:`FaceCore` converts with :mod:`common.ros2_convert`; each ROS topic is presented by
+the ROS 2 node that stands for the stack node it comes from (:data:`FACE_TOPICS`). No
+transport here: used by the face process (:mod:`nodes.ros_face.__main__`).
 """
 
 from __future__ import annotations
@@ -52,7 +46,18 @@ SUBSCRIBED = ("scan", "odom", "cmd_vel", "battery", "planner/state", "goal")
 
 
 class FaceCore:
-    """Turn our messages into (face topic, CDR) pairs; remember what markers and goals need."""
+    """Turn our messages into (face topic, CDR) pairs; remember what markers and goals need.
+
+    No transport here (the process is :mod:`nodes.ros_face.__main__`). Conversions are
+    :mod:`common.ros2_convert`'s (rosbags, ROS 2 Jazzy types); the URDF is
+    :mod:`common.urdf`'s. Each ROS topic is presented by the ROS 2 node that stands for the
+    stack node it comes from (:data:`FACE_TOPICS`), so ``ros2 node info /papf_planner``
+    lists ``/cmd_vel``, ``/plan`` and ``/markers``.
+
+    Frames (REP 105): ``odom`` is the run's world frame, ``base_link`` the robot, ``laser`` the
+    LiDAR; ``/tf`` carries odom -> base_link with each odometry sample, ``/tf_static``
+    base_link -> laser once, transient local (as ``robot_description``).
+    """
 
     def __init__(self) -> None:
         self.robot_xy: tuple[float, float] | None = None
@@ -65,6 +70,7 @@ class FaceCore:
                 ("robot_description", rc.serialize(rc.string(rosbot_urdf()), rc.STRING))]
 
     def on_message(self, topic: str, msg) -> list[tuple[str, bytes]]:
+        """One of our messages -> the (ROS topic, CDR bytes) to publish for it."""
         self.last_ns = max(self.last_ns, getattr(msg, "stamp_ns", 0))
         if topic == "scan":
             return [("scan", rc.serialize(rc.laser_scan(msg), rc.LASER_SCAN))]

@@ -1,0 +1,1 @@
+"""The obstacle tracker node: LiDAR scans + odometry -> object tracks (``python -m nodes.tracker``)."""

@@ -54,6 +54,7 @@ def params_from(items: list[str]) -> TrackerParams:
 
 
 def run(args: argparse.Namespace, params: TrackerParams) -> int:
+    """Run the tracker node until stopped; the process's exit code."""
     log = setup_logging(NODE_NAME, args.log_level)
     tracker = Tracker(params)
     tracker.warm_up()                      # JIT-compile before ready, not in the first cycle
@@ -74,6 +75,7 @@ def run(args: argparse.Namespace, params: TrackerParams) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m nodes.tracker``: run the node; the exit code (2 on a bad setting)."""
     parser = argparse.ArgumentParser(prog="python -m nodes.tracker",
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -1,13 +1,9 @@
 """The tracker's box model: a cluster measured as its track's box (pure maths, no state).
 
-A LiDAR sees the faces of a car that turn towards it: one face from behind, two from an
-angle. The centre of the visible points' box lies up to half a car off the car's centre,
-and it moves as the robot drives past and new faces come into view — a velocity the car
-does not have. So a matched cluster is measured in its track's frame (along / across the
-track's heading): the points' extents there, and the centre of a box of the track's size
-(the largest extents seen so far) whose faces nearest the sensor lie on the seen points
-(:func:`fit`). A rigid box keeps its size; a new heading only re-labels its sides
-(:func:`turned`).
+A LiDAR sees only the faces of a car turned towards it, so a matched cluster is measured
+in its track's frame as the centre of a box of the track's size whose nearest faces lie
+on the seen points (:func:`fit`); a new heading only re-labels the sides (:func:`turned`).
+Used by :class:`nodes.tracker.core.Tracker`.
 """
 
 from __future__ import annotations
@@ -34,7 +30,12 @@ def fit(points: np.ndarray, yaw: float, size: tuple[float, float],
     """``(x, y, along, across)``: the box centre [m] (world frame) of ``points`` (m, 2) for a
     box of ``size`` = (length along ``yaw``, width across) [m] seen from the sensor at
     ``origin``, and the points' own extents along / across ``yaw`` [m]. ``compiled``: the
-    extents from the numba kernel when numba is installed (else numpy)."""
+    extents from the numba kernel when numba is installed (else numpy).
+
+    Why: the centre of the visible points' box lies up to half a car off the car's centre,
+    and it moves as the robot drives past and new faces come into view — a velocity the car
+    does not have. The box's size is the largest extents seen so far (a rigid box keeps it).
+    """
     c, s = math.cos(yaw), math.sin(yaw)
     if compiled and kernels.extents is not None:
         ulo, vlo, uhi, vhi = kernels.extents(points, c, s)

@@ -1,45 +1,9 @@
 """Obstacle tracker: LiDAR scan + pose -> tracked objects (pure core; no zenoh).
 
-One cycle (:meth:`Tracker.update`) per scan, everything in the world frame:
-
-1. **Points**: valid beams within ``max_range`` of the sensor, to world coordinates
-   with the robot pose and the sensor offset.
-2. **Clusters**: breakpoint segmentation in scan order, the standard for 2-D LiDARs:
-   two successive returns belong to one object when they are closer than
-   ``max(cluster_radius, D_max)``, ``D_max = r sin(dphi) / sin(lambda - dphi) + 3 sigma_r``
-   (the adaptive breakpoint detector of Borges & Aldon, J. Intell. Robot. Syst. 39,
-   2004: ``dphi`` the angle between the two beams, ``lambda`` = ``breakpoint_angle``,
-   sigma_r = ``range_sd``; far returns are sparse, so the allowance grows with the range);
-   returns with more than ``max_beam_gap`` beams between them that saw nothing, or
-   more than ``lambda`` apart in angle, never join (the rays between passed through free
-   space). The first and last segment join across the scan's seam.
-   Clusters with fewer than ``min_points`` points are noise; clusters longer than
-   ``max_extent`` are walls or other structure, not objects (the planner still sees them
-   in the scan). Why not a library clustering (scipy ``cKDTree`` + ``connected_components``,
-   scikit-learn DBSCAN): on a scan the neighbours are already ordered, and the sparse-graph
-   set-up took most of the cycle in our first version (nodes/tracker/README.md).
-   A cluster's box: its bounding box in its principal axes (the visible part).
-3. **Association**: predicted tracks vs cluster boxes by centre distance, globally optimal
-   (``scipy.optimize.linear_sum_assignment``, the Hungarian method), pairs farther than
-   ``gate`` rejected.
-4. **Box model** (:mod:`nodes.tracker.box`): a matched cluster is measured in its track's
-   frame, as the centre of a box of the track's size whose faces nearest the sensor lie on
-   the seen points (a car seen from behind is measured at its centre once its length has
-   been seen, not at its rear face).
-5. **Filter**: a constant-velocity Kalman filter per track (state x, y, vx, vy;
-   white-noise acceleration of ``accel_sd``; position measurements of ``meas_sd``),
-   vectorised over all tracks with numpy. Unmatched clusters start tracks (velocity 0,
-   ``init_speed_sd``); a track is published after ``confirm_hits`` hits and dropped
-   after ``max_misses`` scans without one.
-
-Heading: the direction of the filtered velocity when its speed exceeds ``moving_speed``
-and twice the filter's own velocity standard deviation along it, else the last one (a new
-track: the cluster's principal axis) — a standing car's velocity is noise, and its
-direction would turn the box at random. Size: the largest extents seen along / across the
-heading (a rigid object only shows more of itself over time), swapped when the heading
-turns by more than 45 degrees.
-
-Deterministic: the output depends only on the inputs, in order.
+:class:`Tracker` clusters each scan (Borges & Aldon's adaptive breakpoints), associates
+clusters with tracks (Hungarian method), measures them as boxes (:mod:`nodes.tracker.box`)
+and filters them (constant-velocity Kalman). Used by the tracker node's loop
+(:mod:`nodes.tracker.loop`) and ``papf bench tracker``; the why: nodes/tracker/README.md.
 """
 
 from __future__ import annotations
@@ -133,7 +97,7 @@ def scan_points(scan: Scan, odom: Odometry, max_range: float) -> ScanPoints:
 
 def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
     """(order, starts): the points rotated so that no segment crosses the array's end, and
-    the index in ``order`` where each segment starts (see module doc, step 2)."""
+    the index in ``order`` where each segment starts (:class:`Tracker`, step 2)."""
     n = len(sp.beams)
     nxt = np.arange(1, n + 1)
     nxt[-1] = 0                                           # the seam: last point -> first
@@ -155,7 +119,7 @@ def _breaks(sp: ScanPoints, p: TrackerParams) -> tuple[np.ndarray, np.ndarray]:
 
 
 def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
-    """Index arrays (into ``sp.xy``) of the scan-order segments (see module doc, step 2)."""
+    """Index arrays (into ``sp.xy``) of the scan-order segments (:class:`Tracker`, step 2)."""
     if len(sp.beams) == 0:
         return []
     order, starts = _breaks(sp, p)
@@ -163,7 +127,7 @@ def segments(sp: ScanPoints, p: TrackerParams) -> list[np.ndarray]:
 
 
 def cluster_points(sp: ScanPoints, p: TrackerParams) -> list[Cluster]:
-    """Object-sized clusters of a scan (see module doc, step 2), in scan order.
+    """Object-sized clusters of a scan (:class:`Tracker`, step 2), in scan order.
 
     With numba (and ``use_numba``) one compiled pass (:mod:`nodes.tracker.kernels`),
     else :func:`_breaks` and :func:`_measure` for all segments at once in numpy.
@@ -226,7 +190,49 @@ class _Tracks:
 
 
 class Tracker:
-    """Multi-object tracker over successive scans (see module doc)."""
+    """Multi-object tracker over successive scans.
+
+    One cycle (:meth:`Tracker.update`) per scan, everything in the world frame:
+
+    1. **Points**: valid beams within ``max_range`` of the sensor, to world coordinates
+       with the robot pose and the sensor offset.
+    2. **Clusters**: breakpoint segmentation in scan order, the standard for 2-D LiDARs:
+       two successive returns belong to one object when they are closer than
+       ``max(cluster_radius, D_max)``, ``D_max = r sin(dphi) / sin(lambda - dphi) + 3 sigma_r``
+       (the adaptive breakpoint detector of Borges & Aldon, J. Intell. Robot. Syst. 39,
+       2004: ``dphi`` the angle between the two beams, ``lambda`` = ``breakpoint_angle``,
+       sigma_r = ``range_sd``; far returns are sparse, so the allowance grows with the range);
+       returns with more than ``max_beam_gap`` beams between them that saw nothing, or
+       more than ``lambda`` apart in angle, never join (the rays between passed through free
+       space). The first and last segment join across the scan's seam.
+       Clusters with fewer than ``min_points`` points are noise; clusters longer than
+       ``max_extent`` are walls or other structure, not objects (the planner still sees them
+       in the scan). Why not a library clustering (scipy ``cKDTree`` + ``connected_components``,
+       scikit-learn DBSCAN): on a scan the neighbours are already ordered, and the sparse-graph
+       set-up took most of the cycle in our first version (nodes/tracker/README.md).
+       A cluster's box: its bounding box in its principal axes (the visible part).
+    3. **Association**: predicted tracks vs cluster boxes by centre distance, globally optimal
+       (``scipy.optimize.linear_sum_assignment``, the Hungarian method), pairs farther than
+       ``gate`` rejected.
+    4. **Box model** (:mod:`nodes.tracker.box`): a matched cluster is measured in its track's
+       frame, as the centre of a box of the track's size whose faces nearest the sensor lie on
+       the seen points (a car seen from behind is measured at its centre once its length has
+       been seen, not at its rear face).
+    5. **Filter**: a constant-velocity Kalman filter per track (state x, y, vx, vy;
+       white-noise acceleration of ``accel_sd``; position measurements of ``meas_sd``),
+       vectorised over all tracks with numpy. Unmatched clusters start tracks (velocity 0,
+       ``init_speed_sd``); a track is published after ``confirm_hits`` hits and dropped
+       after ``max_misses`` scans without one.
+
+    Heading: the direction of the filtered velocity when its speed exceeds ``moving_speed``
+    and twice the filter's own velocity standard deviation along it, else the last one (a new
+    track: the cluster's principal axis) — a standing car's velocity is noise, and its
+    direction would turn the box at random. Size: the largest extents seen along / across the
+    heading (a rigid object only shows more of itself over time), swapped when the heading
+    turns by more than 45 degrees.
+
+    Deterministic: the output depends only on the inputs, in order.
+    """
 
     def __init__(self, params: TrackerParams | None = None):
         self.params = params or TrackerParams()

@@ -1,13 +1,8 @@
 """Input pairing of the tracker process (pure; no zenoh; wall time injected).
 
-- **lockstep** (default): ``scan(t)`` waits for ``odom(t)`` (same stamp); whichever
-  arrives second triggers the cycle, so the tracks of instant ``t`` come from the pose of
-  instant ``t`` whatever the arrival order. A scan whose odometry has not arrived after
-  ``pair_timeout_s`` of wall time is tracked with the newest older pose (or skipped if
-  there is none).
-- **realtime**: each scan is tracked with the latest pose.
-
-Each tracked scan gives one ``Objects`` message stamped with the scan's stamp.
+:class:`TrackerLoop` pairs each scan with odometry (lockstep: the same stamp; realtime:
+the latest) and gives one ``Objects`` message per tracked scan, stamped with the scan's
+stamp. Used by the tracker node (``nodes/tracker/__main__.py``).
 """
 
 from __future__ import annotations
@@ -22,6 +17,14 @@ ODOM_BUFFER = 64          # odometry messages kept for pairing (1.28 s at 50 Hz)
 
 
 class TrackerLoop:
+    """
+    - **lockstep** (default): ``scan(t)`` waits for ``odom(t)`` (same stamp); whichever
+      arrives second triggers the cycle, so the tracks of instant ``t`` come from the pose of
+      instant ``t`` whatever the arrival order. A scan whose odometry has not arrived after
+      ``pair_timeout_s`` of wall time is tracked with the newest older pose (or skipped if
+      there is none).
+    - **realtime**: each scan is tracked with the latest pose.
+    """
     def __init__(self, tracker: Tracker, realtime: bool = False, pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S):
         self.tracker, self.realtime, self.pair_timeout_s = tracker, realtime, pair_timeout_s
         self.odoms: OrderedDict[int, Odometry] = OrderedDict()
@@ -30,6 +33,7 @@ class TrackerLoop:
         self.unpaired = 0
 
     def on_message(self, topic: str, msg, now: float) -> list:
+        """Take one message at ``now`` [s] (odometry kept, a scan paired); the outputs."""
         if topic == "odom" and isinstance(msg, Odometry):
             self.odoms[msg.stamp_ns] = msg
             self.odoms.move_to_end(msg.stamp_ns)

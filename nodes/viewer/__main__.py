@@ -50,12 +50,15 @@ class Listener(foxglove.websocket.ServerListener):
         self.client_topics: dict[tuple[int, int], str] = {}
 
     def on_client_advertise(self, client, channel) -> None:
+        """Foxglove client advertised ``channel``: remember its topic."""
         self.client_topics[(client.id, channel.id)] = channel.topic
 
     def on_client_unadvertise(self, client, client_channel_id: int) -> None:
+        """Foxglove client withdrew a channel: forget its topic."""
         self.client_topics.pop((client.id, client_channel_id), None)
 
     def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
+        """A message from a Foxglove client (a goal, a click) -> the node's inbox."""
         topic = self.client_topics.get((client.id, client_channel_id), "")
         self.node.inbox.put((CLIENT, (topic, bytes(data))))
 
@@ -79,9 +82,11 @@ class Listener(foxglove.websocket.ServerListener):
         return [_parameter(k, v) for k, v in reply["params"].items() if not names or k in names]
 
     def on_get_parameters(self, client, param_names: list[str], request_id=None):
+        """Foxglove asks parameters: the planner's, those of ``param_names`` (all if empty)."""
         return self._params(self._query({}), param_names)
 
     def on_set_parameters(self, client, parameters: list[Parameter], request_id=None):
+        """Foxglove sets parameters: sent to the planner; its answer goes to the log."""
         sets = param_sets({p.name: p.get_value() for p in parameters})
         reply = self._query({"set": sets})
         if reply is None:
@@ -101,6 +106,7 @@ def _parameter(name: str, value) -> Parameter:
 
 
 def parse_args(argv=None) -> argparse.Namespace:
+    """The viewer's command line: world, WebSocket host and port, bus options."""
     ap = argparse.ArgumentParser(prog="python -m nodes.viewer", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS))
@@ -132,6 +138,7 @@ class Viewer:
         self.key = runauth.key_from_env()   # a launch's run key: goals signed like papf goal's
 
     def on_client(self, topic: str, data: bytes) -> None:
+        """A client's message on ``topic``: a parameter outcome logged, a goal sent."""
         if topic == "/params/refused":
             self._note(LOG_WARNING, f"parameter change refused: {data.decode()}")
         elif topic == "/params/set":
@@ -163,6 +170,7 @@ class Viewer:
         self.channels.log(*self.core.note(level, message))
 
     def run(self) -> None:
+        """Convert every bus message to Foxglove until stopped; the static scene now and then."""
         next_static = 0.0
         for topic, msg in self.node.messages(tick_s=0.1):
             if topic == CLIENT:
@@ -176,6 +184,7 @@ class Viewer:
 
 
 def serve(args: argparse.Namespace, log: logging.Logger) -> int:
+    """Serve ``args``' namespace to Foxglove; the exit code."""
     world = load_world(args.world) if args.world else None
     try:
         with open_node(NAME, args, log) as node:
@@ -211,6 +220,7 @@ def _serve(node: Node, args: argparse.Namespace, world, log: logging.Logger) -> 
 
 
 def main(argv=None) -> int:
+    """``python -m nodes.viewer``: serve; the exit code (2 on a bad setting)."""
     args = parse_args(argv)
     log = setup_logging(NAME, args.log_level)
     try:

@@ -36,6 +36,7 @@ def stamp(ns: int) -> dict:
 
 
 def vec3(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> dict:
+    """A foxglove.Vector3 (components in m or m/s as the caller means)."""
     return {"x": float(x), "y": float(y), "z": float(z)}
 
 
@@ -151,10 +152,12 @@ def pose_in_frame(stamp_ns: int, x: float, y: float, yaw: float = 0.0,
 
 
 def robot_pose(odom: Odometry) -> dict:
+    """The robot's pose from odometry as a foxglove.PoseInFrame (x, y [m], yaw [rad])."""
     return pose_in_frame(odom.stamp_ns, odom.x, odom.y, odom.yaw)
 
 
 def goal_pose(goal: Goal) -> dict:
+    """The goal as a foxglove.PoseInFrame (x, y [m], no heading)."""
     return pose_in_frame(goal.stamp_ns, goal.x, goal.y)
 
 

@@ -1,12 +1,8 @@
 """The viewer's pure core: a namespace's messages in, Foxglove channel messages out.
 
-:data:`CHANNELS` is the one table of what the viewer serves (the live WebSocket server and
-``papf export foxglove`` alike); :class:`ViewCore` turns each ``(topic, message)`` of the
-stack into ``[(channel, json_dict, log_time_ns), ...]``. No Zenoh, no sockets, no clocks:
-the wrapper (``__main__``) and the exporter feed it.
-
-Pose source: ground truth (``sim/pose``) as soon as one arrives, else odometry — the
-same choice as the run summary's path length.
+:data:`CHANNELS` is the one table of what the viewer serves; :class:`ViewCore` turns each
+``(topic, message)`` into ``[(channel, json_dict, log_time_ns), ...]``. No Zenoh, sockets
+or clocks: used by the viewer node (``__main__``) and ``papf export foxglove``.
 """
 
 from __future__ import annotations
@@ -88,6 +84,9 @@ class ViewCore:
     ``repeat_ns``: re-emit the world and goal every so much message time (recordings, so a
     seek finds them); None = only when :meth:`static_outputs` is called (live: the wrapper
     calls it on a wall-clock timer so a client that joins late sees them).
+
+    Pose source: ground truth (``sim/pose``) as soon as one arrives, else odometry — the
+    same choice as the run summary's path length.
     """
 
     def __init__(self, world: World | None = None, repeat_ns: int | None = None):

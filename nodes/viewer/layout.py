@@ -24,6 +24,7 @@ def _plot(title: str, *series: tuple[str, str]) -> fl.PlotPanel:
 
 
 def layout() -> fl.Layout:
+    """The Foxglove layout of the viewer: 3-D scene, plots of speed, charge and power, logs."""
     three_d = fl.ThreeDeePanel(title="robot", config=fl.ThreeDeeConfig(
         follow_tf="base_link", fixed_frame="world", follow_mode="follow-position",
         publish=fl.ThreeDeePublishSettings(type="pose", pose_topic=GOAL_PUBLISH_TOPIC,

@@ -1,19 +1,9 @@
 """The 3-D scene as foxglove.SceneUpdate dicts (pure): the world, the robot, the planner's mind.
 
-- :func:`world_scene` — static obstacles (boxes and walls as cubes, cylinders, spheres in
-  3-D worlds), the road's lines, start and goal (a disc of the goal tolerance), in frame
-  ``world``;
-- :func:`moving_scene` — the moving obstacles where they are at a sim time (entity
-  ``moving``, re-sent with each scan);
-- :func:`footprint_scene` — the robot's chassis (``common.robot``) in frame ``base_link``,
-  frame-locked so it follows the robot;
-- :func:`objects_scene` — the obstacle tracks of ``objects`` (truth or tracker);
-- :func:`mind_scene` — one planner cycle (``planner/state``): predicted path, abandoned
-  predictions, top quarks, temporary goal, the force vector at the robot, AR-APF's virtual
-  walls and obstacles, and the mode as a label (what the PAPF paper drew in RViz).
-
-Colours are shared with the matplotlib pictures (``MIND_COLOURS``) so a PNG, a GIF and
-the live view read alike.
+:func:`world_scene` (static obstacles, road, start and goal), :func:`moving_scene`,
+:func:`footprint_scene`, :func:`objects_scene` (tracks) and :func:`mind_scene` (one planner
+cycle, as the PAPF paper drew it in RViz). Colours are the matplotlib pictures'
+(``MIND_COLOURS``). Used by the viewer's core and ``papf export foxglove``.
 """
 
 from __future__ import annotations
@@ -67,6 +57,7 @@ FORCE_MIN_M, FORCE_MAX_M = 0.15, 0.8   # [m] drawn length of the force arrow (lo
 
 
 def c(name: str) -> dict:
+    """The foxglove.Color of the mind layer ``name`` (:data:`MIND_COLOURS`)."""
     return colour(*MIND_COLOURS[name])
 
 

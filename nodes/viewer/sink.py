@@ -35,9 +35,11 @@ class FoxgloveChannels:
         self.logged += 1
 
     def log_all(self, outputs) -> None:
+        """Log each (topic, payload, log time [ns]) of ``outputs``."""
         for topic, payload, log_time_ns in outputs:
             self.log(topic, payload, log_time_ns)
 
     def close(self) -> None:
+        """Close every channel."""
         for channel in self.channels.values():
             channel.close()

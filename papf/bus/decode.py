@@ -1,12 +1,9 @@
 """Decode whatever travels on a Zenoh key, for people to read (pure; no Zenoh here).
 
-Two encodings share the bus (docs/robot.md): our messages are msgpack maps that name
-their type (``"_type": "papf/Scan/v1"``, :mod:`schemas`); the ROS 2 topics that
-``zenoh-bridge-ros2dds`` carries are CDR with a 4-byte encapsulation header, and CDR
-does not name its type, so it is taken from the key (rmw_zenoh's keys name it; on the
-bridge :data:`ROS_TYPES`: the ROSbot's topics, optionally under a bridge namespace) or
-given with ``--ros-type``.
-Anything else is shown as its size and first bytes.
+Our msgpack messages name their type (:mod:`schemas`); ROS 2 CDR does not, so its type
+comes from the key (rmw_zenoh's keys, the bridge's :data:`ROS_TYPES`) or ``--ros-type``
+(:func:`decode`); anything else is shown as its size and first bytes. Used by ``papf
+topic``.
 """
 
 from __future__ import annotations
@@ -73,7 +70,16 @@ def is_cdr(data: bytes) -> bool:
 
 
 def decode(key: str, data: bytes, ros_type: str | None = None) -> Decoded:
-    """What ``data`` published on ``key`` holds (see the module doc)."""
+    """What ``data`` published on ``key`` holds.
+
+    Two encodings share the bus (docs/robot.md): our messages are msgpack maps that name
+    their type (``"_type": "papf/Scan/v1"``, :mod:`schemas`); the ROS 2 topics that
+    ``zenoh-bridge-ros2dds`` carries are CDR with a 4-byte encapsulation header, and CDR
+    does not name its type, so it is taken from the key (rmw_zenoh's keys name it; on the
+    bridge :data:`ROS_TYPES`: the ROSbot's topics, optionally under a bridge namespace) or
+    given with ``--ros-type``.
+    Anything else is shown as its size and first bytes.
+    """
     data = bytes(data)
     if data and data[0] in MSGPACK_MAP_FIRST:
         return _decode_msgpack(data)

@@ -1,13 +1,8 @@
 """``papf goal X Y``: send the planner a goal, optionally start the run, follow it to an outcome.
 
-The same handshake as the launcher's (docs/architecture.md, "Start and end of a run"):
-publish ``<ns>/goal`` every 0.5 s until the planner answers ``planner/status`` ``ready``;
-with ``start_run`` then publish ``events`` ``run_started`` (what a sim driver started alone
-waits for). Then, unless told not to wait, follow ``planner/status`` until ``reached``
-(exit 0), ``stagnated`` (3) or ``failed`` (6); a ``collision`` event gives 4,
-``timeout_s`` without an outcome 5, and another goal on ``<ns>/goal`` (someone re-targeted
-the planner: its statuses are no longer about this goal) 6. In a session started by ``papf launch`` the launcher
-keeps deciding the run's outcome; this command only steers the planner.
+:func:`send_goal` does the launcher's handshake (docs/architecture.md, "Start and end of a
+run") and follows ``planner/status`` to an outcome and its exit code (:class:`GoalResult`).
+Used by ``papf goal``.
 """
 
 from __future__ import annotations
@@ -38,6 +33,7 @@ class GoalResult:
 
     @property
     def exit_code(self) -> int:
+        """``papf goal``'s exit code of this outcome (0 acknowledged, else EXIT_CODES)."""
         if self.outcome == "superseded":
             return 6
         if self.outcome == "acknowledged":
@@ -77,7 +73,17 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
               start_run: bool = False, wait: bool = True, timeout_s: float = 0.0,
               out: Callable[[str], None] = print, progress: bool | None = None,
               stop: Callable[[], bool] = lambda: False) -> GoalResult:
-    """See the module doc. ``timeout_s`` 0: wait for an outcome as long as it takes."""
+    """Send a goal to ``x``, ``y`` [m] and follow it. ``timeout_s`` 0: wait as long as it takes.
+
+    The same handshake as the launcher's (docs/architecture.md, "Start and end of a run"):
+    publish ``<ns>/goal`` every 0.5 s until the planner answers ``planner/status`` ``ready``;
+    with ``start_run`` then publish ``events`` ``run_started`` (what a sim driver started alone
+    waits for). Then, unless told not to wait, follow ``planner/status`` until ``reached``
+    (exit 0), ``stagnated`` (3) or ``failed`` (6); a ``collision`` event gives 4,
+    ``timeout_s`` without an outcome 5, and another goal on ``<ns>/goal`` (someone re-targeted
+    the planner: its statuses are no longer about this goal) 6. In a session started by ``papf launch`` the launcher
+    keeps deciding the run's outcome; this command only steers the planner.
+    """
     watch = _Watch(session, keys)
     try:
         key = runauth.read_key(keys.ns)   # a launched session's key, if any

@@ -1,12 +1,9 @@
 """Who is on the bus: our nodes and their ports, ROS 2 nodes from rmw_zenoh's tokens.
 
-``papf node list|info`` and ``papf topic info`` (what ``ros2 node`` / ``ros2 topic info``
-show). Our nodes announce themselves with ``<ns>/alive/<node>`` (:mod:`common.transport`)
-and declare their ports as data (``nodes/<node>/ports.py``, :mod:`common.ports`); a node
-whose ports depend on its options shows each variant. ROS 2 nodes on rmw_zenoh announce
-themselves and each publisher and subscription with a liveliness token
-(:mod:`common.rmw_zenoh`); the bridge announces no ROS graph on Zenoh, so ROS 2 nodes
-behind it are listed by ``ros2 node list`` on the robot, not here.
+Our nodes by their liveliness tokens (:mod:`common.transport`) and declared ports
+(:func:`node_ports`); ROS 2 nodes on rmw_zenoh by theirs (:func:`ros_entities`; nodes behind
+the bridge announce nothing on Zenoh: ``ros2 node list`` on the robot shows them). Used by
+``papf node list|info`` and ``papf topic info``.
 """
 
 from __future__ import annotations
@@ -55,10 +52,12 @@ def ros_entities(session, domain: int, timeout_s: float = 1.0) -> list[rz.Entity
 
 
 def ros_nodes(entities: list[rz.Entity]) -> list[str]:
+    """The fully qualified names of the ROS nodes among ``entities``, sorted."""
     return sorted({e.fq_node for e in entities if e.kind == rz.NODE})
 
 
 def ros_node_info(entities: list[rz.Entity], fq_node: str) -> dict[str, list[rz.Entity]]:
+    """The publishers and subscriptions of ROS node ``fq_node``, by topic."""
     mine = [e for e in entities if e.fq_node == fq_node and e.kind != rz.NODE]
     return {"publishers": sorted((e for e in mine if e.kind == rz.PUBLISHER), key=lambda e: e.topic),
             "subscriptions": sorted((e for e in mine if e.kind == rz.SUBSCRIPTION),
@@ -66,6 +65,7 @@ def ros_node_info(entities: list[rz.Entity], fq_node: str) -> dict[str, list[rz.
 
 
 def ros_topic_info(entities: list[rz.Entity], topic: str) -> dict[str, list[rz.Entity]]:
+    """The publishers and subscriptions of ROS ``topic``."""
     mine = [e for e in entities if e.topic == topic]
     return {"publishers": [e for e in mine if e.kind == rz.PUBLISHER],
             "subscriptions": [e for e in mine if e.kind == rz.SUBSCRIPTION]}
@@ -87,6 +87,7 @@ def our_topic_info(session, keys: Keys, suffix: str) -> dict[str, list[str]]:
 
 
 def describe_port(port: Port, ns: str) -> str:
+    """One line of ``papf node info``: direction, key (a bridged one as ``<ros>/...``), type."""
     direction, key, msg_type = port
     shown = f"<ros>/{key[len(BRIDGE):]}" if key.startswith(BRIDGE) else f"{ns}/{key}"
     return f"{direction:<4} {shown:<32} {msg_type}"

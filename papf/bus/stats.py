@@ -26,6 +26,7 @@ class Rate:
     stamp_hz: float      # [Hz] rate by the messages' own stamps (nan: no stamps)
 
     def line(self, key: str) -> str:
+        """One line of ``papf topic hz`` for ``key``: rate [Hz], gaps [s], window."""
         if math.isnan(self.hz):
             return f"{key}: waiting for messages ({self.window} so far)"
         stamps = "" if math.isnan(self.stamp_hz) else f"; by stamps {self.stamp_hz:.3f} Hz"
@@ -44,12 +45,14 @@ class HzStats:
         self.count = 0
 
     def add(self, arrival_s: float, stamp_ns: int | None = None) -> None:
+        """Note a message that arrived at ``arrival_s`` [s], stamped ``stamp_ns`` [ns]."""
         self.count += 1
         self.arrivals.append(arrival_s)
         if stamp_ns is not None:
             self.stamps.append(stamp_ns)
 
     def rate(self) -> Rate:
+        """The rate [Hz] and gap statistics [s] over the window (NaN below two messages)."""
         n = len(self.arrivals)
         if n < 2:
             return Rate(math.nan, math.nan, math.nan, math.nan, n, math.nan)

@@ -1,17 +1,9 @@
 """``papf teleop``: drive the robot from the keyboard, like ``teleop_twist_keyboard``.
 
-The commands go where the planner's go — ``<ns>/cmd_vel`` as :class:`schemas.Twist` — so
-the base driver's :class:`nodes.base_driver.limits.CommandGate` treats them the same:
-clamped to the ROSbot limits, rate-limited, and stopped by its 0.5 s watchdog when they
-cease (a killed teleop, a cut link). Each command carries the latest ``<ns>/clock``
-stamp (the driver's time; 0 before a run), as a planner's carries its scan's.
-
-Keys (:func:`parse_keys`): ``w``/up faster forward, ``s``/down slower or backwards,
-``a``/left turn left (counter-clockwise), ``d``/right turn right, space or ``x`` stop,
-``q`` (or Ctrl-C) quit — zero velocity is sent on the way out. The speed set is kept and
-re-sent every ``period_s`` (default 0.1 s) until changed.
-
-:class:`TeleopState` is pure (tests drive it directly); :func:`run` owns the terminal.
+The commands go where the planner's go (``<ns>/cmd_vel``), so the base driver's
+:class:`nodes.base_driver.limits.CommandGate` clamps, rate-limits and watchdogs them alike.
+:class:`TeleopState` is pure (keys -> speeds; tests drive it); :func:`run` owns the
+terminal. Used by ``papf teleop``.
 """
 
 from __future__ import annotations
@@ -96,6 +88,7 @@ class TeleopState:
         return action is not None
 
     def status(self) -> str:
+        """The command on screen: ``v +0.10 m/s  w -0.50 rad/s``."""
         return f"v {self.v:+.2f} m/s  w {self.w:+.2f} rad/s"
 
 
@@ -146,7 +139,17 @@ def cbreak(fd: int):
 def run(session: zenoh.Session, keys: Keys, state: TeleopState, *, period_s: float = 0.1,
         start_run: bool = False, fd: int | None = None, out=None,
         stop: Callable[[], bool] = lambda: False) -> int:
-    """Read keys from the terminal ``fd`` and publish commands until q; returns the exit code."""
+    """Read keys from the terminal ``fd`` and publish commands until q; returns the exit code.
+
+    Each command carries the latest ``<ns>/clock`` stamp (the driver's time; 0 before a run),
+    as a planner's carries its scan's; the gate's 0.5 s watchdog stops the robot when commands
+    cease (a killed teleop, a cut link).
+
+    Keys (:func:`parse_keys`): ``w``/up faster forward, ``s``/down slower or backwards,
+    ``a``/left turn left (counter-clockwise), ``d``/right turn right, space or ``x`` stop,
+    ``q`` (or Ctrl-C) quit — zero velocity is sent on the way out. The speed set is kept and
+    re-sent every ``period_s`` (default 0.1 s) until changed.
+    """
     fd = sys.stdin.fileno() if fd is None else fd
     out = out or sys.stdout
     if not os.isatty(fd):

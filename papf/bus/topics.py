@@ -1,12 +1,9 @@
 """``papf topic list | echo | hz`` over a Zenoh session (what ``ros2 topic`` does for DDS).
 
-Zenoh has no topic registry, so ``list`` listens: it subscribes to every key (``**``) for
-``duration_s`` and reports what arrived — key, type, encoding and rate — plus the
-stack's own topics of the namespace that stayed silent, and the nodes whose liveliness
-tokens exist. ``echo`` and ``hz`` subscribe to one key expression. Decoding:
-:mod:`papf.bus.decode`. Key names (:func:`resolve_key`): ``scan`` is our topic
-``<ns>/scan``, ``/scan`` is the ROS 2 topic ``/scan`` (the bridge's key ``scan``, or with
-``--ros rmw_zenoh`` rmw_zenoh's key of it in ``--ros-domain``), anything else is verbatim.
+Zenoh has no topic registry, so :func:`topic_list` listens to every key for a while and
+reports what arrived (key, type, encoding, rate), the silent topics of the stack and the
+nodes alive; :func:`echo` and :func:`hz` subscribe to one key expression (names:
+:func:`resolve_key`; decoding: :mod:`papf.bus.decode`). Used by ``papf topic``.
 """
 
 from __future__ import annotations
@@ -32,7 +29,12 @@ Stop = Callable[[], bool]
 
 def resolve_key(name: str, keys: Keys, ros: str = "bridge", domain: int = 0) -> str:
     """``scan`` -> ``rosbot/scan`` (a stack topic); ``/scan`` -> the bridge's ``scan``, or on
-    rmw_zenoh ``<domain>/scan/*/*`` (any type and hash); else as given."""
+    rmw_zenoh ``<domain>/scan/*/*`` (any type and hash); else as given.
+
+    ``scan`` is our topic ``<ns>/scan``, ``/scan`` is the ROS 2 topic ``/scan`` (the bridge's
+    key ``scan``, or with ``--ros rmw_zenoh`` rmw_zenoh's key of it in ``--ros-domain``),
+    anything else is verbatim.
+    """
     if name in TOPICS:
         return keys.key(name)
     if not name.startswith("/"):
@@ -52,12 +54,14 @@ class Inbox:
             self.q.put((str(sample.key_expr), sample.payload.to_bytes(), time.monotonic()))
 
     def get(self, timeout_s: float):
+        """The next sample within ``timeout_s`` [s], else None."""
         try:
             return self.q.get(timeout=max(timeout_s, 0.0))
         except queue.Empty:
             return None
 
     def close(self) -> None:
+        """Undeclare the subscriber."""
         self.sub.undeclare()
 
 
@@ -71,6 +75,7 @@ class TopicRow:
 
     @property
     def count(self) -> int:
+        """Messages seen on the topic."""
         return self.stats.count
 
 
@@ -150,6 +155,7 @@ def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout
 
 
 def format_sample(key: str, d: Decoded, max_items: int | None, as_json: bool) -> str:
+    """A decoded sample as ``papf topic echo`` prints it (text or a JSON line)."""
     if as_json:
         return json.dumps(json_safe({"key": key, "type": d.type_name, "encoding": d.encoding,
                                      "message": d.value, **({"error": d.error} if d.error else {})},

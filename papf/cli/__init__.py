@@ -58,6 +58,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``papf`` parser: every command module of :data:`COMMANDS` registers its subcommand."""
     parser = _Parser(prog="papf", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"papf-stack {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -71,6 +72,7 @@ def _sigterm_as_interrupt(*_) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``papf``: parse ``argv``, run the command; its exit code (2 on a user's mistake)."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     # a command started in the background by a script inherits SIGINT ignored (the shell's

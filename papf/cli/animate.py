@@ -7,6 +7,7 @@ import argparse
 
 
 def register(sub) -> None:
+    """Add ``papf animate`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("animate", help="render a recorded run as a GIF or MP4",
                        description="Top view (world, path, footprint, the planner's mind), "
                        "speed and charge over time; time, speed and charge in the title. "
@@ -27,6 +28,7 @@ def register(sub) -> None:
 
 
 def cmd_animate(args: argparse.Namespace) -> int:
+    """``papf animate``: render a recorded run as a GIF or MP4; the exit code."""
     from papf.cli.report import topic_map
     from papf.report.animation import animate
 

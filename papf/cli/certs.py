@@ -6,6 +6,7 @@ import sys
 
 
 def register(sub) -> None:
+    """Add ``papf make-certs`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("make-certs", help="test CA, certificates and secure Zenoh configs",
                        description="Write a test CA, robot/laptop certificates (openssl), a "
                                    "password dictionary and the Zenoh configs of the secure "
@@ -22,6 +23,7 @@ def register(sub) -> None:
 
 
 def cmd_make_certs(args) -> int:
+    """``papf make-certs``: write the test CA, certificates and secure configs; the exit code."""
     from nodes.base_driver.rosbot import BridgeTopics  # rosbags: only when writing configs
     from papf.robot.certs import where_files_go, write_bundle
 

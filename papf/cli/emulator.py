@@ -7,6 +7,7 @@ from common.transport import add_zenoh_args
 
 
 def register(sub) -> None:
+    """Add ``papf rosbot-emulator`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("rosbot-emulator",
                        help="emulate the ROSbot behind zenoh-bridge-ros2dds or on rmw_zenoh",
                        description="Subscribe CDR cmd_vel, drive a unicycle with the ROSbot's "
@@ -32,6 +33,7 @@ def register(sub) -> None:
 
 
 def cmd_emulator(args) -> int:
+    """``papf rosbot-emulator``: emulate the ROSbot until stopped; the exit code."""
     from papf.robot.emulator import run  # rosbags (the CDR codec): only when emulating
 
     return run(args)

@@ -21,6 +21,7 @@ from papf.experiments.paper_tests import PAPER_WORLDS
 
 
 def register(sub) -> None:
+    """Add ``papf experiment`` and each experiment's subcommand to ``sub``."""
     p = sub.add_parser("experiment", help="run an experiment (many runs, a table, plots)",
                        description="Experiments: many runs of planners on worlds, "
                                    "tabulated. `papf experiment NAME --help` for each.")
@@ -143,6 +144,7 @@ def _add_iapf(exp) -> None:
 
 
 def cmd_iapf(args) -> int:
+    """``papf experiment iapf``: the IAPF paper's cases at car scale; the exit code."""
     from papf.experiments.iapf import CASES, run_iapf_experiment  # matplotlib: when run
     from papf.offline.road import CAR_PLANNERS
 
@@ -185,6 +187,7 @@ def _add_traffic(exp) -> None:
 
 
 def cmd_traffic(args) -> int:
+    """``papf experiment traffic``: planners among moving cars; the exit code."""
     from papf.experiments.traffic import CASES, ROAD_WORLDS, run_traffic  # zenoh, mcap: when run
 
     cases = CASES
@@ -224,6 +227,7 @@ def planner_list(text: str) -> list[str]:
 
 
 def cmd_energy(args) -> int:
+    """``papf experiment energy``: the PAPF paper's energy experiment (IV-C); the exit code."""
     from papf.experiments.energy import EnergyExperiment, print_summary, run_experiment
 
     planners = tuple(p.strip() for p in args.planners.split(",") if p.strip())
@@ -246,6 +250,7 @@ def cmd_energy(args) -> int:
 
 
 def cmd_paper_tests(args) -> int:
+    """``papf experiment paper-tests``: every paper world with every planner; the exit code."""
     from papf.experiments.paper_tests import run_paper_tests  # pybullet, matplotlib: when run
 
     worlds = PAPER_WORLDS
@@ -263,6 +268,7 @@ def cmd_paper_tests(args) -> int:
 
 
 def cmd_random(args) -> int:
+    """``papf experiment random``: success and collision rates on random worlds; the exit code."""
     from papf.experiments.random_worlds import run_random  # pybullet, matplotlib: when run
 
     run_random(args.out, args.n, args.seed, planner_list(args.planners), args.mode, args.timeout,

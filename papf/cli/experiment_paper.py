@@ -34,6 +34,7 @@ def _study(exp, name: str, summary: str, description: str, func):
 
 
 def add_paper_studies(exp) -> None:
+    """Add the paper studies (safety-floor, wang, horizon, ...) to the experiments ``exp``."""
     f = exp.add_parser("safety-floor", help="the safety parameters' floors, measured offline",
                        description="Each safety parameter (d_o, k_vo_l, q_o, k_ro_l, k_rep_l, "
                                    "rho_0) swept downwards alone on energy-blocking and papf-test-1, "
@@ -84,6 +85,7 @@ def add_paper_studies(exp) -> None:
 
 
 def cmd_wang(args) -> int:
+    """``papf experiment wang``: Wang's Figs. 5-12, point simulation and ROSbot; the exit code."""
     from papf.experiments.wang_figs import run_wang
 
     run_wang(args.out, args.seed)
@@ -92,6 +94,7 @@ def cmd_wang(args) -> int:
 
 
 def cmd_horizon(args) -> int:
+    """``papf experiment horizon``: PAPF's horizon of prediction (Fig. 7); the exit code."""
     from papf.experiments.paper_study import run_horizon
 
     run_horizon(args.out, args.seed)
@@ -100,6 +103,7 @@ def cmd_horizon(args) -> int:
 
 
 def cmd_deviations(args) -> int:
+    """``papf experiment deviations``: the deviations study (2 if ``--n`` < 1); the exit code."""
     from papf.experiments.paper_study import run_deviations
 
     if args.n < 1:
@@ -110,6 +114,7 @@ def cmd_deviations(args) -> int:
 
 
 def cmd_test1_sweep(args) -> int:
+    """``papf experiment test1-sweep``: papf-test-1's box sized by APF alone; the exit code."""
     from papf.experiments.test1_sweep import run_sweep
 
     try:
@@ -124,6 +129,7 @@ def cmd_test1_sweep(args) -> int:
 
 
 def cmd_cases(args) -> int:
+    """``papf experiment cases``: the docs' case studies named by ``--studies``; the exit code."""
     from papf.experiments.doc_cases import STUDIES, run_cases
 
     names = list(STUDIES) if args.studies == "all" else [n.strip() for n in args.studies.split(",") if n.strip()]
@@ -136,6 +142,7 @@ def cmd_cases(args) -> int:
 
 
 def cmd_safety_floor(args) -> int:
+    """``papf experiment safety-floor``: each safety parameter's floor; the exit code."""
     from papf.experiments.safety_floor import run
 
     floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car)

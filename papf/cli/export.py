@@ -13,6 +13,7 @@ from pathlib import Path
 
 
 def register(sub) -> None:
+    """Add ``papf export foxglove|ros2|map`` and their options to the subcommands ``sub``."""
     p = sub.add_parser("export", help="convert a recording for another tool")
     formats = p.add_subparsers(dest="format", required=True, metavar="FORMAT")
     f = formats.add_parser("foxglove", help="a recording as Foxglove's own channels (MCAP)",
@@ -43,6 +44,7 @@ def register(sub) -> None:
 
 
 def cmd_export_map(args: argparse.Namespace) -> int:
+    """``papf export map``: a world as a ROS map (YAML + PGM); the exit code."""
     from common.errors import WorldError
     from worlds import World, load_world
     from worlds.kinds.grid import from_map
@@ -71,6 +73,7 @@ def cmd_export_map(args: argparse.Namespace) -> int:
 
 
 def cmd_export_foxglove(args: argparse.Namespace) -> int:
+    """``papf export foxglove``: a recording as Foxglove's channels (MCAP); the exit code."""
     from papf.recording.foxglove_export import export_foxglove
 
     stats = export_foxglove(args.src, args.dst, args.world, force=args.force)
@@ -82,6 +85,7 @@ def cmd_export_foxglove(args: argparse.Namespace) -> int:
 
 
 def cmd_export_ros2(args: argparse.Namespace) -> int:
+    """``papf export ros2``: a recording as a rosbag2; the exit code."""
     from papf.recording.ros2_export import export_ros2
 
     stats = export_ros2(args.src, args.dst)

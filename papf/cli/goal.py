@@ -16,6 +16,7 @@ GOAL_TOLERANCE = num(0.0, 100.0, "m", lo_open=True)
 
 
 def register(sub) -> None:
+    """Add ``papf goal`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("goal", help="send the planner a goal and follow it to an outcome",
                        description="Publish a goal until the planner acknowledges it, then "
                                    "follow its status: exit 0 reached, 3 stagnated, 4 collision, "
@@ -44,6 +45,7 @@ def _session(args):
 
 
 def cmd_goal(args) -> int:
+    """``papf goal``: send a goal and follow it; 0 reached, 3 stagnated, 4 collision, ..."""
     from papf.bus.goal import send_goal
 
     if args.world:

@@ -10,6 +10,7 @@ from common.errors import PapfError
 
 
 def register(sub) -> None:
+    """Add ``papf info`` and its options to the subcommands ``sub``."""
     from papf.cli.report import add_topics_option
 
     p = sub.add_parser("info", help="what a recording (or a rosbag2 from the robot) holds")

@@ -16,6 +16,7 @@ from schemas import Keys
 
 
 def register(sub) -> None:
+    """Add ``papf node list|info`` and their options to the subcommands ``sub``."""
     p = sub.add_parser("node", help="list the nodes on the bus, show one's ports (like ros2 node)",
                        description="Our nodes (liveliness) and, with --ros rmw_zenoh, the ROS 2 "
                                    "nodes of a domain (rmw_zenoh's liveliness tokens).")
@@ -39,6 +40,7 @@ def _session(args):
 
 
 def cmd_node_list(args) -> int:
+    """``papf node list``: our alive nodes (and ROS 2 nodes with ``--ros``); the exit code."""
     from common.transport import alive_nodes
     from papf.bus.graph import ros_entities, ros_nodes
 
@@ -59,6 +61,7 @@ def cmd_node_list(args) -> int:
 
 
 def cmd_node_info(args) -> int:
+    """``papf node info``: a node's ports; the exit code."""
     from common.transport import alive_nodes
     from papf.bus.graph import describe_port, node_ports, ros_entities, ros_node_info
 

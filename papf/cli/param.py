@@ -23,6 +23,7 @@ ANSWER_S = 3.0   # [s] for the node to answer
 
 
 def register(sub) -> None:
+    """Add ``papf param`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("param", help="list, get or set a running node's settings (signed)",
                        description="A running node's settings: list them, get one, or set one "
                                    "(checked against its range, signed with your launch's run "
@@ -69,6 +70,7 @@ def _full_name(name: str, planner: str, params: dict) -> str:
 
 
 def cmd_param(args) -> int:
+    """``papf param``: list, get or set a running node's settings; the exit code."""
     from common import runauth
     from nodes.planner.registry import check_setting
     from papf.bus.session import open_session

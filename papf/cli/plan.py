@@ -18,6 +18,7 @@ from papf.offline.run import MOTIONS
 
 
 def register(sub) -> None:
+    """Add ``papf plan`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("plan", help="run a planner on a world offline (no processes)",
                        description="Run the planner core on a world without the process "
                        "stack: 2-D worlds with the simulated LiDAR and a unicycle with the "
@@ -47,6 +48,7 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
+    """``papf plan``: a planner on a world offline; the outcome's exit code."""
     from common.outcomes import EXIT_CODES
     from nodes.planner.registry import preset_sets
     from papf.offline.result import write_path

@@ -11,6 +11,7 @@ from nodes.recorder.__main__ import main as recorder_main
 
 
 def register(sub) -> None:
+    """Add ``papf record`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("record", help="record every message of a namespace into an MCAP",
                        description="Record until Ctrl-C (the file is then complete).")
     p.add_argument("out", metavar="F.mcap", help="recording to write")
@@ -20,4 +21,5 @@ def register(sub) -> None:
 
 
 def cmd_record(args) -> int:
+    """``papf record``: record a namespace until Ctrl-C; the exit code."""
     return recorder_main(args)

@@ -10,6 +10,7 @@ from common.errors import PapfError
 
 
 def register(sub) -> None:
+    """Add ``papf recover`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("recover", help="salvage a truncated recording",
                        description="Copy every intact message of a cut-short or damaged "
                                    "MCAP into a new, valid file, and say what was lost.")
@@ -22,6 +23,7 @@ def register(sub) -> None:
 
 
 def cmd_recover(args) -> int:
+    """``papf recover``: salvage a truncated recording into a new file; the exit code."""
     from papf.recording.recover import recover  # mcap: only when recovering
 
     broken = Path(args.broken)

@@ -15,6 +15,7 @@ from papf.cli.view import add_view_flag
 
 
 def register(sub) -> None:
+    """Add ``papf replay`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("replay", help="republish a recording with its timing",
                        description="Republish a recording on its keys, in log-time "
                                    "order, with the recorded timing scaled by --rate.")
@@ -38,6 +39,7 @@ def register(sub) -> None:
 
 
 def cmd_replay(args) -> int:
+    """``papf replay``: republish a recording with its timing; the exit code."""
     if args.view is not None:
         from papf.launch.replay_view import replay_with_view
 

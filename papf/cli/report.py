@@ -11,6 +11,7 @@ import math
 
 
 def register(sub) -> None:
+    """Add ``papf report`` and its options to the subcommands ``sub``."""
     p = sub.add_parser(
         "report", help="energy report of recorded runs (report.md, report.csv, PNGs)",
         description="Read MCAP recordings and rosbag2s recorded on the ROSbot only; write "
@@ -47,6 +48,7 @@ def topic_map(args):
 
 
 def cmd_report(args) -> int:
+    """``papf report``: energy report of recorded runs; the exit code."""
     from papf.report.metrics import BAG, live_difference, metadata_notes
     from papf.report.report import build_report  # matplotlib: only when reporting
     from papf.report.tables import bags_markdown, summary_markdown

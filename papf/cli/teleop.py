@@ -10,6 +10,7 @@ from schemas import Keys
 
 
 def register(sub) -> None:
+    """Add ``papf teleop`` and its options to the subcommands ``sub``."""
     from papf.bus.teleop import HELP  # no zenoh, no terminal: cheap
 
     p = sub.add_parser("teleop", help="drive the robot with the keyboard (cmd_vel, in a terminal)",
@@ -37,6 +38,7 @@ def _session(args):
 
 
 def cmd_teleop(args) -> int:
+    """``papf teleop``: drive the robot with the keyboard; the exit code."""
     from papf.bus.teleop import TeleopState, run
 
     state = TeleopState(args.max_v, args.max_w, args.step_v, args.step_w)

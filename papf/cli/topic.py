@@ -26,6 +26,7 @@ joint_states, tf) or --ros-type."""
 
 
 def register(sub) -> None:
+    """Add ``papf topic list|echo|hz|pub|info`` and their options to the subcommands ``sub``."""
     p = sub.add_parser("topic", help="list, echo and measure the bus's topics (like ros2 topic)",
                        description="Poke the bus: what is published, what it says, how often.")
     tsub = p.add_subparsers(dest="topic_command", required=True,
@@ -119,6 +120,7 @@ def _key(args) -> str:
 
 
 def cmd_topic_list(args) -> int:
+    """``papf topic list``: keys heard with type and rate, nodes alive; the exit code."""
     from papf.bus.topics import topic_list
 
     domain = ros_domain(args)
@@ -149,6 +151,7 @@ def _ros_graph(session, domain: int, as_json: bool) -> None:
 
 
 def cmd_topic_echo(args) -> int:
+    """``papf topic echo``: print the messages on a key; the exit code."""
     from papf.bus.topics import echo
 
     stop = StopRequested()
@@ -167,6 +170,7 @@ def cmd_topic_echo(args) -> int:
 
 
 def cmd_topic_hz(args) -> int:
+    """``papf topic hz``: print a key's rate [Hz]; the exit code."""
     from papf.bus.topics import hz
 
     if args.window < 2:
@@ -181,6 +185,7 @@ def cmd_topic_hz(args) -> int:
 
 
 def cmd_topic_pub(args) -> int:
+    """``papf topic pub``: publish a message typed as YAML/JSON; the exit code."""
     from papf.bus.fields import parse_value
     from papf.bus.pub import prepare, publish
 
@@ -197,6 +202,7 @@ def cmd_topic_pub(args) -> int:
 
 
 def cmd_topic_info(args) -> int:
+    """``papf topic info``: publishers and subscribers of a key; the exit code."""
     from papf.bus.graph import our_topic_info, ros_entities, ros_topic_info
     from schemas.keys import TOPICS
 

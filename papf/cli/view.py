@@ -18,6 +18,7 @@ def add_view_flag(parser: argparse.ArgumentParser) -> None:
 
 
 def register(sub) -> None:
+    """Add ``papf view`` and its options to the subcommands ``sub``."""
     from nodes.viewer.__main__ import add_view_args
 
     p = sub.add_parser("view", help="serve a namespace's traffic to Foxglove (WebSocket)",
@@ -34,6 +35,7 @@ def register(sub) -> None:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
+    """``papf view``: serve a namespace to Foxglove (or write its layout); the exit code."""
     if args.layout:
         from pathlib import Path
 

@@ -137,6 +137,7 @@ class RunProgress:
         return self
 
     def update(self, sim_s: float, dist_m: float, charge_mAh: float, state: str) -> None:
+        """Show sim time [s], distance to goal [m], charge [mAh] and the state."""
         sim_s = max(sim_s, 0.0)
         text = (f"sim {sim_s:6.1f} s  to goal {dist_m:5.2f} m  {charge_mAh:6.2f} mAh  {state}"
                 if not math.isnan(dist_m) else f"sim {sim_s:6.1f} s  {state}")

@@ -1,15 +1,8 @@
 """The command examples of README.md and docs/*.md, for the tests that run them.
 
-Every line of a ``bash``/``sh`` block, and of an unlabelled block whose lines look like
-commands, is an example: comments dropped, ``\\`` continuations joined. A *synopsis*
-(``papf experiment random [--n 50] [--seed S]``) is made concrete by :func:`concrete`:
-optional ``[...]`` groups dropped, ``a|b`` choices and placeholders (``<robot>``, ``W``,
-``DIR``) replaced by a real value. A *session* is a block with a line ending in ``&``: its
-lines run in order in one shell, the background ones stopped at the end.
-
-``tests/unit/test_docs_examples.py`` parses every ``papf`` example with the real parser and
-checks that every other one is a known module, a Makefile target or an external tool
-named with the reason it cannot run here; ``tests/e2e/test_docs_examples.py`` runs them.
+Every line of a shell block is an example; :func:`concrete` makes a synopsis runnable.
+Used by ``tests/unit/test_docs_examples.py`` (parsed) and ``tests/e2e/test_docs_examples.py``
+(run).
 """
 
 from __future__ import annotations
@@ -44,14 +37,17 @@ class Example:
 
     @property
     def where(self) -> str:
+        """``file:line`` of the example."""
         return f"{self.file}:{self.line}"
 
     @property
     def program(self) -> str:
+        """The command's program (its first word)."""
         return self.text.split()[0]
 
 
 def doc_files(root: Path = ROOT) -> list[Path]:
+    """The docs whose examples are checked: README.md and docs/*.md."""
     return [root / "README.md", *sorted((root / "docs").glob("*.md"))]
 
 
@@ -90,7 +86,19 @@ def _block_commands(body: str, first_line: int) -> list[tuple[int, str]]:
 
 
 def examples(root: Path = ROOT) -> list[Example]:
-    """Every command example of README.md and docs/*.md, in file order."""
+    r"""Every command example of README.md and docs/*.md, in file order.
+
+    Every line of a ``bash``/``sh`` block, and of an unlabelled block whose lines look like
+    commands, is an example: comments dropped, ``\`` continuations joined. A *synopsis*
+    (``papf experiment random [--n 50] [--seed S]``) is made concrete by :func:`concrete`:
+    optional ``[...]`` groups dropped, ``a|b`` choices and placeholders (``<robot>``, ``W``,
+    ``DIR``) replaced by a real value. A *session* is a block with a line ending in ``&``: its
+    lines run in order in one shell, the background ones stopped at the end.
+
+    ``tests/unit/test_docs_examples.py`` parses every ``papf`` example with the real parser and
+    checks that every other one is a known module, a Makefile target or an external tool
+    named with the reason it cannot run here; ``tests/e2e/test_docs_examples.py`` runs them.
+    """
     found = []
     for path in doc_files(root):
         text = path.read_text()

@@ -1,18 +1,8 @@
 """Tables and numbers in the docs that come from committed CSVs (``make docs``, ``make docs-check``).
 
-Convention (Markdown, invisible once rendered):
-
-- a table ``<!-- table data/x.csv | col | col = Header | col = Header : .2f | where k=v,k2=v2 -->``
-  followed by the generated table and ``<!-- /table -->``: the rows of ``data/x.csv`` (path
-  relative to the Markdown file) that match every ``where`` pair, the listed columns (all
-  when none are listed) with an optional header and Python format spec;
-- a number ``<!-- v data/x.csv | col : .2f | where k=v -->23.83<!-- /v -->``: the one
-  matching row's cell.
-
-``render`` rewrites what lies between the markers from the CSVs; ``check`` renders every
-file in memory and lists each place where the committed text differs — a number in the
-prose that drifted from its CSV, or a CSV regenerated without updating the docs.
-Every CSV under ``docs/data/`` names the command that made it in ``docs/data/README.md``.
+``render`` rewrites what lies between ``<!-- table ... -->`` / ``<!-- v ... -->`` markers
+from the CSVs; ``check`` lists each place where the committed text differs. Used by
+``make docs`` and ``make docs-check``; the markers' syntax: :func:`render`.
 """
 
 from __future__ import annotations
@@ -95,12 +85,28 @@ def _value(base: Path, spec: str) -> str:
 
 
 def render(text: str, base: Path) -> str:
-    """``text`` with every marked table and value regenerated from its CSV."""
+    """``text`` with every marked table and value regenerated from its CSV.
+
+    Convention (Markdown, invisible once rendered):
+
+    - a table ``<!-- table data/x.csv | col | col = Header | col = Header : .2f | where k=v,k2=v2 -->``
+      followed by the generated table and ``<!-- /table -->``: the rows of ``data/x.csv`` (path
+      relative to the Markdown file) that match every ``where`` pair, the listed columns (all
+      when none are listed) with an optional header and Python format spec;
+    - a number ``<!-- v data/x.csv | col : .2f | where k=v -->23.83<!-- /v -->``: the one
+      matching row's cell.
+
+    ``render`` rewrites what lies between the markers from the CSVs; ``check`` renders every
+    file in memory and lists each place where the committed text differs — a number in the
+    prose that drifted from its CSV, or a CSV regenerated without updating the docs.
+    Every CSV under ``docs/data/`` names the command that made it in ``docs/data/README.md``.
+    """
     text = TABLE.sub(lambda m: m.group(1) + _table(base, m.group("spec")) + m.group(4), text)
     return VALUE.sub(lambda m: m.group(1) + _value(base, m.group("spec")) + m.group(4), text)
 
 
 def doc_files(root: Path = ROOT) -> list[Path]:
+    """The docs whose tables are rendered: README.md and docs/*.md."""
     return [root / "README.md", *sorted((root / "docs").glob("*.md"))]
 
 

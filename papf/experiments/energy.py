@@ -1,15 +1,8 @@
 """``papf experiment energy``: the PAPF paper's 3-run energy experiment (IV-C), in sim.
 
-World ``energy`` (goal (10, 0) m, three obstacles); each planner × ``runs``; run k
-(1-based) of every planner uses seed ``seed + k`` (the same noise for the k-th run of
-each planner: paired runs); each run goes through the full process stack
-(:func:`papf.launch.run.run`) recorded to ``OUT/<planner>-<k>.mcap``; then the report
-(:func:`papf.report.report.build_report`) from those files alone, in ``OUT``.
-
-While a run goes, a progress bar over the runs shows its live figures (sim time,
-distance to the goal, charge), read from the run's own router by a Zenoh subscriber
-of this process; each run's result is printed as it finishes. The run's summary
-(live) and the report's figures for it (from the file) are compared at the end.
+Each planner × ``runs`` on world ``energy`` through the full process stack, recorded,
+then the report (:func:`papf.report.report.build_report`) from the files alone.
+Details: :func:`run_experiment`.
 """
 
 from __future__ import annotations
@@ -70,6 +63,7 @@ class RunSpec:
 
     @property
     def name(self) -> str:
+        """The experiment's name (its file's stem)."""
         return self.path.stem
 
 
@@ -122,6 +116,7 @@ def plan(exp: EnergyExperiment) -> list[RunSpec]:
 
 
 def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
+    """The RunConfig of one run of ``exp`` (world, planner, preset, seed) on router ``port``."""
     from nodes.planner.registry import preset_sets
     from papf.launch.run import RunConfig
 
@@ -164,11 +159,13 @@ class LiveFigures:
         return True
 
     def text(self, goal: tuple[float, float]) -> str:
+        """The progress line: sim time [s], distance to ``goal`` [m], charge [mAh]."""
         dist = math.hypot(self.xy[0] - goal[0], self.xy[1] - goal[1])
         to_goal = f"{dist:5.2f} m to goal" if math.isfinite(dist) else "starting"
         return f"sim {self.sim_s:6.1f} s  {to_goal}  {self.charge_mAh:6.2f} mAh"
 
     def close(self) -> None:
+        """Undeclare the subscribers and close the session (the run's router may be gone)."""
         with contextlib.suppress(Exception):  # the run's router is gone by now
             for sub in self._subs:
                 sub.undeclare()
@@ -220,6 +217,17 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     """Run every planner × runs through the stack, recorded, then write the report.
 
     ``run_fn``: how one run is made (default :func:`papf.launch.run.run`; tests substitute).
+
+    World ``energy`` (goal (10, 0) m, three obstacles); each planner × ``runs``; run k
+    (1-based) of every planner uses seed ``seed + k`` (the same noise for the k-th run of
+    each planner: paired runs); each run goes through the full process stack
+    (:func:`papf.launch.run.run`) recorded to ``OUT/<planner>-<k>.mcap``; then the report
+    (:func:`papf.report.report.build_report`) from those files alone, in ``OUT``.
+
+    While a run goes, a progress bar over the runs shows its live figures (sim time,
+    distance to the goal, charge), read from the run's own router by a Zenoh subscriber
+    of this process; each run's result is printed as it finishes. The run's summary
+    (live) and the report's figures for it (from the file) are compared at the end.
     """
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn

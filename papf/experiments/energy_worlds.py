@@ -1,17 +1,9 @@
 """``papf experiment energy --worlds energy,energy-blocking,energy-empty``: the energy
 experiment on several worlds, and one table that separates the effects (issue 14).
 
-- ``energy`` — the paper's course (goal 10 m, three obstacles beside the line);
-- ``energy-blocking`` — the same course with the obstacles across the line, so PAPF's
-  temporary goal and top quarks have to work;
-- ``energy-empty`` — the control: no obstacle; any saving there comes from the motion law
-  alone (APF's 5 / r^2 pull is below V_max beyond 7.1 m, PAPF's temporary goal <= lambda
-  away always pulls with >= 5).
-
-Each world runs as :func:`papf.experiments.energy.run_experiment` into ``OUT/world-<world>/``
-(recordings, report); then ``OUT/energy-worlds.csv`` and ``.md``: per world and planner
-(preset) the runs that reached, mean charge, duration and path, the charge change against
-APF in the same world, and what PAPF did (:mod:`papf.report.activity`).
+``energy`` (the paper's course), ``energy-blocking`` (obstacles across the line) and
+``energy-empty`` (the control, no obstacle), each as :func:`papf.experiments.energy.run_experiment`;
+then ``OUT/energy-worlds.csv`` and ``.md``. Details: :func:`run_energy_worlds`.
 """
 
 from __future__ import annotations
@@ -60,7 +52,20 @@ def world_rows(world: str, report) -> list[dict]:
 
 
 def run_energy_worlds(exp, worlds: Sequence[str] = WORLDS, console=None) -> list:
-    """Run ``exp`` on each world (into ``exp.out/world-<world>``); write the combined table."""
+    """Run ``exp`` on each world (into ``exp.out/world-<world>``); write the combined table.
+
+    - ``energy`` — the paper's course (goal 10 m, three obstacles beside the line);
+    - ``energy-blocking`` — the same course with the obstacles across the line, so PAPF's
+      temporary goal and top quarks have to work;
+    - ``energy-empty`` — the control: no obstacle; any saving there comes from the motion law
+      alone (APF's 5 / r^2 pull is below V_max beyond 7.1 m, PAPF's temporary goal <= lambda
+      away always pulls with >= 5).
+
+    Each world runs as :func:`papf.experiments.energy.run_experiment` into ``OUT/world-<world>/``
+    (recordings, report); then ``OUT/energy-worlds.csv`` and ``.md``: per world and planner
+    (preset) the runs that reached, mean charge, duration and path, the charge change against
+    APF in the same world, and what PAPF did (:mod:`papf.report.activity`).
+    """
     from papf.experiments.energy import run_experiment
 
     out = Path(exp.out)

@@ -1,18 +1,8 @@
 """``papf experiment iapf``: the IAPF paper's cases A-D at car scale (Jin 2024, Sec. 4, Table 2).
 
-Each case world runs for the paper's case time (Table 2: 5, 5, 6, 10 s) with IAPF, IAPF
-without prediction and the traditional APF baseline, in the paper's vehicle model
-(:mod:`papf.offline.road`). Writes into ``OUT``:
-
-- ``iapf.md`` — a table like Table 2 (case time, computation) with what each planner did
-  (collisions, clearance, off the road, lane changes, speeds) and the paper's figures;
-- ``iapf.csv`` — the same, one row per run; ``<case>-<planner>.csv`` the host's time series
-  (t, x, y, v, yaw, temporary lane goal, eq. 24 count) and ``<case>-vehicles.csv`` the others';
-- ``<case>.png`` — trajectories with time marks and speed over time (like Figs. 10-13).
-
-Computation is thread CPU time (other processes on the machine disturb wall time): per
-planning step (0.02 s of driving), and, like Table 2, per "single planning" of a T = 5 s
-trajectory made every 0.1 s of the case.
+Each case world runs for the paper's case time with IAPF, IAPF without prediction and the
+traditional APF in the paper's vehicle model (:mod:`papf.offline.road`); writes
+``OUT/iapf.md`` and ``.csv``, time series and plots. Details: :func:`run_iapf_experiment`.
 """
 
 from __future__ import annotations
@@ -130,6 +120,7 @@ def write_vehicles(out: Path, case: str, world, duration: float, step_s: float) 
 
 
 def markdown(rows: list[dict]) -> str:
+    """The IAPF experiment's table (Markdown), our figures beside the paper's."""
     head = ["case", "planner", "case time [s]", "collisions", "min clearance [m]", "left road",
             "lane changes", "speed min-max [km/h]", "final [km/h]", "step CPU p50 / p99 [ms]",
             "case calc. [s]", "T = 5 s plan [ms]", "paper: case calc. [s]", "paper: plan [ms]",
@@ -148,7 +139,22 @@ def markdown(rows: list[dict]) -> str:
 
 def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), params=(),
                         horizon: bool = True, plots: bool = True, progress=None) -> list[dict]:
-    """Run every case with every planner; write the table, CSVs and figures into ``out``."""
+    """Run every case with every planner; write the table, CSVs and figures into ``out``.
+
+    Each case world runs for the paper's case time (Table 2: 5, 5, 6, 10 s) with IAPF, IAPF
+    without prediction and the traditional APF baseline, in the paper's vehicle model
+    (:mod:`papf.offline.road`). Writes into ``OUT``:
+
+    - ``iapf.md`` — a table like Table 2 (case time, computation) with what each planner did
+      (collisions, clearance, off the road, lane changes, speeds) and the paper's figures;
+    - ``iapf.csv`` — the same, one row per run; ``<case>-<planner>.csv`` the host's time series
+      (t, x, y, v, yaw, temporary lane goal, eq. 24 count) and ``<case>-vehicles.csv`` the others';
+    - ``<case>.png`` — trajectories with time marks and speed over time (like Figs. 10-13).
+
+    Computation is thread CPU time (other processes on the machine disturb wall time): per
+    planning step (0.02 s of driving), and, like Table 2, per "single planning" of a T = 5 s
+    trajectory made every 0.1 s of the case.
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []

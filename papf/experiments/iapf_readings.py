@@ -62,6 +62,7 @@ def _cell(run, case: str) -> str:
 
 
 def run_readings(out: str | Path, progress=None) -> list[dict]:
+    """Run each of :data:`READINGS`, write paths and CSV into ``out``; the rows."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []

@@ -1,12 +1,8 @@
 """Each finished run of an experiment on disk as it ends, and a re-run that skips them.
 
-Ctrl-C (or a crash) in the middle of an experiment must not throw away the runs already
-made. :class:`Journal` keeps one small JSON file per finished run in ``OUT/runs/``, named
-by a digest of everything that defines the run (:func:`run_key`), written atomically
-(:func:`common.outfiles.output`) the moment the run ends. Running the same experiment into
-the same ``OUT`` again takes those runs from their files (a note says how many) and makes
-only the others; delete ``OUT/runs/`` to make them all again. A file that does not parse,
-or was made for another run, is ignored (that run is made again), never trusted.
+:class:`Journal` keeps one JSON file per finished run in ``OUT/runs/`` (named by
+:func:`run_key`, written atomically), so Ctrl-C or a crash loses no finished run and the
+same command into the same ``OUT`` makes only the others. Used by the experiments.
 """
 
 from __future__ import annotations
@@ -27,7 +23,16 @@ def run_key(*parts: Any) -> str:
 
 
 class Journal:
-    """Finished runs under ``out/runs/`` (module doc)."""
+    """Finished runs under ``out/runs/``.
+
+    Ctrl-C (or a crash) in the middle of an experiment must not throw away the runs already
+    made. :class:`Journal` keeps one small JSON file per finished run in ``OUT/runs/``, named
+    by a digest of everything that defines the run (:func:`run_key`), written atomically
+    (:func:`common.outfiles.output`) the moment the run ends. Running the same experiment into
+    the same ``OUT`` again takes those runs from their files (a note says how many) and makes
+    only the others; delete ``OUT/runs/`` to make them all again. A file that does not parse,
+    or was made for another run, is ignored (that run is made again), never trusted.
+    """
 
     def __init__(self, out: str | Path):
         self.dir = Path(out) / "runs"

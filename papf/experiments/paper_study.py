@@ -1,13 +1,8 @@
 """Two studies of PAPF against its paper (offline, :func:`papf.offline.run.simulate`):
 
-- ``papf experiment horizon`` (:func:`run_horizon`): PAPF IV-A / Fig. 7 — lambda in
-  {0.5, 1, 1.5, 2} m on the Fig. 7-like world ``papf-horizon`` (goal 7 m straight ahead,
-  three obstacles), both presets, APF for reference: outcome, duration, path length,
-  turning (sum of |heading change|, the smoothness the paper judges by eye), and the
-  planner's cycle time (``PlannerState.compute_ns``, median and 99th percentile).
+- ``papf experiment horizon`` (:func:`run_horizon`): PAPF IV-A / Fig. 7, lambda swept;
 - ``papf experiment deviations`` (:func:`run_deviations`): each of our deviations from the
-  literal PAPF (:data:`DEVIATIONS`) switched *alone* — on top of ``--preset paper`` and off
-  from the default — on the first ``n`` random worlds of a set and on PAPF Tests I-VI.
+  literal PAPF switched alone.
 
 Both write ``OUT/<name>.csv`` and ``OUT/<name>.md``.
 """
@@ -56,7 +51,14 @@ def _turning(headings: np.ndarray) -> float:
 
 def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORIZONS,
                 world: str = HORIZON_WORLD) -> list[dict]:
-    """PAPF with each horizon (both presets) and APF on ``world``; write horizon.csv/.md."""
+    """PAPF with each horizon (both presets) and APF on ``world``; write horizon.csv/.md.
+
+    PAPF IV-A / Fig. 7 — lambda in {0.5, 1, 1.5, 2} m on the Fig. 7-like world
+    ``papf-horizon`` (goal 7 m straight ahead, three obstacles), both presets, APF for
+    reference: outcome, duration, path length, turning (sum of |heading change|, the
+    smoothness the paper judges by eye), and the planner's cycle time
+    (``PlannerState.compute_ns``, median and 99th percentile).
+    """
     from papf.console.progress import StepProgress
     from papf.experiments.trials import markdown_table, write_csv
 
@@ -117,7 +119,11 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
     """Every variant of :func:`_variants` on ``n`` random worlds and PAPF Tests I-VI.
 
     ``part = (k, K)``: only every K-th variant from the k-th, written to
-    ``deviations-<k>.csv`` (split a long study over processes; concatenate the CSVs)."""
+    ``deviations-<k>.csv`` (split a long study over processes; concatenate the CSVs).
+
+    Each of our deviations from the literal PAPF (:data:`DEVIATIONS`) switched *alone* — on
+    top of ``--preset paper`` and off from the default.
+    """
     from papf.console.progress import StepProgress
     from papf.experiments.paper_tests import PAPF_WORLDS, table2_check
     from papf.experiments.trials import markdown_table, run_offline, write_csv

@@ -1,19 +1,8 @@
 """``papf experiment paper-tests``: every paper world with every planner, a table like PAPF Table 2.
 
-For each world of :data:`PAPER_WORLDS` and each planner: one run through the full process
-stack (default; :func:`papf.experiments.trials.run_stack`, recorded to
-``OUT/recordings/<world>-<planner>.mcap``) or offline (``mode="offline"``). Writes
-
-- ``OUT/paper-tests.md`` — per world and planner: outcome, duration, path length, their
-  change against APF (negative = shorter, as the paper's "reduced by"), and the paper's
-  own figures (:data:`PAPER`);
-- ``OUT/paper-tests.csv`` — one row per run;
-- ``OUT/<world>.png`` — all planners' paths over the obstacles (like PAPF Figs. 8-13).
-
-The paper values: PAPF Table 2 (its text is partly illegible in our copy: the APF durations
-of Tests I, II, III and VI are reconstructed from the PAPF durations and the stated
-reductions, e.g. Test I 41.71 s "reduced by 40.23 %" -> 69.79 s); AR-APF Sec. 4.2 and Wang
-Sec. 4 give outcomes only.
+Each world of :data:`PAPER_WORLDS` with each planner, through the process stack or
+offline; writes ``OUT/paper-tests.md`` and ``.csv`` (beside the papers' figures,
+:data:`PAPER`) and one plot per world. Details: :func:`run_paper_tests`.
 """
 
 from __future__ import annotations
@@ -161,6 +150,21 @@ def run_paper_tests(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one);
     ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
+
+    For each world of :data:`PAPER_WORLDS` and each planner: one run through the full process
+    stack (default; :func:`papf.experiments.trials.run_stack`, recorded to
+    ``OUT/recordings/<world>-<planner>.mcap``) or offline (``mode="offline"``). Writes
+
+    - ``OUT/paper-tests.md`` — per world and planner: outcome, duration, path length, their
+      change against APF (negative = shorter, as the paper's "reduced by"), and the paper's
+      own figures (:data:`PAPER`);
+    - ``OUT/paper-tests.csv`` — one row per run;
+    - ``OUT/<world>.png`` — all planners' paths over the obstacles (like PAPF Figs. 8-13).
+
+    The paper values: PAPF Table 2 (its text is partly illegible in our copy: the APF durations
+    of Tests I, II, III and VI are reconstructed from the PAPF durations and the stated
+    reductions, e.g. Test I 41.71 s "reduced by 40.23 %" -> 69.79 s); AR-APF Sec. 4.2 and Wang
+    Sec. 4 give outcomes only.
     """
     from papf.plots.paths import plot_paths  # matplotlib: only when the experiment runs
 

@@ -1,17 +1,8 @@
 """``papf experiment random``: success and collision rates of each planner on random worlds.
 
-The first ``n`` *solvable* worlds of the seeded set (:func:`papf.offline.world_gen.generate_solvable`:
-obstacle fields, dead ends, narrow gaps, in turn) are run with every planner — offline by
-default (:func:`papf.offline.run.simulate`, fast), or through the whole stack (``mode="stack"``). Writes
-
-- ``OUT/random.md`` — per planner: reached / collision / stagnated / timeout / failed rates
-  over the solvable worlds, the success rate per world kind, and split by the world's
-  bottleneck (:func:`papf.offline.world_gen.bottleneck_width`) at :data:`WIDE_M`;
-- ``OUT/random.csv`` — one row per run;
-- ``OUT/worlds/<name>.toml`` — every world (so a run can be repeated with ``papf plan`` or
-  ``papf run``), and with ``plots=True`` ``OUT/plots/<name>.png`` (all planners' paths).
-
-The planners' parameters are their defaults: nothing is tuned to these worlds.
+The first ``n`` solvable worlds of a seeded set (:mod:`papf.offline.world_gen`) with every
+planner at its defaults, offline or through the stack; writes ``OUT/random.md``, ``.csv``
+and the worlds. Details: :func:`run_random`.
 """
 
 from __future__ import annotations
@@ -70,6 +61,7 @@ def summarize(trials, bottleneck: dict[str, float] | None = None) -> list[dict]:
 
 def summary_markdown(summary: list[dict], n: int, seed: int, mode: str, rejected: int) -> str:
 
+    """The random-worlds table (Markdown): outcomes [%] per planner, by kind and width."""
     header = ["planner", "worlds", *[f"{o} [%]" for o in OUTCOMES], "collisions",
               *[f"reached: {k} [%]" for k in KINDS],
               f"reached: bottleneck >= {WIDE_M} m [%]", f"reached: bottleneck < {WIDE_M} m [%]"]
@@ -91,6 +83,19 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     ``sets``: ``name=value`` planner settings applied to every planner (as ``--set``);
     ``sweep``: how the runs are spread (:mod:`papf.experiments.sweep`; default one by one);
     ``presets``: planner presets side by side (:func:`papf.experiments.trials.variants`).
+
+    The first ``n`` *solvable* worlds of the seeded set (:func:`papf.offline.world_gen.generate_solvable`:
+    obstacle fields, dead ends, narrow gaps, in turn) are run with every planner — offline by
+    default (:func:`papf.offline.run.simulate`, fast), or through the whole stack (``mode="stack"``). Writes
+
+    - ``OUT/random.md`` — per planner: reached / collision / stagnated / timeout / failed rates
+      over the solvable worlds, the success rate per world kind, and split by the world's
+      bottleneck (:func:`papf.offline.world_gen.bottleneck_width`) at :data:`WIDE_M`;
+    - ``OUT/random.csv`` — one row per run;
+    - ``OUT/worlds/<name>.toml`` — every world (so a run can be repeated with ``papf plan`` or
+      ``papf run``), and with ``plots=True`` ``OUT/plots/<name>.png`` (all planners' paths).
+
+    The planners' parameters are their defaults: nothing is tuned to these worlds.
     """
     from papf.plots.paths import plot_paths  # matplotlib: only when the experiment runs
 

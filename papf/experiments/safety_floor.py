@@ -1,14 +1,9 @@
 """The safety parameters' floors, measured: each swept downwards alone, offline, on worlds with
 obstacles in the path (``papf experiment safety-floor``).
 
-A safety parameter's range must exclude every value that switches its protection off, and a
-value only just above zero does that as surely as zero (``d_o = 1e-9`` m repels from nothing).
-The floor is therefore the smallest swept value at which every planner on every world still
-avoided every obstacle (no collision); :mod:`nodes.planner.settings` takes its lower bounds
-from the table this writes (``docs/data/safety-floor.csv``, docs/planners.md "Safety floors").
-The last rows per world (:data:`COMBOS`) reach the floor of eq. 2's product ``k q_V q_O``
-(what repels) through several factors at once. Each finished run is appended to the CSV as it ends, and a
-run already in the CSV is not run again (``--resume``).
+The floor is the smallest swept value at which no planner collided on any world;
+:mod:`nodes.planner.settings` takes its lower bounds from the table this writes
+(``docs/data/safety-floor.csv``, docs/planners.md "Safety floors"). Details: :func:`run`.
 """
 
 from __future__ import annotations
@@ -62,10 +57,12 @@ class Case:
 
     @property
     def key(self) -> tuple[str, str, str, str]:
+        """The case's identity: (world, planner, parameter, value label)."""
         return (self.world, self.planner, self.param, self.label)
 
     @property
     def label(self) -> str:
+        """The value as shown: the number, or the combination's settings."""
         return " ".join(self.sets) if self.param == "combo" else f"{self.value:g}"
 
 
@@ -133,7 +130,17 @@ def floors_of(rows: list[dict], sweep=None) -> dict[str, float]:
 
 def run(out: Path, worlds=WORLDS, progress=print, car: bool = False) -> dict[str, float]:
     """Sweep into ``out`` (appending; runs already there skipped), then :data:`COMBOS`;
-    returns the single-factor floors. ``car``: :data:`CAR_SWEEP` on :data:`CAR_WORLDS` instead."""
+    returns the single-factor floors. ``car``: :data:`CAR_SWEEP` on :data:`CAR_WORLDS` instead.
+
+    A safety parameter's range must exclude every value that switches its protection off, and a
+    value only just above zero does that as surely as zero (``d_o = 1e-9`` m repels from nothing).
+    The floor is therefore the smallest swept value at which every planner on every world still
+    avoided every obstacle (no collision); :mod:`nodes.planner.settings` takes its lower bounds
+    from the table this writes (``docs/data/safety-floor.csv``, docs/planners.md "Safety floors").
+    The last rows per world (:data:`COMBOS`) reach the floor of eq. 2's product ``k q_V q_O``
+    (what repels) through several factors at once. Each finished run is appended to the CSV as it ends, and a
+    run already in the CSV is not run again (``--resume``).
+    """
     from bench.csvrows import write_rows
 
     rows = _read(out)

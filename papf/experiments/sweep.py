@@ -1,25 +1,8 @@
 """Sweeps: many independent runs on Dask distributed — a local cluster or an existing one.
 
-``map_runs(fn, jobs, opts)`` returns ``[fn(job) for job in jobs]``, in job order, however
-the runs are spread:
-
-- ``workers = 1`` and no scheduler: one after the other in this process (no Dask at all);
-- ``workers = N``: a :class:`distributed.LocalCluster` of N single-threaded worker
-  processes on this machine;
-- ``scheduler = "tcp://HOST:8786"``: the workers of an existing Dask cluster (other
-  machines with papf-stack installed; docs/sweeps.md), results gathered here.
-
-Each run is isolated: a stack run gets its own router port (a free one on the machine
-that runs it) and its own key namespace (:func:`run_namespace`), so two runs on one
-machine never hear each other. A run is bit-for-bit reproducible for its seed, so the
-results — and the CSV written from them in job order — are byte-identical to a
-sequential sweep. One progress bar covers the whole sweep (a terminal), or one line per
-finished run (piped).
-
-Dask was chosen because it is pure Python (one ``pip install``), light on a 2-core
-laptop (a scheduler thread and N worker processes), and the same client code drives a
-``LocalCluster`` and a remote ``tcp://`` scheduler; Ray or Celery need a server or a
-broker for the latter.
+:func:`map_runs` runs jobs one after the other, on a local Dask cluster of N workers, or on
+an existing scheduler (docs/sweeps.md); results come back in job order, byte-identical to
+a sequential sweep. Used by every experiment with many runs.
 """
 
 from __future__ import annotations
@@ -59,6 +42,7 @@ class SweepOptions:
 
     @property
     def distributed(self) -> bool:
+        """Whether runs are spread over workers or a scheduler."""
         return self.workers > 1 or self.scheduler is not None
 
 
@@ -71,13 +55,34 @@ def map_runs(fn: Callable[[J], R], jobs: Sequence[J], opts: SweepOptions,
              label: Callable[[J], str] = str, title: str = "sweep",
              line: Callable[[J, R], str] | None = None,
              on_done: Callable[[J, R], None] | None = None) -> list[R]:
-    """``[fn(job) for job in jobs]`` (job order), on Dask when ``opts`` asks; see module doc.
+    """``[fn(job) for job in jobs]`` (job order), on Dask when ``opts`` asks.
 
     ``fn`` and the jobs must pickle (a module-level function, dataclass jobs) when
     distributed; ``label(job)`` names a run on the progress bar; ``line(job, result)`` is
     the line printed per finished run (default: label, outcome, wall time);
     ``on_done(job, result)`` is called here the moment each run ends (to write it to disk:
     :mod:`papf.experiments.journal`).
+
+    ``map_runs(fn, jobs, opts)`` returns ``[fn(job) for job in jobs]``, in job order, however
+    the runs are spread:
+
+    - ``workers = 1`` and no scheduler: one after the other in this process (no Dask at all);
+    - ``workers = N``: a :class:`distributed.LocalCluster` of N single-threaded worker
+      processes on this machine;
+    - ``scheduler = "tcp://HOST:8786"``: the workers of an existing Dask cluster (other
+      machines with papf-stack installed; docs/sweeps.md), results gathered here.
+
+    Each run is isolated: a stack run gets its own router port (a free one on the machine
+    that runs it) and its own key namespace (:func:`run_namespace`), so two runs on one
+    machine never hear each other. A run is bit-for-bit reproducible for its seed, so the
+    results — and the CSV written from them in job order — are byte-identical to a
+    sequential sweep. One progress bar covers the whole sweep (a terminal), or one line per
+    finished run (piped).
+
+    Dask was chosen because it is pure Python (one ``pip install``), light on a 2-core
+    laptop (a scheduler thread and N worker processes), and the same client code drives a
+    ``LocalCluster`` and a remote ``tcp://`` scheduler; Ray or Celery need a server or a
+    broker for the latter.
     """
     opts.validate()
     with SweepProgress(len(jobs), title, opts.progress, line) as progress:
@@ -159,6 +164,7 @@ class SweepProgress:
         return self
 
     def done(self, job, label: str, result, wall_s: float) -> None:
+        """Count a finished job and show its line (above the progress bar when there is one)."""
         self.count += 1
         text = (self.line(job, result) if self.line else
                 f"{label}: {getattr(result, 'outcome', 'done')} ({wall_s:.1f} s wall)")

@@ -1,25 +1,9 @@
 """``papf experiment test1-sweep``: calibrate the obstacle of ``papf-test-1`` on APF alone.
 
-The PAPF paper (Sec. IV-B, Table 2, Figs. 6 and 8) gives Test (I)'s start (the odometry
-origin) and goal ((2.2, 2.7) m, Table 1) but not its obstacle: Fig. 6 is a photo of the lab,
-absent from our copy. ``papf-test-1`` places one square box on the right of the start-goal
-line; its side, its distance along the line and its offset to the right are free unknowns.
-This sweep runs the **APF baseline only** (offline, :func:`papf.offline.run.simulate`, several seeds)
-over a grid of those three, so the box can be sized by APF's Table 2 figures (4.50 m; the
-duration, 69.79 s, is reported as a secondary check) without ever looking at PAPF — PAPF is
-then validated on the chosen world, not fitted to it.
-
-Selection rule (:func:`choose`), on APF's figures only: among geometries where APF reaches
-for every seed **and** its mean duration is within the issue's duration band (15 %) of 69.79 s,
-the smallest |mean path - 4.50 m|; geometries within ``tie_m`` of that best are a tie, broken
-by the smallest change from the old box (0.5 m, 1.62 m along, 0.15 m right). The first rule,
-written before the sweep, used the path alone: it picks a 1.5 m box whose APF takes 96 s,
-38 % longer than the paper's — the duration check rejects it, so the duration became a
-constraint (decided on APF's figures, before PAPF ran on any candidate). Both picks are
-marked in the CSV (``chosen``: ``yes`` / ``path only``).
-
-Writes ``OUT/test1-sweep-runs.csv`` (one row per run), ``OUT/test1-sweep.csv`` (one row per
-geometry: reached k/n, mean and range of path and duration) and ``OUT/test1-sweep.md``.
+The paper gives Test (I)'s start and goal but not its obstacle; this sweep sizes and
+places ``papf-test-1``'s box by APF's Table 2 figures alone (offline, several seeds), so
+PAPF is validated on the chosen world, not fitted to it. Writes ``OUT/test1-sweep*.csv``
+and ``OUT/test1-sweep.md``; the reading and the rule: :func:`run_sweep`, :func:`choose`.
 """
 
 from __future__ import annotations
@@ -83,7 +67,7 @@ def _change(g: dict) -> float:
 
 def choose(rows: Sequence[dict], tie_m: float = 0.02,
            duration_band_pct: float | None = DURATION_BAND_PCT) -> dict | None:
-    """The geometry the selection rule of the module docstring picks (None: none qualifies);
+    """The geometry the selection rule (:func:`run_sweep`) picks (None: none qualifies);
     ``duration_band_pct=None``: the path alone (the first rule)."""
     ok = [r for r in rows if r["reached"] == r["runs"] and r["runs"] > 0]
     if duration_band_pct is not None:
@@ -114,7 +98,29 @@ def _summary(side, along, offset, runs) -> dict:
 
 def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seeds=SEEDS,
               timeout_s: float = 300.0) -> tuple[list[dict], dict | None]:
-    """APF over the grid; write the CSVs and the Markdown; return (summary rows, chosen)."""
+    """APF over the grid; write the CSVs and the Markdown; return (summary rows, chosen).
+
+    The PAPF paper (Sec. IV-B, Table 2, Figs. 6 and 8) gives Test (I)'s start (the odometry
+    origin) and goal ((2.2, 2.7) m, Table 1) but not its obstacle: Fig. 6 is a photo of the lab,
+    absent from our copy. ``papf-test-1`` places one square box on the right of the start-goal
+    line; its side, its distance along the line and its offset to the right are free unknowns.
+    This sweep runs the **APF baseline only** (offline, :func:`papf.offline.run.simulate`, several seeds)
+    over a grid of those three, so the box can be sized by APF's Table 2 figures (4.50 m; the
+    duration, 69.79 s, is reported as a secondary check) without ever looking at PAPF — PAPF is
+    then validated on the chosen world, not fitted to it.
+
+    Selection rule (:func:`choose`), on APF's figures only: among geometries where APF reaches
+    for every seed **and** its mean duration is within the issue's duration band (15 %) of 69.79 s,
+    the smallest |mean path - 4.50 m|; geometries within ``tie_m`` of that best are a tie, broken
+    by the smallest change from the old box (0.5 m, 1.62 m along, 0.15 m right). The first rule,
+    written before the sweep, used the path alone: it picks a 1.5 m box whose APF takes 96 s,
+    38 % longer than the paper's — the duration check rejects it, so the duration became a
+    constraint (decided on APF's figures, before PAPF ran on any candidate). Both picks are
+    marked in the CSV (``chosen``: ``yes`` / ``path only``).
+
+    Writes ``OUT/test1-sweep-runs.csv`` (one row per run), ``OUT/test1-sweep.csv`` (one row per
+    geometry: reached k/n, mean and range of path and duration) and ``OUT/test1-sweep.md``.
+    """
     from papf.console.progress import StepProgress
     from papf.experiments.trials import markdown_table, write_csv
     from papf.offline.run import simulate

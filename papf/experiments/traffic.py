@@ -1,14 +1,8 @@
 """``papf experiment traffic``: every planner on the ROSbot-scale road worlds, full stack.
 
-For each ``road-*`` world and each case — IAPF with the sim's ground-truth tracks
-(``--objects truth``), IAPF with the tracker node's tracks (``--objects tracker``), and
-APF, PAPF, AR-APF (no road model, no tracks) — one run of the whole process stack,
-recorded to ``OUT/recordings/<world>-<planner>-<objects>.mcap``. From the recording's
-ground-truth poses (``sim/pose``): ``left_road`` (a corner of the ROSbot's footprint
-ever beyond a solid line), ``lane_changes`` (the centre crossed a broken line),
-``min_speed_mps`` / ``max_speed_mps`` after the first motion
-(:func:`papf.offline.car.road_figures`). Writes ``OUT/traffic.csv`` (one row per run) and
-``OUT/traffic.md`` (the table).
+IAPF (truth and tracker tracks), APF, PAPF, AR-APF on each ``road-*`` world through the
+whole stack, recorded; road figures from the recordings' ground truth. Writes
+``OUT/traffic.csv`` and ``OUT/traffic.md``. Details: :func:`run_traffic`.
 """
 
 from __future__ import annotations
@@ -71,6 +65,7 @@ def road_row(world_name: str, planner: str, objects: str, trial, mcap: Path) -> 
 
 
 def table(rows: Sequence[dict]) -> str:
+    """The traffic experiment's table (Markdown), one row per run."""
     def num(x, nd=2):
         return f"{x:.{nd}f}" if isinstance(x, float) and math.isfinite(x) else str(x)
 
@@ -86,7 +81,18 @@ def run_traffic(out: str | Path, worlds: Sequence[str] = ROAD_WORLDS,
                 timeout_s: float = 150.0, echo=print,
                 seeds: Sequence[int] | None = None) -> list[dict]:
     """Run every (seed, world, case) through the stack (``seeds``: default ``(seed,)``);
-    write ``traffic.csv`` and ``traffic.md``."""
+    write ``traffic.csv`` and ``traffic.md``.
+
+    For each ``road-*`` world and each case — IAPF with the sim's ground-truth tracks
+    (``--objects truth``), IAPF with the tracker node's tracks (``--objects tracker``), and
+    APF, PAPF, AR-APF (no road model, no tracks) — one run of the whole process stack,
+    recorded to ``OUT/recordings/<world>-<planner>-<objects>.mcap``. From the recording's
+    ground-truth poses (``sim/pose``): ``left_road`` (a corner of the ROSbot's footprint
+    ever beyond a solid line), ``lane_changes`` (the centre crossed a broken line),
+    ``min_speed_mps`` / ``max_speed_mps`` after the first motion
+    (:func:`papf.offline.car.road_figures`). Writes ``OUT/traffic.csv`` (one row per run) and
+    ``OUT/traffic.md`` (the table).
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()

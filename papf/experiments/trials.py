@@ -73,6 +73,7 @@ def _r(x: float, nd: int = 3):
 
 
 def variant_label(planner: str, preset: str) -> str:
+    """``papf`` for the default preset, else ``papf (paper)``."""
     return planner if preset == "default" else f"{planner} ({preset})"
 
 
@@ -147,6 +148,7 @@ class TrialJob:
 
     @property
     def label(self) -> str:
+        """``WORLD PLANNER (PRESET) seed N``."""
         return f"{self.world.name} {variant_label(self.planner, self.preset)} seed {self.seed}"
 
 
@@ -203,10 +205,12 @@ def pose_path(mcap: str | Path, namespace: str = "*") -> np.ndarray:
 
 
 def load_all(names: Sequence[str]) -> list[World]:
+    """Load each world of ``names``."""
     return [load_world(n) for n in names]
 
 
 def write_csv(rows: list[dict], path: str | Path) -> Path:
+    """Write ``rows`` as CSV (header from the first row) to ``path``; the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:

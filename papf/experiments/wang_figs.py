@@ -1,17 +1,8 @@
 """``papf experiment wang``: Wang's Figs. 5-12 side by side with the paper's outcomes.
 
-Each figure is run twice:
-
-- **as published** — ``motion="fixed-step"`` (:mod:`papf.offline.wang_step`): a point stepping 0.5 along the
-  force for at most J = 200 iterations, Table 1 gains, the obstacles' centres known
-  (Wang's MATLAB simulation);
-- **on the ROSbot** — the default motion (offline; 2-D: simulated LiDAR and the
-  ROSbot's motion law; 3-D: the point robot of :mod:`papf.offline.point3d`) with the registry's
-  ``wang-apf`` (traditional, eqs. 1-5) or ``wang`` (improved, eqs. 6-8) planner.
-
-Both through :func:`papf.offline.run.simulate`.
-
-Writes ``OUT/wang.md`` and ``OUT/wang.csv``.
+Each figure as published (a fixed-step point, :mod:`papf.offline.wang_step`) and on the
+ROSbot (the ``wang-apf`` and ``wang`` planners), both through
+:func:`papf.offline.run.simulate`; writes ``OUT/wang.md`` and ``OUT/wang.csv``.
 """
 
 from __future__ import annotations
@@ -46,7 +37,21 @@ HEADER = ["figure", "world", "method", "paper", "fixed step (as published)", "it
 
 
 def run_wang(out: str | Path, seed: int = 0, timeout_s: float = 300.0) -> list[dict]:
-    """Run every figure both ways; write ``wang.md`` and ``wang.csv`` into ``out``."""
+    """Run every figure both ways; write ``wang.md`` and ``wang.csv`` into ``out``.
+
+    Each figure is run twice:
+
+    - **as published** — ``motion="fixed-step"`` (:mod:`papf.offline.wang_step`): a point stepping 0.5 along the
+      force for at most J = 200 iterations, Table 1 gains, the obstacles' centres known
+      (Wang's MATLAB simulation);
+    - **on the ROSbot** — the default motion (offline; 2-D: simulated LiDAR and the
+      ROSbot's motion law; 3-D: the point robot of :mod:`papf.offline.point3d`) with the registry's
+      ``wang-apf`` (traditional, eqs. 1-5) or ``wang`` (improved, eqs. 6-8) planner.
+
+    Both through :func:`papf.offline.run.simulate`.
+
+    Writes ``OUT/wang.md`` and ``OUT/wang.csv``.
+    """
     from papf.console.progress import StepProgress
     from papf.offline.run import simulate
 

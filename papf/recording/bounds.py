@@ -1,13 +1,8 @@
 """What a reader may allocate for one recording's chunk, checked before anything is decompressed.
 
-A chunk record says how large its records are once decompressed (``uncompressed_size``), and
-the library allocates that much (zstd: the frame's own content size, when it gives one).
-50 KB of zstd can claim 1 GiB. Every reader of ours (``info``, ``recover``, ``report``,
-``replay``, ``export``, ``animate``) checks each chunk first: a size above
-:data:`MAX_CHUNK_BYTES` — in the record or in the compressed frame's header — is a
-RecordingError (one line), and an lz4 frame that does not declare its size is decompressed
-in bounded pieces to count it. Our recorder closes a chunk at 512 KiB (or at one message
-beyond it), so 64 MiB leaves a 128-fold margin for any recording of ours.
+Every reader of ours (``info``, ``recover``, ``report``, ``replay``, ``export``,
+``animate``) checks each chunk's declared size against :data:`MAX_CHUNK_BYTES` before
+decompressing it (50 KB of zstd can claim 1 GiB): a RecordingError in one line.
 """
 
 from __future__ import annotations
@@ -27,7 +22,17 @@ _FIXED = struct.Struct("<QQQI")      # start, end, uncompressed_size, uncompress
 
 
 def check_sizes(uncompressed_size: int, compression: str, head: bytes, where: str) -> None:
-    """RecordingError when a chunk would decompress to more than :data:`MAX_CHUNK_BYTES`."""
+    """RecordingError when a chunk would decompress to more than :data:`MAX_CHUNK_BYTES`.
+
+    A chunk record says how large its records are once decompressed (``uncompressed_size``), and
+    the library allocates that much (zstd: the frame's own content size, when it gives one).
+    50 KB of zstd can claim 1 GiB. Every reader of ours (``info``, ``recover``, ``report``,
+    ``replay``, ``export``, ``animate``) checks each chunk first: a size above
+    :data:`MAX_CHUNK_BYTES` — in the record or in the compressed frame's header — is a
+    RecordingError (one line), and an lz4 frame that does not declare its size is decompressed
+    in bounded pieces to count it. Our recorder closes a chunk at 512 KiB (or at one message
+    beyond it), so 64 MiB leaves a 128-fold margin for any recording of ours.
+    """
     declared = uncompressed_size
     if compression == "zstd" and head:
         try:

@@ -74,6 +74,7 @@ def decode(schema_name: str, data: bytes) -> Message | bytes:
 
 
 def truncated_error(path: Path, exc: BaseException | str) -> RecordingError:
+    """The RecordingError of a cut-short file, saying how to salvage it."""
     return RecordingError(
         f"{path}: not a complete MCAP recording ({exc}); it was probably cut short "
         f"(recorder killed, disk full). Salvage it with: papf recover {path} FIXED.mcap")
@@ -130,6 +131,7 @@ class Recording:
         self.close()
 
     def close(self) -> None:
+        """Close the file."""
         self._file.close()
 
     # -- what is in it ----------------------------------------------------
@@ -195,6 +197,7 @@ class Recording:
 
 
 def open_recording(path: str | Path) -> Recording:
+    """Open ``path`` as a Recording (RecordingError if it is not a complete MCAP)."""
     return Recording(path)
 
 

@@ -1,15 +1,8 @@
 """Salvage a truncated or damaged recording: ``papf recover BROKEN.mcap FIXED.mcap``.
 
-A recorder killed mid-run leaves an MCAP without its summary and footer, often with
-a half-written last record; a copy or a disk may flip bytes anywhere. :func:`recover`
-walks the records with :func:`papf.recording.scan.scan_records` (framing checked
-against the file size, every chunk decompressed and CRC-checked, resynchronising on
-the next intact chunk after damage) and re-writes every intact schema, channel,
-metadata record and message into a new, valid file (with indexes). What was lost is
-counted — damaged chunks, the messages they held, skipped bytes — and said.
-
-The output is written beside its final name and renamed into place only when
-complete: a full disk or a missing directory leaves no partial or empty file behind.
+:func:`recover` copies every intact record (:func:`papf.recording.scan.scan_records`) into a
+new, valid file and counts what was lost; the output appears only when complete. Used by
+``papf recover``.
 """
 
 from __future__ import annotations
@@ -64,6 +57,7 @@ class RecoverStats:
 
     @property
     def stopped_at(self) -> str:
+        """Where the scan stopped (``end of file``, or what it met at which byte)."""
         return self.scan.stopped_at
 
     @property
@@ -100,6 +94,7 @@ class RecoverStats:
         return f"{head}: " + "; ".join(parts + ([cut] if cut else []))
 
     def summary(self) -> str:
+        """One line of what was kept and what was lost."""
         total = f" of {self.scan.expected_messages}" if self.scan.expected_messages is not None \
             else ""
         text = (f"kept {self.messages}{total} messages on {self.channels} channels, "
@@ -109,6 +104,7 @@ class RecoverStats:
         return f"{text}; {lost}" if lost else f"{text}; the file was complete, nothing lost"
 
     def to_json(self, output: str) -> dict:
+        """The outcome as ``papf recover --json`` prints it."""
         sc = self.scan
         return {"output": output, "messages": self.messages, "log_span_s": self.log_span_s,
                 "receive_span_s": self.receive_span_s, "channels": self.channels,
@@ -159,7 +155,19 @@ class _Copier:
 def recover(broken: str | Path, fixed: str | Path, compression: str = "zstd",
             force: bool = False) -> RecoverStats:
     """Write every intact message of ``broken`` into a new, valid MCAP ``fixed``
-    (:func:`common.outfiles.output`: an existing ``fixed`` only with ``force``, never ``broken``)."""
+    (:func:`common.outfiles.output`: an existing ``fixed`` only with ``force``, never ``broken``).
+
+    A recorder killed mid-run leaves an MCAP without its summary and footer, often with
+    a half-written last record; a copy or a disk may flip bytes anywhere. :func:`recover`
+    walks the records with :func:`papf.recording.scan.scan_records` (framing checked
+    against the file size, every chunk decompressed and CRC-checked, resynchronising on
+    the next intact chunk after damage) and re-writes every intact schema, channel,
+    metadata record and message into a new, valid file (with indexes). What was lost is
+    counted — damaged chunks, the messages they held, skipped bytes — and said.
+
+    The output is written beside its final name and renamed into place only when
+    complete: a full disk or a missing directory leaves no partial or empty file behind.
+    """
     broken, fixed = Path(broken), Path(fixed)
     try:
         check_output(fixed, [broken], force)

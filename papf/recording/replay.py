@@ -1,25 +1,8 @@
 """Republish a recording with its timing: ``papf replay run.mcap --rate 2`` (docs/recording.md).
 
-Payloads are put back on their recorded keys (or the same topics under another
-namespace) byte for byte, in log-time order. Message ``i`` goes out
-``(log_i - log_0) / rate`` seconds after the first; ``rate`` None or 0 sends as fast
-as possible. Log time is the messages' ``stamp_ns`` (sim time), so a lockstep run
-that took 5 s of wall time for 60 s of sim time replays over 60 s at rate 1.
-
-Recorded keys that are not Zenoh keys are mapped the way ``zenoh-bridge-ros2dds`` maps
-ROS 2 topic names (``/some/topic`` -> ``some/topic``); a key that still is not one
-(empty chunks, wildcards) is skipped and counted, never a crash.
-
-A jump in log time longer than ``max_gap_s`` (e.g. from sim-time stamps to messages
-stamped with their wall-clock receive time, which had no ``stamp_ns``) is replayed
-as ``max_gap_s``, so one odd stamp cannot stall a replay for decades.
-
-A rosbag2 from the robot (:mod:`papf.recording.rosbag`) is replayed as our messages on
-our keys, msgpack-encoded, so the stack's nodes take it (the energy meter re-meters it,
-the viewer shows it).
-
-Pure: the caller passes a publish function ``(key, payload) -> None`` or anything
-with ``declare_publisher(key)`` (a Zenoh session); no Zenoh import here.
+:func:`replay` puts payloads back on their recorded keys (or another namespace's) byte for
+byte, in log-time order, paced by ``rate``; a rosbag2 from the robot is replayed as our
+messages. Pure: the caller passes the publish function. Used by ``papf replay``.
 """
 
 from __future__ import annotations
@@ -36,7 +19,7 @@ from papf.recording.reader import Recording
 from papf.recording.rosbag import BagRecording, TopicMap, open_run
 from schemas.keys import TOPICS
 
-MAX_GAP_S = 5.0         # [s] of log time; longest pause replayed (see module doc)
+MAX_GAP_S = 5.0         # [s] of log time; longest pause replayed (see replay())
 STOP_POLL_S = 0.1       # [s] longest sleep between checks of stop()
 PROGRESS_EVERY_S = 0.1  # [s] wall time between progress calls
 
@@ -98,6 +81,7 @@ def target_namespaces(rec: Recording | BagRecording, keys=None, namespace: str |
 
 
 def check_rate(rate: float | None) -> None:
+    """RecordingError unless ``rate`` is None, 0 (as fast as possible) or a finite number > 0."""
     if rate is not None and not (math.isfinite(rate) and rate >= 0):
         raise RecordingError(f"replay rate {rate} must be a finite number > 0 "
                              "(or 0 for as fast as possible)")
@@ -180,12 +164,33 @@ def replay(path: str | Path, target: Publish | Any, rate: float | None = 1.0,
            clock: Callable[[], float] = time.monotonic,
            sleep: Callable[[float], None] = time.sleep,
            topics: TopicMap | None = None) -> ReplayStats:
-    """Republish ``path`` on ``target``; see the module doc.
+    """Republish ``path`` on ``target``.
 
     ``keys``: key expression(s) of the recorded keys to replay (default all);
     ``namespace``: publish under this namespace instead of the recorded one;
     ``progress(done, total)`` is called about ten times a second; ``stop()`` aborts;
     ``topics``: a rosbag2's topic names (it is replayed as our messages on our keys).
+
+    Payloads are put back on their recorded keys (or the same topics under another
+    namespace) byte for byte, in log-time order. Message ``i`` goes out
+    ``(log_i - log_0) / rate`` seconds after the first; ``rate`` None or 0 sends as fast
+    as possible. Log time is the messages' ``stamp_ns`` (sim time), so a lockstep run
+    that took 5 s of wall time for 60 s of sim time replays over 60 s at rate 1.
+
+    Recorded keys that are not Zenoh keys are mapped the way ``zenoh-bridge-ros2dds`` maps
+    ROS 2 topic names (``/some/topic`` -> ``some/topic``); a key that still is not one
+    (empty chunks, wildcards) is skipped and counted, never a crash.
+
+    A jump in log time longer than ``max_gap_s`` (e.g. from sim-time stamps to messages
+    stamped with their wall-clock receive time, which had no ``stamp_ns``) is replayed
+    as ``max_gap_s``, so one odd stamp cannot stall a replay for decades.
+
+    A rosbag2 from the robot (:mod:`papf.recording.rosbag`) is replayed as our messages on
+    our keys, msgpack-encoded, so the stack's nodes take it (the energy meter re-meters it,
+    the viewer shows it).
+
+    Pure: the caller passes a publish function ``(key, payload) -> None`` or anything
+    with ``declare_publisher(key)`` (a Zenoh session); no Zenoh import here.
     """
     check_rate(rate)
     stats = ReplayStats()

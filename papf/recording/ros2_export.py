@@ -1,29 +1,8 @@
 """``papf export ros2 IN.mcap OUT_DIR``: a recording as a rosbag2 that ROS 2 tools play.
 
-OUT_DIR is a rosbag2 directory (``metadata.yaml`` + one MCAP with ``ros2msg`` schemas and
-``cdr`` messages) written by rosbags' :class:`~rosbags.rosbag2.Writer`, of the topics the
-stack's ROS 2 face publishes (conversions: :mod:`common.ros2_convert`):
-
-===================== ================================ =====================================
-topic                 type                             from
-===================== ================================ =====================================
-/scan                 sensor_msgs/msg/LaserScan        ``scan``
-/odom, /tf            nav_msgs/msg/Odometry,           ``odom`` (``/tf``: odom -> base_link)
-                      tf2_msgs/msg/TFMessage
-/tf_static            tf2_msgs/msg/TFMessage           base_link -> laser (common.robot), once
-/robot_description    std_msgs/msg/String              the URDF (common.urdf), once
-/cmd_vel              geometry_msgs/msg/Twist          ``cmd_vel``
-/battery              sensor_msgs/msg/BatteryState     ``battery`` (the meter's figures)
-/plan, /markers       nav_msgs/msg/Path,               ``planner/state`` (the prediction;
-                      visualization_msgs/msg/MarkerArray  the planner's mind)
-===================== ================================ =====================================
-
-``/tf_static`` and ``/robot_description`` are offered transient-local, as ROS 2 publishes
-them. Bag time and header stamps are the recording's stamps: sim time from 0 in sim runs.
-With several robots (namespaces) the topics are ``/<robot>/scan``… and the robot's frames
-``<robot>/base_link``, ``<robot>/laser`` (``odom`` is the world frame all share).
-OUT_DIR is never overwritten: the bag is written beside it under a temporary name and
-renamed at the end, so an interrupted export leaves no half bag under OUT_DIR.
+:func:`export_ros2` writes a rosbag2 directory (``metadata.yaml`` + one MCAP, CDR) of the
+topics the stack's ROS 2 face publishes (conversions: :mod:`common.ros2_convert`); OUT_DIR
+is never overwritten. Used by ``papf export ros2``.
 """
 
 from __future__ import annotations
@@ -140,7 +119,33 @@ def _namespaces(rec: Recording) -> list[str]:
 
 
 def export_ros2(src: str | Path, dst: str | Path) -> Ros2ExportStats:
-    """Write the rosbag2 directory ``dst`` (must not exist) from the recording ``src``."""
+    """Write the rosbag2 directory ``dst`` (must not exist) from the recording ``src``.
+
+    OUT_DIR is a rosbag2 directory (``metadata.yaml`` + one MCAP with ``ros2msg`` schemas and
+    ``cdr`` messages) written by rosbags' :class:`~rosbags.rosbag2.Writer`, of the topics the
+    stack's ROS 2 face publishes (conversions: :mod:`common.ros2_convert`):
+
+    ===================== ================================ =====================================
+    topic                 type                             from
+    ===================== ================================ =====================================
+    /scan                 sensor_msgs/msg/LaserScan        ``scan``
+    /odom, /tf            nav_msgs/msg/Odometry,           ``odom`` (``/tf``: odom -> base_link)
+                          tf2_msgs/msg/TFMessage
+    /tf_static            tf2_msgs/msg/TFMessage           base_link -> laser (common.robot), once
+    /robot_description    std_msgs/msg/String              the URDF (common.urdf), once
+    /cmd_vel              geometry_msgs/msg/Twist          ``cmd_vel``
+    /battery              sensor_msgs/msg/BatteryState     ``battery`` (the meter's figures)
+    /plan, /markers       nav_msgs/msg/Path,               ``planner/state`` (the prediction;
+                          visualization_msgs/msg/MarkerArray  the planner's mind)
+    ===================== ================================ =====================================
+
+    ``/tf_static`` and ``/robot_description`` are offered transient-local, as ROS 2 publishes
+    them. Bag time and header stamps are the recording's stamps: sim time from 0 in sim runs.
+    With several robots (namespaces) the topics are ``/<robot>/scan``… and the robot's frames
+    ``<robot>/base_link``, ``<robot>/laser`` (``odom`` is the world frame all share).
+    OUT_DIR is never overwritten: the bag is written beside it under a temporary name and
+    renamed at the end, so an interrupted export leaves no half bag under OUT_DIR.
+    """
     src, dst = Path(src), Path(dst)
     check_out_dir(src, dst)
     stats = Ros2ExportStats()

@@ -1,24 +1,9 @@
 """A rosbag2 recorded on the ROSbot, read as one of our recordings (docs/recording.md "Bags").
 
-``open_run(path)`` gives :class:`BagRecording` for a rosbag2 (its directory with
-``metadata.yaml``, its ``.mcap`` with ``cdr`` messages, or its sqlite3 ``.db3``) and our
-:class:`~papf.recording.reader.Recording` for anything else; both answer ``messages()``,
-``raw()``, ``counts()``, ``keys()`` and ``run_metadata`` alike, so ``papf report``,
-``animate`` and ``replay`` take either. The bag is read with rosbags' ``AnyReader``
-(message definitions from the bag, else ROS 2 Jazzy's) and converted back to our messages
-on our keys (namespace ``rosbot``):
-
-- ``/odometry/filtered`` -> ``odom`` and ``wheels`` (wheel speeds and torques from the
-  odometry, as the live ROSbot driver derives them: :func:`nodes.base_driver.rosbot.wheel_states`);
-- ``/battery`` -> ``battery/measured`` (its voltage, as the live driver publishes it); its
-  current, where it carries one, is the measured charge (:func:`measured_charge_mAh`);
-- ``/cmd_vel`` -> ``cmd_vel``; ``/scan`` -> ``scan`` (the LiDAR at its mount, common.robot);
-  ``/tf`` (optional) is only counted.
-
-Stamps: a message's header stamp (the bag's receive time for ``/cmd_vel``, and for a
-topic whose header stamps are unset or more than a minute from the receive time: another
-clock), in ns since the bag's first stamp, so a bag's time starts near 0 like a run's.
-``--topics odom=/odom,battery=/battery_state`` maps another robot's names.
+:func:`open_run` gives :class:`BagRecording` for a rosbag2 and our
+:class:`~papf.recording.reader.Recording` for anything else; both answer alike, so
+``papf report``, ``animate`` and ``replay`` take either. Topic mapping and stamps:
+:class:`BagRecording`.
 """
 
 from __future__ import annotations
@@ -101,12 +86,33 @@ def is_rosbag(path: str | Path, topics: TopicMap | None = None) -> bool:
 
 
 def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | BagRecording:
-    """Our recording, or a rosbag2 read as one (see the module doc)."""
+    """Our recording, or a rosbag2 read as one (:class:`BagRecording`)."""
     return BagRecording(path, topics) if is_rosbag(path, topics) else Recording(path)
 
 
 class BagRecording:
-    """A rosbag2 as a read-only recording of our messages on ``rosbot/...`` keys."""
+    """A rosbag2 as a read-only recording of our messages on ``rosbot/...`` keys.
+
+    ``open_run(path)`` gives :class:`BagRecording` for a rosbag2 (its directory with
+    ``metadata.yaml``, its ``.mcap`` with ``cdr`` messages, or its sqlite3 ``.db3``) and our
+    :class:`~papf.recording.reader.Recording` for anything else; both answer ``messages()``,
+    ``raw()``, ``counts()``, ``keys()`` and ``run_metadata`` alike, so ``papf report``,
+    ``animate`` and ``replay`` take either. The bag is read with rosbags' ``AnyReader``
+    (message definitions from the bag, else ROS 2 Jazzy's) and converted back to our messages
+    on our keys (namespace ``rosbot``):
+
+    - ``/odometry/filtered`` -> ``odom`` and ``wheels`` (wheel speeds and torques from the
+      odometry, as the live ROSbot driver derives them: :func:`nodes.base_driver.rosbot.wheel_states`);
+    - ``/battery`` -> ``battery/measured`` (its voltage, as the live driver publishes it); its
+      current, where it carries one, is the measured charge (:func:`measured_charge_mAh`);
+    - ``/cmd_vel`` -> ``cmd_vel``; ``/scan`` -> ``scan`` (the LiDAR at its mount, common.robot);
+      ``/tf`` (optional) is only counted.
+
+    Stamps: a message's header stamp (the bag's receive time for ``/cmd_vel``, and for a
+    topic whose header stamps are unset or more than a minute from the receive time: another
+    clock), in ns since the bag's first stamp, so a bag's time starts near 0 like a run's.
+    ``--topics odom=/odom,battery=/battery_state`` maps another robot's names.
+    """
 
     def __init__(self, path: str | Path, topics: TopicMap | None = None):
         self.path = Path(path)
@@ -133,6 +139,7 @@ class BagRecording:
         self.close()
 
     def close(self) -> None:
+        """Close the bag."""
         if self._reader.stack is not None:
             self._reader.close()
 
@@ -162,7 +169,7 @@ class BagRecording:
                 for r in ROLE_TYPES if getattr(self.topics, r) in have}
 
     def _uses_header(self, conns: list) -> bool:
-        """Whether a topic's header stamps are on the bag's clock (see the module doc)."""
+        """Whether a topic's header stamps are on the bag's clock (see the class doc)."""
         if not conns or conns[0].msgtype in (rc.TWIST, rc.TF_MESSAGE):
             return False
         for conn, log_ns, data in self._reader.messages(connections=conns):
@@ -182,6 +189,7 @@ class BagRecording:
     # -- as one of our recordings ---------------------------------------------------------------
     @property
     def run_metadata(self) -> dict[str, str]:
+        """The run's metadata (as a recording of ours would carry it)."""
         return self.metadata["run"]
 
     def counts(self) -> dict[str, int]:
@@ -193,11 +201,13 @@ class BagRecording:
         return out
 
     def keys(self, expr: str | Iterable[str] | None = None) -> list[str]:
+        """Our keys in the bag, those matching ``expr`` if given."""
         exprs = [expr] if isinstance(expr, str) else expr
         keys = sorted(self.counts())
         return keys if exprs is None else [k for k in keys if any(key_matches(e, k) for e in exprs)]
 
     def time_span_ns(self) -> tuple[int, int]:
+        """(0, span of the bag [ns]) relative to its first message."""
         return 0, max(self._reader.end_time - self.t0_ns, 0)
 
     def messages(self, keys: str | Iterable[str] | None = None,

@@ -1,18 +1,8 @@
 """Walk an MCAP file record by record, trusting nothing: framing, chunk CRCs, resync.
 
-:func:`scan_records` yields every record of the data section that is intact — the
-records inside a chunk only when the chunk decompresses and passes its CRC. Damage is
-counted in :class:`ScanStats`, never raised:
-
-- a record whose opcode is unknown, whose length runs past the end of the file, or
-  whose content does not parse is *damage*: the scan resynchronises on the next chunk
-  that parses and passes its CRC (a cut record at the very end is a truncation);
-- a chunk that fails its CRC or does not decompress is skipped; the message index
-  records that follow it say how many messages it held (``lost_messages``);
-- after the data-end record, the summary's statistics (when readable) give the number
-  of messages the file should hold (``expected_messages``).
-
-Used by ``papf recover`` (copy what is intact) and ``papf info`` (say what is damaged).
+:func:`scan_records` yields every intact record; damage is counted in :class:`ScanStats`,
+never raised. Used by ``papf recover`` (copy what is intact) and ``papf info`` (say what
+is damaged).
 """
 
 from __future__ import annotations
@@ -81,9 +71,11 @@ class ScanStats:
 
     @property
     def damaged(self) -> bool:
+        """Whether the scan met bad chunks or damaged bytes."""
         return bool(self.bad_chunks or self.damaged_bytes)
 
     def note_damage(self, pos: int) -> None:
+        """Note damage at byte ``pos`` (the first ten kept)."""
         if len(self.damage_at) < 10:
             self.damage_at.append(pos)
 
@@ -163,7 +155,22 @@ def _read_at(mm, pos: int, size: int):
 
 
 def scan_records(f, stats: ScanStats) -> Iterator[object]:
-    """Intact records of the data section of the open file ``f`` (see module doc)."""
+    """Intact records of the data section of the open file ``f``.
+
+    :func:`scan_records` yields every record of the data section that is intact — the
+    records inside a chunk only when the chunk decompresses and passes its CRC. Damage is
+    counted in :class:`ScanStats`, never raised:
+
+    - a record whose opcode is unknown, whose length runs past the end of the file, or
+      whose content does not parse is *damage*: the scan resynchronises on the next chunk
+      that parses and passes its CRC (a cut record at the very end is a truncation);
+    - a chunk that fails its CRC or does not decompress is skipped; the message index
+      records that follow it say how many messages it held (``lost_messages``);
+    - after the data-end record, the summary's statistics (when readable) give the number
+      of messages the file should hold (``expected_messages``).
+
+    Used by ``papf recover`` (copy what is intact) and ``papf info`` (say what is damaged).
+    """
     size = os.fstat(f.fileno()).st_size
     stats.bytes_total = size
     head = f.read(len(MAGIC))

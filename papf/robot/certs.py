@@ -1,38 +1,9 @@
 """The secure split: Zenoh TLS, user/password and access control (docs/architecture.md "Transport", docs/robot.md).
 
-``papf make-certs DIR --robot-host 192.168.1.10`` writes a test bundle:
-
-- ``ca.pem``/``ca.key`` and certificates ``robot.pem`` (server; its SANs are the
-  ``--robot-host`` names/IPs plus localhost/127.0.0.1) and ``laptop.pem`` (client), made
-  with the ``openssl`` CLI (the ``cryptography`` package is not a dependency);
-- ``credentials.txt``: the router's user/password dictionary, random passwords for the
-  three identities of :data:`ROLES`;
-- ``router.json5`` (the robot's router: TLS listener with mutual TLS, local TCP listener,
-  password dictionary, access control), ``robot.json5`` (nodes on the robot, TCP loopback),
-  ``laptop.json5`` (planner host: TLS + client certificate) and ``observer.json5`` (valid
-  credentials, read-only: for viewers, and to test that valid credentials alone cannot
-  drive the robot).
-
-Identities are bound to how they connect, not to a password alone (Zenoh ACL subjects
-match user names, link protocols and certificate common names together): ``robot`` is
-the robot's password *over the loopback TCP listener* (only processes on the robot reach
-it); ``planner`` and ``observer`` are their passwords *with the laptop's certificate*
-(TLS). The robot's password over TLS, or the planner's over TCP, matches no subject and
-is denied everything.
-
-The configs name their files relative to themselves (``ca.pem``, not ``/home/…/ca.pem``;
-:func:`common.transport.load_config_file` resolves them), so the bundle works wherever it
-is copied. Which file goes to which host: :data:`HOST_FILES` (also written to
-``README.txt`` in the bundle). ``ca.key`` goes nowhere: keep it where the bundle was made.
-
-Access control (:func:`access_control`): default deny. Every authenticated identity may
-subscribe and hold liveliness tokens, and receive every publication; each role may
-*put* only on the keys of :data:`ROLES`. Only ``planner`` may put on ``<ns>/cmd_vel`` and
-only ``robot`` (the base driver) on the bridge's ``cmd_vel``; ``observer`` puts nothing and
-queries nothing (:data:`READ_ONLY`: a query on ``<ns>/planner/params`` can set parameters).
-Zenoh 1.x decides explicit deny > explicit allow > default, and a rule's key expression
-must include the message key, so "everything but cmd_vel" is written as the list of
-allowed keys, generated from this table.
+:func:`write_bundle` writes a test CA, robot and laptop certificates (openssl), a password
+dictionary and the Zenoh configs of the robot's router, its nodes, the laptop and an
+observer; :func:`access_control` lets each role put only on its own keys (default deny).
+Used by ``papf make-certs``.
 """
 
 from __future__ import annotations
@@ -85,7 +56,17 @@ NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "livelin
 
 
 def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None) -> dict:
-    """The ``access_control`` section for the robot's router (see module doc)."""
+    """The ``access_control`` section for the robot's router.
+
+    Access control (:func:`access_control`): default deny. Every authenticated identity may
+    subscribe and hold liveliness tokens, and receive every publication; each role may
+    *put* only on the keys of :data:`ROLES`. Only ``planner`` may put on ``<ns>/cmd_vel`` and
+    only ``robot`` (the base driver) on the bridge's ``cmd_vel``; ``observer`` puts nothing and
+    queries nothing (:data:`READ_ONLY`: a query on ``<ns>/planner/params`` can set parameters).
+    Zenoh 1.x decides explicit deny > explicit allow > default, and a rule's key expression
+    must include the message key, so "everything but cmd_vel" is written as the list of
+    allowed keys, generated from this table.
+    """
     bridge = bridge or BridgeTopics()
     rules = [
         {"id": "talk", "permission": "allow", "flows": ["ingress", "egress"],
@@ -176,7 +157,7 @@ def make_certs(out: Path, robot_hosts: list[str], days: int = CERT_DAYS) -> None
 
 
 def _tls(who: str) -> dict:
-    """TLS settings naming the bundle's files relative to the config (module doc)."""
+    """TLS settings naming the bundle's files relative to the config (:func:`write_bundle`)."""
     return {"root_ca_certificate": "ca.pem", "enable_mtls": True,
             "connect_private_key": f"{who}.key", "connect_certificate": f"{who}.pem"}
 
@@ -184,9 +165,34 @@ def _tls(who: str) -> dict:
 def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosbot",
                  bridge: BridgeTopics | None = None, local_port: int = LOCAL_PORT,
                  tls_port: int = TLS_PORT, force: bool = False) -> Bundle:
-    """Certificates, credentials and the four Zenoh configs (module doc) in directory ``out``.
+    """Certificates, credentials and the four Zenoh configs in directory ``out``.
 
     An existing bundle in ``out`` (its CA and passwords) is replaced only with ``force``.
+
+    ``papf make-certs DIR --robot-host 192.168.1.10`` writes a test bundle:
+
+    - ``ca.pem``/``ca.key`` and certificates ``robot.pem`` (server; its SANs are the
+      ``--robot-host`` names/IPs plus localhost/127.0.0.1) and ``laptop.pem`` (client), made
+      with the ``openssl`` CLI (the ``cryptography`` package is not a dependency);
+    - ``credentials.txt``: the router's user/password dictionary, random passwords for the
+      three identities of :data:`ROLES`;
+    - ``router.json5`` (the robot's router: TLS listener with mutual TLS, local TCP listener,
+      password dictionary, access control), ``robot.json5`` (nodes on the robot, TCP loopback),
+      ``laptop.json5`` (planner host: TLS + client certificate) and ``observer.json5`` (valid
+      credentials, read-only: for viewers, and to test that valid credentials alone cannot
+      drive the robot).
+
+    Identities are bound to how they connect, not to a password alone (Zenoh ACL subjects
+    match user names, link protocols and certificate common names together): ``robot`` is
+    the robot's password *over the loopback TCP listener* (only processes on the robot reach
+    it); ``planner`` and ``observer`` are their passwords *with the laptop's certificate*
+    (TLS). The robot's password over TLS, or the planner's over TCP, matches no subject and
+    is denied everything.
+
+    The configs name their files relative to themselves (``ca.pem``, not ``/home/…/ca.pem``;
+    :func:`common.transport.load_config_file` resolves them), so the bundle works wherever it
+    is copied. Which file goes to which host: :data:`HOST_FILES` (also written to
+    ``README.txt`` in the bundle). ``ca.key`` goes nowhere: keep it where the bundle was made.
     """
     if not robot_hosts:
         raise ConfigError("give at least one --robot-host (the robot's IP or DNS name the "

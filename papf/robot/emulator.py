@@ -1,30 +1,9 @@
 """`papf rosbot-emulator`: the ROSbot as seen through ``zenoh-bridge-ros2dds`` or rmw_zenoh, without a robot.
 
-What a driver sees of the real robot (docs/architecture.md "The robot"), on the bridge keys
-``[<bridge-ns>/]<topic>`` (``--ros bridge``, the default) or as the ROS 2 node
-``/rosbot_emulator`` on rmw_zenoh (``--ros rmw_zenoh --ros-domain N``: rmw_zenoh's keys,
-liveliness tokens and attachments, :mod:`common.ros_link`), all CDR with the encapsulation
-header (``cmd_vel`` is ``TwistStamped`` with ``--cmd-vel-type twist_stamped``):
-
-=======================  ===========================  ===  ==================================
-key                      type                         dir  what
-=======================  ===========================  ===  ==================================
-``cmd_vel``              geometry_msgs/Twist          in   linear.x, angular.z
-``odometry/filtered``    nav_msgs/Odometry            out  ``--rate`` Hz (50), odom frame
-``battery``              sensor_msgs/BatteryState     out  1 Hz, voltage only
-``scan``                 sensor_msgs/LaserScan        out  10 Hz, only with ``--world``
-=======================  ===========================  ===  ==================================
-
-The body (:class:`EmulatedRosbot`, pure) is a unicycle whose commands pass the robot's own
-``diff_drive_controller`` behaviour: the ROSbot limits of
-:class:`nodes.base_driver.limits.RosbotLimits` (clamp, 1.0 m/s², 4.0 rad/s²) and its
-``cmd_vel_timeout`` (``--cmd-timeout``, 0.5 s; 0 disables it, to show that the base driver
-alone stops the robot). Odometry is exact (no slip, no noise) and starts at (0, 0, 0) like
-a freshly started EKF; with ``--world`` the robot really stands at the world's start pose
-and the scan is cast there with :mod:`nodes.lidar_sim.core` (``--scan-beams`` rays).
-Header stamps are wall-clock time, as ROS time is. ``--trace FILE`` appends one JSON line
-per command received (``{"t_ns": monotonic ns, "v": .., "w": ..}``) for latency benches.
-Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
+:class:`EmulatedRosbot` (pure) is a unicycle behind the ROSbot's own command limits and
+timeout; :func:`run` takes ``cmd_vel`` and publishes odometry, battery and (with
+``--world``) a scan as CDR on the bridge's keys or as an rmw_zenoh node. Used by
+``papf rosbot-emulator`` and the robot-path tests and benches.
 """
 
 from __future__ import annotations
@@ -52,7 +31,19 @@ NO_TIMEOUT_NS = 10**18              # "never": --cmd-timeout 0
 
 
 class EmulatedRosbot:
-    """Unicycle + the controller's command gate, stepped with wall-clock nanoseconds."""
+    """Unicycle + the controller's command gate, stepped with wall-clock nanoseconds.
+
+    The body (:class:`EmulatedRosbot`, pure) is a unicycle whose commands pass the robot's own
+    ``diff_drive_controller`` behaviour: the ROSbot limits of
+    :class:`nodes.base_driver.limits.RosbotLimits` (clamp, 1.0 m/s², 4.0 rad/s²) and its
+    ``cmd_vel_timeout`` (``--cmd-timeout``, 0.5 s; 0 disables it, to show that the base driver
+    alone stops the robot). Odometry is exact (no slip, no noise) and starts at (0, 0, 0) like
+    a freshly started EKF; with ``--world`` the robot really stands at the world's start pose
+    and the scan is cast there with :mod:`nodes.lidar_sim.core` (``--scan-beams`` rays).
+    Header stamps are wall-clock time, as ROS time is. ``--trace FILE`` appends one JSON line
+    per command received (``{"t_ns": monotonic ns, "v": .., "w": ..}``) for latency benches.
+    Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
+    """
 
     def __init__(self, cmd_timeout_s: float = 0.5, start: Pose2D = ORIGIN):
         watchdog = int(round(cmd_timeout_s * 1e9)) if cmd_timeout_s > 0 else NO_TIMEOUT_NS
@@ -63,6 +54,7 @@ class EmulatedRosbot:
         self.commands = 0
 
     def command(self, v: float, w: float, t_ns: int) -> None:
+        """Take a cmd_vel (``v`` [m/s], ``w`` [rad/s]) received at ``t_ns`` [ns]."""
         self.commands += 1
         self.gate.command(v, w, t_ns)
 
@@ -74,9 +66,11 @@ class EmulatedRosbot:
 
     @property
     def world_pose(self) -> Pose2D:
+        """The robot's pose in the world (start composed with odometry): x, y [m], yaw [rad]."""
         return compose(self.start, self.pose)
 
     def odometry_cdr(self, stamp_ns: int) -> bytes:
+        """The odometry at ``stamp_ns`` [ns] as CDR nav_msgs/Odometry."""
         x, y, yaw = self.pose
         return ros2.encode(ros2.odometry(stamp_ns, x, y, yaw, self.v, self.w), ros2.ODOMETRY)
 
@@ -90,7 +84,23 @@ def _lidar(args):
 
 
 def run(args: argparse.Namespace) -> int:
-    """``papf rosbot-emulator`` (options: :mod:`papf.cli.emulator`) until SIGINT/SIGTERM."""
+    """``papf rosbot-emulator`` (options: :mod:`papf.cli.emulator`) until SIGINT/SIGTERM.
+
+    What a driver sees of the real robot (docs/architecture.md "The robot"), on the bridge keys
+    ``[<bridge-ns>/]<topic>`` (``--ros bridge``, the default) or as the ROS 2 node
+    ``/rosbot_emulator`` on rmw_zenoh (``--ros rmw_zenoh --ros-domain N``: rmw_zenoh's keys,
+    liveliness tokens and attachments, :mod:`common.ros_link`), all CDR with the encapsulation
+    header (``cmd_vel`` is ``TwistStamped`` with ``--cmd-vel-type twist_stamped``):
+
+    =======================  ===========================  ===  ==================================
+    key                      type                         dir  what
+    =======================  ===========================  ===  ==================================
+    ``cmd_vel``              geometry_msgs/Twist          in   linear.x, angular.z
+    ``odometry/filtered``    nav_msgs/Odometry            out  ``--rate`` Hz (50), odom frame
+    ``battery``              sensor_msgs/BatteryState     out  1 Hz, voltage only
+    ``scan``                 sensor_msgs/LaserScan        out  10 Hz, only with ``--world``
+    =======================  ===========================  ===  ==================================
+    """
     log = setup_logging("emulator", args.log_level)
     topics = BridgeTopics(args.bridge_namespace)
     if getattr(args, "ros", "bridge") == "bridge":

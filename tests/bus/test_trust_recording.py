@@ -3,52 +3,24 @@ namespace of a live stack, over a real router."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
 import zenoh
-from mcap.writer import Writer
 
 from common.transport import zenoh_config
-from papf.recording import RunWriter
-from schemas import Keys, Odometry
-
-N = 600
-
-
-def _odom(i):
-    return Odometry(stamp_ns=i * 20_000_000, x=i * 0.01, y=0.0, yaw=0.0, v=0.1, w=0.0)
+from schemas import Keys
+from tests.support.cli import papf
+from tests.support.recordings import write_odom_recording, write_ros_topics
 
 
 @pytest.fixture
 def recording(tmp_path):
-    path = tmp_path / "run.mcap"
-    with RunWriter(path, {"world": "open"}, chunk_size=2048) as w:
-        for i in range(N):
-            w.write_message("rosbot/odom", _odom(i), receive_ns=i)
-    return path
-
-
-def papf(*args, timeout=60):
-    return subprocess.run([sys.executable, "-m", "papf", *map(str, args)], capture_output=True,
-                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    return write_odom_recording(tmp_path / "run.mcap")
 
 
 # -- replay ----------------------------------------------------------------------------------
 @pytest.fixture
 def ros_recording(tmp_path):
-    path = tmp_path / "ros.mcap"
-    with open(path, "wb") as f:
-        w = Writer(f)
-        w.start()
-        s = w.register_schema("std_msgs/String", "ros2msg", b"string data")
-        for topic in ("/some/topic", "/bad//topic"):
-            c = w.register_channel(topic, "cdr", s)
-            for i in range(3):
-                w.add_message(c, log_time=i, publish_time=i, data=b"\x00\x01\x00\x00abc")
-        w.finish()
-    return path
+    return write_ros_topics(tmp_path / "ros.mcap")
 
 
 def test_replay_of_ros_style_topics_maps_them_and_skips_the_impossible(ros_recording, router,

@@ -2,21 +2,14 @@
 into a fresh energy-meter process reproducing the live meter's charge."""
 
 import json
-import sys
-import threading
-import time
 
 import jsonschema
 import msgpack
 import pytest
-import zenoh
 from mcap.reader import make_reader
 
-from common.transport import wait_alive, zenoh_config
-from papf.launch.supervisor import free_port, wait_port
 from papf.recording.replay import replay
-from schemas import BatteryState, Keys
-from tests.support.e2e import papf_run
+from tests.support.e2e import metered_bus, papf_run
 
 
 @pytest.fixture(scope="module")
@@ -53,32 +46,13 @@ def test_stock_reader_opens_it_and_every_message_validates_against_its_schema(re
 
 def test_replay_at_rate_10_into_a_fresh_meter_gives_the_live_charge(recorded, spawn):
     path, res = recorded
-    port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
-    spawn("router", [sys.executable, "-m", "papf.launch.router", "--listen", endpoint])
     ns = "replayed"
-    assert wait_port(port, 15)
-    with zenoh.open(zenoh_config("client", [endpoint])) as s:
-        spawn("energy_meter", [sys.executable, "-m", "nodes.energy_meter", "--connect", endpoint,
-                               "--namespace", ns, "--model", "motor"])
-        assert not wait_alive(s, Keys(ns), ["energy_meter"], timeout_s=30)
-        got, lock = [], threading.Lock()
-
-        def on_battery(sample):
-            with lock:
-                got.append(BatteryState.from_bytes(sample.payload.to_bytes()))
-
-        sub = s.declare_subscriber(Keys(ns).battery, on_battery)
+    with metered_bus(spawn, ns) as (s, got):
         stats = replay(path, s, rate=10.0, keys=["rosbot/odom", "rosbot/wheels"], namespace=ns)
         assert stats.messages > 1000
-        deadline = time.monotonic() + 30     # the meter's last batteries may still be coming
-        while time.monotonic() < deadline:
-            with lock:
-                if got and got[-1].stamp_ns >= 12_000_000_000:
-                    break
-            time.sleep(0.05)
-        sub.undeclare()
+        got.wait_for(12_000_000_000)
     live = res["charge_mAh"]  # the live meter's charge at t_end = 12 s
-    replayed = max((b for b in got if b.stamp_ns <= 12_000_000_000), key=lambda b: b.stamp_ns)
+    replayed = max((b for b in got.items if b.stamp_ns <= 12_000_000_000),
+                   key=lambda b: b.stamp_ns)
     assert replayed.stamp_ns == 12_000_000_000
     assert replayed.charge_used_mAh == pytest.approx(live, rel=1e-3)

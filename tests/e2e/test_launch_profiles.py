@@ -16,28 +16,14 @@ import zenoh
 from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Keys
+from tests.support.worlds import FAST, SHORT, write_world
 
 PY = sys.executable
-WORLD = """name = "short"
-description = "1.2 m ahead, a box beside the path"
-[robot]
-start = [0.0, 0.0, 0.0]
-[goal]
-position = [1.2, 0.0]
-tolerance = 0.15
-[[obstacles]]
-kind = "box"
-center = [0.6, 0.6]
-size = [0.3, 0.3]
-"""
-FAST = ["--set", "v_max=0.5"]    # the paper's 0.1 m/s would make a 12 s test
 
 
 @pytest.fixture
 def world(tmp_path) -> str:
-    path = tmp_path / "short.toml"
-    path.write_text(WORLD)
-    return str(path)
+    return str(write_world(tmp_path / "short.toml", SHORT))
 
 
 # -- processes ----------------------------------------------------------------------------------

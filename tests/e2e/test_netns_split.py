@@ -22,21 +22,11 @@ import pytest
 
 from common.outcomes import OUTCOMES
 from papf.recording.reader import open_recording
+from tests.support.worlds import box_world
 
 PY = sys.executable
 ROBOT_IP, LAPTOP_IP, PREFIX = "10.231.0.1", "10.231.0.2", 30
-WORLD = """name = "corridor"
-description = "2.5 m ahead, a box beside the path"
-[robot]
-start = [0.0, 0.0, 0.0]
-[goal]
-position = [2.5, 0.0]
-tolerance = 0.15
-[[obstacles]]
-kind = "box"
-center = [1.2, 0.7]
-size = [0.3, 0.3]
-"""
+WORLD = box_world("corridor", "2.5 m ahead, a box beside the path", 2.5, (1.2, 0.7))
 CUT_S = 2.0            # [s] the link is down this long
 WATCHDOG_S = 0.5       # [s] the driver's cmd_vel timeout
 SLACK_S = 0.15         # [s] scheduling allowance on a loaded 2-core machine

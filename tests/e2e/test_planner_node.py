@@ -3,30 +3,19 @@
 import queue
 import sys
 
-import numpy as np
 import pytest
 
 from common.transport import wait_alive
 from schemas import Keys
 from schemas.messages import (
     Goal,
-    Odometry,
     PlannerState,
     PlannerStatus,
-    Scan,
     Twist,
 )
+from tests.support.messages import odom, scan
 
 MS = 1_000_000
-
-
-def odom(t, x=0.0):
-    return Odometry(stamp_ns=t, x=x, y=0.0, yaw=0.0, v=0.0, w=0.0)
-
-
-def scan(t, n=16):
-    return Scan(stamp_ns=t, angle_min=0.0, angle_increment=2 * np.pi / n, range_min=0.2,
-                range_max=10.0, ranges=np.full(n, np.inf, dtype=np.float32))
 
 
 @pytest.mark.parametrize("algorithm", ["apf", "papf"])

@@ -7,6 +7,9 @@ import os
 import signal
 import subprocess
 import sys
+import threading
+import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from papf.launch.supervisor import free_port
@@ -50,3 +53,55 @@ def pids_of(module: str, port: int) -> list[int]:
         if module in text and any(a.endswith(f":{port}") for a in text):
             pids.append(int(d.name))
     return pids
+
+
+class Batteries:
+    """The battery states a meter publishes, collected from a subscriber's thread."""
+
+    def __init__(self):
+        self.items: list = []
+        self.lock = threading.Lock()
+
+    def add(self, sample) -> None:
+        """Subscriber callback: decode and keep one ``BatteryState``."""
+        from schemas import BatteryState
+
+        with self.lock:
+            self.items.append(BatteryState.from_bytes(sample.payload.to_bytes()))
+
+    def wait_for(self, stamp_ns: int, timeout_s: float = 30.0) -> None:
+        """Return once the latest state is stamped ``stamp_ns`` [ns] or later, or after
+        ``timeout_s`` [s] (the meter's last states may still be coming)."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            with self.lock:
+                if self.items and self.items[-1].stamp_ns >= stamp_ns:
+                    return
+            time.sleep(0.05)
+
+
+@contextmanager
+def metered_bus(spawn, ns: str):
+    """A router and a fresh energy-meter process (motor model) in namespace ``ns``, started
+    with ``spawn`` (the conftest fixture); yields a client session and the :class:`Batteries`
+    the meter publishes."""
+    import zenoh
+
+    from common.transport import wait_alive, zenoh_config
+    from papf.launch.supervisor import wait_port
+    from schemas import Keys
+
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    spawn("router", [sys.executable, "-m", "papf.launch.router", "--listen", endpoint])
+    assert wait_port(port, 15)
+    with zenoh.open(zenoh_config("client", [endpoint])) as s:
+        spawn("energy_meter", [sys.executable, "-m", "nodes.energy_meter", "--connect", endpoint,
+                               "--namespace", ns, "--model", "motor"])
+        assert not wait_alive(s, Keys(ns), ["energy_meter"], timeout_s=30)
+        got = Batteries()
+        sub = s.declare_subscriber(Keys(ns).battery, got.add)
+        try:
+            yield s, got
+        finally:
+            sub.undeclare()

@@ -76,3 +76,37 @@ def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int 
                 state = outcome if (k == end_k and outcome) else "driving"
                 w.write_message("rosbot/planner/status", PlannerStatus(stamp_ns=t, state=state))
     return meter
+
+
+ODOM_RUN_N = 600               # samples of :func:`write_odom_recording` (12 s at 50 Hz)
+
+
+def odom_at(i: int) -> Odometry:
+    """The ``i``-th odometry sample of :func:`write_odom_recording`: 50 Hz, 0.01 m apart."""
+    return Odometry(stamp_ns=i * STEP_NS, x=i * 0.01, y=0.0, yaw=0.0, v=0.1, w=0.0)
+
+
+def write_odom_recording(path: Path, n: int = ODOM_RUN_N) -> Path:
+    """A recording of ``n`` odometry samples on ``rosbot/odom`` in small (2 KiB) chunks, so
+    damage and truncation hit some chunks and spare others; ``path``."""
+    with RunWriter(path, {"world": "open"}, chunk_size=2048) as w:
+        for i in range(n):
+            w.write_message("rosbot/odom", odom_at(i), receive_ns=i)
+    return path
+
+
+def write_ros_topics(path: Path) -> Path:
+    """An MCAP of ROS-style topics: ``/some/topic`` (maps to a Zenoh key) and ``/bad//topic``
+    (maps to none), three CDR messages each; ``path``."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        s = w.register_schema("std_msgs/String", "ros2msg", b"string data")
+        for topic in ("/some/topic", "/bad//topic"):
+            c = w.register_channel(topic, "cdr", s)
+            for i in range(3):
+                w.add_message(c, log_time=i, publish_time=i, data=b"\x00\x01\x00\x00abc")
+        w.finish()
+    return path

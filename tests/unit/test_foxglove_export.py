@@ -29,6 +29,7 @@ from schemas.messages import (
     Scan,
     Twist,
 )
+from tests.support.worlds import traffic_world
 
 NS = 1_000_000_000
 
@@ -147,20 +148,7 @@ def test_launch_and_run_start_the_viewer_with_their_goal_policy(capsys):
     assert "viewer" not in resolve_run(RunConfig(world="open")).nodes
 
 
-TRAFFIC_TOML = """
-name = "traffic"
-[goal]
-position = [6.0, 0.0]
-[road]
-y_min = -0.3
-lane_width = 0.6
-lanes = 2
-[[obstacles]]
-kind = "box"
-size = [0.5, 0.3]
-[obstacles.motion]
-track = [[0.0, 3.0, 0.0], [20.0, 5.0, 0.0]]
-"""
+TRAFFIC_TOML = traffic_world(goal_x=6.0)
 
 
 def test_traffic_world_export_and_animation(tmp_path):

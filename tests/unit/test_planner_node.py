@@ -3,8 +3,6 @@
 import subprocess
 import sys
 
-import numpy as np
-
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner
 from nodes.planner.road import Lanes
@@ -12,20 +10,10 @@ from schemas.messages import (
     Goal,
     Objects,
     ObjectTrack,
-    Odometry,
-    Scan,
 )
+from tests.support.messages import odom, scan
 
 MS = 1_000_000
-
-
-def odom(t, x=0.0):
-    return Odometry(stamp_ns=t, x=x, y=0.0, yaw=0.0, v=0.0, w=0.0)
-
-
-def scan(t, n=16):
-    return Scan(stamp_ns=t, angle_min=0.0, angle_increment=2 * np.pi / n, range_min=0.2,
-                range_max=10.0, ranges=np.full(n, np.inf, dtype=np.float32))
 
 
 def loop(**kw):

@@ -6,37 +6,22 @@ from __future__ import annotations
 import json
 import os
 import random
-import subprocess
-import sys
 
 import pytest
-from mcap.writer import Writer
 
 from common.errors import RecordingError
-from papf.recording import RunWriter, iter_messages, recover
+from papf.recording import iter_messages, recover
 from papf.recording.scan import scan_file
-from schemas import Odometry
 from tests.conftest import tiny_disk_free
+from tests.support.cli import papf
+from tests.support.recordings import ODOM_RUN_N, odom_at, write_odom_recording, write_ros_topics
 
-N = 600
-
-
-def _odom(i):
-    return Odometry(stamp_ns=i * 20_000_000, x=i * 0.01, y=0.0, yaw=0.0, v=0.1, w=0.0)
+N = ODOM_RUN_N
 
 
 @pytest.fixture
 def recording(tmp_path):
-    path = tmp_path / "run.mcap"
-    with RunWriter(path, {"world": "open"}, chunk_size=2048) as w:
-        for i in range(N):
-            w.write_message("rosbot/odom", _odom(i), receive_ns=i)
-    return path
-
-
-def papf(*args, timeout=60):
-    return subprocess.run([sys.executable, "-m", "papf", *map(str, args)], capture_output=True,
-                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    return write_odom_recording(tmp_path / "run.mcap")
 
 
 def _flip(src, dst, n, seed=10):
@@ -59,7 +44,7 @@ def test_recover_says_what_byte_flips_lost(recording, tmp_path):
     text = papf("recover", "--force", broken, fixed).stdout   # fixed exists: replaced only when told
     assert f"LOST {out['lost_messages']} messages" in text and "complete" not in text
     kept = list(iter_messages(fixed))
-    assert len(kept) == out["messages"] and all(m.message == _odom(round(m.message.stamp_ns
+    assert len(kept) == out["messages"] and all(m.message == odom_at(round(m.message.stamp_ns
                                                 / 20_000_000)) for m in kept)
 
 
@@ -125,17 +110,7 @@ def test_recover_into_a_full_disk_leaves_no_empty_output(recording, tiny_disk):
 # -- replay ----------------------------------------------------------------------------------
 @pytest.fixture
 def ros_recording(tmp_path):
-    path = tmp_path / "ros.mcap"
-    with open(path, "wb") as f:
-        w = Writer(f)
-        w.start()
-        s = w.register_schema("std_msgs/String", "ros2msg", b"string data")
-        for topic in ("/some/topic", "/bad//topic"):
-            c = w.register_channel(topic, "cdr", s)
-            for i in range(3):
-                w.add_message(c, log_time=i, publish_time=i, data=b"\x00\x01\x00\x00abc")
-        w.finish()
-    return path
+    return write_ros_topics(tmp_path / "ros.mcap")
 
 
 def test_replay_bad_rate_and_no_router_are_one_line(ros_recording):

@@ -7,8 +7,6 @@ from __future__ import annotations
 import json
 import math
 import socket
-import subprocess
-import sys
 import tracemalloc
 
 import pytest
@@ -20,6 +18,7 @@ from nodes.planner.registry import make_planner
 from papf.launch.outcome import NS, RunMonitor, RunResult
 from schemas import BatteryState, Goal, Odometry, PlannerStatus
 from schemas.keys import Keys
+from tests.support.cli import papf
 from worlds import load_world, parse_world
 from worlds.checks import check_runnable
 
@@ -116,11 +115,6 @@ def test_launcher_memory_stays_constant_over_a_long_run():
 
 
 # -- items 9, 10 ---------------------------------------------------------------------------------
-def papf(*args, timeout=60):
-    return subprocess.run([sys.executable, "-m", "papf", *map(str, args)], capture_output=True,
-                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)
-
-
 @pytest.mark.parametrize("args,says", [
     (["--planner", "papff"], "did you mean 'papf'"),
     (["--planner", "PAPF"], "did you mean 'papf'"),

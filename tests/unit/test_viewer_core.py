@@ -24,27 +24,15 @@ from schemas.messages import (
     Scan,
     Twist,
 )
+from tests.support.worlds import traffic_world
 from worlds import load_world, packaged_worlds, parse_world
 
 SCHEMAS = {c.topic: schema_json(c.schema) for c in CHANNELS}
-TRAFFIC = parse_world(tomllib.loads("""
-name = "traffic"
-[goal]
-position = [10.0, 0.0]
-[road]
-y_min = -0.3
-lane_width = 0.6
-lanes = 2
-[[obstacles]]
-kind = "box"
-size = [0.5, 0.3]
-[obstacles.motion]
-track = [[0.0, 3.0, 0.0], [20.0, 5.0, 0.0]]
-[[obstacles]]
+TRAFFIC = parse_world(tomllib.loads(traffic_world(extra="""[[obstacles]]
 kind = "cylinder"
 center = [6.0, 2.0]
 radius = 0.3
-"""))
+""")))
 
 
 def valid(topic: str, payload: dict) -> dict:

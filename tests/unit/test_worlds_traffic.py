@@ -6,24 +6,12 @@ import pytest
 
 from common.errors import WorldError
 from schemas.messages import Goal
+from tests.support.worlds import traffic_world
 from worlds import load_world, parse_world
 from worlds.messages import goal_message
 from worlds.traffic import Motion, Road, RoadLine, heading_at, pose_at, state_at
 
-ISSUE_EXAMPLE = """
-name = "traffic"
-[goal]
-position = [10.0, 0.0]
-[road]
-y_min = -0.3
-lane_width = 0.6
-lanes = 2
-[[obstacles]]
-kind = "box"
-size = [0.5, 0.3]
-[obstacles.motion]
-track = [[0.0, 3.0, 0.0], [20.0, 5.0, 0.0], [28.0, 5.0, 0.6]]
-"""
+ISSUE_EXAMPLE = traffic_world(track=((0.0, 3.0, 0.0), (20.0, 5.0, 0.0), (28.0, 5.0, 0.6)))
 
 
 def write(tmp_path, text, name="w.toml"):

@@ -36,6 +36,25 @@ def _carrot(pos, goal, goal_range, out):
 _carrot_jit = numba.njit(cache=True, error_model="numpy")(_carrot) if HAVE_NUMBA else None
 
 
+def _advance(prev, f, step, goal, out):
+    """``out`` = ``prev`` + ``step`` [m] along ``f`` (stays at ``prev`` for zero force); its
+    squared distance to ``goal`` [m^2]. One step of Algorithm 1, for both paths."""
+    n2 = 0.0
+    for j in range(prev.shape[0]):
+        n2 += f[j] * f[j]
+    norm = math.sqrt(n2)
+    scale = step / norm if norm > 0.0 else 0.0
+    d2 = 0.0
+    for j in range(prev.shape[0]):
+        out[j] = prev[j] + f[j] * scale
+        dj = out[j] - goal[j]
+        d2 += dj * dj
+    return d2
+
+
+_advance_jit = numba.njit(cache=True, error_model="numpy")(_advance) if HAVE_NUMBA else None
+
+
 def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range):
     f = np.zeros_like(pos)
     f = f - g_goal * coulomb_sum(pos, _carrot(pos, goal, goal_range, np.empty_like(pos))[None, :])
@@ -54,17 +73,7 @@ def rollout_numpy(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, 
     for i in range(1, n_steps + 1):
         prev = path[i - 1]
         f = _force_numpy(prev, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range)
-        n2 = 0.0
-        for j in range(dims):
-            n2 += f[j] * f[j]
-        norm = math.sqrt(n2)
-        scale = step / norm if norm > 0.0 else 0.0
-        d2 = 0.0
-        for j in range(dims):
-            path[i, j] = prev[j] + f[j] * scale
-            dj = path[i, j] - goal[j]
-            d2 += dj * dj
-        if d2 <= stop_radius * stop_radius:
+        if _advance(prev, f, step, goal, path[i]) <= stop_radius * stop_radius:
             return path[: i + 1], True
     return path, False
 
@@ -147,7 +156,6 @@ if HAVE_NUMBA:
 
         ``near`` (2, K, D), ``goal2`` (1, D), ``f`` (D,): scratch buffers.
         """
-        dims = start.shape[0]
         path[0] = start
         reach = d_o + CANDIDATE_BLOCK * step + 1e-6
         reach_sub = d_o + CANDIDATE_SUBBLOCK * step + 1e-6
@@ -164,17 +172,7 @@ if HAVE_NUMBA:
             _coulomb_acc(prev, near[1, :n_near], d_o, g_obs, f)
             if quarks.shape[0]:
                 _coulomb_acc(prev, quarks, d_q, g_q, f)
-            n2 = 0.0
-            for j in range(dims):
-                n2 += f[j] * f[j]
-            norm = math.sqrt(n2)
-            scale = step / norm if norm > 0.0 else 0.0
-            d2 = 0.0
-            for j in range(dims):
-                path[i, j] = prev[j] + f[j] * scale
-                dj = path[i, j] - goal[j]
-                d2 += dj * dj
-            if d2 <= stop_radius * stop_radius:
+            if _advance_jit(prev, f, step, goal, path[i]) <= stop_radius * stop_radius:
                 return i + 1, True
         return n_steps + 1, False
 
