@@ -24,7 +24,9 @@ a freshly started EKF; with ``--world`` the robot really stands at the world's s
 and the scan is cast there with :mod:`nodes.lidar_sim.core` (``--scan-beams`` rays).
 Header stamps are wall-clock time, as ROS time is. ``--trace FILE`` appends one JSON line
 per command received (``{"t_ns": monotonic ns, "v": .., "w": ..}``) for latency benches.
-Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
+Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's). On
+the bridge it also answers the bridge's admin space for its node ``/rosbot_emulator``
+(:mod:`papf.robot.bridge_admin`), so ``papf node list`` sees it as a real bridge's node.
 """
 
 from __future__ import annotations
@@ -107,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
         link.subscribe(topics.cmd_vel, cmd_type,
                        lambda data: node.inbox.put((time.monotonic_ns(), data)))
         pubs = {t: link.publisher(getattr(topics, t), typename) for t, typename in PUBLISHED.items()}
+        admin = _bridge_admin(node.session, topics, cmd_type, lidar) if link.middleware == "bridge" \
+            else None
         node.ready()
         log.info("emulating the ROSbot over %s: cmd_vel %s (%s); %s (scan: %s)", link.middleware,
                  link.key(topics.cmd_vel, cmd_type), cmd_type,
@@ -116,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
             _loop(node, robot, pubs, lidar, trace, args, cmd_type, log)
         finally:
             link.close()
+            if admin is not None:
+                admin.close()
             if trace:
                 trace.close()
             if lidar is not None:
@@ -157,6 +163,15 @@ def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, 
         if lidar is not None and now >= next_scan:
             next_scan = now + SCAN_PERIOD_NS
             pubs["scan"].put(_scan_cdr(lidar, robot.world_pose, wall))
+
+
+def _bridge_admin(session, topics: BridgeTopics, cmd_type: str, lidar):
+    """Answer the bridge's admin space for our node: the topics as their ROS names."""
+    from papf.robot.bridge_admin import BridgeAdmin
+
+    published = {f"/{getattr(topics, t).strip('/')}": ty for t, ty in PUBLISHED.items()
+                 if t != "scan" or lidar is not None}
+    return BridgeAdmin(session, ROS_NODE, published, {f"/{topics.cmd_vel.strip('/')}": cmd_type})
 
 
 def _scan_cdr(lidar, pose: Pose2D, wall_ns: int) -> bytes:
