@@ -33,6 +33,11 @@ queries nothing (:data:`READ_ONLY`: a query on ``<ns>/planner/params`` can set p
 Zenoh 1.x decides explicit deny > explicit allow > default, and a rule's key expression
 must include the message key, so "everything but cmd_vel" is written as the list of
 allowed keys, generated from this table.
+
+``--ros rmw_zenoh``: the robot's ROS 2 router ``rmw_zenohd`` is the secure router, in the
+form rmw_zenoh's config files take (:mod:`papf.robot.rmw_bundle`); ``robot``'s ROS keys are
+then the whole ROS domain (``<domain>/**``) instead of the bridge's topics, and rmw_zenoh's
+liveliness tokens (``@ros2_lv/**``, a chunk ``**`` does not match) may be declared.
 """
 
 from __future__ import annotations
@@ -49,6 +54,7 @@ from pathlib import Path
 
 from common.errors import ConfigError
 from nodes.base_driver.rosbot import BridgeTopics
+from papf.robot.rmw_bundle import PAPF_PORT, rmw_configs
 
 LOCAL_PORT = 7447   # [-] TCP on the robot's loopback (robot nodes, the bridge)
 TLS_PORT = 7448     # [-] TLS on the robot's network interfaces (the laptop)
@@ -74,9 +80,10 @@ HOST_FILES = {
               "robot.json5"),
     "laptop": ("ca.pem", "laptop.pem", "laptop.key", "laptop.json5", "observer.json5"),
 }
+RMW_ROBOT_FILES = ("rmw_zenohd.json5", "ros_session.json5")   # robot's too, with --ros rmw_zenoh
 BUNDLE_FILES = ("ca.pem", "ca.key", "robot.pem", "robot.key", "laptop.pem", "laptop.key",
                 "credentials.txt", "router.json5", "robot.json5", "laptop.json5",
-                "observer.json5", "README.txt")
+                "observer.json5", "README.txt", *RMW_ROBOT_FILES)
 _LABEL = re.compile(r"^(?!-)[A-Za-z0-9-]{1,63}(?<!-)$")
 READ_ONLY = ("observer",)   # identities that watch: no puts, no queries (a query may set parameters)
 # every message type that is not a data write: declarations, queries, liveliness
@@ -84,22 +91,28 @@ NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "livelin
            "liveliness_query", "declare_liveliness_subscriber")
 
 
-def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None) -> dict:
-    """The ``access_control`` section for the robot's router (see module doc)."""
+def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None,
+                   ros_domain: int | None = None) -> dict:
+    """The ``access_control`` section for the robot's router (see module doc); with
+    ``ros_domain`` the robot's ROS keys are rmw_zenoh's of that domain, not the bridge's."""
     bridge = bridge or BridgeTopics()
+    # "**" matches no "@" chunk: the bridge's node list (admin space) or rmw_zenoh's tokens
+    anywhere = ["**", "@/*/ros2/**"] if ros_domain is None else ["**", "@ros2_lv/**"]
     rules = [
         {"id": "talk", "permission": "allow", "flows": ["ingress", "egress"],
-         "messages": [m for m in NON_PUT if m != "query"], "key_exprs": ["**"]},
+         "messages": [m for m in NON_PUT if m != "query"], "key_exprs": anywhere},
         # a query may change a node (planner/params set): not for a read-only identity
         {"id": "query", "permission": "allow", "flows": ["ingress", "egress"],
-         "messages": ["query"], "key_exprs": ["**"]},
+         "messages": ["query"], "key_exprs": anywhere},
         {"id": "receive", "permission": "allow", "flows": ["egress"],
          "messages": ["put", "delete"], "key_exprs": ["**"]},
     ]
     subjects, policies = [], []
     for role, (ours, bridged) in ROLES.items():
         subjects.append({"id": role, "usernames": [role], **BINDINGS[role]})
-        keys = [f"{namespace}/{t}" for t in ours] + [bridge.key(getattr(bridge, t)) for t in bridged]
+        ros_keys = ([bridge.key(getattr(bridge, t)) for t in bridged] if ros_domain is None
+                    else [f"{ros_domain}/**"] if bridged else [])
+        keys = [f"{namespace}/{t}" for t in ours] + ros_keys
         names = ["talk", "receive"] + ([] if role in READ_ONLY else ["query"])
         if keys:
             rules.append({"id": f"{role}-puts", "permission": "allow", "flows": ["ingress"],
@@ -118,7 +131,8 @@ class Bundle:
 
     def __getattr__(self, name: str) -> Path:  # bundle.router -> DIR/router.json5, ...
         files = {"ca": "ca.pem", "credentials": "credentials.txt", "router": "router.json5",
-                 "robot": "robot.json5", "laptop": "laptop.json5", "observer": "observer.json5"}
+                 "robot": "robot.json5", "laptop": "laptop.json5", "observer": "observer.json5",
+                 "rmw_zenohd": "rmw_zenohd.json5", "ros_session": "ros_session.json5"}
         if name not in files:
             raise AttributeError(name)
         return self.dir / files[name]
@@ -183,11 +197,15 @@ def _tls(who: str) -> dict:
 
 def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosbot",
                  bridge: BridgeTopics | None = None, local_port: int = LOCAL_PORT,
-                 tls_port: int = TLS_PORT, force: bool = False) -> Bundle:
-    """Certificates, credentials and the four Zenoh configs (module doc) in directory ``out``.
+                 tls_port: int = TLS_PORT, force: bool = False, ros: str = "bridge",
+                 ros_domain: int = 0, papf_port: int = PAPF_PORT) -> Bundle:
+    """Certificates, credentials and the Zenoh configs (module doc) in directory ``out``:
+    four for the bridge, six with ``ros="rmw_zenoh"`` (:mod:`papf.robot.rmw_bundle`).
 
     An existing bundle in ``out`` (its CA and passwords) is replaced only with ``force``.
     """
+    if ros not in ("bridge", "rmw_zenoh"):
+        raise ConfigError(f"--ros {ros!r}: give bridge or rmw_zenoh")
     if not robot_hosts:
         raise ConfigError("give at least one --robot-host (the robot's IP or DNS name the "
                           "laptop connects to)")
@@ -223,17 +241,23 @@ def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosb
         "laptop": _client(remote, "planner", passwords, _tls("laptop")),
         "observer": _client(remote, "observer", passwords, _tls("laptop")),
     }
+    if ros == "rmw_zenoh":
+        configs.update(rmw_configs(passwords, router_tls, access_control(namespace, bridge, ros_domain),
+                                   local_port, tls_port, papf_port))
+    for name in RMW_ROBOT_FILES:          # a bridge bundle replacing an rmw_zenoh one (--force)
+        (out / name).unlink(missing_ok=True)
     for name, conf in configs.items():
         path = out / f"{name}.json5"
         path.write_text(json.dumps(conf, indent=2) + "\n")
         os.chmod(path, 0o600)
-    (out / "README.txt").write_text(where_files_go())
+    (out / "README.txt").write_text(where_files_go(ros))
     return Bundle(out)
 
 
-def where_files_go() -> str:
+def where_files_go(ros: str = "bridge") -> str:
     """Which bundle file goes to which host (README.txt of the bundle, make-certs' output)."""
-    return ("Copy to the robot:  " + " ".join(HOST_FILES["robot"]) + "\n"
+    robot = HOST_FILES["robot"] + (RMW_ROBOT_FILES if ros == "rmw_zenoh" else ())
+    return ("Copy to the robot:  " + " ".join(robot) + "\n"
             "Copy to the laptop: " + " ".join(HOST_FILES["laptop"]) + "\n"
             "Keep ca.key here (it signs certificates; no host needs it).\n"
             "The configs name these files relative to themselves: keep each host's files "
