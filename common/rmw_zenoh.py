@@ -19,6 +19,9 @@ from common.errors import ConfigError, SchemaError
 
 ADMIN_SPACE = "@ros2_lv"
 NODE, PUBLISHER, SUBSCRIPTION = "NN", "MP", "MS"
+SERVICE, CLIENT = "SS", "SC"       # a service server / client: its token names the service
+                                   # and the type without "Request_"/"Response_"
+                                   # (rmw_service_data.cpp, ServiceData::make)
 GID_SIZE = 16                      # [bytes] RMW_GID_STORAGE_SIZE of rmw_zenoh
 ATTACHMENT_SIZE = 8 + 8 + 1 + GID_SIZE
 DOMAIN_MAX = 232                   # highest ROS_DOMAIN_ID ROS 2 documents as usable
@@ -195,11 +198,11 @@ class Entity:
     zid: str
     node_id: int
     entity_id: int
-    kind: str                       # NN, MP, MS (SS, SC: services, read only)
+    kind: str                       # NN, MP, MS, SS, SC
     namespace: str                  # ROS namespace, "/" for the root
     node: str
     enclave: str = "/"
-    topic: str | None = None        # fully qualified, "/cmd_vel"
+    topic: str | None = None        # fully qualified, "/cmd_vel" (a service's name for SS/SC)
     typename: str | None = None     # "geometry_msgs/msg/Twist"
     hash: str | None = None         # "RIHS01_…"
     qos: Qos | None = None
@@ -225,7 +228,7 @@ class Entity:
         if len(parts) < 9 or parts[0] != ADMIN_SPACE or any(p == "" for p in parts):
             raise SchemaError(f"{token!r} is not an rmw_zenoh liveliness token")
         kind = parts[5]
-        if kind not in (NODE, PUBLISHER, SUBSCRIPTION, "SS", "SC"):
+        if kind not in (NODE, PUBLISHER, SUBSCRIPTION, SERVICE, CLIENT):
             raise SchemaError(f"{token!r}: unknown entity kind {kind!r}")
         if not (parts[1].isdigit() and parts[3].isdigit() and parts[4].isdigit()):
             raise SchemaError(f"{token!r}: domain and ids must be numbers")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from common.ros_link import add_ros_args, ros_domain
+
 
 def register(sub) -> None:
     """Add ``papf make-certs`` and its options to the subcommands ``sub``."""
@@ -19,6 +21,7 @@ def register(sub) -> None:
     p.add_argument("--bridge-namespace", default="", help="zenoh-bridge-ros2dds namespace")
     p.add_argument("--force", action="store_true",
                    help="replace an existing bundle in DIR (a new CA and new passwords)")
+    add_ros_args(p, cmd_vel=False)   # rmw_zenoh: rmw_zenohd is the secure router (docs/robot.md)
     p.set_defaults(func=cmd_make_certs)
 
 
@@ -27,10 +30,19 @@ def cmd_make_certs(args) -> int:
     from nodes.base_driver.rosbot import BridgeTopics  # rosbags: only when writing configs
     from papf.robot.certs import where_files_go, write_bundle
 
+    domain = ros_domain(args)
     b = write_bundle(args.dir, args.robot_host, args.namespace, BridgeTopics(args.bridge_namespace),
-                     force=args.force)
-    print(f"wrote {b.dir} (README.txt says the same):\n{where_files_go()}"
-          "robot:  papf launch robot --router-config router.json5 --zenoh-config robot.json5 "
-          "--listen tcp/127.0.0.1:7447 --listen tls/0.0.0.0:7448\n"
+                     force=args.force, ros=args.ros, ros_domain=domain)
+    if args.ros == "rmw_zenoh":
+        robot = (f"(cd {b.dir} && ZENOH_ROUTER_CONFIG_URI=rmw_zenohd.json5 ros2 run rmw_zenoh_cpp "
+                 "rmw_zenohd) &\n        ZENOH_SESSION_CONFIG_URI=<dir>/ros_session.json5 for "
+                 "every ROS 2 process\n        papf launch robot --ros rmw_zenoh --ros-domain "
+                 f"{domain} --router-config router.json5 --zenoh-config robot.json5 --listen "
+                 "tcp/127.0.0.1:7449")
+    else:
+        robot = ("papf launch robot --router-config router.json5 --zenoh-config robot.json5 "
+                 "--listen tcp/127.0.0.1:7447 --listen tls/0.0.0.0:7448")
+    print(f"wrote {b.dir} (README.txt says the same):\n{where_files_go(args.ros)}"
+          f"robot:  {robot}\n"
           "laptop: papf launch laptop --zenoh-config laptop.json5 --world W", file=sys.stderr)
     return 0

@@ -87,8 +87,9 @@ def register(sub) -> None:
     q = tsub.add_parser("info", help="publishers and subscribers of a key (like ros2 topic info)",
                         epilog=TOPIC_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
                         description="Our keys: the alive nodes that declare it as an output or "
-                                    "input. A ROS 2 /topic with --ros rmw_zenoh: its publishers "
-                                    "and subscriptions from rmw_zenoh's liveliness tokens.")
+                                    "input. A ROS 2 /topic: its publishers and subscribers as "
+                                    "zenoh-bridge-ros2dds's admin space tells them, or with --ros "
+                                    "rmw_zenoh from rmw_zenoh's liveliness tokens.")
     q.add_argument("key", metavar="KEY")
     q.add_argument("--verbose", "-v", action="store_true", help="types, QoS and GIDs too")
     add_ros_args(q, cmd_vel=False)
@@ -217,12 +218,14 @@ def cmd_topic_info(args) -> int:
                 _out(f"{role.capitalize()[:-1]} count: {len(names)}"
                      + "".join(f"\n  {n}" for n in names))
             return 0
-        if not args.key.startswith("/") or args.ros != "rmw_zenoh":
+        if not args.key.startswith("/"):
             print(f"papf topic info: {args.key!r}: give a stack topic ({', '.join(sorted(TOPICS))})"
-                  " or a ROS 2 /topic with --ros rmw_zenoh (the bridge announces no ROS graph on "
-                  "Zenoh: use ros2 topic info on the robot)", file=sys.stderr)
+                  " or a ROS 2 /topic (behind zenoh-bridge-ros2dds, or with --ros rmw_zenoh)",
+                  file=sys.stderr)
             return 2
         topic = "/" + args.key.strip("/")
+        if args.ros != "rmw_zenoh":
+            return _bridge_topic_info(s, topic, args.verbose)
         info = ros_topic_info(ros_entities(s, domain), topic)
     types = sorted({e.typename for v in info.values() for e in v})
     _out(f"Topic: {topic} (rmw_zenoh, domain {domain})\nType: {', '.join(types) or '?'}")
@@ -231,4 +234,23 @@ def cmd_topic_info(args) -> int:
         for e in entities:
             _out(f"  {e.fq_node}" + (f"  [{e.typename}, {e.hash}, {e.qos.describe()}, gid "
                                      f"{e.gid.hex('.')}]" if args.verbose else ""))
+    return 0
+
+
+def _bridge_topic_info(session, topic: str, verbose: bool) -> int:
+    """A ROS 2 topic's publishers and subscribers as the bridges' admin space tells them."""
+    from papf.bus.graph import bridge_nodes, bridge_topic_info
+
+    nodes = bridge_nodes(session)
+    info = bridge_topic_info(nodes, topic)
+    if not nodes:
+        print("papf topic info: no zenoh-bridge-ros2dds answered on @/*/ros2/node/** (is the "
+              "bridge reachable? on rmw_zenoh give --ros rmw_zenoh)", file=sys.stderr)
+        return 2
+    types = sorted({ty for v in info.values() for _, ty in v})
+    _out(f"Topic: {topic} (behind zenoh-bridge-ros2dds)\nType: {', '.join(types) or '?'}")
+    for role, entries in info.items():
+        _out(f"{role.capitalize()[:-1]} count: {len(entries)}")
+        for node, ty in entries:
+            _out(f"  {node}" + (f"  [{ty}]" if verbose else ""))
     return 0

@@ -4,6 +4,8 @@
 dictionary and the Zenoh configs of the robot's router, its nodes, the laptop and an
 observer; :func:`access_control` lets each role put only on its own keys (default deny).
 Used by ``papf make-certs``.
+With ``--ros rmw_zenoh`` the secure router is the robot's ROS 2 router ``rmw_zenohd``, in the
+form rmw_zenoh's config files take (:mod:`papf.robot.rmw_bundle`).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from pathlib import Path
 
 from common.errors import ConfigError
 from nodes.base_driver.rosbot import BridgeTopics
+from papf.robot.rmw_bundle import PAPF_PORT, rmw_configs
 
 LOCAL_PORT = 7447   # [-] TCP on the robot's loopback (robot nodes, the bridge)
 TLS_PORT = 7448     # [-] TLS on the robot's network interfaces (the laptop)
@@ -45,9 +48,10 @@ HOST_FILES = {
               "robot.json5"),
     "laptop": ("ca.pem", "laptop.pem", "laptop.key", "laptop.json5", "observer.json5"),
 }
+RMW_ROBOT_FILES = ("rmw_zenohd.json5", "ros_session.json5")   # robot's too, with --ros rmw_zenoh
 BUNDLE_FILES = ("ca.pem", "ca.key", "robot.pem", "robot.key", "laptop.pem", "laptop.key",
                 "credentials.txt", "router.json5", "robot.json5", "laptop.json5",
-                "observer.json5", "README.txt")
+                "observer.json5", "README.txt", *RMW_ROBOT_FILES)
 _LABEL = re.compile(r"^(?!-)[A-Za-z0-9-]{1,63}(?<!-)$")
 READ_ONLY = ("observer",)   # identities that watch: no puts, no queries (a query may set parameters)
 # every message type that is not a data write: declarations, queries, liveliness
@@ -55,32 +59,39 @@ NON_PUT = ("declare_subscriber", "declare_queryable", "query", "reply", "livelin
            "liveliness_query", "declare_liveliness_subscriber")
 
 
-def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None) -> dict:
+def access_control(namespace: str = "rosbot", bridge: BridgeTopics | None = None,
+                   ros_domain: int | None = None) -> dict:
     """The ``access_control`` section for the robot's router.
 
-    Access control (:func:`access_control`): default deny. Every authenticated identity may
-    subscribe and hold liveliness tokens, and receive every publication; each role may
-    *put* only on the keys of :data:`ROLES`. Only ``planner`` may put on ``<ns>/cmd_vel`` and
-    only ``robot`` (the base driver) on the bridge's ``cmd_vel``; ``observer`` puts nothing and
-    queries nothing (:data:`READ_ONLY`: a query on ``<ns>/planner/params`` can set parameters).
-    Zenoh 1.x decides explicit deny > explicit allow > default, and a rule's key expression
-    must include the message key, so "everything but cmd_vel" is written as the list of
-    allowed keys, generated from this table.
+    Default deny. Every authenticated identity may subscribe and hold liveliness tokens, and
+    receive every publication; each role may *put* only on the keys of :data:`ROLES`. Only
+    ``planner`` may put on ``<ns>/cmd_vel`` and only ``robot`` (the base driver) on the
+    bridge's ``cmd_vel``; ``observer`` puts nothing and queries nothing (:data:`READ_ONLY`: a
+    query on ``<ns>/planner/params`` can set parameters). Zenoh 1.x decides explicit deny >
+    explicit allow > default, and a rule's key expression must include the message key, so
+    "everything but cmd_vel" is written as the list of allowed keys, generated from this
+    table. With ``ros_domain``, ``robot``'s ROS keys are rmw_zenoh's whole domain
+    (``<domain>/**``) instead of the bridge's topics, and rmw_zenoh's liveliness tokens
+    (``@ros2_lv/**``; a chunk ``**`` does not match them) may be declared.
     """
     bridge = bridge or BridgeTopics()
+    # "**" matches no "@" chunk: the bridge's node list (admin space) or rmw_zenoh's tokens
+    anywhere = ["**", "@/*/ros2/**"] if ros_domain is None else ["**", "@ros2_lv/**"]
     rules = [
         {"id": "talk", "permission": "allow", "flows": ["ingress", "egress"],
-         "messages": [m for m in NON_PUT if m != "query"], "key_exprs": ["**"]},
+         "messages": [m for m in NON_PUT if m != "query"], "key_exprs": anywhere},
         # a query may change a node (planner/params set): not for a read-only identity
         {"id": "query", "permission": "allow", "flows": ["ingress", "egress"],
-         "messages": ["query"], "key_exprs": ["**"]},
+         "messages": ["query"], "key_exprs": anywhere},
         {"id": "receive", "permission": "allow", "flows": ["egress"],
          "messages": ["put", "delete"], "key_exprs": ["**"]},
     ]
     subjects, policies = [], []
     for role, (ours, bridged) in ROLES.items():
         subjects.append({"id": role, "usernames": [role], **BINDINGS[role]})
-        keys = [f"{namespace}/{t}" for t in ours] + [bridge.key(getattr(bridge, t)) for t in bridged]
+        ros_keys = ([bridge.key(getattr(bridge, t)) for t in bridged] if ros_domain is None
+                    else [f"{ros_domain}/**"] if bridged else [])
+        keys = [f"{namespace}/{t}" for t in ours] + ros_keys
         names = ["talk", "receive"] + ([] if role in READ_ONLY else ["query"])
         if keys:
             rules.append({"id": f"{role}-puts", "permission": "allow", "flows": ["ingress"],
@@ -99,7 +110,8 @@ class Bundle:
 
     def __getattr__(self, name: str) -> Path:  # bundle.router -> DIR/router.json5, ...
         files = {"ca": "ca.pem", "credentials": "credentials.txt", "router": "router.json5",
-                 "robot": "robot.json5", "laptop": "laptop.json5", "observer": "observer.json5"}
+                 "robot": "robot.json5", "laptop": "laptop.json5", "observer": "observer.json5",
+                 "rmw_zenohd": "rmw_zenohd.json5", "ros_session": "ros_session.json5"}
         if name not in files:
             raise AttributeError(name)
         return self.dir / files[name]
@@ -164,8 +176,10 @@ def _tls(who: str) -> dict:
 
 def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosbot",
                  bridge: BridgeTopics | None = None, local_port: int = LOCAL_PORT,
-                 tls_port: int = TLS_PORT, force: bool = False) -> Bundle:
-    """Certificates, credentials and the four Zenoh configs in directory ``out``.
+                 tls_port: int = TLS_PORT, force: bool = False, ros: str = "bridge",
+                 ros_domain: int = 0, papf_port: int = PAPF_PORT) -> Bundle:
+    """Certificates, credentials and the Zenoh configs (module doc) in directory ``out``:
+    four for the bridge, six with ``ros="rmw_zenoh"`` (:mod:`papf.robot.rmw_bundle`).
 
     An existing bundle in ``out`` (its CA and passwords) is replaced only with ``force``.
 
@@ -194,6 +208,8 @@ def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosb
     is copied. Which file goes to which host: :data:`HOST_FILES` (also written to
     ``README.txt`` in the bundle). ``ca.key`` goes nowhere: keep it where the bundle was made.
     """
+    if ros not in ("bridge", "rmw_zenoh"):
+        raise ConfigError(f"--ros {ros!r}: give bridge or rmw_zenoh")
     if not robot_hosts:
         raise ConfigError("give at least one --robot-host (the robot's IP or DNS name the "
                           "laptop connects to)")
@@ -229,17 +245,23 @@ def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosb
         "laptop": _client(remote, "planner", passwords, _tls("laptop")),
         "observer": _client(remote, "observer", passwords, _tls("laptop")),
     }
+    if ros == "rmw_zenoh":
+        configs.update(rmw_configs(passwords, router_tls, access_control(namespace, bridge, ros_domain),
+                                   local_port, tls_port, papf_port))
+    for name in RMW_ROBOT_FILES:          # a bridge bundle replacing an rmw_zenoh one (--force)
+        (out / name).unlink(missing_ok=True)
     for name, conf in configs.items():
         path = out / f"{name}.json5"
         path.write_text(json.dumps(conf, indent=2) + "\n")
         os.chmod(path, 0o600)
-    (out / "README.txt").write_text(where_files_go())
+    (out / "README.txt").write_text(where_files_go(ros))
     return Bundle(out)
 
 
-def where_files_go() -> str:
+def where_files_go(ros: str = "bridge") -> str:
     """Which bundle file goes to which host (README.txt of the bundle, make-certs' output)."""
-    return ("Copy to the robot:  " + " ".join(HOST_FILES["robot"]) + "\n"
+    robot = HOST_FILES["robot"] + (RMW_ROBOT_FILES if ros == "rmw_zenoh" else ())
+    return ("Copy to the robot:  " + " ".join(robot) + "\n"
             "Copy to the laptop: " + " ".join(HOST_FILES["laptop"]) + "\n"
             "Keep ca.key here (it signs certificates; no host needs it).\n"
             "The configs name these files relative to themselves: keep each host's files "

@@ -4,6 +4,8 @@
 timeout; :func:`run` takes ``cmd_vel`` and publishes odometry, battery and (with
 ``--world``) a scan as CDR on the bridge's keys or as an rmw_zenoh node. Used by
 ``papf rosbot-emulator`` and the robot-path tests and benches.
+On the bridge it also answers the bridge's admin space for its node ``/rosbot_emulator``
+(:mod:`papf.robot.bridge_admin`), so ``papf node list`` sees it as a real bridge's node.
 """
 
 from __future__ import annotations
@@ -117,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
         link.subscribe(topics.cmd_vel, cmd_type,
                        lambda data: node.inbox.put((time.monotonic_ns(), data)))
         pubs = {t: link.publisher(getattr(topics, t), typename) for t, typename in PUBLISHED.items()}
+        admin = _bridge_admin(node.session, topics, cmd_type, lidar) if link.middleware == "bridge" \
+            else None
         node.ready()
         log.info("emulating the ROSbot over %s: cmd_vel %s (%s); %s (scan: %s)", link.middleware,
                  link.key(topics.cmd_vel, cmd_type), cmd_type,
@@ -126,6 +130,8 @@ def run(args: argparse.Namespace) -> int:
             _loop(node, robot, pubs, lidar, trace, args, cmd_type, log)
         finally:
             link.close()
+            if admin is not None:
+                admin.close()
             if trace:
                 trace.close()
             if lidar is not None:
@@ -167,6 +173,15 @@ def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, 
         if lidar is not None and now >= next_scan:
             next_scan = now + SCAN_PERIOD_NS
             pubs["scan"].put(_scan_cdr(lidar, robot.world_pose, wall))
+
+
+def _bridge_admin(session, topics: BridgeTopics, cmd_type: str, lidar):
+    """Answer the bridge's admin space for our node: the topics as their ROS names."""
+    from papf.robot.bridge_admin import BridgeAdmin
+
+    published = {f"/{getattr(topics, t).strip('/')}": ty for t, ty in PUBLISHED.items()
+                 if t != "scan" or lidar is not None}
+    return BridgeAdmin(session, ROS_NODE, published, {f"/{topics.cmd_vel.strip('/')}": cmd_type})
 
 
 def _scan_cdr(lidar, pose: Pose2D, wall_ns: int) -> bytes:

@@ -12,6 +12,7 @@ import sys
 import time
 
 import pytest
+import zenoh
 from rosbags.typesys import Stores, get_typestore
 
 from common.transport import Node
@@ -59,6 +60,44 @@ def test_node_list_and_info_on_the_ros_graph(router, session):
     r = papf("node", "info", "/nobody", "--ros", "rmw_zenoh", "--ros-domain", str(DOMAIN),
              router=router)
     assert r.returncode == 2 and "no ROS 2 node /nobody" in r.stderr
+
+
+BRIDGE_ZID = "8c1e7a55bd1f9d2d"
+BRIDGE_NODE = (   # a bridge's admin-space reply, shaped as tests/unit/test_ros_graph.py cites
+    f"@/{BRIDGE_ZID}/ros2/node/0110c2f9a7d4f2c1b6a2e9d800000000/rosbot_base_controller",
+    b'{"publishers":[{"name":"/odometry/wheels","type":"nav_msgs/msg/Odometry"}],'
+    b'"subscribers":[{"name":"/cmd_vel","type":"geometry_msgs/msg/Twist"}],'
+    b'"service_servers":[],"service_clients":[],"action_servers":[],"action_clients":[]}')
+
+
+def test_node_and_topic_info_behind_the_bridge(router, session):
+    """A queryable answering as zenoh-bridge-ros2dds's admin space (raw key and JSON bytes)."""
+    key, value = BRIDGE_NODE
+
+    def answer(query):
+        if zenoh.KeyExpr(str(query.key_expr)).intersects(zenoh.KeyExpr(key)):
+            query.reply(key, value)
+
+    q = session.declare_queryable(f"@/{BRIDGE_ZID}/ros2/**", answer)
+    try:
+        r = papf("node", "list", router=router)
+        assert r.returncode == 0, r.stderr
+        assert f"/rosbot_base_controller  (ROS 2, zenoh-bridge-ros2dds {BRIDGE_ZID[:8]})" in r.stdout
+        r = papf("node", "info", "/rosbot_base_controller", router=router)
+        assert r.returncode == 0, r.stderr
+        assert "  Subscribers:\n    /cmd_vel: geometry_msgs/msg/Twist" in r.stdout
+        assert "  Publishers:\n    /odometry/wheels: nav_msgs/msg/Odometry" in r.stdout
+        r = papf("topic", "info", "/cmd_vel", "-v", router=router)
+        assert r.returncode == 0, r.stderr
+        assert "Type: geometry_msgs/msg/Twist" in r.stdout
+        assert "Subscriber count: 1\n  /rosbot_base_controller  [geometry_msgs/msg/Twist]" in r.stdout
+        assert "Publisher count: 0" in r.stdout
+    finally:
+        q.undeclare()
+    r = papf("node", "info", "/rosbot_base_controller", router=router)
+    assert r.returncode == 2 and "no ROS 2 node /rosbot_base_controller behind" in r.stderr
+    r = papf("topic", "info", "/cmd_vel", router=router)
+    assert r.returncode == 2 and "no zenoh-bridge-ros2dds answered" in r.stderr
 
 
 def test_topic_pub_on_rmw_zenoh_is_what_rmw_zenoh_puts(router, session):
@@ -116,7 +155,7 @@ def test_topic_pub_and_info_on_our_keys(router, session):
     (["topic", "pub", "/my_topic", "{}"], "--ros-type"),
     (["topic", "pub", "cmd_vel", "[1, 2]"], "mapping of fields"),
     (["topic", "pub", "/cmd_vel", "{}", "--ros", "rmw_zenoh", "--ros-domain", "999"], "0..232"),
-    (["node", "info", "/x"], "needs --ros rmw_zenoh"),
+    (["topic", "info", "nokey"], "give a stack topic"),
 ])
 def test_user_mistakes_are_one_line_and_exit_2(router, argv, says):
     r = papf(*argv, router=router)

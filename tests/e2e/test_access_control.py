@@ -130,6 +130,20 @@ def test_the_planner_identity_moves_the_robot(secure_robot):
     assert any(c["v"] > 0 for c in _commands(trace))
 
 
+def test_the_planner_lists_the_nodes_behind_the_bridge(secure_robot):
+    """The bridge's admin space (answered here by the emulator) passes the ACL, whose "**"
+    matches no "@" chunk (the observer queries nothing: its node list has no ROS nodes)."""
+    import subprocess
+
+    bundle, _, tls, _ = secure_robot
+    r = subprocess.run([sys.executable, "-m", "papf", "node", "list", "--namespace", NS,
+                        "--connect", tls, "--zenoh-config", str(bundle.laptop)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert any(line.startswith("/rosbot_emulator  (ROS 2, zenoh-bridge-ros2dds ")
+               for line in r.stdout.splitlines()), r.stdout
+
+
 def test_secure_hil_run_reaches_the_goal(secure_robot, tmp_path):
     """The rules let a whole run through: the laptop's LiDAR, planner and meter over mTLS."""
     import subprocess

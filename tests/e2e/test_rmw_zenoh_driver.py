@@ -40,6 +40,7 @@ CMD_KEY = {TWIST: f"{DOMAIN}/cmd_vel/geometry_msgs::msg::dds_::Twist_/{HASH[TWIS
                           f"{HASH[TWIST_STAMPED]}"}
 ODOM_KEY = f"{DOMAIN}/odometry/filtered/nav_msgs::msg::dds_::Odometry_/{HASH[ODOM]}"
 START = (5.0, 5.0, math.pi)          # where the robot's EKF says it is when the run starts
+LAST_W = 0.25                         # [rad/s] the last command's turn rate (the cruise's is 0.2)
 STORE = get_typestore(Stores.ROS2_JAZZY)
 
 
@@ -152,17 +153,24 @@ def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, sessio
         while time.monotonic() - t0 < 1.5:                        # 10 Hz commands, stamped now
             stamp = int((time.monotonic() - t0) * 1e9)
             session.put(keys.cmd_vel, Twist(stamp_ns=stamp, v=0.2, w=0.2).to_bytes())
-            t_last = time.monotonic()                             # the last command went out
             time.sleep(0.1)
-        assert _wait(lambda: any(t > t_last and v == 0.0 and w == 0.0
-                                 for t, v, w, _ in robot.cmds), 5.0)
-        cruise = [c for c in robot.cmds if c[0] <= t_last]
-        after = [c for c in robot.cmds if c[0] > t_last]
+        # The last command turns a little harder. The driver forwards every command the instant
+        # it takes it, so the first Twist with w > 0.2 marks the driver's receipt of the last
+        # command: the watchdog's own start, measured on the robot's side like the brake (the
+        # same path, so the test's scheduling and the network's delay drop out of the figure).
+        stamp = int((time.monotonic() - t0) * 1e9)
+        session.put(keys.cmd_vel, Twist(stamp_ns=stamp, v=0.2, w=LAST_W).to_bytes())
+        assert _wait(lambda: any(w > 0.2 + 1e-6 for _, _, w, _ in robot.cmds)
+                     and robot.cmds[-1][1:3] == (0.0, 0.0), 5.0)
+        t_last = next(t for t, _, w, _ in robot.cmds if w > 0.2 + 1e-6)
+        cruise = [c for c in robot.cmds if c[0] < t_last]
+        after = [c for c in robot.cmds if c[0] >= t_last]
         assert cruise and cruise[-1][1] == pytest.approx(0.2) and cruise[-1][2] == pytest.approx(0.2)
+        assert after[0][1] == pytest.approx(0.2) and 0.2 < after[0][2] <= LAST_W + 1e-9
         brake = next(t for t, v, _, _ in after if v < 0.2 - 1e-9)
         zero = next(t for t, v, w, _ in after if v == 0.0 and w == 0.0)
         print(f"{cmd_type}: brake {brake - t_last:.3f} s, zero {zero - t_last:.3f} s after the "
-              f"last command; {len(robot.cmds)} commands decoded")
+              f"driver took the last command; {len(robot.cmds)} commands decoded")
         assert brake - t_last <= 0.55, f"watchdog braked {brake - t_last:.3f} s after the last command"
         assert zero - t_last <= 0.9, f"zero Twist {zero - t_last:.3f} s after the last command"
         # every sample carries rmw_zenoh's attachment: seq from 1 upwards, stamp, one GID

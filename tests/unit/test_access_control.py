@@ -49,3 +49,46 @@ def test_make_certs_refuses_to_replace_a_bundle_and_bad_hosts(tmp_path):
         p = certs(tmp_path / "c", f"--robot-host={host}")
         assert p.returncode == 2 and "is not an IP address or a DNS name" in p.stderr, host
     assert not (tmp_path / "c").exists()
+
+
+def test_rmw_zenoh_rules_give_the_ros_domain_to_the_robot_only():
+    acl = access_control(NS, BridgeTopics(BRIDGE), ros_domain=4)
+    puts = {r["id"]: r["key_exprs"] for r in acl["rules"] if r["id"].endswith("-puts")}
+    assert "4/**" in puts["robot-puts"] and f"{BRIDGE}/cmd_vel" not in puts["robot-puts"]
+    assert not any(k.startswith("4/") for k in puts["planner-puts"])   # no way past the driver
+    talk = next(r for r in acl["rules"] if r["id"] == "talk")
+    assert "@ros2_lv/**" in talk["key_exprs"] and "liveliness_token" in talk["messages"]
+
+
+def test_make_certs_for_rmw_zenoh_writes_rmw_zenohs_config_files(tmp_path):
+    """rmw_zenohd's and the ROS 2 nodes' configs, shaped as rmw_zenoh's defaults
+    (DEFAULT_RMW_ZENOH_ROUTER_CONFIG.json5 / _SESSION_CONFIG.json5), made secure."""
+    if shutil.which("openssl") is None:
+        pytest.skip("the openssl command is needed to make test certificates")
+    import json
+    import subprocess
+
+    out = tmp_path / "b"
+    p = subprocess.run([sys.executable, "-m", "papf", "make-certs", str(out), "--robot-host",
+                        "10.0.0.2", "--ros", "rmw_zenoh", "--ros-domain", "3"],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert "ZENOH_ROUTER_CONFIG_URI=rmw_zenohd.json5" in p.stderr
+    assert "rmw_zenohd.json5 ros_session.json5" in (out / "README.txt").read_text()
+    rmwd = json.loads((out / "rmw_zenohd.json5").read_text())
+    assert rmwd["mode"] == "router" and rmwd["listen"]["endpoints"] == [
+        "tcp/127.0.0.1:7447", "tls/0.0.0.0:7448"]              # loopback, not tcp/[::]:7447
+    assert rmwd["scouting"]["gossip"]["enabled"] and not rmwd["scouting"]["multicast"]["enabled"]
+    assert rmwd["transport"]["link"]["tls"]["enable_mtls"]
+    assert any("3/**" in r["key_exprs"] for r in rmwd["access_control"]["rules"])
+    session = json.loads((out / "ros_session.json5").read_text())
+    assert session["mode"] == "peer" and session["connect"]["endpoints"] == ["tcp/127.0.0.1:7447"]
+    assert session["transport"]["auth"]["usrpwd"]["user"] == "robot"
+    ours = json.loads((out / "router.json5").read_text())
+    assert ours["connect"]["endpoints"] == ["tcp/127.0.0.1:7447"]
+    assert ours["listen"]["endpoints"] == ["tcp/127.0.0.1:7449"] and "access_control" not in ours
+    laptop = json.loads((out / "laptop.json5").read_text())
+    assert laptop["connect"]["endpoints"] == ["tls/10.0.0.2:7448"]
+    p = subprocess.run([sys.executable, "-m", "papf", "make-certs", str(out), "--robot-host",
+                        "10.0.0.2", "--force"], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0 and not (out / "rmw_zenohd.json5").exists()   # a bridge bundle now
