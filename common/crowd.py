@@ -38,6 +38,9 @@ SF_CARROT_M = 1.0              # [m] pysocialforce stops 0.5 m short of its goal
 SF_SPEED_MULTIPLIER = 1.3      # [-] pysocialforce's max_speed_multiplier (its default)
 ROUND_SIDES = 16               # [-] a cylinder becomes a circumscribed 16-gon
 ORCA_SAFETY_M = 0.01           # [m] added to an ORCA agent's radius (CrowdNav's ORCA does)
+# [m] added to a given-velocity agent's radius in ORCA: RVO2 assumes every agent takes half
+# of the avoiding, a robot or another model's person does not
+ORCA_EXTERNAL_MARGIN_M = 0.05
 SF_WALL_STEP_M = 0.1           # [m] spacing of a wall's sample points (pysocialforce's 10/m)
 
 
@@ -188,7 +191,8 @@ class Crowd:
             for row in others:
                 sim.add_agent(tuple(row[:2]), ORCA_NEIGHBOR_DIST_M, ORCA_MAX_NEIGHBORS,
                               ORCA_TIME_HORIZON_S, ORCA_TIME_HORIZON_OBST_S,
-                              float(row[4]) + ORCA_SAFETY_M, EXTERNAL_MAX_SPEED_M_S,
+                              float(row[4]) + ORCA_SAFETY_M + ORCA_EXTERNAL_MARGIN_M,
+                              EXTERNAL_MAX_SPEED_M_S,
                               tuple(row[2:4]))
             for poly in self._polys:
                 sim.add_obstacle([tuple(p) for p in poly.tolist()])
