@@ -105,9 +105,10 @@ class CrowdMeter:
         self._t: float | None = None
 
     def update(self, t_s: float, robots: dict[str, tuple[float, float, float]],
-               people_xy: np.ndarray, people_radii: np.ndarray) -> None:
+               people_xy: np.ndarray, people_radii: np.ndarray, active=None) -> None:
         """One control step at time t_s [s]: robots' poses (x [m], y [m], yaw [rad]), people's
-        centres (n, 2) [m] and radii (n,) [m]."""
+        centres (n, 2) [m] and radii (n,) [m]; ``active``: the names measured this step
+        (default all; the others are only there to be kept clear of, e.g. a robot at its goal)."""
         dt = 0.0 if self._t is None else t_s - self._t
         if dt < 0:
             raise ValueError(f"time went back: {t_s} s after {self._t} s")
@@ -117,6 +118,8 @@ class CrowdMeter:
         if len(radii) != len(xy):
             raise ValueError(f"{len(xy)} people positions but {len(radii)} radii")
         for name, pose in robots.items():
+            if active is not None and name not in active:
+                continue
             tr = self._tracks.setdefault(name, _Track())
             x, y, yaw = (float(v) for v in pose)
             if tr.poses:
