@@ -248,7 +248,8 @@ class Crowd:
         sim = self._sim
         sim.peds.step_width = dt
         sim.peds.state[:, :6] = state
-        sim.step_once()
+        with np.errstate(invalid="ignore", divide="ignore"):   # 0/0 speeds: its own guard
+            sim.step_once()
         del sim.peds.ped_states[:-1], sim.peds.group_states[:-1]  # the library keeps history
         out = sim.peds.state
         return out[:n_own, 0:2].copy(), out[:n_own, 2:4].copy()
