@@ -98,7 +98,7 @@ def crowd_scene(people: int, seed: int) -> tuple[World, str]:
 
 @dataclass(frozen=True)
 class CrowdJob:
-    """One run: ``planner`` in the scene of ``people`` and ``seed``."""
+    """One run: ``planner`` on ``world`` (a hall scene of ``people``, or a packaged world)."""
 
     world: World
     planner: str
@@ -108,20 +108,22 @@ class CrowdJob:
     sets: tuple[str, ...] = ()
 
 
-def run_crowd_job(job: CrowdJob) -> dict:
-    """One offline run -> its CSV row (no wall time: rows depend on the run alone)."""
+def run_crowd_job(job: CrowdJob) -> list[dict]:
+    """One offline run -> a CSV row per robot (no wall time: rows depend on the run alone)."""
     from papf.offline.crowd import plan_crowd  # also with 0 people: the crowd measures
 
     res = plan_crowd(job.world, job.planner, list(job.sets), None, job.seed, job.timeout_s, 0.1)
-    r = res.crowd["robots"][0]
-    return {"planner": job.planner, "people": job.people, "seed": job.seed,
-            "outcome": r["outcome"], "duration_s": round(r["duration_s"], 3),
-            "path_length_m": round(r["path_length_m"], 3),
-            "collisions_wall": r["collisions_wall"], "collisions_person": r["collisions_person"],
-            "min_separation_m": "" if r["min_person_separation_m"] is None
-            else round(r["min_person_separation_m"], 3),
-            "discomfort_s": round(r["discomfort_s"], 3), "intrusions": r["intrusions"],
-            "irregularity_rad_per_m": round(r["path_irregularity_rad_per_m"], 3)}
+    return [{"world": job.world.name, "robot": r["name"], "planner": r["planner"],
+             "people": job.people, "seed": job.seed,
+             "outcome": r["outcome"], "duration_s": round(r["duration_s"], 3),
+             "path_length_m": round(r["path_length_m"], 3),
+             "collisions_wall": r["collisions_wall"], "collisions_robot": r["collisions_robot"],
+             "collisions_person": r["collisions_person"],
+             "min_separation_m": "" if r["min_separation_m"] is None
+             else round(r["min_separation_m"], 3),
+             "discomfort_s": round(r["discomfort_s"], 3), "intrusions": r["intrusions"],
+             "irregularity_rad_per_m": round(r["path_irregularity_rad_per_m"], 3)}
+            for r in res.crowd["robots"]]
 
 
 def _mean(values) -> float | str:
@@ -129,16 +131,17 @@ def _mean(values) -> float | str:
     return round(float(np.mean(vals)), 3) if vals else ""
 
 
-def summarize(rows: list[dict]) -> list[dict]:
-    """Per planner x people: rates [%] and the means (module doc)."""
+def summarize(rows: list[dict], by: str = "people") -> list[dict]:
+    """Per planner x ``by`` (people, or world): rates [%] over the robots' runs, the means
+    (module doc)."""
     out = []
     for planner in dict.fromkeys(r["planner"] for r in rows):
-        for people in dict.fromkeys(r["people"] for r in rows):
-            mine = [r for r in rows if r["planner"] == planner and r["people"] == people]
+        for group in dict.fromkeys(r[by] for r in rows):
+            mine = [r for r in rows if r["planner"] == planner and r[by] == group]
             if not mine:
                 continue
             ok = [r for r in mine if r["outcome"] == "reached"]
-            row = {"planner": planner, "people": people, "runs": len(mine)}
+            row = {"planner": planner, by: group, "runs": len(mine)}
             for o in OUTCOMES[:4]:
                 row[o] = round(100.0 * sum(r["outcome"] == o for r in mine) / len(mine), 1)
             row.update({"time_s": _mean(r["duration_s"] for r in ok),
@@ -152,49 +155,61 @@ def summarize(rows: list[dict]) -> list[dict]:
     return out
 
 
-def summary_markdown(summary: list[dict], seeds: Sequence[int]) -> str:
-    header = ["planner", "people", "runs", "success [%]", "collision [%]", "stagnated [%]",
+def summary_markdown(summary: list[dict], seeds: Sequence[int], by: str = "people") -> str:
+    header = ["planner", by, "runs", "success [%]", "collision [%]", "stagnated [%]",
               "timeout [%]", "time [s]", "path [m]", "min separation [m]", "discomfort [s]",
               "intrusions", "irregularity [rad/m]"]
-    rows = [[r["planner"], r["people"], r["runs"], r["reached"], r["collision"], r["stagnated"],
+    rows = [[r["planner"], r[by], r["runs"], r["reached"], r["collision"], r["stagnated"],
              r["timeout"], r["time_s"], r["path_m"], r["min_separation_m"], r["discomfort_s"],
              r["intrusions"], r["irregularity_rad_per_m"]] for r in summary]
-    return (f"# Crowd (offline, seeds {', '.join(map(str, seeds))}; time and path of the "
-            "successful runs, the rest over all runs)\n\n" + markdown_table(header, rows))
+    return (f"# Crowd (offline, seeds {', '.join(map(str, seeds))}; a run = one robot's; time "
+            "and path of the successful runs, the rest over all runs)\n\n"
+            + markdown_table(header, rows))
 
 
 def run_crowd(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
               people: Sequence[int] = DEFAULT_PEOPLE, seeds: Sequence[int] = (0, 1, 2),
               timeout_s: float = 300.0, sets: Sequence[str] = (),
-              sweep: SweepOptions | None = None, progress: bool | None = None) -> list[dict]:
-    """Run the experiment into ``out``; return the summary rows."""
+              sweep: SweepOptions | None = None, progress: bool | None = None,
+              worlds: Sequence[str] = ()) -> list[dict]:
+    """Run the experiment into ``out`` (the hall scenes; or, given ``worlds``, those worlds
+    as they are, files ``crowd-worlds*``); return the summary rows."""
     from nodes.planner.registry import make_planner
+    from worlds import load_world
 
-    if not planners or not people or not seeds:
+    if not planners or not seeds or not (people or worlds):
         raise ConfigError("need at least one planner, one number of people and one seed")
     for name in planners:
         make_planner(name, None, list(sets))          # a bad name or setting: before any run
     out = Path(out)
-    (out / "worlds").mkdir(parents=True, exist_ok=True)
     jobs = []
-    for n in people:
-        for seed in seeds:
-            world, text = crowd_scene(n, seed)
-            (out / "worlds" / f"{world.name}.toml").write_text(text)
-            jobs += [CrowdJob(world, planner, n, seed, timeout_s, tuple(sets))
-                     for planner in planners]
+    if worlds:
+        loaded = [load_world(w) for w in worlds]
+        jobs = [CrowdJob(w, planner, len(w.people), seed, timeout_s, tuple(sets))
+                for w in loaded for seed in seeds for planner in planners]
+    else:
+        (out / "worlds").mkdir(parents=True, exist_ok=True)
+        for n in people:
+            for seed in seeds:
+                world, text = crowd_scene(n, seed)
+                (out / "worlds" / f"{world.name}.toml").write_text(text)
+                jobs += [CrowdJob(world, planner, n, seed, timeout_s, tuple(sets))
+                         for planner in planners]
     opts = SweepOptions(workers=(sweep or SweepOptions()).workers,
                         scheduler=(sweep or SweepOptions()).scheduler, progress=progress)
-    rows = map_runs(run_crowd_job, jobs, opts,
-                    label=lambda j: f"{j.planner} {j.people} people seed {j.seed}",
-                    title="crowd",
-                    line=lambda j, r: f"{j.planner}, {j.people} people, seed {j.seed}: "
-                                      f"{r['outcome']} ({r['duration_s']} s)")
-    write_csv(rows, out / "crowd.csv")
-    summary = summarize(rows)
-    write_csv(summary, out / "crowd-summary.csv")
-    (out / "crowd.md").write_text(summary_markdown(summary, seeds))
-    plot_summary(summary, out / "crowd.png")
+    runs = map_runs(run_crowd_job, jobs, opts,
+                    label=lambda j: f"{j.planner} {j.world.name} seed {j.seed}", title="crowd",
+                    line=lambda j, rows: f"{j.planner}, {j.world.name}, seed {j.seed}: "
+                                         + ", ".join(r["outcome"] for r in rows))
+    rows = [r for rs in runs for r in rs]
+    stem, by = ("crowd-worlds", "world") if worlds else ("crowd", "people")
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(rows, out / f"{stem}.csv")
+    summary = summarize(rows, by)
+    write_csv(summary, out / f"{stem}-summary.csv")
+    (out / f"{stem}.md").write_text(summary_markdown(summary, seeds, by))
+    if not worlds:
+        plot_summary(summary, out / "crowd.png")
     return summary
 
 
