@@ -14,7 +14,8 @@ Each run is :func:`papf.offline.run.simulate` (offline, :mod:`papf.offline.crowd
 :func:`papf.experiments.sweep.map_runs` (``--workers`` / ``--scheduler``). Writes
 ``OUT/crowd.csv`` (a row per run), ``OUT/crowd-summary.csv`` and ``OUT/crowd.md`` (per
 planner x people: success, collision, stagnation and timeout rates; time and path of the
-successful runs; mean min separation, discomfort time, intrusions and path irregularity — the
+successful runs; mean min separation, discomfort time (and its share of the run, first
+motion to outcome, CrowdNav's discomfort frequency), intrusions and path irregularity — the
 measures of :mod:`common.crowd_measures`) and ``OUT/crowd.png``.
 """
 
@@ -148,6 +149,9 @@ def summarize(rows: list[dict], by: str = "people") -> list[dict]:
                         "path_m": _mean(r["path_length_m"] for r in ok),
                         "min_separation_m": _mean(r["min_separation_m"] for r in mine),
                         "discomfort_s": _mean(r["discomfort_s"] for r in mine),
+                        "discomfort_pct": _mean(100.0 * float(r["discomfort_s"])
+                                                / float(r["duration_s"]) for r in mine
+                                                if float(r["duration_s"]) > 0),
                         "intrusions": _mean(r["intrusions"] for r in mine),
                         "irregularity_rad_per_m": _mean(r["irregularity_rad_per_m"]
                                                         for r in mine)})
@@ -158,10 +162,11 @@ def summarize(rows: list[dict], by: str = "people") -> list[dict]:
 def summary_markdown(summary: list[dict], seeds: Sequence[int], by: str = "people") -> str:
     header = ["planner", by, "runs", "success [%]", "collision [%]", "stagnated [%]",
               "timeout [%]", "time [s]", "path [m]", "min separation [m]", "discomfort [s]",
-              "intrusions", "irregularity [rad/m]"]
+              "discomfort [% of the run]", "intrusions", "irregularity [rad/m]"]
     rows = [[r["planner"], r[by], r["runs"], r["reached"], r["collision"], r["stagnated"],
              r["timeout"], r["time_s"], r["path_m"], r["min_separation_m"], r["discomfort_s"],
-             r["intrusions"], r["irregularity_rad_per_m"]] for r in summary]
+             r["discomfort_pct"], r["intrusions"], r["irregularity_rad_per_m"]]
+            for r in summary]
     return (f"# Crowd (offline, seeds {', '.join(map(str, seeds))}; a run = one robot's; time "
             "and path of the successful runs, the rest over all runs)\n\n"
             + markdown_table(header, rows))
@@ -221,7 +226,7 @@ def plot_summary(summary: list[dict], png: Path) -> Path:
     import matplotlib.pyplot as plt
 
     panels = (("reached", "success [%]"), ("min_separation_m", "mean min separation [m]"),
-              ("discomfort_s", "mean discomfort time [s]"), ("intrusions", "mean intrusions"))
+              ("discomfort_pct", "discomfort [% of the run]"), ("intrusions", "mean intrusions"))
     fig, axes = plt.subplots(1, len(panels), figsize=(13, 3.4), layout="constrained")
     for ax, (key, label) in zip(axes, panels, strict=True):
         for planner in dict.fromkeys(r["planner"] for r in summary):
