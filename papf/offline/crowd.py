@@ -127,6 +127,7 @@ class _Senses:
                                               [0, 0, 0, 1], physicsClientId=cid)
 
     def scan(self, x, y, yaw, t_ns):
+        """The robot's scan at pose (x [m], y [m], yaw [rad]) and sim time t_ns [ns]."""
         return self.lidar.scan(x, y, yaw, t_ns)
 
     def clearance(self, x: float, y: float, yaw: float, t_ns: int) -> float:
@@ -145,6 +146,7 @@ class _Senses:
         return best
 
     def close(self) -> None:
+        """Disconnect the LiDAR's pybullet client."""
         self.lidar.close()
 
 
