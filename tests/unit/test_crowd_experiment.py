@@ -46,3 +46,20 @@ def test_a_small_sweep_writes_its_files(tmp_path):
     assert len(rows) == 2 and rows[0]["min_separation_m"] == ""   # nobody to meet
     for name in ("crowd.md", "crowd-summary.csv", "crowd.png", "worlds/crowd-3-0.toml"):
         assert (tmp_path / name).is_file()
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--people", "0,99"], "--people '0,99': comma-separated whole numbers 0-20"),
+    (["--people", "five"], "--people 'five'"),
+    (["--runs", "0"], "--runs 0"),
+    (["--planners", "nope"], "unknown ['nope']"),
+    (["--worlds", "wang-3d-fig9"], "not a 2-D world of ROSbots"),
+    (["--worlds", "no-such-world"], "no packaged world named 'no-such-world'"),
+])
+def test_bad_arguments_exit_2_with_one_line_before_any_run(argv, says, tmp_path, capsys):
+    from papf.cli import main
+
+    assert main(["experiment", "crowd", "--out", str(tmp_path / "o"), *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0]
+    assert not (tmp_path / "o").exists()
