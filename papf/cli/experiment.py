@@ -1,4 +1,4 @@
-"""``papf experiment energy | paper-tests | random | iapf | traffic``: many runs, a table, plots.
+"""``papf experiment energy | paper-tests | random | iapf | traffic | crowd``: many runs, a table, plots.
 
 ``energy`` is the PAPF paper's energy experiment (IV-C) through the process stack,
 recorded (:mod:`papf.experiments.energy`); ``paper-tests`` every paper world with every
@@ -31,6 +31,7 @@ def register(sub) -> None:
     _add_random(exp)
     _add_iapf(exp)
     _add_traffic(exp)
+    _add_crowd(exp)
     add_paper_studies(exp)
 
 
@@ -121,6 +122,74 @@ def _add_random(exp) -> None:
     mode.add_argument("--stack", dest="mode", action="store_const", const="stack",
                       help="every run through the whole process stack (slow)")
     p.set_defaults(func=cmd_random, mode="offline")
+
+
+def _add_crowd(exp) -> None:
+    p = exp.add_parser("crowd", help="planners x numbers of people x seeds in a hall: a "
+                                     "CrowdNav-style table",
+                       description="A robot crosses a hall of people walking back and forth "
+                                   "(ORCA), offline: every planner x --people x --runs seeds; "
+                                   "crowd.md, crowd.csv, crowd-summary.csv, crowd.png and the "
+                                   "scenes' worlds/ into --out (docs/experiments.md, Crowd).")
+    p.add_argument("--planners", default="apf,papf,arapf", help="comma-separated "
+                                                                "(default apf,papf,arapf)")
+    p.add_argument("--people", default="0,5,10,20", metavar="N1,N2",
+                   help="numbers of people, comma-separated, each 0-20 (default 0,5,10,20)")
+    p.add_argument("--runs", type=int, default=3, help="seeds per planner and number (default 3)")
+    p.add_argument("--seed", type=int, default=0, help="first seed S: runs use S..S+runs-1")
+    p.add_argument("--out", default="crowd", metavar="DIR", help="output directory")
+    p.add_argument("--timeout", type=float, default=300.0, metavar="S",
+                   help="sim-time limit per run (default 300)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="planner setting for every planner, repeatable")
+    p.add_argument("--worlds", metavar="W1,W2",
+                   help="instead of the hall: these worlds as they are (e.g. the packaged "
+                        "crowd-*), a row per robot -> DIR/crowd-worlds.md, .csv, -summary.csv")
+    p.add_argument("--compare-models", action="store_true",
+                   help="instead: ORCA against the social-force model on small scenes and "
+                        "their cost per step -> DIR/crowd-models.csv")
+    _add_sweep(p)
+    p.set_defaults(func=cmd_crowd)
+
+
+def cmd_crowd(args) -> int:
+    from papf.experiments.crowd import MAX_HALL_PEOPLE, run_crowd  # pybullet: when run
+
+    if args.compare_models:
+        from papf.experiments.crowd_models import compare_models
+        from papf.experiments.trials import markdown_table, write_csv
+
+        rows = compare_models()
+        write_csv(rows, Path(args.out) / "crowd-models.csv")
+        print(markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
+        print(f"wrote {args.out}/crowd-models.csv", file=sys.stderr)
+        return 0
+    try:
+        people = [int(v) for v in args.people.split(",") if v.strip()]
+    except ValueError:
+        people = []
+    if not people or any(not 0 <= n <= MAX_HALL_PEOPLE for n in people):
+        raise ConfigError(f"--people {args.people!r}: comma-separated whole numbers 0-"
+                          f"{MAX_HALL_PEOPLE}, e.g. 0,5,10,20")
+    if args.runs < 1 or args.seed < 0:
+        raise ConfigError(f"--runs {args.runs} --seed {args.seed}: need runs >= 1, seed >= 0")
+    if not args.timeout > 0:
+        raise ConfigError(f"--timeout {args.timeout!r}: need a number of seconds > 0")
+    worlds = [w.strip() for w in (args.worlds or "").split(",") if w.strip()]
+    if worlds:
+        from worlds import load_world
+
+        for w in worlds:                   # a bad one: exit 2 before any run
+            if load_world(w).dims != 2 or load_world(w).vehicle != "rosbot":
+                raise ConfigError(f"--worlds: {w!r} is not a 2-D world of ROSbots")
+    run_crowd(args.out, planner_list(args.planners), people,
+              list(range(args.seed, args.seed + args.runs)), args.timeout, args.set,
+              sweep_options(args), worlds=worlds)
+    stem = "crowd-worlds" if worlds else "crowd"
+    print((Path(args.out) / f"{stem}.md").read_text())
+    print(f"wrote {args.out}/{stem}.md, {stem}.csv, {stem}-summary.csv"
+          + ("" if worlds else ", crowd.png and worlds/"), file=sys.stderr)
+    return 0
 
 
 def _add_iapf(exp) -> None:

@@ -77,6 +77,14 @@ def cmd_plan(args) -> int:
         print(f"{s['world']} {s['planner']}: {s['outcome']} after {s['duration_s']:.1f} s, "
               f"{s['path_length_m']:.2f} m, min clearance {s['min_clearance_m']:.2f} m"
               + (f" ({s['reason']})" if s["reason"] else ""))
+    for r in s.get("robots", []):   # a crowd world: one line per robot
+        sep = "-" if r["min_separation_m"] is None else f"{r['min_separation_m']:.2f} m"
+        print(f"  {r['name']} {r['planner']}: {r['outcome']} after {r['duration_s']:.1f} s, "
+              f"{r['path_length_m']:.2f} m, collisions wall/robot/person "
+              f"{r['collisions_wall']}/{r['collisions_robot']}/{r['collisions_person']}, "
+              f"min separation {sep}, discomfort {r['discomfort_s']:.1f} s, "
+              f"intrusions {r['intrusions']}, irregularity "
+              f"{r['path_irregularity_rad_per_m']:.2f} rad/m")
     for what, path in (("plot", args.plot), ("path", args.out)):
         if path:  # on stderr: with --json, stdout holds the one JSON object only
             print(f"{what}: {os.path.abspath(path)}", file=sys.stderr)
@@ -85,6 +93,14 @@ def cmd_plan(args) -> int:
 
 def _plot(world, result, args) -> None:
     """The PNG of ``--plot``: the ROSbot's run with its mind, or the path alone."""
+    if result.motion == "crowd":      # every robot and the people's tracks
+        from papf.plots.crowd import plot_crowd
+
+        run = result.trace
+        plot_crowd(world, {f"{r.name} ({r.planner}, {r.result.outcome})": r.result.path
+                           for r in run.robots}, run.people, run.radii, args.plot,
+                   f"{world.name} (offline, seed {args.seed})")
+        return
     if result.motion == "unicycle":   # with the mind and the ROSbot's footprint
         from papf.plots.mind import plot_plan
 

@@ -29,12 +29,13 @@ class PlanResult:
     sim_time_s: float              # sim time of the outcome [s]
     min_clearance_m: float         # closest approach of the footprint / point to an obstacle [m]
     collisions: int
-    motion: str = "unicycle"       # the motion model: unicycle | point3d | fixed-step | car
+    motion: str = "unicycle"       # the motion model: unicycle | point3d | fixed-step | car | crowd
     cycles: int = 0                # planner cycles (force evaluations) made
     states: list = field(default_factory=list)   # keep_states: PlannerState (2-D) or Plan (3-D) per cycle
     road: dict = field(default_factory=dict)     # road worlds: left_road, lane_changes, min/max speed
     units_per_m: float = 1.0       # fixed step: the paper's map units per metre (Wang's gains are in them)
-    trace: object = None           # car: the whole RoadRun (speeds, temporary goals, step times, vehicles)
+    trace: object = None           # car: the whole RoadRun (speeds, temporary goals, step times, vehicles); crowd: the CrowdRun
+    crowd: dict = field(default_factory=dict)    # crowd worlds: people, and one object per robot
 
     @property
     def length_m(self) -> float:
@@ -49,7 +50,7 @@ class PlanResult:
                 "seed": self.seed, "motion": self.motion, "cycles": self.cycles, "duration_s": round(self.duration_s, 6),
                 "path_length_m": round(self.length_m, 6), "sim_time_s": round(self.sim_time_s, 6),
                 "collisions": self.collisions,
-                "min_clearance_m": round(self.min_clearance_m, 6), **self.road,
+                "min_clearance_m": round(self.min_clearance_m, 6), **self.road, **self.crowd,
                 "reason": self.reason}
 
 

@@ -9,6 +9,8 @@ experiment's offline runs):
 - ``motion="robot"``, 3-D world (spheres): a point robot (:mod:`papf.offline.point3d`);
 - ``motion="robot"``, car-scale road world (``vehicle = "car"``): the IAPF paper's vehicle
   model (:mod:`papf.offline.road`, :mod:`papf.offline.car`);
+- ``motion="robot"``, a world with ``[[robots]]`` or ``[[people]]``: every robot as above, in
+  lockstep with the people (:mod:`papf.offline.crowd`);
 - ``motion="fixed-step"``: Wang's MATLAB point, planners ``wang-apf`` and ``wang``
   (:mod:`papf.offline.wang_step`).
 """
@@ -51,6 +53,11 @@ def simulate(world: World | str | Path, planner: str, params=None, seed: int = 0
         raise ConfigError("whole_time: car-scale road worlds only ([robot] vehicle = \"car\")")
     if motion == "fixed-step":
         return _fixed_step(world, planner, sets, params_file)
+    if world.robots or world.people:
+        from papf.offline.crowd import plan_crowd
+
+        return plan_crowd(world, planner, sets, params_file, seed, max_time_s, dt, keep_states,
+                          lidar)
     if world.vehicle == "car":
         from papf.offline.road import plan_car
 

@@ -51,6 +51,8 @@ SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
     ("experiment", "iapf"): (["--cases", "a", "--planners", "iapf", "--no-horizon"], {0}),
     ("experiment", "traffic"): (["--worlds", "road-stopped", "--planners", "apf",
                                  "--timeout", "5"], {0}),
+    ("experiment", "crowd"): (["--planners", "apf", "--people", "0,2", "--runs", "1",
+                               "--timeout", "30"], {0}),
     ("replay",): (["--rate", "0"], {0}),
     ("plan",): ([], {0, 3, 4, 5}),     # its exit code is the run's outcome (docs: the papers'
                                        # collisions and stagnations are examples too)

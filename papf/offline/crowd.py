@@ -1,0 +1,247 @@
+"""Several robots and people offline: :func:`plan_crowd` (called by
+:func:`papf.offline.run.simulate` for a world with ``[[robots]]`` or ``[[people]]``).
+
+Every robot is the offline ROSbot of :mod:`papf.offline.plan` — its planner from the
+registry (the robot's ``planner``, else the run's), its own LiDAR sim, the driver's command
+gate and the unicycle of :class:`papf.offline.unicycle.Drive` — and all of them advance in
+lockstep, one control period ``dt`` at a time:
+
+1. every active robot scans and moves (:meth:`Drive.cycle`): its LiDAR sees the world's
+   obstacles, the other robots' footprint boxes and the people's discs (cylinders
+   ``PERSON_HEIGHT_M`` tall) where they stood at the start of the period;
+2. the people take the same period (:class:`common.crowd.Crowd`), seeing the robots;
+3. a person now overlapping a robot's footprint is a robot-person collision of that robot;
+4. :class:`common.crowd_measures.CrowdMeter` takes the step.
+
+Collisions (the footprint's clearance < 0, checked every 20 ms substep of the drive):
+``wall`` (the world's obstacles, pybullet as ``papf plan``), ``robot`` (another robot's
+footprint, at its pose of the period's start), ``person`` (a disc). A robot stops at its
+outcome and stays where it is, an obstacle to the others. Robot ``i`` draws its LiDAR noise
+and start jitter from seed ``seed + ROBOT_SEED_STRIDE * i`` (robot 0: the run's seed, as
+``papf plan`` of that robot alone); the people from ``seed``. Same seed, same figures.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from common.crowd import Crowd
+from common.crowd_measures import CrowdMeter, box_box_distance, point_box_distance
+from common.quiet import import_quietly
+from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.sim import SimParams
+from nodes.lidar_sim.core import LidarSim
+from nodes.planner.registry import make_planner
+from papf.offline.result import PlanResult
+from papf.offline.unicycle import Drive, FootprintChecker, start_pose
+from worlds import World
+
+p = import_quietly("pybullet")
+
+ROBOT_SEED_STRIDE = 7919      # [-] seed offset between robots (a prime: no overlap in sweeps)
+PERSON_HEIGHT_M = 1.7         # [m] a person's cylinder in the LiDAR's world
+ROBOT_SEEN_HEIGHT_M = 0.3     # [m] another robot's box in the LiDAR's world (chassis to LiDAR)
+COLLISION_KINDS = ("wall", "robot", "person")
+OUTCOME_ORDER = ("collision", "failed", "stagnated", "timeout", "reached")  # the fleet's: worst
+
+
+@dataclass
+class RobotRun:
+    """One robot of a crowd run: its drive's result and its crowd figures."""
+
+    name: str
+    planner: str
+    result: PlanResult
+    collisions: dict = field(default_factory=lambda: dict.fromkeys(COLLISION_KINDS, 0))
+    measures: object = None       # common.crowd_measures.CrowdMeasures
+
+    def summary(self) -> dict:
+        """The robot's object of ``papf plan --json`` (``robots``)."""
+        m, r = self.measures, self.result
+        return {"name": self.name, "planner": self.planner, "outcome": r.outcome,
+                "duration_s": round(r.duration_s, 6), "path_length_m": round(r.length_m, 6),
+                "collisions": r.collisions, **{f"collisions_{k}": v
+                                               for k, v in self.collisions.items()},
+                "min_clearance_m": round(r.min_clearance_m, 6),
+                "min_separation_m": _num(m.min_separation_m),
+                "min_person_separation_m": _num(m.min_person_separation_m),
+                "min_robot_separation_m": _num(m.min_robot_separation_m),
+                "discomfort_s": round(m.discomfort_s, 6), "intrusions": m.intrusions,
+                "path_irregularity_rad_per_m": round(m.irregularity_rad_per_m, 6),
+                "reason": r.reason}
+
+
+@dataclass
+class CrowdRun:
+    """Everything of a crowd run: the robots, and the people's tracks."""
+
+    robots: list[RobotRun]
+    times: np.ndarray             # (T,) [s]
+    people: np.ndarray            # (T, n, 2) [m]
+    radii: np.ndarray             # (n,) [m]
+
+
+def _num(v: float):
+    """A figure for JSON: rounded, None when infinite (nobody to measure against)."""
+    return round(v, 6) if math.isfinite(v) else None
+
+
+class _Senses:
+    """Robot ``i``'s LiDAR and clearance, with the others where they stood (module doc)."""
+
+    def __init__(self, world: World, lidar, i: int, n_robots: int, radii: np.ndarray,
+                 seed: int, checker: FootprintChecker):
+        self.i, self.checker = i, checker
+        self.lidar = LidarSim(world, lidar, seed)
+        cid = self.lidar.cid
+        sx, sy, _ = SimParams().chassis_size
+        box = p.createCollisionShape(p.GEOM_BOX, halfExtents=[sx / 2, sy / 2,
+                                                              ROBOT_SEEN_HEIGHT_M / 2],
+                                     physicsClientId=cid)
+        self.robot_bodies = [p.createMultiBody(0.0, box, basePosition=[0, 0, -10],
+                                               physicsClientId=cid) for _ in range(n_robots)]
+        self.person_bodies = []
+        for r in radii:
+            shape = p.createCollisionShape(p.GEOM_CYLINDER, radius=float(r),
+                                           height=PERSON_HEIGHT_M, physicsClientId=cid)
+            self.person_bodies.append(p.createMultiBody(0.0, shape, basePosition=[0, 0, -10],
+                                                        physicsClientId=cid))
+        self.poses: list[tuple[float, float, float]] = []
+        self.people = np.zeros((0, 2))
+        self.radii = radii
+        self.kind = "wall"            # what the last clearance was closest to
+
+    def see(self, poses, people: np.ndarray) -> None:
+        """The others' poses (x, y, yaw) and the people's centres (n, 2) [m] for this period."""
+        self.poses, self.people = poses, people
+        cid = self.lidar.cid
+        for j, (body, (x, y, yaw)) in enumerate(zip(self.robot_bodies, poses, strict=True)):
+            pos = [x, y, ROBOT_SEEN_HEIGHT_M / 2] if j != self.i else [0, 0, -10]
+            p.resetBasePositionAndOrientation(body, pos, p.getQuaternionFromEuler([0, 0, yaw]),
+                                              physicsClientId=cid)
+        for body, (x, y) in zip(self.person_bodies, people, strict=True):
+            p.resetBasePositionAndOrientation(body, [float(x), float(y), PERSON_HEIGHT_M / 2],
+                                              [0, 0, 0, 1], physicsClientId=cid)
+
+    def scan(self, x, y, yaw, t_ns):
+        """The robot's scan at pose (x [m], y [m], yaw [rad]) and sim time t_ns [ns]."""
+        return self.lidar.scan(x, y, yaw, t_ns)
+
+    def clearance(self, x: float, y: float, yaw: float, t_ns: int) -> float:
+        """[m] to the nearest of walls, other robots and people; < 0: a collision."""
+        best, self.kind = self.checker.clearance(x, y, yaw, t_ns), "wall"
+        for j, pose in enumerate(self.poses):
+            if j != self.i:
+                d = box_box_distance((x, y, yaw), pose)
+                d = d if d > 0 else -1e-9          # touching is a collision
+                if d < best:
+                    best, self.kind = d, "robot"
+        if len(self.people):
+            d = float((point_box_distance(self.people, x, y, yaw) - self.radii).min())
+            if d < best:
+                best, self.kind = d, "person"
+        return best
+
+    def close(self) -> None:
+        """Disconnect the LiDAR's pybullet client."""
+        self.lidar.close()
+
+
+def plan_crowd(world: World, planner_name: str, sets: list[str], params_file, seed: int,
+               max_time_s: float, dt: float, keep_states: bool = False,
+               lidar=None) -> PlanResult:
+    """Every robot of ``world`` among its people to an outcome (module doc); the fleet's
+    :class:`PlanResult` with the whole run in ``trace`` (a :class:`CrowdRun`)."""
+    fleet = world.fleet
+    crowd = Crowd(world.people, world, seed)
+    radii = crowd.radii
+    checker = FootprintChecker(world)
+    senses, drives = [], []
+    try:
+        for i, spec in enumerate(fleet):
+            rseed = seed + ROBOT_SEED_STRIDE * i
+            own = replace(world, start=spec.start, goal=spec.goal,
+                          tolerance=spec.tolerance)
+            s = _Senses(world, lidar, i, len(fleet), radii, rseed, checker)
+            senses.append(s)
+            s.see([tuple(r.start) for r in fleet], crowd.positions)
+            planner = make_planner(spec.planner or planner_name, params_file, sets)
+            drives.append(Drive(own, planner, spec.planner or planner_name, rseed,
+                                start_pose(own, rseed), s.scan, s.clearance, max_time_s, dt,
+                                CommandGate(RosbotLimits()), keep_states))
+        run = _lockstep(world, fleet, drives, senses, crowd, dt)
+    finally:
+        for s in senses:
+            s.close()
+        checker.close()
+    return _fleet_result(world, seed, run)
+
+
+def _lockstep(world, fleet, drives, senses, crowd, dt) -> CrowdRun:
+    """Advance robots and people together until every robot has its outcome."""
+    collisions = [dict.fromkeys(COLLISION_KINDS, 0) for _ in drives]
+    meter = CrowdMeter({spec.name or "robot": spec.goal for spec in fleet})
+    names = [spec.name or "robot" for spec in fleet]
+
+    def poses():
+        return [(d.x, d.y, d.yaw) for d in drives]
+
+    meter.update(0.0, dict(zip(names, poses(), strict=True)), crowd.positions, crowd.radii)
+    times, tracks, t = [0.0], [crowd.positions], 0.0
+    while any(not d.outcome for d in drives):
+        now, people = poses(), crowd.positions
+        active = [i for i, d in enumerate(drives) if not d.outcome]
+        for i in active:
+            senses[i].see(now, people)
+            drives[i].cycle()
+            if drives[i].outcome == "collision":
+                collisions[i][senses[i].kind] += 1
+        crowd.step(dt, [(d.x, d.y, d.v * math.cos(d.yaw), d.v * math.sin(d.yaw))
+                        if not d.outcome else (d.x, d.y, 0.0, 0.0) for d in drives])
+        t += dt
+        people = crowd.positions
+        for i in active:                  # a person who walked into a robot
+            d = drives[i]
+            if d.outcome or not len(people):
+                continue
+            gap = float((point_box_distance(people, d.x, d.y, d.yaw) - crowd.radii).min())
+            d.min_clear = min(d.min_clear, gap)
+            if gap < 0:
+                d.collisions += 1
+                collisions[i]["person"] += 1
+                d.outcome, d.t_end = "collision", d.t
+                d.reason = f"a person walked into the footprint at ({d.x:.2f}, {d.y:.2f})"
+        meter.update(t, dict(zip(names, poses(), strict=True)), people, crowd.radii,
+                     active={names[i] for i in active})
+        times.append(t)
+        tracks.append(people)
+    measures = meter.results()
+    robots = [RobotRun(name=names[i], planner=d.name, result=d.result(),
+                       collisions=collisions[i], measures=measures[names[i]])
+              for i, d in enumerate(drives)]
+    return CrowdRun(robots=robots, times=np.array(times),
+                    people=np.array(tracks).reshape(len(times), -1, 2), radii=crowd.radii)
+
+
+def _fleet_result(world: World, seed: int, run: CrowdRun) -> PlanResult:
+    """The fleet as one PlanResult: its worst outcome, the first robot's path, the sums."""
+    results = [r.result for r in run.robots]
+    worst = min(results, key=lambda r: OUTCOME_ORDER.index(r.outcome)
+                if r.outcome in OUTCOME_ORDER else 0)
+    first = results[0]
+    names = {r.planner for r in results}
+    return PlanResult(world=world.name, planner=", ".join(sorted(names)), seed=seed,
+                      outcome=worst.outcome, reason=worst.reason if len(results) == 1 else
+                      "; ".join(f"{r.name}: {r.result.outcome}" for r in run.robots),
+                      path=first.path, times=first.times, headings=first.headings,
+                      duration_s=max(r.duration_s for r in results),
+                      sim_time_s=max(r.sim_time_s for r in results),
+                      min_clearance_m=min(r.min_clearance_m for r in results),
+                      collisions=sum(r.collisions for r in results), motion="crowd",
+                      cycles=sum(r.cycles for r in results),
+                      states=first.states, trace=run,
+                      crowd={"people": int(run.radii.size),
+                             "robots": [r.summary() for r in run.robots]})

@@ -1,0 +1,65 @@
+"""papf/experiments/crowd.py: the hall scenes, the summary, a small sweep."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import pytest
+
+from common.errors import ConfigError
+from papf.experiments.crowd import HALL_X, HALL_Y, START, crowd_scene, run_crowd, summarize
+
+
+def test_scenes_are_seeded_valid_and_keep_people_apart():
+    a, text = crowd_scene(10, 3)
+    b, again = crowd_scene(10, 3)
+    assert text == again and a == b and crowd_scene(10, 4)[1] != text
+    assert len(a.people) == 10 and all(p.loop and len(p.route) == 2 for p in a.people)
+    points = [p.start for p in a.people] + [p.route[0] for p in a.people]
+    for i, (x, y) in enumerate(points):
+        assert HALL_X[0] < x < HALL_X[1] and HALL_Y[0] < y < HALL_Y[1]
+        assert math.hypot(x - START[0], y - START[1]) >= 0.7
+        assert all(math.hypot(x - u, y - v) >= 0.7 for u, v in points[:i])
+    with pytest.raises(ConfigError, match="hall takes"):
+        crowd_scene(99, 0)
+
+
+def test_summary_rates_and_means():
+    rows = [{"planner": "p", "people": 5, "outcome": o, "duration_s": d, "path_length_m": 8.0,
+             "min_separation_m": s, "discomfort_s": 1.0, "intrusions": 2,
+             "irregularity_rad_per_m": 0.5}
+            for o, d, s in (("reached", 80.0, 0.2), ("reached", 90.0, 0.4),
+                            ("collision", 10.0, 0.0), ("stagnated", 50.0, ""))]
+    (row,) = summarize(rows)
+    assert (row["runs"], row["reached"], row["collision"], row["stagnated"]) == (4, 50.0, 25.0, 25.0)
+    assert row["time_s"] == 85.0                       # successful runs only
+    assert row["min_separation_m"] == pytest.approx(0.2)   # the runs that met someone
+
+
+def test_a_small_sweep_writes_its_files(tmp_path):
+    summary = run_crowd(tmp_path, planners=["apf"], people=[0, 3], seeds=[0], timeout_s=30,
+                        progress=False)
+    assert [(r["planner"], r["people"]) for r in summary] == [("apf", 0), ("apf", 3)]
+    with (tmp_path / "crowd.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 2 and rows[0]["min_separation_m"] == ""   # nobody to meet
+    for name in ("crowd.md", "crowd-summary.csv", "crowd.png", "worlds/crowd-3-0.toml"):
+        assert (tmp_path / name).is_file()
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--people", "0,99"], "--people '0,99': comma-separated whole numbers 0-20"),
+    (["--people", "five"], "--people 'five'"),
+    (["--runs", "0"], "--runs 0"),
+    (["--planners", "nope"], "unknown ['nope']"),
+    (["--worlds", "wang-3d-fig9"], "not a 2-D world of ROSbots"),
+    (["--worlds", "no-such-world"], "no packaged world named 'no-such-world'"),
+])
+def test_bad_arguments_exit_2_with_one_line_before_any_run(argv, says, tmp_path, capsys):
+    from papf.cli import main
+
+    assert main(["experiment", "crowd", "--out", str(tmp_path / "o"), *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0]
+    assert not (tmp_path / "o").exists()
