@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from schemas.messages import (
     BatteryState,
     BatteryVoltage,
+    Bodies,
     Clock,
     Event,
     Goal,
@@ -34,6 +35,7 @@ TOPICS = {
     "sim/pose": Odometry,
     "events": Event,
     "objects": Objects,     # obstacle tracks: sim ground truth or the tracker node
+    "sim/bodies": Bodies,   # the other robots and the people a robot's LiDAR sees (sim fleets)
 }
 
 # Topics with one publisher whose stamps never go back within a run (a new run restarts

@@ -8,6 +8,7 @@ SIM = (
     ("out", "wheels", "WheelStates"),    # wheel speeds and motor torques
     ("out", "clock", "Clock"),           # sim time
     ("out", "events", "Event"),          # collision, watchdog_stop, node_fault
+    ("out", "sim/bodies", "Bodies"),     # a fleet ([[robots]]): the others, before sim/pose
 )
 ROSBOT = (
     ("in", "cmd_vel", "Twist"),

@@ -9,6 +9,10 @@ pybullet DIRECT client that holds only the world's obstacles (no robot, so no
 self-hits; moving obstacles placed at the scan's sim time), at :data:`SENSOR_HEIGHT` above the floor (below the default 0.5 m
 obstacle height).
 
+In a fleet, :meth:`LidarSim.place_bodies` puts the other robots (boxes of the ROSbot's
+200 x 235 x 220 mm body) and the people (cylinders) at their poses of the scan's instant
+(``Bodies``, from the sim driver) before the rays are cast.
+
 Invalid readings: no return within ``range_max`` -> ``inf``; a return closer than
 ``range_min`` -> ``inf`` too, because the A3 reports distance 0 ("no valid
 measurement") there and ``rplidar_ros`` publishes a 0 reading as ``inf``.
@@ -33,7 +37,7 @@ from common.errors import ConfigError
 from common.params import check_value
 from common.quiet import import_quietly
 from nodes.lidar_sim.options import OPTIONS
-from schemas.messages import Scan
+from schemas.messages import Bodies, Scan
 from worlds import World
 from worlds.bullet import MovingBodies, build_world
 
@@ -43,6 +47,7 @@ RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
 SENSOR_HEIGHT = robot.LIDAR_HEIGHT_M   # [m] scan plane above the floor (common.robot)
 SENSOR_X = robot.LIDAR_X_M   # [m] sensor ahead of the robot centre (common.robot)
+PERSON_HEIGHT_M = 1.8    # [m] a person's cylinder (any height above the scan plane would do)
 
 
 _BODY, _FRACTION = itemgetter(0), itemgetter(2)   # of a rayTestBatch hit
@@ -94,9 +99,52 @@ class LidarSim:
         try:
             self.bodies = build_world(self.cid, world)
             self.moving = MovingBodies(self.cid, world, self.bodies)
+            self._robots: list[int] = []          # other robots' bodies (place_bodies)
+            self._people: list = []               # (body, radius) of each person, or None
         except Exception:
             p.disconnect(self.cid)
             raise
+
+    def place_bodies(self, bodies: Bodies) -> None:
+        """Put the other robots (boxes of the ROSbot's body) and the people (cylinders 1.8 m
+        tall) where ``bodies`` says; bodies beyond what it lists wait far below the floor."""
+        cid = self.cid
+        shapes = ((self._robots, len(bodies.robots), self._robot_body),
+                  (self._people, len(bodies.person_x), None))
+        for pool, n, make in shapes:
+            while len(pool) < n:
+                pool.append(make() if make else None)
+        for k, body in enumerate(self._robots):
+            if k < len(bodies.robots):
+                quat = p.getQuaternionFromEuler([0, 0, bodies.robot_yaw[k]])
+                pos = [bodies.robot_x[k], bodies.robot_y[k], robot.BODY_HEIGHT_M / 2]
+            else:
+                pos, quat = [0.0, 0.0, -100.0], [0, 0, 0, 1]
+            p.resetBasePositionAndOrientation(body, pos, quat, physicsClientId=cid)
+        for k in range(len(self._people)):
+            if k < len(bodies.person_x):
+                r = bodies.person_radius[k]
+                if self._people[k] is None or self._people[k][1] != r:
+                    if self._people[k] is not None:
+                        p.removeBody(self._people[k][0], physicsClientId=cid)
+                    self._people[k] = (self._person_body(r), r)
+                pos = [bodies.person_x[k], bodies.person_y[k], PERSON_HEIGHT_M / 2]
+            elif self._people[k] is None:
+                continue
+            else:
+                pos = [0.0, 0.0, -100.0]
+            p.resetBasePositionAndOrientation(self._people[k][0], pos, [0, 0, 0, 1],
+                                              physicsClientId=cid)
+
+    def _robot_body(self) -> int:
+        half = [robot.BODY_LENGTH_M / 2, robot.BODY_WIDTH_M / 2, robot.BODY_HEIGHT_M / 2]
+        shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=self.cid)
+        return p.createMultiBody(0, shape, basePosition=[0, 0, -100], physicsClientId=self.cid)
+
+    def _person_body(self, radius: float) -> int:
+        shape = p.createCollisionShape(p.GEOM_CYLINDER, radius=radius, height=PERSON_HEIGHT_M,
+                                       physicsClientId=self.cid)
+        return p.createMultiBody(0, shape, basePosition=[0, 0, -100], physicsClientId=self.cid)
 
     def true_ranges(self, pose_x: float, pose_y: float, pose_yaw: float) -> np.ndarray:
         """Noise-free distance to the first obstacle per beam [m]; ``inf`` if none within range_max."""

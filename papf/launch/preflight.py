@@ -101,6 +101,12 @@ def check_run(world: World, planner: str, seed: int, timeout_s: float, port: int
     check_value("--seed", seed, SEED)
     check_value("--timeout", timeout_s, spec_timeout)
     planner_settings(planner, planner_args)
+    for robot in world.robots:   # a fleet: each robot's own planner, if it names one
+        if robot.planner is not None:
+            try:
+                planner_settings(planner_name(robot.planner), planner_args)
+            except ConfigError as exc:
+                raise ConfigError(f"world {world.name!r}, robot {robot.name!r}: {exc}") from None
     namespace(ns)
     record_path(record, force)
     if world.dims != 2:
