@@ -110,15 +110,17 @@ def robot_json(name: str, planner: str, r: RunResult, min_sep: float, discomfort
 
 
 def fleet_result(robots: list[tuple[str, str, RunMonitor]], sep: SeparationMeter,
-                 planner: str, world: str, seed: int, wall_time_s: float,
+                 world: str, seed: int, wall_time_s: float,
                  discomfort_s: dict[str, float] | None = None) -> RunResult:
-    """The fleet's :class:`RunResult` (module doc) with its ``robots`` objects."""
+    """The fleet's :class:`RunResult` (module doc) with its ``robots`` objects; its planner
+    is the robots' one, or their names joined by ``+``."""
     discomfort_s = discomfort_s or {}
     results = [(name, p, m.result(p, world, seed, wall_time_s)) for name, p, m in robots]
     worst = max(results, key=lambda nr: nr[2].exit_code)[2]
     outcome = "reached" if all(r.outcome == "reached" for _, _, r in results) else worst.outcome
+    used = sorted({p for _, p, _ in results})
     total = RunResult(
-        outcome=outcome, planner=planner, world=world, seed=seed,
+        outcome=outcome, planner=used[0] if len(used) == 1 else "+".join(used), world=world, seed=seed,
         duration_s=max(r.duration_s for _, _, r in results),
         path_length_m=sum(r.path_length_m for _, _, r in results),
         charge_mAh=sum(r.charge_mAh for _, _, r in results),

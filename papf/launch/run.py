@@ -162,7 +162,7 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
             _drive_fleet(cfg, world, graph.nodes, sup, session, seqs, goals, sep)
         finally:
             result = fleet_result([(n, planners[n], seqs[n].monitor) for n in names], sep,
-                                  cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
+                                  world.name, cfg.seed, time.monotonic() - wall0)
             for n in names[1:]:   # the recorder watches the first robot's events: last
                 seqs[n].end(result, wait_recorder=False)
             seqs[names[0]].end(result)

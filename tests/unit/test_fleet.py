@@ -1,0 +1,157 @@
+"""A fleet's pure parts: several robots in one driver core, the LiDAR's other bodies, the
+per-robot processes of a launch, the separation and the fleet's figures."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nodes.base_driver.core import DriverCore
+from nodes.base_driver.sim import SimBase
+from nodes.lidar_sim.__main__ import BodyPairs
+from nodes.lidar_sim.core import LidarParams, LidarSim
+from papf.launch.fleet import SeparationMeter, box_gap, fleet_result, footprint
+from papf.launch.outcome import RunMonitor
+from papf.launch.profile import LaunchOptions, load_profile, resolve
+from schemas.messages import Bodies, Odometry, PlannerStatus, Twist
+from worlds import parse_world
+
+S = 1_000_000_000  # ns per s
+
+
+def fleet_world(r2_start=(3.0, 0.0, math.pi), r2_planner=None):
+    r2 = {"name": "r2", "start": list(r2_start), "goal": [0.0, 0.0]}
+    if r2_planner:
+        r2["planner"] = r2_planner
+    return parse_world({"name": "f", "robots": [
+        {"name": "r1", "start": [0.0, 0.0, 0.0], "goal": [3.0, 0.0]}, r2]})
+
+
+def answer(core: DriverCore, *robots: str) -> list[bool]:
+    return [core.command(Twist(stamp_ns=core.t_ns, v=0.3, w=0.0), r) for r in robots]
+
+
+def test_lockstep_needs_every_robots_answer():
+    with DriverCore(fleet_world(), seed=0) as core:
+        out = core.outputs()
+        topics = [t for t, _ in out]
+        assert topics[:5] == ["r1/sim/bodies", "r1/sim/pose", "r1/odom", "r1/wheels", "r1/clock"]
+        assert topics[5:10] == ["r2/sim/bodies", "r2/sim/pose", "r2/odom", "r2/wheels", "r2/clock"]
+        bodies = dict(out)["r1/sim/bodies"]
+        assert bodies.robots == ("r2",) and bodies.robot_x[0] == pytest.approx(3.0, abs=0.05)
+        assert answer(core, "r1") == [False]           # r2 has not answered: not complete
+        assert answer(core, "nobody") == [False]       # no such robot: ignored
+        assert answer(core, "r2") == [True]
+        core.advance()
+        assert [t for t, _ in core.outputs()][0] == "r1/sim/pose"   # no scan: no bodies
+
+
+def test_first_robot_of_a_fleet_starts_as_a_lone_robot():
+    """Robot 0 takes the first draws of the seed's rng, as a single robot does."""
+    lone = parse_world({"name": "t", "robot": {"start": [0.0, 0.0, 0.0]},
+                        "goal": {"position": [3.0, 0.0]}})
+    with SimBase(lone, seed=7) as one, SimBase(lone, seed=7, starts=[(0, 0, 0), (3, 0, 0)]) as two:
+        assert one.pose() == pytest.approx(two.pose(0), abs=1e-6)
+        assert two.pose(1)[0] == pytest.approx(3.0, abs=0.05)
+
+
+def test_robots_driving_into_each_other_collide_both():
+    with DriverCore(fleet_world(r2_start=(0.6, 0.0, math.pi)), seed=0) as core:
+        events = []
+        while core.t_ns < 3 * S and not events:
+            out = core.outputs()
+            events += [(t, m) for t, m in out if t.endswith("events") and m.kind == "collision"]
+            if core.is_scan_instant():
+                answer(core, "r1", "r2")
+            core.advance()
+        events += [(t, m) for t, m in core.outputs() if t.endswith("events")]
+    where = {t: m.detail for t, m in events}
+    assert where == {"r1/events": "robot r2", "r2/events": "robot r1"}
+    assert core.collision_counts == [1, 1]
+
+
+def test_lidar_sees_another_robot():
+    with LidarSim(parse_world({"name": "e", "robot": {"start": [0, 0, 0]},
+                               "goal": {"position": [5, 0]}}),
+                  LidarParams(beams=360, noise_sd=0.0)) as lidar:
+        assert np.isinf(lidar.true_ranges(0.0, 0.0, 0.0)).all()
+        lidar.place_bodies(Bodies(stamp_ns=0, robots=("r2",), robot_x=(2.0,), robot_y=(0.0,),
+                                  robot_yaw=(0.0,), person_x=(0.0,), person_y=(-1.5,),
+                                  person_radius=(0.3,)))
+        ranges = lidar.true_ranges(0.0, 0.0, 0.0)
+        ahead, right = ranges[180], ranges[90]           # beam i at -pi + i deg
+        assert ahead == pytest.approx(2.0 - 0.1 - lidar.params.sensor_x, abs=1e-3)
+        assert right == pytest.approx(1.5 - 0.3, abs=1e-2)
+        lidar.place_bodies(Bodies(stamp_ns=1))              # gone: nothing seen
+        assert np.isinf(lidar.true_ranges(0.0, 0.0, 0.0)).all()
+
+
+def test_scan_waits_for_pose_and_bodies_in_either_order():
+    pairs = BodyPairs()
+    pose, bodies = Odometry(stamp_ns=100, x=0, y=0, yaw=0, v=0, w=0), Bodies(stamp_ns=100)
+    assert pairs.add("sim/pose", pose) == (None, None)
+    assert pairs.add("sim/bodies", bodies) == (pose, bodies)
+    assert pairs.add("sim/bodies", Bodies(stamp_ns=200)) == (None, None)
+    later = Odometry(stamp_ns=200, x=1, y=0, yaw=0, v=0, w=0)
+    assert pairs.add("sim/pose", later) == (later, Bodies(stamp_ns=200))
+
+
+def test_launch_gives_each_robot_its_nodes_and_planner(tmp_path):
+    path = tmp_path / "f.toml"
+    path.write_text('name = "f"\n[[robots]]\nname = "r1"\nstart = [0, 0]\ngoal = [3, 0]\n'
+                    '[[robots]]\nname = "r2"\nstart = [3, 1]\ngoal = [0, 1]\nplanner = "papf"\n')
+    graph = resolve(load_profile("sim"), LaunchOptions("sim", values={"world": str(path),
+                                                                       "planner": "apf"}))
+    nodes = graph.nodes
+    assert {"r1/planner", "r2/planner", "r1/lidar_sim", "r2/energy_meter", "base_driver"} <= set(nodes)
+    assert "planner" not in nodes and sum(n.endswith("base_driver") for n in nodes) == 1
+
+    def arg(name, flag):
+        argv = nodes[name]
+        return argv[argv.index(flag) + 1]
+    assert (arg("r1/planner", "--planner"), arg("r2/planner", "--planner")) == ("apf", "papf")
+    assert (arg("r1/planner", "--namespace"), arg("r2/lidar_sim", "--namespace")) == ("r1", "r2")
+
+
+def test_box_gap():
+    a = footprint(0.0, 0.0, 0.0)
+    assert box_gap(a, footprint(1.0, 0.0, 0.0)) == pytest.approx(0.8)
+    assert box_gap(a, footprint(0.0, 1.0, math.pi / 2)) == pytest.approx(1 - 0.1175 - 0.1)
+    assert box_gap(a, footprint(0.1, 0.05, 0.4)) == 0.0
+
+
+def test_separation_is_taken_up_to_each_robots_end():
+    sep = SeparationMeter(["r1", "r2"])
+    for t, x2 in ((0, 2.0), (10, 1.0), (20, 0.5)):
+        sep.on_pose("r2", t, x2, 0.0, 0.0)       # either robot first: measured once both came
+        sep.on_pose("r1", t, 0.0, 0.0, 0.0)
+    assert sep.min_m("r1", 10) == pytest.approx(0.8)
+    assert sep.min_m("r2", 25) == pytest.approx(0.3)
+    assert sep.min_m("r1", -1) == math.inf
+
+
+def monitor(outcome: str, t_ns: int) -> RunMonitor:
+    m = RunMonitor(10.0)
+    m.on_pose(Odometry(stamp_ns=0, x=0, y=0, yaw=0, v=0.5, w=0))
+    m.on_status(PlannerStatus(stamp_ns=t_ns, state=outcome))
+    return m
+
+
+def test_fleet_outcome_is_the_worst_robots():
+    sep = SeparationMeter(["r1", "r2"])
+    both = fleet_result([("r1", "apf", monitor("reached", 2 * S)),
+                         ("r2", "apf", monitor("reached", 3 * S))], sep, "f", 0, 1.0)
+    assert (both.outcome, both.duration_s, both.planner) == ("reached", 3.0, "apf")
+    d = both.to_json()
+    assert [r["name"] for r in d["robots"]] == ["r1", "r2"] and d["min_separation_m"] is None
+    mixed = fleet_result([("r1", "apf", monitor("reached", 2 * S)),
+                          ("r2", "papf", monitor("stagnated", 3 * S))], sep, "f", 0, 1.0)
+    assert (mixed.outcome, mixed.exit_code, mixed.planner) == ("stagnated", 3, "apf+papf")
+    assert mixed.reason.startswith("r2: stagnated")
+
+
+def test_single_robot_json_has_no_fleet_fields():
+    d = monitor("reached", S).result("apf", "w", 0, 1.0).to_json()
+    assert not {"robots", "min_separation_m", "discomfort_s"} & set(d)
