@@ -93,50 +93,81 @@ def closed_loop(world: World, planner, name: str, seed: int, start: tuple[float,
                 stop_on_collision: bool = True) -> PlanResult:
     """Drive ``planner`` from ``start`` to an outcome (see the module doc); ``scan(x, y, yaw,
     t_ns)`` senses, ``clearance(x, y, yaw, t_ns)`` [m] < 0 is a collision."""
-    x, y, yaw = start
-    step_ns = int(round(dt * NS))
-    n_sub = max(1, int(round(dt / SUBSTEP_S)))
-    sub_s = dt / n_sub
-    v = w = 0.0
-    planner.set_goal(goal_message(world))
-    rows, states = [(0.0, x, y, yaw)], []
-    outcome, reason, t_end, moved_ns = "", "", 0, None
-    min_clear = clearance(x, y, yaw, 0)
-    collisions, t, cycles = 0, 0, 0
-    while not outcome:
-        cmd, state, status = planner.step(scan(x, y, yaw, t), Odometry(stamp_ns=t, x=x, y=y,
-                                                                       yaw=yaw, v=v, w=w))
-        cycles += 1
-        if keep_states:
-            states.append(state)
+    drive = Drive(world, planner, name, seed, start, scan, clearance, max_time_s, dt, gate,
+                  keep_states, stop_on_collision)
+    while not drive.outcome:
+        drive.cycle()
+    return drive.result()
+
+
+class Drive:
+    """:func:`closed_loop` one control period at a time (:meth:`cycle`), for loops that
+    interleave several robots (papf/offline/crowd.py); arguments as :func:`closed_loop`."""
+
+    def __init__(self, world: World, planner, name: str, seed: int,
+                 start: tuple[float, float, float], scan, clearance, max_time_s: float,
+                 dt: float = 0.1, gate: CommandGate | None = None, keep_states: bool = False,
+                 stop_on_collision: bool = True):
+        self.world, self.planner, self.name, self.seed = world, planner, name, seed
+        self.scan, self.clearance, self.gate = scan, clearance, gate
+        self.max_time_s, self.dt = max_time_s, dt
+        self.keep_states, self.stop_on_collision = keep_states, stop_on_collision
+        self.x, self.y, self.yaw = start
+        self.step_ns = int(round(dt * NS))
+        self.n_sub = max(1, int(round(dt / SUBSTEP_S)))
+        self.v = self.w = 0.0
+        planner.set_goal(goal_message(world))
+        self.rows, self.states = [(0.0, *start)], []
+        self.outcome, self.reason, self.t_end, self.moved_ns = "", "", 0, None
+        self.min_clear = clearance(*start, 0)
+        self.collisions, self.t, self.cycles = 0, 0, 0
+
+    def cycle(self) -> None:
+        """One control period: scan, plan, drive the substeps, check clearance."""
+        x, y, yaw, t, gate = self.x, self.y, self.yaw, self.t, self.gate
+        step_ns, n_sub = self.step_ns, self.n_sub
+        sub_s = self.dt / n_sub
+        cmd, state, status = self.planner.step(
+            self.scan(x, y, yaw, t), Odometry(stamp_ns=t, x=x, y=y, yaw=yaw, v=self.v, w=self.w))
+        self.cycles += 1
+        if self.keep_states:
+            self.states.append(state)
         if status.state in TERMINAL:
-            outcome, reason, t_end = status.state, status.reason, t
-            break
+            self.outcome, self.reason, self.t_end = status.state, status.reason, t
+            return
         if gate is not None:
             gate.command(cmd.v, cmd.w, t)
         for k in range(n_sub):
             t_sub = t + (k * step_ns) // n_sub
             v, w = gate.output(t_sub, sub_s)[:2] if gate is not None else (cmd.v, cmd.w)
+            self.v, self.w = v, w
             x, y, yaw = unicycle(x, y, yaw, v, w, sub_s)
-            if moved_ns is None and abs(v) > MOVING_SPEED:
-                moved_ns = t_sub
-            c = clearance(x, y, yaw, t + ((k + 1) * step_ns) // n_sub)
-            min_clear = min(min_clear, c)
+            if self.moved_ns is None and abs(v) > MOVING_SPEED:
+                self.moved_ns = t_sub
+            c = self.clearance(x, y, yaw, t + ((k + 1) * step_ns) // n_sub)
+            self.min_clear = min(self.min_clear, c)
             if c < 0.0:
-                collisions += 1
-                if stop_on_collision:
-                    t_end = t + ((k + 1) * step_ns) // n_sub
-                    outcome = "collision"
-                    reason = f"footprint overlaps an obstacle at ({x:.2f}, {y:.2f})"
+                self.collisions += 1
+                if self.stop_on_collision:
+                    self.t_end = t + ((k + 1) * step_ns) // n_sub
+                    self.outcome = "collision"
+                    self.reason = f"footprint overlaps an obstacle at ({x:.2f}, {y:.2f})"
                     break
-        t += step_ns
-        rows.append((t_end / NS if outcome else t / NS, x, y, yaw))
-        if not outcome and t >= max_time_s * NS:
-            outcome, reason, t_end = "timeout", f"no outcome within {max_time_s:g} s", t
-    arr = np.array(rows)
-    start_ns = moved_ns if moved_ns is not None else t_end
-    return PlanResult(world=world.name, planner=name, seed=seed, outcome=outcome, reason=reason,
-                      path=arr[:, 1:3], times=arr[:, 0], headings=arr[:, 3],
-                      duration_s=max(0, t_end - start_ns) / NS, sim_time_s=t_end / NS,
-                      min_clearance_m=float(min_clear), collisions=collisions,
-                      motion="unicycle", cycles=cycles, states=states)
+        self.x, self.y, self.yaw = x, y, yaw
+        self.t = t = t + step_ns
+        self.rows.append((self.t_end / NS if self.outcome else t / NS, x, y, yaw))
+        if not self.outcome and t >= self.max_time_s * NS:
+            self.outcome, self.reason, self.t_end = ("timeout",
+                                                     f"no outcome within {self.max_time_s:g} s", t)
+
+    def result(self) -> PlanResult:
+        """The run so far as a :class:`PlanResult`."""
+        arr = np.array(self.rows)
+        start_ns = self.moved_ns if self.moved_ns is not None else self.t_end
+        return PlanResult(world=self.world.name, planner=self.name, seed=self.seed,
+                          outcome=self.outcome, reason=self.reason, path=arr[:, 1:3],
+                          times=arr[:, 0], headings=arr[:, 3],
+                          duration_s=max(0, self.t_end - start_ns) / NS,
+                          sim_time_s=self.t_end / NS, min_clearance_m=float(self.min_clear),
+                          collisions=self.collisions, motion="unicycle", cycles=self.cycles,
+                          states=self.states)
