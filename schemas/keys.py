@@ -13,6 +13,7 @@ from schemas.messages import (
     Goal,
     Objects,
     Odometry,
+    People,
     PlannerState,
     PlannerStatus,
     Scan,
@@ -36,12 +37,13 @@ TOPICS = {
     "events": Event,
     "objects": Objects,     # obstacle tracks: sim ground truth or the tracker node
     "sim/bodies": Bodies,   # the other robots and the people a robot's LiDAR sees (sim fleets)
+    "sim/people": People,   # the world's people, every instant (sim driver)
 }
 
 # Topics with one publisher whose stamps never go back within a run (a new run restarts
 # sim time at 0): a message older than the last one on them is dropped (common.units.StampGuard).
 STAMP_ORDERED = frozenset({"scan", "odom", "wheels", "battery", "battery/measured", "clock",
-                           "sim/pose"})
+                           "sim/pose", "sim/people"})
 
 
 @dataclass(frozen=True)

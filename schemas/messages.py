@@ -222,9 +222,24 @@ class Bodies(Message):
     person_radius: Floats = field((), unit="m")
 
 
+@message("People", 1)
+class People(Message):
+    """Where the world's people (``[[people]]``) are and go at one instant (sim ground truth).
+
+    Index ``i`` is the i-th ``[[people]]`` of the world file, in every message of a run.
+    """
+
+    stamp_ns: int = field(unit="ns")
+    x: Floats = field((), unit="m")
+    y: Floats = field((), unit="m")
+    vx: Floats = field((), unit="m/s")
+    vy: Floats = field((), unit="m/s")
+    radius: Floats = field((), unit="m", doc="body radius")
+
+
 ALL_MESSAGES: tuple[type[Message], ...] = (
     Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
-    PlannerStatus, Clock, Event, Objects, Bodies,
+    PlannerStatus, Clock, Event, Objects, Bodies, People,
 )
 BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
 

@@ -76,13 +76,16 @@ def main_sim(args: argparse.Namespace) -> int:
     config = DriverConfig.from_rates(args.odom_hz, args.scan_hz, args.watchdog)
     with open_node(NAME, args, log) as node:
         publish = node.publish
+        people = ("sim/people",) if world.people else ()   # on this node's namespace
         if world.robots:   # a fleet: each robot's share under its own namespace
             publish = fleet_nodes(node, [r.name for r in world.robots], log)
+            node.declare_publishers(*people)
             node.ready()   # <namespace>/alive/base_driver too: the process itself is up
         else:
             node.subscribe("events")
             node.subscribe("cmd_vel")
-            node.declare_publishers(*PUBLISHES, on_demand=ON_DEMAND)
+            node.declare_publishers(*PUBLISHES, *people, *(("sim/bodies",) if people else ()),
+                                    on_demand=ON_DEMAND)
             node.ready()
         log.info("waiting for run_started on %s (a launcher sends it; alone: papf goal X Y "
                  "--start-run, or papf teleop --start-run with --realtime)", node.keys.events)
@@ -115,6 +118,9 @@ def fleet_nodes(node: Node, names: list[str], log):
     node.shares = list(robots.values())   # closed with the session (kept referenced)
 
     def publish(topic: str, msg) -> None:
+        if topic == "sim/people":   # the world's, not a robot's: on the driver's namespace
+            node.publish(topic, msg)
+            return
         name, _, suffix = topic.partition("/")
         robots[name].publish(suffix, msg)
     return publish

@@ -20,12 +20,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from common.errors import ConfigError
 from common.params import check_value
 from common.units import NS_PER_S
 from nodes.base_driver.limits import OPTIONS, CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimBase, SimParams
-from schemas.messages import Bodies, Clock, Event, Twist
+from schemas.messages import Bodies, Clock, Event, People, Twist
 from worlds import World
 
 SOURCE = "base_driver"            # Event.source of this node's events
@@ -113,6 +115,13 @@ class DriverCore:
         self._watchdog_stopped = [False] * n
         self._answered: set[int] = set()          # robots whose command answers this scan
         self._index = {name: i for i, name in enumerate(self.names)}
+        self.crowd = None
+        if world.people:   # people who react (common/crowd.py), bodies in the physics
+            from common.crowd import Crowd  # pyrvo / pysocialforce: only with people
+
+            self.crowd = Crowd(world.people, world, seed)
+            self.sim.add_people(self.crowd.radii)
+            self.sim.place_people(self.crowd.positions)
 
     @property
     def collision_count(self) -> int:
@@ -138,8 +147,10 @@ class DriverCore:
         (a fleet's robots first get ``sim/bodies`` at a scan instant); clears pending events."""
         t = self.t_ns
         out: list[tuple[str, object]] = []
-        scan = len(self.names) > 1 and self.is_scan_instant()
+        scan = (len(self.names) > 1 or self.crowd is not None) and self.is_scan_instant()
         odoms = [self.sim.odometry(t, i) for i in range(len(self.names))]
+        if self.crowd is not None:
+            out.append(("sim/people", self._people(t)))
         if self.is_scan_instant():
             self._answered = set()
         for i, odom in enumerate(odoms):
@@ -153,12 +164,25 @@ class DriverCore:
         return out
 
     def _bodies(self, t: int, i: int, odoms: list) -> Bodies:
-        """What robot ``i``'s LiDAR sees move at ``t``: every other robot."""
+        """What robot ``i``'s LiDAR sees move at ``t``: every other robot, every person."""
         others = [j for j in range(len(self.names)) if j != i]
+        xy = self.crowd.positions if self.crowd is not None else np.zeros((0, 2))
+        radii = self.crowd.radii if self.crowd is not None else ()
         return Bodies(stamp_ns=t, robots=tuple(self.names[j] for j in others),
                       robot_x=tuple(odoms[j].x for j in others),
                       robot_y=tuple(odoms[j].y for j in others),
-                      robot_yaw=tuple(odoms[j].yaw for j in others))
+                      robot_yaw=tuple(odoms[j].yaw for j in others),
+                      person_x=tuple(float(v) for v in xy[:, 0]),
+                      person_y=tuple(float(v) for v in xy[:, 1]),
+                      person_radius=tuple(float(r) for r in radii))
+
+    def _people(self, t: int) -> People:
+        crowd = self.crowd
+        xy, v = crowd.positions, crowd.velocities
+        return People(stamp_ns=t, x=tuple(float(a) for a in xy[:, 0]),
+                      y=tuple(float(a) for a in xy[:, 1]), vx=tuple(float(a) for a in v[:, 0]),
+                      vy=tuple(float(a) for a in v[:, 1]),
+                      radius=tuple(float(r) for r in crowd.radii))
 
     def command(self, twist: Twist, robot: str = "") -> bool:
         """Apply robot ``robot``'s command; True once it completes the lockstep of this
@@ -177,6 +201,10 @@ class DriverCore:
         """Step the physics to the next publication instant."""
         step_ns = self.config.sim.step_ns
         n = len(self.names)
+        if self.crowd is not None:   # people take the instant's step, seeing the robots now
+            robots = [(*self.sim.pose(i)[:2], *self.sim.velocity(i)) for i in range(n)]
+            self.crowd.step(self.config.odom_period_ns / NS_PER_S, robots)
+            self.sim.place_people(self.crowd.positions)
         for _ in range(self.config.odom_period_ns // step_ns):
             t = self.sim.t_ns
             for i in range(n):
@@ -196,12 +224,15 @@ class DriverCore:
         if not contacts:
             return
         t = self.sim.t_ns
-        keys = [c.obstacle if c.robot < 0 else -1 - c.robot for c in contacts]
+        n = len(self.names)   # monitor keys: obstacles >= 0, robots -1.., people after them
+        keys = [c.obstacle if c.robot < 0 and c.person < 0 else
+                -1 - c.robot if c.robot >= 0 else -1 - n - c.person for c in contacts]
         new = set(self.monitors[i].update(t, keys))
         for c, key in zip(contacts, keys, strict=True):
             if key in new:
                 self.collision_counts[i] += 1
                 what = (f"robot {self.names[c.robot]}" if c.robot >= 0 else
+                        f"person {c.person}" if c.person >= 0 else
                         f"obstacle {c.obstacle} ({self.world.obstacles[c.obstacle].kind})")
                 self._event(i, t, "collision", what, c.x, c.y)
 

@@ -64,6 +64,7 @@ MOTOR_TORQUE_LIMIT = 1.5       # [N*m] per wheel: rosbot_description wheel joint
                                # Gazebo plugin's max_wheel_torque (assumption: the real gear motor
                                # delivers about this much)
 TOP_SPEED = robot.TOP_SPEED_M_S   # [m/s]
+PERSON_HEIGHT_M = 1.8          # [m] a person's cylinder (assumption; anything above the robot)
 
 
 @dataclass(frozen=True)
@@ -118,6 +119,7 @@ class Contact:
     x: float
     y: float
     robot: int = -1               # index of the other robot touched (fleet order), else -1
+    person: int = -1              # index of the person touched ([[people]] order), else -1
 
 
 def jittered_start(start, rng: np.random.Generator, prm: SimParams | None = None,
@@ -184,6 +186,8 @@ class SimBase:
         self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
         self.robots = [self._build_robot(start) for start in starts]   # body ids, fleet order
         self._robot_index = {body: i for i, body in enumerate(self.robots)}
+        self.people: list[int] = []                                   # add_people
+        self._person_index: dict[int, int] = {}
         self._targets_of = [(0.0, 0.0)] * len(self.robots)           # [rad/s] left, right
         self.robot = self.robots[0]
         for _ in range(SETTLE_STEPS):
@@ -289,6 +293,11 @@ class SimBase:
         v = math.cos(yaw) * vx + math.sin(yaw) * vy
         return Odometry(stamp_ns=stamp_ns, x=x, y=y, yaw=yaw, v=v, w=w)
 
+    def velocity(self, i: int = 0) -> tuple[float, float]:
+        """Robot ``i``'s ground-truth velocity (vx, vy) [m/s] in the world frame."""
+        (vx, vy, _), _ = p.getBaseVelocity(self.robots[i], physicsClientId=self.cid)
+        return vx, vy
+
     def wheel_states(self, stamp_ns: int, i: int = 0) -> WheelStates:
         """Robot ``i``'s wheel speeds [rad/s] and motor torques of the last step [N*m]."""
         states = p.getJointStates(self.robots[i], self._joints, physicsClientId=self.cid)
@@ -305,12 +314,15 @@ class SimBase:
         points = _contact_points(bodyA=self.robots[i], linkIndexA=-1, physicsClientId=self.cid)
         if not points:   # the common case, every step of a run without contact
             return []
-        seen: dict = {}   # obstacle index, or ("robot", index) -> Contact
+        seen: dict = {}   # obstacle index, or ("robot" | "person", index) -> Contact
         for cp in points:
-            other = self._robot_index.get(cp[2])
-            if other is not None:
-                if ("robot", other) not in seen:
-                    seen[("robot", other)] = Contact(-1, float(cp[6][0]), float(cp[6][1]), other)
+            other, person = self._robot_index.get(cp[2]), self._person_index.get(cp[2])
+            if other is not None or person is not None:
+                key = ("robot", other) if other is not None else ("person", person)
+                if key not in seen:
+                    seen[key] = Contact(-1, float(cp[6][0]), float(cp[6][1]),
+                                        -1 if other is None else other,
+                                        -1 if person is None else person)
                 continue
             index = self._obstacle_index.get(cp[2])
             if index == MERGED:   # a mesh of many static obstacles: the one at the contact
@@ -327,6 +339,22 @@ class SimBase:
                 d = float(ob.model.distance(ob, np.array([[x, y]]))[0])
                 best = (d, i) if best is None or d < best[0] else best
         return best[1] if best else None
+
+    def add_people(self, radii) -> None:
+        """Bodies for people (cylinders of ``radii`` [m], :data:`PERSON_HEIGHT_M` tall, moved
+        kinematically by :meth:`place_people`); a robot touching one is a contact."""
+        for r in radii:
+            shape = p.createCollisionShape(p.GEOM_CYLINDER, radius=float(r), height=PERSON_HEIGHT_M,
+                                           physicsClientId=self.cid)
+            body = p.createMultiBody(0, shape, basePosition=[0, 0, -100], physicsClientId=self.cid)
+            self._person_index[body] = len(self.people)
+            self.people.append(body)
+
+    def place_people(self, xy) -> None:
+        """Put each person's body at its (x, y) [m]."""
+        for body, (x, y) in zip(self.people, xy, strict=True):
+            p.resetBasePositionAndOrientation(body, [float(x), float(y), PERSON_HEIGHT_M / 2],
+                                              [0, 0, 0, 1], physicsClientId=self.cid)
 
     def close(self) -> None:
         if self.cid is not None and p.isConnected(self.cid):

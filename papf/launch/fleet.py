@@ -12,8 +12,11 @@ has an outcome. The fleet's figures (docs/architecture.md "Fleets"):
   the longest robot's;
 - ``min_separation_m``: the closest approach of a robot's footprint to another robot's
   (footprint to footprint, from the pose samples of one instant) or a person;
-- ``discomfort_s``: the time a person spent within :data:`DISCOMFORT_M` of a robot's
-  footprint (0 without people).
+- ``discomfort_s``: the time a person spent within 0.2 m of a robot's footprint (0
+  without people); both by :mod:`common.crowd_measures`, summed over robots at the top.
+
+A world with ``[[people]]`` and one robot runs this way too (one robot, its namespace the
+run's), so its JSON has the people's figures and a ``robots`` list of one.
 """
 
 from __future__ import annotations
@@ -24,76 +27,55 @@ from dataclasses import replace
 
 import numpy as np
 
-from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
+from common.crowd_measures import CrowdMeter
 from common.units import NS_PER_S as NS
 from papf.launch.outcome import RunMonitor, RunResult
-
-DISCOMFORT_M = 0.2    # [m] CrowdNav's discomfort distance
-
-
-def footprint(x: float, y: float, yaw: float) -> np.ndarray:
-    """The ROSbot's footprint corners (4 x 2) [m] at pose (x, y, yaw)."""
-    hx, hy = BODY_LENGTH_M / 2, BODY_WIDTH_M / 2
-    c, s = math.cos(yaw), math.sin(yaw)
-    local = np.array([(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)])
-    return local @ np.array([[c, s], [-s, c]]) + (x, y)
+from schemas import Odometry, People
 
 
-def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    ab = b - a
-    t = min(1.0, max(0.0, float(np.dot(p - a, ab) / np.dot(ab, ab))))
-    return float(np.hypot(*(a + t * ab - p)))
+class FleetMeter:
+    """Each robot's crowd measures (:class:`common.crowd_measures.CrowdMeter`: separation to
+    the other robots' footprints and the people's discs, discomfort time), fed the instants
+    for which every robot's pose sample (and the people's positions, if any) came.
 
+    Every instant's figures are kept per robot as (stamp, min separation, discomfort), so
+    the figures at a robot's ``t_end`` are exact whatever order samples and outcomes arrive in
+    (each robot's samples arrive in stamp order, so instants complete in order)."""
 
-def _inside(p: np.ndarray, poly: np.ndarray) -> bool:
-    """``p`` in the convex, counter-clockwise polygon ``poly``."""
-    edges = np.roll(poly, -1, axis=0) - poly
-    rel = p - poly
-    return bool(np.all(edges[:, 0] * rel[:, 1] - edges[:, 1] * rel[:, 0] >= 0))
+    def __init__(self, names: list[str], goals: dict[str, tuple[float, float]], people: bool):
+        self.names, self.people = names, people
+        self.meter = CrowdMeter(goals)
+        self._at: dict[int, dict] = {}
+        self._runs: dict[str, list[tuple[int, float, float]]] = {n: [] for n in names}
 
+    def on_pose(self, name: str, msg: Odometry) -> None:
+        """A robot's pose sample (``sim/pose``)."""
+        self._at.setdefault(msg.stamp_ns, {})[name] = (msg.x, msg.y, msg.yaw)
+        self._check(msg.stamp_ns)
 
-def box_gap(a: np.ndarray, b: np.ndarray) -> float:
-    """Distance between two convex footprints [m]; 0 when they touch or overlap."""
-    if any(_inside(p, b) for p in a) or any(_inside(p, a) for p in b):
-        return 0.0
-    return min(_point_segment(p, poly[i], poly[(i + 1) % len(poly)])
-               for pts, poly in ((a, b), (b, a)) for p in pts for i in range(len(poly)))
+    def on_people(self, msg: People) -> None:
+        """The people's positions of one instant (``sim/people``)."""
+        self._at.setdefault(msg.stamp_ns, {})[None] = msg
+        self._check(msg.stamp_ns)
 
-
-class SeparationMeter:
-    """Closest approach between robots' footprints, from pose samples of equal stamps.
-
-    Every complete instant is kept per robot as (stamp, running minimum), so the figure at
-    a robot's ``t_end`` is exact whatever order samples and outcomes arrive in."""
-
-    def __init__(self, names: list[str]):
-        self.names = names
-        self._at: dict[int, dict[str, tuple[float, float, float]]] = {}
-        self._runs: dict[str, list[tuple[int, float]]] = {n: [] for n in names}
-
-    def on_pose(self, name: str, stamp_ns: int, x: float, y: float, yaw: float) -> None:
-        """A robot's pose sample; once every robot's of that stamp came, measure."""
-        at = self._at.setdefault(stamp_ns, {})
-        at[name] = (x, y, yaw)
-        if len(at) < len(self.names):
+    def _check(self, t: int) -> None:
+        at = self._at[t]
+        if len(at) < len(self.names) + self.people:
             return
-        del self._at[stamp_ns]
-        for old in [t for t in self._at if t < stamp_ns]:   # never completed: a robot is gone
+        del self._at[t]
+        for old in [s for s in self._at if s < t]:   # never completed: a robot is gone
             del self._at[old]
-        boxes = {n: footprint(*at[n]) for n in self.names}
-        near = {n: math.inf for n in self.names}
-        for i, a in enumerate(self.names):
-            for b in self.names[i + 1:]:
-                gap = box_gap(boxes[a], boxes[b])
-                near[a], near[b] = min(near[a], gap), min(near[b], gap)
-        for n, gap in near.items():
-            runs = self._runs[n]
-            runs.append((stamp_ns, min(gap, runs[-1][1]) if runs else gap))
+        crowd = at.pop(None, None)
+        xy = np.column_stack([crowd.x, crowd.y]) if crowd else np.zeros((0, 2))
+        self.meter.update(t / NS, at, xy, np.asarray(crowd.radius if crowd else ()))
+        for n, m in self.meter.results().items():
+            self._runs[n].append((t, m.min_separation_m, m.discomfort_s))
 
-    def min_m(self, name: str, t_end_ns: int) -> float:
-        """Robot ``name``'s closest approach to another robot up to ``t_end_ns`` [m] (inf: none)."""
-        i = bisect_right(self._runs[name], (t_end_ns, math.inf))
-        return self._runs[name][i - 1][1] if i else math.inf
+    def at(self, name: str, t_end_ns: int) -> tuple[float, float]:
+        """Robot ``name``'s (min separation [m], inf: nobody to measure against; discomfort
+        time [s]) up to ``t_end_ns``."""
+        i = bisect_right(self._runs[name], (t_end_ns, math.inf, math.inf))
+        return self._runs[name][i - 1][1:] if i else (math.inf, 0.0)
 
 
 def robot_json(name: str, planner: str, r: RunResult, min_sep: float, discomfort_s: float) -> dict:
@@ -109,12 +91,10 @@ def robot_json(name: str, planner: str, r: RunResult, min_sep: float, discomfort
     return out
 
 
-def fleet_result(robots: list[tuple[str, str, RunMonitor]], sep: SeparationMeter,
-                 world: str, seed: int, wall_time_s: float,
-                 discomfort_s: dict[str, float] | None = None) -> RunResult:
+def fleet_result(robots: list[tuple[str, str, RunMonitor]], meter: FleetMeter,
+                 world: str, seed: int, wall_time_s: float) -> RunResult:
     """The fleet's :class:`RunResult` (module doc) with its ``robots`` objects; its planner
     is the robots' one, or their names joined by ``+``."""
-    discomfort_s = discomfort_s or {}
     results = [(name, p, m.result(p, world, seed, wall_time_s)) for name, p, m in robots]
     worst = max(results, key=lambda nr: nr[2].exit_code)[2]
     outcome = "reached" if all(r.outcome == "reached" for _, _, r in results) else worst.outcome
@@ -130,11 +110,12 @@ def fleet_result(robots: list[tuple[str, str, RunMonitor]], sep: SeparationMeter
         reason="; ".join(f"{n}: {r.outcome}" + (f" ({r.reason})" if r.reason else "")
                          for n, _, r in results if r.outcome != "reached"),
         faults=tuple(f for _, _, r in results for f in r.faults))
-    seps = {n: sep.min_m(n, round(r.sim_time_s * NS)) for n, _, r in results}
+    crowd = {n: meter.at(n, round(r.sim_time_s * NS)) for n, _, r in results}
+    closest = min(sep for sep, _ in crowd.values())
     return replace(total, fleet=tuple(
-        robot_json(n, p, r, seps[n], discomfort_s.get(n, 0.0)) for n, p, r in results),
-        min_separation_m=min(seps.values()) if math.isfinite(min(seps.values())) else None,
-        discomfort_s=sum(discomfort_s.values()))
+        robot_json(n, p, r, *crowd[n]) for n, p, r in results),
+        min_separation_m=closest if math.isfinite(closest) else None,
+        discomfort_s=sum(d for _, d in crowd.values()))
 
 
 def progress_figures(monitors: dict[str, RunMonitor],

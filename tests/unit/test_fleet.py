@@ -12,10 +12,10 @@ from nodes.base_driver.core import DriverCore
 from nodes.base_driver.sim import SimBase
 from nodes.lidar_sim.__main__ import BodyPairs
 from nodes.lidar_sim.core import LidarParams, LidarSim
-from papf.launch.fleet import SeparationMeter, box_gap, fleet_result, footprint
+from papf.launch.fleet import FleetMeter, fleet_result
 from papf.launch.outcome import RunMonitor
 from papf.launch.profile import LaunchOptions, load_profile, resolve
-from schemas.messages import Bodies, Odometry, PlannerStatus, Twist
+from schemas.messages import Bodies, Odometry, People, PlannerStatus, Twist
 from worlds import parse_world
 
 S = 1_000_000_000  # ns per s
@@ -115,21 +115,29 @@ def test_launch_gives_each_robot_its_nodes_and_planner(tmp_path):
     assert (arg("r1/planner", "--namespace"), arg("r2/lidar_sim", "--namespace")) == ("r1", "r2")
 
 
-def test_box_gap():
-    a = footprint(0.0, 0.0, 0.0)
-    assert box_gap(a, footprint(1.0, 0.0, 0.0)) == pytest.approx(0.8)
-    assert box_gap(a, footprint(0.0, 1.0, math.pi / 2)) == pytest.approx(1 - 0.1175 - 0.1)
-    assert box_gap(a, footprint(0.1, 0.05, 0.4)) == 0.0
+def pose(t, x, y=0.0, yaw=0.0):
+    return Odometry(stamp_ns=t, x=x, y=y, yaw=yaw, v=0.0, w=0.0)
 
 
 def test_separation_is_taken_up_to_each_robots_end():
-    sep = SeparationMeter(["r1", "r2"])
+    meter = FleetMeter(["r1", "r2"], {}, people=False)
     for t, x2 in ((0, 2.0), (10, 1.0), (20, 0.5)):
-        sep.on_pose("r2", t, x2, 0.0, 0.0)       # either robot first: measured once both came
-        sep.on_pose("r1", t, 0.0, 0.0, 0.0)
-    assert sep.min_m("r1", 10) == pytest.approx(0.8)
-    assert sep.min_m("r2", 25) == pytest.approx(0.3)
-    assert sep.min_m("r1", -1) == math.inf
+        meter.on_pose("r2", pose(t, x2))       # either robot first: measured once both came
+        meter.on_pose("r1", pose(t, 0.0))
+    assert meter.at("r1", 10) == (pytest.approx(0.8), 0.0)   # footprints 0.2 m long
+    assert meter.at("r2", 25)[0] == pytest.approx(0.3)
+    assert meter.at("r1", -1) == (math.inf, 0.0)
+
+
+def test_people_bring_separation_and_discomfort():
+    meter = FleetMeter(["r1"], {}, people=True)
+    for t, px in ((0, 2.0), (S, 0.35), (2 * S, 0.3)):    # a person 0.3 m wide comes near
+        meter.on_people(People(stamp_ns=t, x=(px,), y=(0.0,), vx=(0.0,), vy=(0.0,),
+                               radius=(0.1,)))
+        meter.on_pose("r1", pose(t, 0.0))
+    sep, discomfort = meter.at("r1", 2 * S)
+    assert sep == pytest.approx(0.1) and discomfort == pytest.approx(2.0)
+    assert meter.at("r1", 0) == (pytest.approx(1.8), 0.0)
 
 
 def monitor(outcome: str, t_ns: int) -> RunMonitor:
@@ -140,7 +148,7 @@ def monitor(outcome: str, t_ns: int) -> RunMonitor:
 
 
 def test_fleet_outcome_is_the_worst_robots():
-    sep = SeparationMeter(["r1", "r2"])
+    sep = FleetMeter(["r1", "r2"], {}, people=False)
     both = fleet_result([("r1", "apf", monitor("reached", 2 * S)),
                          ("r2", "apf", monitor("reached", 3 * S))], sep, "f", 0, 1.0)
     assert (both.outcome, both.duration_s, both.planner) == ("reached", 3.0, "apf")
@@ -155,3 +163,31 @@ def test_fleet_outcome_is_the_worst_robots():
 def test_single_robot_json_has_no_fleet_fields():
     d = monitor("reached", S).result("apf", "w", 0, 1.0).to_json()
     assert not {"robots", "min_separation_m", "discomfort_s"} & set(d)
+
+
+def people_world(person: dict):
+    return parse_world({"name": "p", "robot": {"start": [0.0, 0.0, 0.0]},
+                        "goal": {"position": [3.0, 0.0]}, "people": [person]})
+
+
+def test_people_walk_in_the_driver_and_the_lidar_is_told():
+    with DriverCore(people_world({"start": [2.0, 1.0], "goal": [-2.0, 1.0]}), seed=0) as core:
+        first = core.outputs()
+        assert [t for t, _ in first][:3] == ["sim/people", "sim/bodies", "sim/pose"]
+        assert dict(first)["sim/bodies"].person_x == (2.0,)
+        while core.t_ns < S:
+            core.advance()
+        people = dict(core.outputs())["sim/people"]
+    assert people.x[0] == pytest.approx(1.0, abs=0.1) and people.vx[0] < -0.9   # 1 m/s
+
+
+def test_driving_into_a_person_is_a_collision():
+    slow = {"start": [0.6, 0.0], "goal": [0.6, 0.0], "speed": 0.05}   # cannot get away
+    with DriverCore(people_world(slow), seed=0) as core:
+        collisions = []
+        while core.t_ns < 3 * S and not collisions:
+            if core.is_scan_instant():
+                core.command(Twist(stamp_ns=core.t_ns, v=0.4, w=0.0))
+            core.advance()
+            collisions += [m for t, m in core.outputs() if t == "events" and m.kind == "collision"]
+    assert [c.detail for c in collisions] == ["person 0"]
