@@ -122,7 +122,11 @@ def fleet_nodes(node: Node, names: list[str], log):
             node.publish(topic, msg)
             return
         name, _, suffix = topic.partition("/")
-        robots[name].publish(suffix, msg)
+        if name in robots and suffix:
+            robots[name].publish(suffix, msg)
+        else:   # the loop's own (a lockstep fault's event): every robot's
+            for share in robots.values():
+                share.publish(topic, msg)
     return publish
 
 

@@ -147,7 +147,8 @@ class DriverCore:
         (a fleet's robots first get ``sim/bodies`` at a scan instant); clears pending events."""
         t = self.t_ns
         out: list[tuple[str, object]] = []
-        scan = (len(self.names) > 1 or self.crowd is not None) and self.is_scan_instant()
+        # the LiDARs of a [[robots]] or [[people]] world wait for it (nodes/lidar_sim)
+        scan = (bool(self.world.robots) or self.crowd is not None) and self.is_scan_instant()
         odoms = [self.sim.odometry(t, i) for i in range(len(self.names))]
         if self.crowd is not None:
             out.append(("sim/people", self._people(t)))

@@ -120,8 +120,8 @@ def pose(t, x, y=0.0, yaw=0.0):
 
 
 def test_separation_is_taken_up_to_each_robots_end():
-    meter = FleetMeter(["r1", "r2"], {}, people=False)
-    for t, x2 in ((0, 2.0), (10, 1.0), (20, 0.5)):
+    meter = FleetMeter(["r1", "r2"], {}, people=False, period_ns=10)
+    for t, x2 in ((0, 2.0), (10, 1.0), (15, 0.1), (20, 0.5)):   # 15: between samples
         meter.on_pose("r2", pose(t, x2))       # either robot first: measured once both came
         meter.on_pose("r1", pose(t, 0.0))
     assert meter.at("r1", 10) == (pytest.approx(0.8), 0.0)   # footprints 0.2 m long

@@ -1,0 +1,130 @@
+"""Cost of a fleet against its size: ``papf run`` (the whole stack, lockstep) with R robots
+and P people (generated worlds), as x real time and CPU per robot-cycle.
+
+The robots drive parallel lanes 1.2 m apart towards goals 10 m ahead; the
+people walk loops across the lanes (ORCA). Per (R, P) two runs differ only in
+``--timeout`` (``--short-s`` and ``--long-s`` of sim time, ``--continue-on-collision``);
+their differences cancel start-up and shutdown:
+
+- ``sim_over_wall`` = (sim time of the long run - the short's) / (their wall times' difference);
+- ``cpu_ms_per_robot_cycle`` = the CPU of every process of the run (launcher, router, nodes:
+  ``RUSAGE_CHILDREN``) in that difference / (R x the 100 ms cycles in it).
+
+``--csv FILE --label L`` writes the rows labelled ``L`` (other labels kept). The machine's
+2 cores may be shared (other work): the 1-minute load average of each row is written with it.
+
+    papf bench fleet [--robots 1,2,4,8] [--people 0,10,50] [--planner apf]
+                     [--short-s 10] [--long-s 40] [--csv docs/data/fleet-scale.csv --label L]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.csvrows import replace_label  # noqa: E402
+from common.ports import plain  # noqa: E402
+from papf.launch.supervisor import free_port  # noqa: E402
+
+FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_wall",
+          "cpu_ms_per_robot_cycle", "cpu_share_of_2_cores", "collisions", "load_avg_1min")
+CYCLE_S = 0.1     # [s] the lockstep cycle: one scan, one command per robot
+LANE_M = 1.2      # [m] between the robots' lanes
+
+
+def fleet_world(folder: Path, robots: int, people: int) -> Path:
+    """R robots in lanes along +x, P people walking loops across the lanes ahead."""
+    lines = [f'name = "bench-{robots}r-{people}p"\n']
+    for i in range(robots):
+        y = i * LANE_M
+        lines.append(f'[[robots]]\nname = "r{i + 1}"\nstart = [0.0, {y:.2f}, 0.0]\n'
+                     f'goal = [10.0, {y:.2f}]\n')
+    span = max(robots - 1, 1) * LANE_M
+    for k in range(people):
+        x = 4.0 + (k * 16.0 / max(people, 1))          # spread over x 4..20 m
+        y0, y1 = -2.0 - (k % 3) * 0.7, span + 2.0 + (k % 2) * 0.7
+        a, b = ((x, y0), (x + 1.0, y1)) if k % 2 else ((x, y1), (x + 1.0, y0))
+        lines.append(f'[[people]]\nstart = [{a[0]:.2f}, {a[1]:.2f}]\nwaypoints = [[{b[0]:.2f}, '
+                     f'{b[1]:.2f}], [{a[0]:.2f}, {a[1]:.2f}]]\nloop = true\nspeed = 0.8\n')
+    path = folder / f"fleet-{robots}r-{people}p.toml"
+    path.write_text("".join(lines))
+    return path
+
+
+def one_run(world: Path, planner: str, timeout_s: float) -> tuple[dict, float, float]:
+    """``papf run --json`` once: (its result, wall [s], CPU [s] of every process it ran)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "papf", "run", "--world", str(world),
+                           "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
+                           "--continue-on-collision", "--port", str(free_port())],
+                          capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = proc.stdout.strip().splitlines()
+    if not out:
+        raise SystemExit(f"papf run on {world.name} gave no result: {proc.stderr.strip()[-300:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return json.loads(out[-1]), wall, cpu
+
+
+def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float) -> dict:
+    """The two runs' difference (module doc)."""
+    short, wall_a, cpu_a = one_run(world, planner, short_s)
+    long, wall_b, cpu_b = one_run(world, planner, long_s)
+    sim = long["sim_time_s"] - short["sim_time_s"]
+    wall = wall_b - wall_a
+    return {"sim_s": round(sim, 2), "wall_s": round(wall, 2),
+            "sim_over_wall": round(sim / wall, 2),
+            "cpu_ms_per_robot_cycle": round((cpu_b - cpu_a) / (robots * sim / CYCLE_S) * 1e3, 2),
+            "cpu_share_of_2_cores": round((cpu_b - cpu_a) / wall / 2, 2),
+            "collisions": long["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(prog="papf bench fleet",
+                                     description=plain(__doc__.splitlines()[0]))
+    parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
+    parser.add_argument("--people", default="0,10,50", help="people counts")
+    parser.add_argument("--planner", default="apf", help="every robot's planner (apf)")
+    parser.add_argument("--short-s", type=float, default=10.0, help="sim s of the short run")
+    parser.add_argument("--long-s", type=float, default=40.0, help="sim s of the long run")
+    parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
+    parser.add_argument("--label", help="the rows' label in --csv")
+    args = parser.parse_args()
+    if bool(args.csv) != bool(args.label):
+        parser.error("--csv and --label go together")
+    try:
+        robot_counts = [int(v) for v in args.robots.split(",") if v]
+        people_counts = [int(v) for v in args.people.split(",") if v]
+    except ValueError:
+        parser.error("--robots and --people are comma-separated integers, e.g. 1,2,4,8")
+    if not all(1 <= r <= 16 for r in robot_counts) or not all(0 <= p <= 200 for p in people_counts):
+        parser.error("robots in 1..16, people in 0..200 (the world format's limits)")
+    if not 0 < args.short_s < args.long_s:
+        parser.error("need 0 < --short-s < --long-s")
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
+        for people in people_counts:
+            for robots in robot_counts:
+                world = fleet_world(Path(tmp), robots, people)
+                row = {"robots": robots, "people": people, "planner": args.planner,
+                       **measure(world, robots, args.planner, args.short_s, args.long_s)}
+                print(json.dumps(row), flush=True)
+                rows.append({"label": args.label or "", **row})
+    if args.csv:
+        replace_label(args.csv, FIELDS, args.label, rows)
+
+
+if __name__ == "__main__":
+    main()
