@@ -145,9 +145,12 @@ def check_launch(opt, prof) -> None:
     if opt.stall_s is not None:
         check_value("--stall-timeout", opt.stall_s, TIMEOUT)
     namespace(opt.namespace)
-    for flag, eps in (("--listen", opt.listen), ("--connect", opt.connect)):
+    for flag, eps in (("--listen", opt.listen), ("--connect", opt.connect), ("--join", opt.join)):
         for ep in eps:
             endpoint(ep, flag)
+    if opt.join and not prof.router:
+        raise ConfigError(f"--join connects this host's router to another's, and profile "
+                          f"{prof.name} runs no router; use --connect for its nodes")
     values = {**prof.defaults, **opt.values}
     if values.get("seed") is not None:
         check_value("--seed", values["seed"], SEED)

@@ -166,6 +166,7 @@ class LaunchOptions:
     stall_s: float | None = None             # [s wall] no clock progress: stuck (None: default)
     verbose: bool = False
     dry_run: bool = False
+    join: list[str] = field(default_factory=list)   # other hosts' routers this one connects to
 
 
 def local_endpoint(listen: str) -> str:
@@ -211,6 +212,7 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
     procs = []
     if prof.router:
         argv = [sys.executable, "-m", ROUTER_MODULE, *[a for ep in listen for a in ("--listen", ep)]]
+        argv += [a for ep in opt.join for a in ("--join", ep)]
         procs.append(Process("router", prof.host, tuple(argv + (
             ["--zenoh-config", opt.router_config] if opt.router_config else []))))
     fleet = fleet_of(values)
