@@ -8,7 +8,10 @@ their differences cancel start-up and shutdown:
 
 - ``sim_over_wall`` = (sim time of the long run - the short's) / (their wall times' difference);
 - ``cpu_ms_per_robot_cycle`` = the CPU of every process of the run (launcher, router, nodes:
-  ``RUSAGE_CHILDREN``) in that difference / (R x the 100 ms cycles in it).
+  ``RUSAGE_CHILDREN``) in that difference / (R x the 100 ms cycles in it); ``driver_ms``,
+  ``lidar_ms``, ``planner_ms``, ``meter_ms``, ``launcher_ms`` split it by kind of process
+  (all robots' together, sampled from /proc by ``bench.proc_cpu.TreeCPU``; the launcher is
+  also the run's router).
 
 ``--csv FILE --label L`` writes the rows labelled ``L`` (other labels kept). The machine's
 2 cores may be shared (other work): the 1-minute load average of each row is written with it.
@@ -33,11 +36,15 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.csvrows import replace_label  # noqa: E402
+from bench.proc_cpu import TreeCPU  # noqa: E402
 from common.ports import plain  # noqa: E402
 from papf.launch.supervisor import free_port  # noqa: E402
 
+PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
+         "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
 FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_wall",
-          "cpu_ms_per_robot_cycle", "cpu_share_of_2_cores", "collisions", "load_avg_1min")
+          "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
+          "cpu_share_of_2_cores", "collisions", "load_avg_1min")
 CYCLE_S = 0.1     # [s] the lockstep cycle: one scan, one command per robot
 LANE_M = 1.2      # [m] between the robots' lanes
 
@@ -61,32 +68,42 @@ def fleet_world(folder: Path, robots: int, people: int) -> Path:
     return path
 
 
-def one_run(world: Path, planner: str, timeout_s: float) -> tuple[dict, float, float]:
-    """``papf run --json`` once: (its result, wall [s], CPU [s] of every process it ran)."""
+def one_run(world: Path, planner: str, timeout_s: float) -> tuple[dict, float, float, dict]:
+    """``papf run --json`` once: (its result, wall [s], CPU [s] of every process it ran,
+    CPU [s] per kind of process: :data:`PARTS`, all robots' together)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "papf", "run", "--world", str(world),
-                           "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
-                           "--continue-on-collision", "--port", str(free_port())],
-                          capture_output=True, text=True, check=False)
+    with TreeCPU() as tree:
+        proc = subprocess.run([sys.executable, "-m", "papf", "run", "--world", str(world),
+                               "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
+                               "--continue-on-collision", "--port", str(free_port())],
+                              capture_output=True, text=True, check=False)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    per = tree.per_process()
+    parts = {col: per.get(name, {}).get("cpu_s", 0.0) for name, col in PARTS.items()}
     out = proc.stdout.strip().splitlines()
     if not out:
         raise SystemExit(f"papf run on {world.name} gave no result: {proc.stderr.strip()[-300:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return json.loads(out[-1]), wall, cpu
+    return json.loads(out[-1]), wall, cpu, parts
 
 
 def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float) -> dict:
     """The two runs' difference (module doc)."""
-    short, wall_a, cpu_a = one_run(world, planner, short_s)
-    long, wall_b, cpu_b = one_run(world, planner, long_s)
+    short, wall_a, cpu_a, parts_a = one_run(world, planner, short_s)
+    long, wall_b, cpu_b, parts_b = one_run(world, planner, long_s)
     sim = long["sim_time_s"] - short["sim_time_s"]
     wall = wall_b - wall_a
+    if sim <= 0 or wall <= 0:
+        raise SystemExit(f"{world.name}: the long run gave no more sim time ({sim:g} s) or wall "
+                         f"time ({wall:g} s) than the short one; give a larger --long-s")
+    cycles = robots * sim / CYCLE_S
     return {"sim_s": round(sim, 2), "wall_s": round(wall, 2),
             "sim_over_wall": round(sim / wall, 2),
-            "cpu_ms_per_robot_cycle": round((cpu_b - cpu_a) / (robots * sim / CYCLE_S) * 1e3, 2),
+            "cpu_ms_per_robot_cycle": round((cpu_b - cpu_a) / cycles * 1e3, 2),
+            **{f"{col}_ms": round((parts_b[col] - parts_a[col]) / cycles * 1e3, 2)
+               for col in PARTS.values()},
             "cpu_share_of_2_cores": round((cpu_b - cpu_a) / wall / 2, 2),
             "collisions": long["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
 

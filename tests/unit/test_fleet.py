@@ -191,3 +191,26 @@ def test_driving_into_a_person_is_a_collision():
             core.advance()
             collisions += [m for t, m in core.outputs() if t == "events" and m.kind == "collision"]
     assert [c.detail for c in collisions] == ["person 0"]
+
+
+def test_a_robots_unknown_planner_is_refused_before_anything_starts():
+    from common.errors import ConfigError
+    from papf.launch.preflight import check_run
+
+    with pytest.raises(ConfigError, match="robot 'r2'.*did you mean 'papf'"):
+        check_run(fleet_world(r2_planner="papff"), "apf", 0, 60.0, None, "rosbot", None, [])
+
+
+def test_join_needs_a_router_and_a_valid_endpoint():
+    from common.errors import ConfigError
+    from papf.launch.preflight import check_launch
+
+    with pytest.raises(ConfigError, match="runs no router"):
+        check_launch(LaunchOptions("laptop", connect=["tcp/127.0.0.1:7447"],
+                                   join=["tcp/10.0.0.2:7447"]), load_profile("laptop"))
+    with pytest.raises(ConfigError, match="--join"):
+        check_launch(LaunchOptions("robot", join=["tcp/nowhere"]), load_profile("robot"))
+    robot = LaunchOptions("robot", listen=["tcp/127.0.0.1:7450"], join=["tcp/10.0.0.2:7447"])
+    check_launch(robot, load_profile("robot"))
+    router = resolve(load_profile("robot"), robot).processes[0].argv
+    assert router[router.index("--join") + 1] == "tcp/10.0.0.2:7447"
