@@ -2,16 +2,16 @@
 and P people (generated worlds), as x real time and CPU per robot-cycle.
 
 The robots drive parallel lanes 1.2 m apart towards goals 10 m ahead; the
-people walk loops across the lanes (ORCA). Per (R, P) two runs differ only in
-``--timeout`` (``--short-s`` and ``--long-s`` of sim time, ``--continue-on-collision``);
-their differences cancel start-up and shutdown:
+people walk loops across the lanes (ORCA). Per (R, P) one run (``--continue-on-collision``)
+is watched on its own bus from the bench: between the first robot's ``sim/pose`` at
+``--short-s`` and at ``--long-s`` of sim time (start-up and shut-down left out):
 
-- ``sim_over_wall`` = (sim time of the long run - the short's) / (their wall times' difference);
-- ``cpu_ms_per_robot_cycle`` = the CPU of every process of the run (launcher, router, nodes:
-  ``RUSAGE_CHILDREN``) in that difference / (R x the 100 ms cycles in it); ``driver_ms``,
+- ``sim_over_wall`` = the sim time between the two samples / the wall time between them;
+- ``cpu_ms_per_robot_cycle`` = the CPU of every process of the run (launcher and router,
+  nodes; from /proc by ``bench.proc_cpu.TreeCPU``) between them / (R x the 100 ms cycles
+  in it); ``driver_ms``,
   ``lidar_ms``, ``planner_ms``, ``meter_ms``, ``launcher_ms`` split it by kind of process
-  (all robots' together, sampled from /proc by ``bench.proc_cpu.TreeCPU``; the launcher is
-  also the run's router).
+  (all robots' together; the launcher is also the run's router).
 
 ``--csv FILE --label L`` writes the rows labelled ``L`` (other labels kept). The machine's
 2 cores may be shared (other work): the 1-minute load average of each row is written with it.
@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -35,10 +34,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+import zenoh  # noqa: E402
+
 from bench.csvrows import replace_label  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
 from common.ports import plain  # noqa: E402
-from papf.launch.supervisor import free_port  # noqa: E402
+from common.transport import zenoh_config  # noqa: E402
+from papf.launch.supervisor import free_port, wait_port  # noqa: E402
+from schemas import Odometry  # noqa: E402
 
 PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
          "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
@@ -68,44 +71,68 @@ def fleet_world(folder: Path, robots: int, people: int) -> Path:
     return path
 
 
-def one_run(world: Path, planner: str, timeout_s: float) -> tuple[dict, float, float, dict]:
-    """``papf run --json`` once: (its result, wall [s], CPU [s] of every process it ran,
-    CPU [s] per kind of process: :data:`PARTS`, all robots' together)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    with TreeCPU() as tree:
-        proc = subprocess.run([sys.executable, "-m", "papf", "run", "--world", str(world),
-                               "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
-                               "--continue-on-collision", "--port", str(free_port())],
-                              capture_output=True, text=True, check=False)
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    per = tree.per_process()
-    parts = {col: per.get(name, {}).get("cpu_s", 0.0) for name, col in PARTS.items()}
-    out = proc.stdout.strip().splitlines()
-    if not out:
-        raise SystemExit(f"papf run on {world.name} gave no result: {proc.stderr.strip()[-300:]}")
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return json.loads(out[-1]), wall, cpu, parts
+def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
+    """CPU seconds so far of the run's processes (the bench's own excluded): per
+    :data:`PARTS` column, and ``total`` of them all (router and any other process too)."""
+    while True:
+        try:
+            threads, names = dict(tree.threads), dict(tree.names)
+            break
+        except RuntimeError:   # the sampler added a thread meanwhile
+            continue
+    out = dict.fromkeys((*PARTS.values(), "total"), 0.0)
+    for (pid, _), (_, cpu) in threads.items():
+        if pid == tree.root:
+            continue
+        out["total"] += cpu
+        col = PARTS.get(names.get(pid, ""))
+        if col:
+            out[col] += cpu
+    return out
 
 
 def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float) -> dict:
-    """The two runs' difference (module doc)."""
-    short, wall_a, cpu_a, parts_a = one_run(world, planner, short_s)
-    long, wall_b, cpu_b, parts_b = one_run(world, planner, long_s)
-    sim = long["sim_time_s"] - short["sim_time_s"]
-    wall = wall_b - wall_a
-    if sim <= 0 or wall <= 0:
-        raise SystemExit(f"{world.name}: the long run gave no more sim time ({sim:g} s) or wall "
-                         f"time ({wall:g} s) than the short one; give a larger --long-s")
+    """One ``papf run --json``, watched on its bus: the wall time and CPU between the first
+    robot's pose samples at ``short_s`` and at ``long_s`` of sim time (module doc)."""
+    port = free_port()
+    marks: dict[str, tuple[float, dict]] = {}
+    with TreeCPU() as tree:
+        proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", str(world),
+                                 "--planner", planner, "--timeout", f"{long_s + 0.5:g}",
+                                 "--json", "--continue-on-collision", "--port", str(port)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            if not wait_port(port, 60.0):
+                raise SystemExit(f"papf run on {world.name}: no router on port {port}")
+
+            def on_pose(sample) -> None:   # Zenoh's thread: note the wall time and CPU once
+                t = Odometry.from_bytes(sample.payload.to_bytes()).stamp_ns / 1e9
+                for mark, at in (("a", short_s), ("b", long_s)):
+                    if t >= at and mark not in marks:
+                        marks[mark] = (time.perf_counter(), cpu_by_kind(tree), t)
+
+            with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as session:
+                sub = session.declare_subscriber("r1/sim/pose", on_pose)
+                out, err = proc.communicate(timeout=max(600.0, long_s * 20))
+                sub.undeclare()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    if set(marks) != {"a", "b"}:
+        raise SystemExit(f"{world.name}: the run never reached {long_s:g} s of sim time: "
+                         f"{(out.strip().splitlines() or [err.strip()[-300:]])[-1][:300]}")
+    result = json.loads(out.strip().splitlines()[-1])
+    (wall_a, cpu_a, sim_a), (wall_b, cpu_b, sim_b) = marks["a"], marks["b"]
+    sim, wall = sim_b - sim_a, wall_b - wall_a
     cycles = robots * sim / CYCLE_S
     return {"sim_s": round(sim, 2), "wall_s": round(wall, 2),
             "sim_over_wall": round(sim / wall, 2),
-            "cpu_ms_per_robot_cycle": round((cpu_b - cpu_a) / cycles * 1e3, 2),
-            **{f"{col}_ms": round((parts_b[col] - parts_a[col]) / cycles * 1e3, 2)
+            "cpu_ms_per_robot_cycle": round((cpu_b["total"] - cpu_a["total"]) / cycles * 1e3, 2),
+            **{f"{col}_ms": round((cpu_b[col] - cpu_a[col]) / cycles * 1e3, 2)
                for col in PARTS.values()},
-            "cpu_share_of_2_cores": round((cpu_b - cpu_a) / wall / 2, 2),
-            "collisions": long["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
+            "cpu_share_of_2_cores": round((cpu_b["total"] - cpu_a["total"]) / wall / 2, 2),
+            "collisions": result["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
 
 
 def main() -> None:
