@@ -214,3 +214,23 @@ def test_join_needs_a_router_and_a_valid_endpoint():
     check_launch(robot, load_profile("robot"))
     router = resolve(load_profile("robot"), robot).processes[0].argv
     assert router[router.index("--join") + 1] == "tcp/10.0.0.2:7447"
+
+
+def test_a_fleet_recordings_track_keeps_its_robot_and_shows_the_others(tmp_path):
+    from nodes.recorder.writer import RunWriter
+    from papf.recording.track import load_track
+
+    path = tmp_path / "fleet.mcap"
+    with RunWriter(path, {"world": "energy", "planner": "apf", "namespace": "r1"}) as w:
+        for k in range(5):
+            t = k * 20_000_000
+            w.write_message("r1/sim/pose", pose(t, 0.1 * k))
+            w.write_message("r2/sim/pose", pose(t, 5.0 - 0.1 * k, 1.0, math.pi))
+            w.write_message("r1/sim/people", People(stamp_ns=t, x=(2.0,), y=(float(k),),
+                                                    vx=(0.0,), vy=(1.0,), radius=(0.3,)))
+    track = load_track(path)
+    assert track.xyyaw[:, 0].tolist() == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4])
+    assert list(track.others) == ["r2"] and track.others["r2"][1][-1, 0] == pytest.approx(4.6)
+    assert [xy[0, 1] for xy in track.people_xy] == [0.0, 1.0, 2.0, 3.0, 4.0]
+    assert track.people_r.tolist() == [0.3]
+    assert load_track(path, robot="r2").xyyaw[0, 0] == pytest.approx(5.0)
