@@ -234,3 +234,31 @@ def test_a_fleet_recordings_track_keeps_its_robot_and_shows_the_others(tmp_path)
     assert [xy[0, 1] for xy in track.people_xy] == [0.0, 1.0, 2.0, 3.0, 4.0]
     assert track.people_r.tolist() == [0.3]
     assert load_track(path, robot="r2").xyyaw[0, 0] == pytest.approx(5.0)
+
+
+def test_a_fleet_recordings_report_has_a_run_per_robot(tmp_path):
+    from nodes.recorder.writer import RunWriter
+    from papf.report.report import collect
+    from schemas.messages import BatteryState, Event
+
+    path = tmp_path / "fleet.mcap"
+    with RunWriter(path, {"world": "energy", "planner": "apf", "namespace": "r1",
+                          "seed": "0"}) as w:
+        for ns in ("r1", "r2"):
+            w.write_message(f"{ns}/events", Event(stamp_ns=0, kind="run_started", source="t"))
+        for k in range(51):
+            t = k * 20_000_000
+            for ns, speed in (("r1", 0.5), ("r2", 0.25)):
+                odom = Odometry(stamp_ns=t, x=speed * k * 0.02, y=0.0, yaw=0.0, v=speed, w=0.0)
+                w.write_message(f"{ns}/sim/pose", odom)
+                w.write_message(f"{ns}/odom", odom)
+                w.write_message(f"{ns}/battery", BatteryState(
+                    stamp_ns=t, voltage=11.1, current=1.0, power=11.1,
+                    charge_used_mAh=0.01 * k, energy_J=0.1 * k, model="motor"))
+            if k == 50:
+                for ns in ("r1", "r2"):
+                    w.write_message(f"{ns}/planner/status",
+                                    PlannerStatus(stamp_ns=t, state="reached"))
+    runs = collect([path])
+    assert [r.file for r in runs] == ["fleet.mcap:r1", "fleet.mcap:r2"]
+    assert [round(r.path_length_m, 3) for r in runs] == [0.5, 0.25]
