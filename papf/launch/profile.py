@@ -220,8 +220,8 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
         if fleet and spec.name in FLEET_NODES:   # one per robot, under the robot's name
             procs += _per_robot(spec, fleet, values, prof, opt, common)
             continue
-        if fleet and spec.name == "recorder":   # a fleet's recording: every robot's keys,
-            extra = ["--keys", "**"]              # run_ended watched on the first robot's events
+        if fleet and spec.name in ("recorder", "viewer"):   # the first robot's namespace; a
+            extra = ["--keys", "**"] if spec.name == "recorder" else []   # recording: all keys
             argv = _argv(spec, values, prof, opt, common(fleet[0].name) + extra)
         else:
             argv = _argv(spec, values, prof, opt, common(opt.namespace))

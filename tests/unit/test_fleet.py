@@ -262,3 +262,17 @@ def test_a_fleet_recordings_report_has_a_run_per_robot(tmp_path):
     runs = collect([path])
     assert [r.file for r in runs] == ["fleet.mcap:r1", "fleet.mcap:r2"]
     assert [round(r.path_length_m, 3) for r in runs] == [0.5, 0.25]
+
+
+def test_the_viewer_shows_the_other_robots_and_the_people():
+    from nodes.viewer.core import ViewCore
+
+    out = ViewCore().on_message("sim/bodies", Bodies(
+        stamp_ns=5, robots=("r2",), robot_x=(1.0,), robot_y=(2.0,), robot_yaw=(0.5,),
+        person_x=(3.0,), person_y=(4.0,), person_radius=(0.3,)))
+    [(channel, scene, t)] = out
+    [ent] = scene["entities"]
+    assert (channel, t, ent["id"]) == ("/fleet", 5, "fleet")
+    assert [c["pose"]["position"]["x"] for c in ent["cubes"]] == [1.0]
+    assert [t["text"] for t in ent["texts"]] == ["r2"]
+    assert [c["size"]["x"] for c in ent["cylinders"]] == [pytest.approx(0.6)]
