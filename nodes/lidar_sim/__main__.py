@@ -91,7 +91,9 @@ def main_sim(args: argparse.Namespace) -> int:
     params = LidarParams(beams=args.beams, noise_sd=args.noise_sd, noise_rel=args.noise_rel)
     schedule = ScanSchedule(period_ns(args.scan_hz, "scan rate"))
     pose_topic = "sim/pose" if args.pose_source == "sim" else "odom"
-    with LidarSim(world, params, args.seed) as lidar, open_node(NAME, args, log) as node:
+    fleet = [r.name for r in world.robots]
+    robot = fleet.index(args.namespace) if args.namespace in fleet else 0
+    with LidarSim(world, params, args.seed, robot) as lidar, open_node(NAME, args, log) as node:
         def keep_due(pose) -> None:  # Zenoh's callback thread: only due poses wake the main one
             if schedule.due(pose.stamp_ns):
                 node.inbox.put((pose_topic, pose))

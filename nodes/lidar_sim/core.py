@@ -20,8 +20,9 @@ measurement") there and ``rplidar_ros`` publishes a 0 reading as ``inf``.
 Noise: Gaussian, sigma = ``noise_sd + noise_rel * range`` [m]. The A3 datasheet gives
 "accuracy 1 % of range (<= 3 m)"; the default is a constant 1 cm (1 % at 1 m, the
 distance the planners react at), ``noise_rel`` follows the datasheet's form when set.
-The noise of a scan is drawn from ``numpy.random.default_rng([seed, stamp_ns])``, so
-the scan of a given instant is identical whatever the process timing.
+The noise of a scan is drawn from ``numpy.random.default_rng([seed, stamp_ns])`` (a
+fleet's robot k > 0: ``[seed, stamp_ns, k]``, so robots' noises differ), so the scan of a
+given instant is identical whatever the process timing.
 """
 
 from __future__ import annotations
@@ -88,11 +89,13 @@ class LidarParams:
 class LidarSim:
     """Cast a scan at a robot pose in ``world`` (see module doc)."""
 
-    def __init__(self, world: World, params: LidarParams | None = None, seed: int = 0):
+    def __init__(self, world: World, params: LidarParams | None = None, seed: int = 0,
+                 robot: int = 0):
         self.params = prm = params or LidarParams()
         if seed < 0:
             raise ConfigError(f"lidar seed = {seed} must be >= 0")
         self.seed = seed
+        self.robot = robot    # index in the world's [[robots]]: each robot's noise its own
         angles = prm.angle_min + prm.angle_increment * np.arange(prm.beams) + prm.sensor_yaw
         self._angles = angles               # beam directions in the robot frame [rad]
         self.cid = p.connect(p.DIRECT)
@@ -179,7 +182,8 @@ class LidarSim:
         ranges = self.true_ranges(pose_x, pose_y, pose_yaw)
         hit = np.isfinite(ranges)
         if prm.noise_sd > 0 or prm.noise_rel > 0:
-            rng = np.random.default_rng([self.seed, stamp_ns % 2**64])
+            key = [self.seed, stamp_ns % 2**64] + ([self.robot] if self.robot else [])
+            rng = np.random.default_rng(key)
             noise = rng.normal(0.0, 1.0, prm.beams)
             ranges[hit] += (prm.noise_sd + prm.noise_rel * ranges[hit]) * noise[hit]
         ranges[(ranges < prm.range_min) | (ranges > prm.range_max)] = np.inf

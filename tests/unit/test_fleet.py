@@ -276,3 +276,15 @@ def test_the_viewer_shows_the_other_robots_and_the_people():
     assert [c["pose"]["position"]["x"] for c in ent["cubes"]] == [1.0]
     assert [t["text"] for t in ent["texts"]] == ["r2"]
     assert [c["size"]["x"] for c in ent["cylinders"]] == [pytest.approx(0.6)]
+
+
+def test_each_robots_lidar_noise_is_its_own():
+    w = parse_world({"name": "e", "robot": {"start": [0, 0, 0]}, "goal": {"position": [5, 0]},
+                     "obstacles": [{"kind": "box", "center": [2.0, 0.0], "size": [0.5, 4.0]}]})
+    scans = []
+    for robot in (0, 0, 1):
+        with LidarSim(w, LidarParams(beams=90), seed=3, robot=robot) as lidar:
+            scans.append(lidar.scan(0.0, 0.0, 0.0, 100_000_000).ranges)
+    assert np.array_equal(scans[0], scans[1]) and not np.array_equal(scans[0], scans[2])
+    with LidarSim(w, LidarParams(beams=90), seed=3) as lone:   # robot 0 = a lone robot
+        assert np.array_equal(lone.scan(0.0, 0.0, 0.0, 100_000_000).ranges, scans[0])
