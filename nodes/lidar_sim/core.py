@@ -10,8 +10,9 @@ self-hits; moving obstacles placed at the scan's sim time), at :data:`SENSOR_HEI
 obstacle height).
 
 In a fleet, :meth:`LidarSim.place_bodies` puts the other robots (boxes of the ROSbot's
-200 x 235 x 220 mm body) and the people (cylinders) at their poses of the scan's instant
-(``Bodies``, from the sim driver) before the rays are cast.
+200 x 235 x 220 mm body) and the people (discs in the scan plane) at their poses of the scan's instant
+(``Bodies``, from the sim driver) before the rays are cast; a person is a sphere centred on
+the scan plane, whose section there is the person's disc (cheaper to cast against).
 
 Invalid readings: no return within ``range_max`` -> ``inf``; a return closer than
 ``range_min`` -> ``inf`` too, because the A3 reports distance 0 ("no valid
@@ -48,7 +49,6 @@ RANGE_MIN = 0.2          # [m] RPLIDAR A3 datasheet
 RANGE_MAX = 25.0         # [m] RPLIDAR A3 datasheet (white objects)
 SENSOR_HEIGHT = robot.LIDAR_HEIGHT_M   # [m] scan plane above the floor (common.robot)
 SENSOR_X = robot.LIDAR_X_M   # [m] sensor ahead of the robot centre (common.robot)
-PERSON_HEIGHT_M = 1.8    # [m] a person's cylinder (any height above the scan plane would do)
 
 
 _BODY, _FRACTION = itemgetter(0), itemgetter(2)   # of a rayTestBatch hit
@@ -109,8 +109,11 @@ class LidarSim:
             raise
 
     def place_bodies(self, bodies: Bodies) -> None:
-        """Put the other robots (boxes of the ROSbot's body) and the people (cylinders 1.8 m
-        tall) where ``bodies`` says; bodies beyond what it lists wait far below the floor."""
+        """Put the other robots (boxes of the ROSbot's body) and the people where ``bodies``
+        says; bodies beyond what it lists wait far below the floor. A person is a sphere of
+        its radius centred on the scan plane: in that plane, the same disc as a cylinder's,
+        and a ray meets a sphere far more cheaply (measured: 50 people as cylinders made a
+        scan 6.5x slower, as spheres 1.7x)."""
         cid = self.cid
         shapes = ((self._robots, len(bodies.robots), self._robot_body),
                   (self._people, len(bodies.person_x), None))
@@ -131,7 +134,7 @@ class LidarSim:
                     if self._people[k] is not None:
                         p.removeBody(self._people[k][0], physicsClientId=cid)
                     self._people[k] = (self._person_body(r), r)
-                pos = [bodies.person_x[k], bodies.person_y[k], PERSON_HEIGHT_M / 2]
+                pos = [bodies.person_x[k], bodies.person_y[k], self.params.height]
             elif self._people[k] is None:
                 continue
             else:
@@ -145,8 +148,7 @@ class LidarSim:
         return p.createMultiBody(0, shape, basePosition=[0, 0, -100], physicsClientId=self.cid)
 
     def _person_body(self, radius: float) -> int:
-        shape = p.createCollisionShape(p.GEOM_CYLINDER, radius=radius, height=PERSON_HEIGHT_M,
-                                       physicsClientId=self.cid)
+        shape = p.createCollisionShape(p.GEOM_SPHERE, radius=radius, physicsClientId=self.cid)
         return p.createMultiBody(0, shape, basePosition=[0, 0, -100], physicsClientId=self.cid)
 
     def true_ranges(self, pose_x: float, pose_y: float, pose_yaw: float) -> np.ndarray:
