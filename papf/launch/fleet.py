@@ -32,6 +32,7 @@ from common.units import NS_PER_S as NS
 from papf.launch.outcome import RunMonitor, RunResult
 from schemas import Odometry, People
 
+PROGRESS_ROBOTS = 4       # [-] robots named one by one on the progress line
 SAMPLE_NS = 100_000_000   # [ns] the measures' sampling period: the lockstep scan period
 
 
@@ -131,9 +132,14 @@ def fleet_result(robots: list[tuple[str, str, RunMonitor]], meter: FleetMeter,
 def progress_figures(monitors: dict[str, RunMonitor],
                      goals: dict[str, tuple[float, float]]) -> tuple[float, float, float, str]:
     """(sim time [s], the farthest running robot's distance to its goal [m], the fleet's
-    charge [mAh], "k/n done") for the progress line."""
+    charge [mAh], every robot's state: its distance to go, or its outcome) for the progress
+    line (at most :data:`PROGRESS_ROBOTS` robots named, then how many are done)."""
     t = min((m.clock_ns for m in monitors.values()), default=0) / NS
     running = [m.distance_to(*goals[n]) for n, m in monitors.items() if not m.done]
     charge = sum(m.batteries[-1].charge_used_mAh for m in monitors.values() if m.batteries)
     done = sum(m.done for m in monitors.values())
-    return t, max(running, default=0.0), charge, f"{done}/{len(monitors)} done"
+    if len(monitors) > PROGRESS_ROBOTS:
+        return t, max(running, default=0.0), charge, f"{done}/{len(monitors)} done"
+    each = [f"{n} {m.outcome}" if m.done else f"{n} {m.distance_to(*goals[n]):.1f} m"
+            for n, m in monitors.items()]
+    return t, max(running, default=0.0), charge, " | ".join(each)

@@ -288,3 +288,14 @@ def test_each_robots_lidar_noise_is_its_own():
     assert np.array_equal(scans[0], scans[1]) and not np.array_equal(scans[0], scans[2])
     with LidarSim(w, LidarParams(beams=90), seed=3) as lone:   # robot 0 = a lone robot
         assert np.array_equal(lone.scan(0.0, 0.0, 0.0, 100_000_000).ranges, scans[0])
+
+
+def test_progress_names_each_robot_or_counts_them():
+    from papf.launch.fleet import progress_figures
+
+    two = {"r1": monitor("reached", S), "r2": RunMonitor(10.0)}
+    two["r2"].on_pose(pose(S, 1.0))
+    t, far, _, state = progress_figures(two, {"r1": (0.0, 0.0), "r2": (4.0, 0.0)})
+    assert (far, state) == (3.0, "r1 reached | r2 3.0 m")
+    many = {f"r{i}": RunMonitor(10.0) for i in range(6)}
+    assert progress_figures(many, {n: (0.0, 0.0) for n in many})[3] == "0/6 done"
