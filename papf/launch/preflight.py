@@ -167,4 +167,8 @@ def check_launch(opt, prof) -> None:
         if world.dims != 2:
             raise ConfigError(f"world {world.name!r} is 3-D: the stack drives the ROSbot on 2-D "
                               "worlds; plan 3-D worlds offline with papf plan")
+        if world.robots and prof.run:
+            raise ConfigError(f"world {world.name!r} has several robots ([[robots]]): papf run "
+                              "drives a fleet; papf launch drives one robot (a fleet across "
+                              "hosts: one launch per robot, each with its --namespace)")
         check_runnable(world)

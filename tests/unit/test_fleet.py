@@ -299,3 +299,12 @@ def test_progress_names_each_robot_or_counts_them():
     assert (far, state) == (3.0, "r1 reached | r2 3.0 m")
     many = {f"r{i}": RunMonitor(10.0) for i in range(6)}
     assert progress_figures(many, {n: (0.0, 0.0) for n in many})[3] == "0/6 done"
+
+
+def test_papf_launch_refuses_a_fleet_world_papf_run_drives_it():
+    from common.errors import ConfigError
+    from papf.launch.preflight import check_launch
+
+    with pytest.raises(ConfigError, match="papf run drives a fleet"):
+        check_launch(LaunchOptions("sim", values={"world": "fleet-corridor-swap"}),
+                     load_profile("sim"))
