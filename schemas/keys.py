@@ -7,11 +7,13 @@ from dataclasses import dataclass
 from schemas.messages import (
     BatteryState,
     BatteryVoltage,
+    Bodies,
     Clock,
     Event,
     Goal,
     Objects,
     Odometry,
+    People,
     PlannerState,
     PlannerStatus,
     Scan,
@@ -34,12 +36,14 @@ TOPICS = {
     "sim/pose": Odometry,
     "events": Event,
     "objects": Objects,     # obstacle tracks: sim ground truth or the tracker node
+    "sim/bodies": Bodies,   # the other robots and the people a robot's LiDAR sees (sim fleets)
+    "sim/people": People,   # the world's people, every instant (sim driver)
 }
 
 # Topics with one publisher whose stamps never go back within a run (a new run restarts
 # sim time at 0): a message older than the last one on them is dropped (common.units.StampGuard).
 STAMP_ORDERED = frozenset({"scan", "odom", "wheels", "battery", "battery/measured", "clock",
-                           "sim/pose"})
+                           "sim/pose", "sim/people"})
 
 
 @dataclass(frozen=True)

@@ -203,9 +203,43 @@ class Objects(Message):
     tracks: tuple[ObjectTrack, ...] = field(())
 
 
+@message("Bodies", 1)
+class Bodies(Message):
+    """The other movers a robot's LiDAR sees at one scan instant (sim; fleets and people).
+
+    The other robots of the fleet (their chassis boxes, at their ground-truth poses) and the
+    people (circles), all in the world frame. The sim driver puts it on each robot's
+    ``sim/bodies`` just before that robot's ``sim/pose`` of the same scan instant.
+    """
+
+    stamp_ns: int = field(unit="ns", doc="the scan instant they belong to")
+    robots: Strs = field((), doc="names (namespaces) of the other robots")
+    robot_x: Floats = field((), unit="m")
+    robot_y: Floats = field((), unit="m")
+    robot_yaw: Floats = field((), unit="rad")
+    person_x: Floats = field((), unit="m")
+    person_y: Floats = field((), unit="m")
+    person_radius: Floats = field((), unit="m")
+
+
+@message("People", 1)
+class People(Message):
+    """Where the world's people (``[[people]]``) are and go at one instant (sim ground truth).
+
+    Index ``i`` is the i-th ``[[people]]`` of the world file, in every message of a run.
+    """
+
+    stamp_ns: int = field(unit="ns")
+    x: Floats = field((), unit="m")
+    y: Floats = field((), unit="m")
+    vx: Floats = field((), unit="m/s")
+    vy: Floats = field((), unit="m/s")
+    radius: Floats = field((), unit="m", doc="body radius")
+
+
 ALL_MESSAGES: tuple[type[Message], ...] = (
     Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
-    PlannerStatus, Clock, Event, Objects,
+    PlannerStatus, Clock, Event, Objects, Bodies, People,
 )
 BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
 

@@ -28,6 +28,7 @@ from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_l
 from nodes.base_driver.limits import OPTIONS
 from nodes.base_driver.loop import DriverLoop
 from nodes.base_driver.ports import PORTS, VARIANTS
+from schemas import Keys
 from worlds import load_world
 
 NAME = "base_driver"
@@ -35,13 +36,13 @@ PUBLISHES = ("sim/pose", "odom", "wheels", "events")
 ON_DEMAND = ("clock",)   # 50 Hz that no node of a sim run reads (sim/pose carries the time)
 
 
-def drive(node: Node, loop: DriverLoop) -> None:
+def drive(node: Node, loop: DriverLoop, publish=None) -> None:
     """Wire a :class:`DriverLoop` to the bus until the run ends or the node is stopped."""
-    inbox = node.inbox
+    inbox, publish = node.inbox, publish or node.publish
     while not node.stop:
         out, until = loop.step(time.monotonic())
         for topic, msg in out:
-            node.publish(topic, msg)
+            publish(topic, msg)
         if until is None:
             return
         while not (node.stop or loop.ready):   # feed inputs until `until` (past: what is queued)
@@ -62,7 +63,7 @@ def wait_for_start(node: Node) -> bool:
             topic, msg = node.inbox.get(timeout=0.1)
         except queue.Empty:
             continue
-        if topic == "events" and msg.kind == "run_started":
+        if topic is not None and topic.endswith("events") and msg.kind == "run_started":
             return True
     return False
 
@@ -74,10 +75,18 @@ def main_sim(args: argparse.Namespace) -> int:
     world = load_world(args.world)
     config = DriverConfig.from_rates(args.odom_hz, args.scan_hz, args.watchdog)
     with open_node(NAME, args, log) as node:
-        node.subscribe("events")
-        node.subscribe("cmd_vel")
-        node.declare_publishers(*PUBLISHES, on_demand=ON_DEMAND)
-        node.ready()
+        publish = node.publish
+        people = ("sim/people",) if world.people else ()   # on this node's namespace
+        if world.robots:   # a fleet: each robot's share under its own namespace
+            publish = fleet_nodes(node, [r.name for r in world.robots], log)
+            node.declare_publishers(*people)
+            node.ready()   # <namespace>/alive/base_driver too: the process itself is up
+        else:
+            node.subscribe("events")
+            node.subscribe("cmd_vel")
+            node.declare_publishers(*PUBLISHES, *people, *(("sim/bodies",) if people else ()),
+                                    on_demand=ON_DEMAND)
+            node.ready()
         log.info("waiting for run_started on %s (a launcher sends it; alone: papf goal X Y "
                  "--start-run, or papf teleop --start-run with --realtime)", node.keys.events)
         while wait_for_start(node):  # one run per run_started; run_ended waits for the next
@@ -85,10 +94,40 @@ def main_sim(args: argparse.Namespace) -> int:
                 log.info("run started: world %s, seed %d, %s", world.name, args.seed,
                          "realtime" if args.realtime else "lockstep")
                 drive(node, DriverLoop(core, args.realtime, args.lockstep_timeout,
-                                       time.monotonic(), log))
+                                       time.monotonic(), log), publish)
                 log.info("run stopped at sim t = %.3f s; collisions: %d", core.t_ns / 1e9,
                          core.collision_count)
+        for share in getattr(node, "shares", ()):
+            share.close()
     return 0
+
+
+def fleet_nodes(node: Node, names: list[str], log):
+    """One :class:`Node` per robot on ``node``'s session, its inputs queued to ``node``'s
+    inbox as ``<name>/<topic>``, its liveliness token ``<name>/alive/base_driver``; returns
+    ``publish(topic, msg)`` for the core's ``<name>/<suffix>`` topics."""
+    robots = {}
+    for name in names:
+        share = Node(NAME, node.session, Keys(name), log)
+        for topic in ("events", "cmd_vel"):
+            share.subscribe(topic, handler=lambda m, t=f"{name}/{topic}": node.inbox.put((t, m)))
+        share.declare_publishers(*PUBLISHES, "sim/bodies", on_demand=ON_DEMAND)
+        robots[name] = share
+    for share in robots.values():
+        share.ready()
+    node.shares = list(robots.values())   # closed with the session (kept referenced)
+
+    def publish(topic: str, msg) -> None:
+        if topic == "sim/people":   # the world's, not a robot's: on the driver's namespace
+            node.publish(topic, msg)
+            return
+        name, _, suffix = topic.partition("/")
+        if name in robots and suffix:
+            robots[name].publish(suffix, msg)
+        else:   # the loop's own (a lockstep fault's event): every robot's
+            for share in robots.values():
+                share.publish(topic, msg)
+    return publish
 
 
 def main_rosbot(args: argparse.Namespace) -> int:

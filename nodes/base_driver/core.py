@@ -20,12 +20,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from common.errors import ConfigError
 from common.params import check_value
 from common.units import NS_PER_S
 from nodes.base_driver.limits import OPTIONS, CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimBase, SimParams
-from schemas.messages import Clock, Event, Twist
+from schemas.messages import Bodies, Clock, Event, People, Twist
 from worlds import World
 
 SOURCE = "base_driver"            # Event.source of this node's events
@@ -88,17 +90,42 @@ class CollisionMonitor:
 
 
 class DriverCore:
-    """Simulated ROSbot on the lockstep time grid (see module doc)."""
+    """Simulated ROSbots on the lockstep time grid (see module doc).
+
+    One robot (``world.robots`` empty): topics are plain (``sim/pose``), under the node's
+    namespace. A fleet (``[[robots]]``): every robot in one physics world, its topics under
+    its own name (``r1/sim/pose``), and an instant's lockstep is complete only when every
+    robot's planner answered the scan (:meth:`command`).
+    """
 
     def __init__(self, world: World, seed: int, config: DriverConfig | None = None):
         self.config = cfg = config or DriverConfig()
         self.world = world
-        self.sim = SimBase(world, seed, cfg.sim)
-        self.gate = CommandGate(cfg.limits)
-        self.collisions = CollisionMonitor()
-        self.collision_count = 0
-        self._pending: list[Event] = []
-        self._watchdog_stopped = False
+        fleet = world.robots
+        self.names = [r.name for r in fleet] or [""]
+        starts = [tuple(r.start) for r in fleet] or None
+        self.sim = SimBase(world, seed, cfg.sim, starts)
+        n = len(self.names)
+        self.gates = [CommandGate(cfg.limits) for _ in range(n)]
+        self.gate = self.gates[0]
+        self.monitors = [CollisionMonitor() for _ in range(n)]
+        self.collisions = self.monitors[0]
+        self.collision_counts = [0] * n
+        self._pending: list[list[Event]] = [[] for _ in range(n)]
+        self._watchdog_stopped = [False] * n
+        self._answered: set[int] = set()          # robots whose command answers this scan
+        self._index = {name: i for i, name in enumerate(self.names)}
+        self.crowd = None
+        if world.people:   # people who react (common/crowd.py), bodies in the physics
+            from common.crowd import Crowd  # pyrvo / pysocialforce: only with people
+
+            self.crowd = Crowd(world.people, world, seed)
+            self.sim.add_people(self.crowd.radii)
+            self.sim.place_people(self.crowd.positions)
+
+    @property
+    def collision_count(self) -> int:
+        return sum(self.collision_counts)
 
     @property
     def t_ns(self) -> int:
@@ -111,52 +138,109 @@ class DriverCore:
         """The latest scan instant <= t [ns]."""
         return self.t_ns - self.t_ns % self.config.scan_period_ns
 
+    def topic(self, i: int, suffix: str) -> str:
+        """Robot ``i``'s topic: ``suffix`` alone, or ``<name>/<suffix>`` in a fleet."""
+        return f"{self.names[i]}/{suffix}" if self.names[i] else suffix
+
     def outputs(self) -> list[tuple[str, object]]:
-        """(topic, message) to publish at instant t, in protocol order; clears pending events."""
+        """(topic, message) to publish at instant t, in protocol order, robot after robot
+        (a fleet's robots first get ``sim/bodies`` at a scan instant); clears pending events."""
         t = self.t_ns
-        odom = self.sim.odometry(t)
-        out: list[tuple[str, object]] = [("sim/pose", odom), ("odom", odom),
-                                         ("wheels", self.sim.wheel_states(t)),
-                                         ("clock", Clock(stamp_ns=t))]
-        out += [("events", e) for e in self._pending]
-        self._pending = []
+        out: list[tuple[str, object]] = []
+        # the LiDARs of a [[robots]] or [[people]] world wait for it (nodes/lidar_sim)
+        scan = (bool(self.world.robots) or self.crowd is not None) and self.is_scan_instant()
+        odoms = [self.sim.odometry(t, i) for i in range(len(self.names))]
+        if self.crowd is not None:
+            out.append(("sim/people", self._people(t)))
+        if self.is_scan_instant():
+            self._answered = set()
+        for i, odom in enumerate(odoms):
+            if scan:
+                out.append((self.topic(i, "sim/bodies"), self._bodies(t, i, odoms)))
+            out += [(self.topic(i, "sim/pose"), odom), (self.topic(i, "odom"), odom),
+                    (self.topic(i, "wheels"), self.sim.wheel_states(t, i)),
+                    (self.topic(i, "clock"), Clock(stamp_ns=t))]
+            out += [(self.topic(i, "events"), e) for e in self._pending[i]]
+            self._pending[i] = []
         return out
 
-    def command(self, twist: Twist) -> bool:
-        """Apply a command; True if it answers the scan of this instant (lockstep match)."""
+    def _bodies(self, t: int, i: int, odoms: list) -> Bodies:
+        """What robot ``i``'s LiDAR sees move at ``t``: every other robot, every person."""
+        others = [j for j in range(len(self.names)) if j != i]
+        xy = self.crowd.positions if self.crowd is not None else np.zeros((0, 2))
+        radii = self.crowd.radii if self.crowd is not None else ()
+        return Bodies(stamp_ns=t, robots=tuple(self.names[j] for j in others),
+                      robot_x=tuple(odoms[j].x for j in others),
+                      robot_y=tuple(odoms[j].y for j in others),
+                      robot_yaw=tuple(odoms[j].yaw for j in others),
+                      person_x=tuple(float(v) for v in xy[:, 0]),
+                      person_y=tuple(float(v) for v in xy[:, 1]),
+                      person_radius=tuple(float(r) for r in radii))
+
+    def _people(self, t: int) -> People:
+        crowd = self.crowd
+        xy, v = crowd.positions, crowd.velocities
+        return People(stamp_ns=t, x=tuple(float(a) for a in xy[:, 0]),
+                      y=tuple(float(a) for a in xy[:, 1]), vx=tuple(float(a) for a in v[:, 0]),
+                      vy=tuple(float(a) for a in v[:, 1]),
+                      radius=tuple(float(r) for r in crowd.radii))
+
+    def command(self, twist: Twist, robot: str = "") -> bool:
+        """Apply robot ``robot``'s command; True once it completes the lockstep of this
+        instant: every robot has answered the scan of ``t`` (``stamp_ns == t``)."""
         t = self.t_ns
-        self.gate.command(twist.v, twist.w, min(twist.stamp_ns, t))
-        return twist.stamp_ns == t and self.is_scan_instant()
+        i = self._index.get(robot)
+        if i is None:
+            return False
+        self.gates[i].command(twist.v, twist.w, min(twist.stamp_ns, t))
+        if twist.stamp_ns == t and self.is_scan_instant():
+            self._answered.add(i)
+            return len(self._answered) == len(self.names)
+        return False
 
     def advance(self) -> None:
         """Step the physics to the next publication instant."""
         step_ns = self.config.sim.step_ns
+        n = len(self.names)
+        if self.crowd is not None:   # people take the instant's step, seeing the robots now
+            robots = [(*self.sim.pose(i)[:2], *self.sim.velocity(i)) for i in range(n)]
+            self.crowd.step(self.config.odom_period_ns / NS_PER_S, robots)
+            self.sim.place_people(self.crowd.positions)
         for _ in range(self.config.odom_period_ns // step_ns):
             t = self.sim.t_ns
-            v, w, stopped = self.gate.output(t, step_ns * 1e-9)
-            if stopped and not self._watchdog_stopped:
-                self._event(t, "watchdog_stop",
-                            f"no fresh cmd_vel for {self.config.limits.watchdog_ns / 1e9:g} s; stopping")
-            self._watchdog_stopped = stopped
-            self.sim.set_twist(v, w)
+            for i in range(n):
+                v, w, stopped = self.gates[i].output(t, step_ns * 1e-9)
+                if stopped and not self._watchdog_stopped[i]:
+                    self._event(i, t, "watchdog_stop",
+                                f"no fresh cmd_vel for {self.config.limits.watchdog_ns / 1e9:g} s; "
+                                "stopping")
+                self._watchdog_stopped[i] = stopped
+                self.sim.set_twist(v, w, i)
             self.sim.step()
-            self._check_contacts()
+            for i in range(n):
+                self._check_contacts(i)
 
-    def _check_contacts(self) -> None:
-        contacts = self.sim.contacts()
+    def _check_contacts(self, i: int) -> None:
+        contacts = self.sim.contacts(i)
         if not contacts:
             return
         t = self.sim.t_ns
-        new = set(self.collisions.update(t, [c.obstacle for c in contacts]))
-        for c in contacts:
-            if c.obstacle in new:
-                self.collision_count += 1
-                kind = self.world.obstacles[c.obstacle].kind
-                self._event(t, "collision", f"obstacle {c.obstacle} ({kind})", c.x, c.y)
+        n = len(self.names)   # monitor keys: obstacles >= 0, robots -1.., people after them
+        keys = [c.obstacle if c.robot < 0 and c.person < 0 else
+                -1 - c.robot if c.robot >= 0 else -1 - n - c.person for c in contacts]
+        new = set(self.monitors[i].update(t, keys))
+        for c, key in zip(contacts, keys, strict=True):
+            if key in new:
+                self.collision_counts[i] += 1
+                what = (f"robot {self.names[c.robot]}" if c.robot >= 0 else
+                        f"person {c.person}" if c.person >= 0 else
+                        f"obstacle {c.obstacle} ({self.world.obstacles[c.obstacle].kind})")
+                self._event(i, t, "collision", what, c.x, c.y)
 
-    def _event(self, t_ns: int, kind: str, detail: str, x: float = float("nan"),
+    def _event(self, i: int, t_ns: int, kind: str, detail: str, x: float = float("nan"),
                y: float = float("nan")) -> None:
-        self._pending.append(Event(stamp_ns=t_ns, kind=kind, source=SOURCE, detail=detail, x=x, y=y))
+        self._pending[i].append(Event(stamp_ns=t_ns, kind=kind, source=SOURCE, detail=detail,
+                                      x=x, y=y))
 
     def close(self) -> None:
         self.sim.close()

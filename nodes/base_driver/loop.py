@@ -11,6 +11,9 @@ Per sim instant ``t`` (the core's odometry grid):
    scan again (then back to lockstep). Otherwise: take whatever is queued, without waiting;
 4. advance the core one instant.
 
+A fleet's core (``[[robots]]``) takes each robot's ``<name>/cmd_vel`` and says an instant
+is answered only when every robot's command for it came (``DriverCore.command``).
+
 ``run_ended`` on ``events`` ends the run. The process wrapper
 (``nodes/base_driver/__main__.py``) only wires this to the bus::
 
@@ -45,14 +48,17 @@ class DriverLoop:
         """True when waiting for input is over before the deadline (a command answered)."""
         return self.ended or (self.phase == AWAIT and self.matched)
 
-    def on_message(self, topic: str, msg) -> None:
-        if topic == "cmd_vel" and isinstance(msg, Twist):
-            self.matched |= self.core.command(msg)
+    def on_message(self, topic: str | None, msg) -> None:
+        if topic is None:   # a stop request's wake-up
+            return
+        if (topic == "cmd_vel" or topic.endswith("/cmd_vel")) and isinstance(msg, Twist):
+            robot = topic[:-len("/cmd_vel")]   # a fleet's "<name>/cmd_vel"; "" for one robot
+            self.matched |= self.core.command(msg, robot) if robot else self.core.command(msg)
             if self.free_running and not self.realtime and msg.stamp_ns == self.last_scan_ns:
                 if self.log:
                     self.log.info("cmd_vel answers scan %d ns again: back to lockstep", msg.stamp_ns)
                 self.free_running = False
-        elif topic == "events" and isinstance(msg, Event) and msg.kind == "run_ended":
+        elif topic.endswith("events") and isinstance(msg, Event) and msg.kind == "run_ended":
             self.ended = True
 
     def step(self, now: float) -> tuple[list[tuple[str, object]], float | None]:

@@ -8,6 +8,8 @@ SIM = (
     ("out", "wheels", "WheelStates"),    # wheel speeds and motor torques
     ("out", "clock", "Clock"),           # sim time
     ("out", "events", "Event"),          # collision, watchdog_stop, node_fault
+    ("out", "sim/bodies", "Bodies"),     # a fleet or people: the others, before sim/pose
+    ("out", "sim/people", "People"),     # [[people]]: where they are, every instant
 )
 ROSBOT = (
     ("in", "cmd_vel", "Twist"),

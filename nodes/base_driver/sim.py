@@ -65,6 +65,7 @@ MOTOR_TORQUE_LIMIT = 1.5       # [N*m] per wheel: rosbot_description wheel joint
                                # Gazebo plugin's max_wheel_torque (assumption: the real gear motor
                                # delivers about this much)
 TOP_SPEED = robot.TOP_SPEED_M_S   # [m/s]
+PERSON_HEIGHT_M = 1.8          # [m] a person's cylinder (assumption; anything above the robot)
 
 
 @dataclass(frozen=True)
@@ -113,11 +114,13 @@ class SimParams:
 
 @dataclass(frozen=True)
 class Contact:
-    """The robot touching an obstacle: index in ``world.obstacles`` and a contact point [m]."""
+    """A robot touching an obstacle (index in ``world.obstacles``) or another robot, at a point [m]."""
 
-    obstacle: int
+    obstacle: int                 # -1: another robot
     x: float
     y: float
+    robot: int = -1               # index of the other robot touched (fleet order), else -1
+    person: int = -1              # index of the person touched ([[people]] order), else -1
 
 
 def jittered_start(start, rng: np.random.Generator, prm: SimParams | None = None,
@@ -131,19 +134,24 @@ def jittered_start(start, rng: np.random.Generator, prm: SimParams | None = None
 
 
 class SimBase:
-    """One simulated ROSbot in a pybullet DIRECT client holding ``world``'s obstacles."""
+    """Simulated ROSbots (one, or a fleet: ``starts``) in a pybullet DIRECT client holding
+    ``world``'s obstacles; methods take the robot's index ``i`` (0: the first)."""
 
-    def __init__(self, world: World, seed: int = 0, params: SimParams | None = None):
+    def __init__(self, world: World, seed: int = 0, params: SimParams | None = None,
+                 starts: list[tuple[float, float, float]] | None = None):
         if world.dims != 2:
             raise ConfigError(f"world {world.name!r} is {world.dims}-D; the ROSbot sim needs a 2-D world")
         self.params = prm = params or SimParams()
         self.world = world
         rng = np.random.default_rng(seed)
-        start = jittered_start(world.start, rng, prm)       # the first draws of the run's rng
-        mu = prm.friction * np.clip(1 + prm.friction_sd * rng.normal(0.0, 1.0, 4), 0.5, 1.5)
-        r_eff = prm.wheel_radius * (1 + prm.radius_sd * rng.normal(0.0, 1.0, 4))
-        self._mu = [float(m) for m in mu]                             # [-] per wheel
-        self._r_eff = [float(r) for r in r_eff]                       # [m] rolling radius per wheel
+        # Each robot's draws in turn from the one rng: jitter, friction, radius. Robot 0's
+        # are the first draws of the run's rng, as with one robot (same seed, same start).
+        noise = []
+        for nominal in starts or [tuple(world.start[:3])]:
+            start = jittered_start(nominal, rng, prm)
+            mu = prm.friction * np.clip(1 + prm.friction_sd * rng.normal(0.0, 1.0, 4), 0.5, 1.5)
+            r_eff = prm.wheel_radius * (1 + prm.radius_sd * rng.normal(0.0, 1.0, 4))
+            noise.append((start, [float(m) for m in mu], [float(r) for r in r_eff]))
         self._load = prm.mass * GRAVITY / 4                          # [N] per wheel
         a, b = prm.wheelbase / 2, prm.track / 2
         self._wx = (a, a, -a, -a)                                     # [m] WHEEL_NAMES order
@@ -152,20 +160,23 @@ class SimBase:
         # Per-wheel constants of the tyre model, computed once: (index, x, y, rolling radius,
         # -mu N). ``-mu * N / d`` is evaluated as ``(-mu * N) / d``, so the product can be
         # kept: the same operations in the same order, bit for bit (tests/test_driver_sim.py).
-        self._tyres = tuple((i, self._wx[i], self._wy[i], self._r_eff[i], -self._mu[i] * self._load)
-                            for i in range(4))
+        self._mu_of = [mu for _, mu, _ in noise]                      # [-] per robot, per wheel
+        self._r_eff_of = [r for _, _, r in noise]                     # [m] rolling radius
+        self._tyres_of = [tuple((i, self._wx[i], self._wy[i], r[i], -mu[i] * self._load)
+                                for i in range(4)) for _, mu, r in noise]
+        self._mu, self._r_eff, self._tyres = self._mu_of[0], self._r_eff_of[0], self._tyres_of[0]
         self._eps2 = prm.slip_eps ** 2                                # [m^2/s^2]
         self._track_eff = prm.effective_track                         # [m]
         self.t_ns = 0
         self.cid = p.connect(p.DIRECT)
         try:
-            self._setup(world, start)
+            self._setup(world, [start for start, _, _ in noise])
         except Exception:
             p.disconnect(self.cid)
             raise
 
     # -- construction -------------------------------------------------------
-    def _setup(self, world: World, start: tuple[float, float, float]) -> None:
+    def _setup(self, world: World, starts: list[tuple[float, float, float]]) -> None:
         cid, prm = self.cid, self.params
         p.setGravity(0, 0, -GRAVITY, physicsClientId=cid)
         p.setTimeStep(prm.step_ns * 1e-9, physicsClientId=cid)
@@ -175,7 +186,12 @@ class SimBase:
         self.obstacles = build_world(cid, world, self._obstacle_index)
         self._static_index: StaticIndex | None = None            # on the first mesh contact
         self.moving = MovingBodies(cid, world, self.obstacles)   # kinematic, on sim time
-        self.robot = self._build_robot(start)
+        self.robots = [self._build_robot(start) for start in starts]   # body ids, fleet order
+        self._robot_index = {body: i for i, body in enumerate(self.robots)}
+        self.people: list[int] = []                                   # add_people
+        self._person_index: dict[int, int] = {}
+        self._targets_of = [(0.0, 0.0)] * len(self.robots)           # [rad/s] left, right
+        self.robot = self.robots[0]
         for _ in range(SETTLE_STEPS):
             self._physics_step()
 
@@ -209,18 +225,20 @@ class SimBase:
         return robot
 
     # -- control and stepping -------------------------------------------------
-    def set_twist(self, v: float, w: float) -> tuple[float, float]:
-        """Command body velocities [m/s, rad/s]; returns the (left, right) wheel targets [rad/s]."""
+    def set_twist(self, v: float, w: float, i: int = 0) -> tuple[float, float]:
+        """Command robot ``i``'s body velocities [m/s, rad/s]; returns its (left, right) wheel
+        targets [rad/s]."""
         prm = self.params
         half = w * self._track_eff / 2
         lim = prm.wheel_speed_limit
         left = max(-lim, min(lim, (v - half) / prm.wheel_radius))
         right = max(-lim, min(lim, (v + half) / prm.wheel_radius))
-        if left != self._targets[0] or right != self._targets[1]:  # motor settings persist
-            p.setJointMotorControlArray(self.robot, self._joints, p.VELOCITY_CONTROL,
+        targets = self._targets_of[i]
+        if left != targets[0] or right != targets[1]:  # motor settings persist
+            p.setJointMotorControlArray(self.robots[i], self._joints, p.VELOCITY_CONTROL,
                                         targetVelocities=[left, right, left, right],
                                         forces=[prm.motor_torque_limit] * 4, physicsClientId=self.cid)
-            self._targets = (left, right)
+            self._targets_of[i] = (left, right)
         return left, right
 
     def step(self) -> None:
@@ -236,9 +254,11 @@ class SimBase:
 
     def _physics_step(self) -> None:
         self._apply_tyre_forces()
+        for i in range(1, len(self.robots)):   # the fleet's other robots, in order
+            self._apply_tyre_forces(i)
         p.stepSimulation(physicsClientId=self.cid)
 
-    def _apply_tyre_forces(self) -> None:
+    def _apply_tyre_forces(self, n: int = 0) -> None:
         """The Coulomb tyre force of every wheel (module doc), applied at its contact point.
 
         Plain floats, not numpy: 4-element arrays cost more in overhead than they save. Three
@@ -246,7 +266,7 @@ class SimBase:
         the per-wheel constants are precomputed (``_tyres``) and the bound functions looked
         up once. Same operations, same order as the formula: bit for bit.
         """
-        cid, robot = self.cid, self.robot
+        cid, robot = self.cid, self.robots[n]
         (px, py, _), (qx, qy, qz, qw) = _base_pose(robot, physicsClientId=cid)
         (vx, vy, _), (_, _, w) = _base_velocity(robot, physicsClientId=cid)
         yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))   # _yaw(quat)
@@ -254,7 +274,7 @@ class SimBase:
         vbx, vby = c * vx + s * vy, -s * vx + c * vy                  # body-frame velocity
         states = _joint_states(robot, self._joints, physicsClientId=cid)
         eps2, sqrt, force = self._eps2, math.sqrt, _external_force
-        for i, wx, wy, r_eff, k_n in self._tyres:
+        for i, wx, wy, r_eff, k_n in self._tyres_of[n]:
             slip_x = vbx - w * wy - states[i][1] * r_eff
             slip_y = vby + w * wx
             k = k_n / sqrt(slip_x * slip_x + slip_y * slip_y + eps2)
@@ -263,35 +283,49 @@ class SimBase:
                   (px + c * wx - s * wy, py + s * wx + c * wy, 0.0), _WORLD_FRAME, physicsClientId=cid)
 
     # -- state ------------------------------------------------------------------
-    def pose(self) -> tuple[float, float, float]:
-        """Ground-truth (x [m], y [m], yaw [rad]) of the robot centre in the world frame."""
-        (x, y, _), quat = p.getBasePositionAndOrientation(self.robot, physicsClientId=self.cid)
+    def pose(self, i: int = 0) -> tuple[float, float, float]:
+        """Ground-truth (x [m], y [m], yaw [rad]) of robot ``i``'s centre in the world frame."""
+        (x, y, _), quat = p.getBasePositionAndOrientation(self.robots[i], physicsClientId=self.cid)
         return x, y, _yaw(quat)
 
-    def odometry(self, stamp_ns: int) -> Odometry:
-        """Ground-truth pose and body-frame forward speed and yaw rate."""
-        x, y, yaw = self.pose()
-        (vx, vy, _), (_, _, w) = p.getBaseVelocity(self.robot, physicsClientId=self.cid)
+    def odometry(self, stamp_ns: int, i: int = 0) -> Odometry:
+        """Robot ``i``'s ground-truth pose and body-frame forward speed and yaw rate."""
+        x, y, yaw = self.pose(i)
+        (vx, vy, _), (_, _, w) = p.getBaseVelocity(self.robots[i], physicsClientId=self.cid)
         v = math.cos(yaw) * vx + math.sin(yaw) * vy
         return Odometry(stamp_ns=stamp_ns, x=x, y=y, yaw=yaw, v=v, w=w)
 
-    def wheel_states(self, stamp_ns: int) -> WheelStates:
-        """Wheel speeds [rad/s] and the motor torques applied in the last step [N*m]."""
-        states = p.getJointStates(self.robot, self._joints, physicsClientId=self.cid)
+    def velocity(self, i: int = 0) -> tuple[float, float]:
+        """Robot ``i``'s ground-truth velocity (vx, vy) [m/s] in the world frame."""
+        (vx, vy, _), _ = p.getBaseVelocity(self.robots[i], physicsClientId=self.cid)
+        return vx, vy
+
+    def wheel_states(self, stamp_ns: int, i: int = 0) -> WheelStates:
+        """Robot ``i``'s wheel speeds [rad/s] and motor torques of the last step [N*m]."""
+        states = p.getJointStates(self.robots[i], self._joints, physicsClientId=self.cid)
         return WheelStates(stamp_ns=stamp_ns, speed=tuple(float(s[1]) for s in states),
                            torque=tuple(float(s[3]) for s in states), names=WHEEL_NAMES)
 
-    def contacts(self) -> list[Contact]:
-        """Obstacles the robot touches after the last step, one entry per obstacle.
+    def contacts(self, i: int = 0) -> list[Contact]:
+        """Obstacles (and other robots) robot ``i`` touches after the last step, one entry each.
 
         Only the chassis is checked: its box covers the wheels' footprint, so an obstacle
-        reaches it first (unless lower than the 2.5 cm ground clearance).
+        reaches it first (unless lower than the 2.5 cm ground clearance). Another robot is
+        any part of its body; its entry has ``obstacle = -1`` and ``robot`` = its index.
         """
-        points = _contact_points(bodyA=self.robot, linkIndexA=-1, physicsClientId=self.cid)
+        points = _contact_points(bodyA=self.robots[i], linkIndexA=-1, physicsClientId=self.cid)
         if not points:   # the common case, every step of a run without contact
             return []
-        seen: dict[int, Contact] = {}
+        seen: dict = {}   # obstacle index, or ("robot" | "person", index) -> Contact
         for cp in points:
+            other, person = self._robot_index.get(cp[2]), self._person_index.get(cp[2])
+            if other is not None or person is not None:
+                key = ("robot", other) if other is not None else ("person", person)
+                if key not in seen:
+                    seen[key] = Contact(-1, float(cp[6][0]), float(cp[6][1]),
+                                        -1 if other is None else other,
+                                        -1 if person is None else person)
+                continue
             index = self._obstacle_index.get(cp[2])
             if index == MERGED:   # a mesh of many static obstacles: the one at the contact
                 index = self._nearest_static(cp[6][0], cp[6][1])
@@ -304,6 +338,22 @@ class SimBase:
         if self._static_index is None:   # built on the first contact with a mesh
             self._static_index = StaticIndex(self.world)
         return self._static_index.nearest(x, y)
+
+    def add_people(self, radii) -> None:
+        """Bodies for people (cylinders of ``radii`` [m], :data:`PERSON_HEIGHT_M` tall, moved
+        kinematically by :meth:`place_people`); a robot touching one is a contact."""
+        for r in radii:
+            shape = p.createCollisionShape(p.GEOM_CYLINDER, radius=float(r), height=PERSON_HEIGHT_M,
+                                           physicsClientId=self.cid)
+            body = p.createMultiBody(0, shape, basePosition=[0, 0, -100], physicsClientId=self.cid)
+            self._person_index[body] = len(self.people)
+            self.people.append(body)
+
+    def place_people(self, xy) -> None:
+        """Put each person's body at its (x, y) [m]."""
+        for body, (x, y) in zip(self.people, xy, strict=True):
+            p.resetBasePositionAndOrientation(body, [float(x), float(y), PERSON_HEIGHT_M / 2],
+                                              [0, 0, 0, 1], physicsClientId=self.cid)
 
     def close(self) -> None:
         if self.cid is not None and p.isConnected(self.cid):

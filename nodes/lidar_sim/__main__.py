@@ -9,7 +9,9 @@ restarts the schedule. ``--source ros2`` hands over to the real sensor's bridge
 
 Ports: :mod:`nodes.lidar_sim.ports` (``--help`` prints them).
 
-Moving obstacles are placed at each scan's sim time. With ``--truth-objects`` the node
+Moving obstacles are placed at each scan's sim time. In a fleet (``[[robots]]`` or
+``[[people]]`` in the world) each scan waits for ``sim/bodies`` of its instant too and
+sees the other robots and the people there. With ``--truth-objects`` the node
 also publishes the ground truth (pose, velocity, size of every obstacle within the
 LiDAR's range) as ``Objects`` with the scan's stamp, just before the scan: the sim's
 answer to ``--objects truth`` (also in HIL, for the virtual obstacles).
@@ -54,6 +56,32 @@ class ScanSchedule:
         return True
 
 
+class BodyPairs:
+    """Pairs each due pose with the ``sim/bodies`` of its stamp, whichever comes first
+    (they travel on different keys): a fleet's scan is cast only with both."""
+
+    def __init__(self):
+        self.poses: dict[int, object] = {}
+        self.bodies: dict[int, object] = {}
+
+    def add(self, topic: str, msg) -> tuple[object, object]:
+        """Take a pose or bodies message; (pose, bodies) of a complete stamp, else (None, None)."""
+        book = self.bodies if topic == "sim/bodies" else self.poses
+        if any(t > msg.stamp_ns for t in book):   # the clock restarted: a new run
+            self.poses.clear()
+            self.bodies.clear()
+        book[msg.stamp_ns] = msg
+        t = msg.stamp_ns
+        if t in self.poses and t in self.bodies:
+            pose, bodies = self.poses.pop(t), self.bodies.pop(t)
+            for old in [s for s in self.poses if s < t]:
+                del self.poses[old]
+            for old in [s for s in self.bodies if s < t]:
+                del self.bodies[old]
+            return pose, bodies
+        return None, None
+
+
 def main_sim(args: argparse.Namespace) -> int:
     from nodes.base_driver.core import period_ns  # the driver owns the time grid
     from nodes.lidar_sim.core import LidarParams, LidarSim  # pybullet: only when simulating
@@ -63,18 +91,29 @@ def main_sim(args: argparse.Namespace) -> int:
     params = LidarParams(beams=args.beams, noise_sd=args.noise_sd, noise_rel=args.noise_rel)
     schedule = ScanSchedule(period_ns(args.scan_hz, "scan rate"))
     pose_topic = "sim/pose" if args.pose_source == "sim" else "odom"
-    with LidarSim(world, params, args.seed) as lidar, open_node(NAME, args, log) as node:
+    fleet = [r.name for r in world.robots]
+    robot = fleet.index(args.namespace) if args.namespace in fleet else 0
+    with LidarSim(world, params, args.seed, robot) as lidar, open_node(NAME, args, log) as node:
         def keep_due(pose) -> None:  # Zenoh's callback thread: only due poses wake the main one
             if schedule.due(pose.stamp_ns):
                 node.inbox.put((pose_topic, pose))
 
         node.subscribe(pose_topic, handler=keep_due)
+        pairs = BodyPairs() if (world.robots or world.people) else None
+        if pairs is not None:   # a fleet: the others' bodies of each scan instant
+            node.subscribe("sim/bodies")
         node.declare_publishers("scan", *(("objects",) if args.truth_objects else ()))
         node.ready()
         count = 0
-        for topic, pose in node.messages():
+        for topic, msg in node.messages():
             if topic is None:
                 continue
+            pose = msg
+            if pairs is not None:
+                pose, bodies = pairs.add(topic, msg)
+                if pose is None:
+                    continue
+                lidar.place_bodies(bodies)
             if args.truth_objects:
                 node.publish("objects", truth_objects(world, pose.stamp_ns, (pose.x, pose.y),
                                                       params.range_max))

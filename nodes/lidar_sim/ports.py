@@ -2,6 +2,7 @@
 
 PORTS = (
     ("in", "sim/pose", "Odometry"),      # ground-truth pose (--pose-source sim, default)
+    ("in?", "sim/bodies", "Bodies"),     # a fleet's other robots and people, per scan instant
     ("out", "scan", "Scan"),             # one per scan instant, stamped with the pose's stamp
 )
 ODOM = (

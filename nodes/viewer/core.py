@@ -14,6 +14,7 @@ from importlib import resources
 
 from nodes.viewer import convert as cv
 from nodes.viewer.scene import (
+    bodies_scene,
     footprint_scene,
     mind_scene,
     moving_scene,
@@ -22,6 +23,7 @@ from nodes.viewer.scene import (
 )
 from schemas.messages import (
     BatteryState,
+    Bodies,
     Event,
     Goal,
     Objects,
@@ -57,6 +59,9 @@ CHANNELS: tuple[ChannelSpec, ...] = (
                 "each planner cycle (10 Hz)"),
     ChannelSpec("/objects", "foxglove.SceneUpdate", "objects",
                 "each set of obstacle tracks (10 Hz, with --objects truth|tracker)"),
+    ChannelSpec("/fleet", "foxglove.SceneUpdate", "sim/bodies",
+                "each scan instant (10 Hz) of a fleet or a world with people: the other "
+                "robots and the people"),
     ChannelSpec("/log", "foxglove.Log", "events; the viewer's own notes", "as they happen"),
     ChannelSpec("/battery", "papf.BatteryState", "battery", "each sample (50 Hz)"),
     ChannelSpec("/cmd_vel", "papf.Twist", "cmd_vel", "each command (10 Hz)"),
@@ -66,7 +71,7 @@ CHANNELS: tuple[ChannelSpec, ...] = (
 PLOT_TYPES = {"papf.BatteryState": BatteryState, "papf.Twist": Twist,
               "papf.PlannerStatus": PlannerStatus, "papf.Odometry": Odometry}
 SUBSCRIBED = ("scan", "odom", "sim/pose", "goal", "planner/state", "planner/status", "cmd_vel",
-              "battery", "events", "objects")
+              "battery", "events", "objects", "sim/bodies")
 GOAL_TOPICS = ("/goal_pose", "/move_base_simple/goal", "/clicked_point", "/goal")
 
 
@@ -100,7 +105,8 @@ class ViewCore:
                           "goal": self._goal, "planner/state": self._state,
                           "planner/status": self._plot("/planner/status"),
                           "cmd_vel": self._plot("/cmd_vel"), "battery": self._plot("/battery"),
-                          "events": self._event, "objects": self._objects}
+                          "events": self._event, "objects": self._objects,
+                          "sim/bodies": self._bodies}
 
     def on_message(self, topic: str, msg) -> list[tuple[str, dict, int]]:
         """Foxglove messages for one stack message (unknown topics: none)."""
@@ -163,6 +169,9 @@ class ViewCore:
 
     def _objects(self, msg: Objects):
         return [("/objects", objects_scene(msg), msg.stamp_ns)]
+
+    def _bodies(self, msg: Bodies):
+        return [("/fleet", bodies_scene(msg), msg.stamp_ns)]
 
     def _event(self, ev: Event):
         return [("/log", cv.event_log(ev), ev.stamp_ns)]

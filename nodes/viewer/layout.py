@@ -36,6 +36,7 @@ def layout() -> fl.Layout:
             "/world": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
             "/planner/scene": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
             "/objects": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
+            "/fleet": fl.BaseRendererSceneUpdateTopicSettings(visible=True),
             "/goal": fl.BaseRendererPoseTopicSettings(visible=True),
             "/robot/pose": fl.BaseRendererPoseTopicSettings(visible=False),
         }))

@@ -6,7 +6,7 @@ from nodes.viewer.core import SUBSCRIBED
 _TYPES = {"scan": "Scan", "odom": "Odometry", "sim/pose": "Odometry", "goal": "Goal",
           "planner/state": "PlannerState", "planner/status": "PlannerStatus",
           "cmd_vel": "Twist", "battery": "BatteryState", "events": "Event",
-          "objects": "Objects"}
+          "objects": "Objects", "sim/bodies": "Bodies"}
 
 PORTS = tuple(("in?", key, _TYPES[key]) for key in SUBSCRIBED) + (
     ("out", "goal", "Goal"),    # a pose/point published from Foxglove's 3D panel (--goals accept)

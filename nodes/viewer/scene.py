@@ -1,9 +1,10 @@
 """The 3-D scene as foxglove.SceneUpdate dicts (pure): the world, the robot, the planner's mind.
 
 :func:`world_scene` (static obstacles, road, start and goal), :func:`moving_scene`,
-:func:`footprint_scene`, :func:`objects_scene` (tracks) and :func:`mind_scene` (one planner
-cycle, as the PAPF paper drew it in RViz). Colours are the matplotlib pictures'
-(``MIND_COLOURS``). Used by the viewer's core and ``papf export foxglove``.
+:func:`footprint_scene`, :func:`objects_scene` (tracks), :func:`bodies_scene` (a fleet's
+other robots and the people) and :func:`mind_scene` (one planner cycle, as the PAPF paper
+drew it in RViz). Colours are the matplotlib pictures' (``MIND_COLOURS``). Used by the
+viewer's core and ``papf export foxglove``.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from nodes.viewer.convert import (
     sphere,
     text,
 )
-from schemas.messages import Objects, PlannerState
+from schemas.messages import Bodies, Objects, PlannerState
 from worlds import World
 
 # (r, g, b, a) 0..1; the matplotlib pictures use the same.
@@ -47,6 +48,8 @@ MIND_COLOURS = {
     "moving": (0.8, 0.4, 0.0, 1.0),
     "track": (0.0, 0.6, 0.6, 0.7),
     "road": (0.95, 0.85, 0.2, 1.0),
+    "other_robot": (0.45, 0.45, 0.45, 0.7),
+    "person": (0.58, 0.4, 0.74, 0.7),
 }
 ROAD_MARGIN_M = 5.0      # [m] road lines drawn this far beyond the world's extent along x
 DASH_M = 0.5             # [m] dash and gap of a broken road line
@@ -137,6 +140,23 @@ def objects_scene(msg: Objects) -> dict:
                           {**c("track"), "a": 1.0}, 0.1))
     return scene_update([entity(msg.stamp_ns, WORLD, "objects", cubes=cubes, arrows=arrows,
                                 texts=texts)])
+
+
+PERSON_HEIGHT_M = 1.7   # [m] drawn height of a person's cylinder
+
+
+def bodies_scene(msg: Bodies) -> dict:
+    """A fleet's other robots (chassis boxes, named) and the people (cylinders) at a scan
+    instant (``sim/bodies``; entity ``fleet``)."""
+    size = (BODY_LENGTH_M, BODY_WIDTH_M, BODY_HEIGHT_M)
+    cubes = [cube(x, y, BODY_HEIGHT_M / 2, yaw, size, c("other_robot"))
+             for x, y, yaw in zip(msg.robot_x, msg.robot_y, msg.robot_yaw, strict=True)]
+    texts = [text(x, y, BODY_HEIGHT_M + 0.2, name, {**c("other_robot"), "a": 1.0}, 0.1)
+             for name, x, y in zip(msg.robots, msg.robot_x, msg.robot_y, strict=True)]
+    people = [cylinder(x, y, PERSON_HEIGHT_M / 2, r, PERSON_HEIGHT_M, c("person"))
+              for x, y, r in zip(msg.person_x, msg.person_y, msg.person_radius, strict=True)]
+    return scene_update([entity(msg.stamp_ns, WORLD, "fleet", cubes=cubes, texts=texts,
+                                cylinders=people)])
 
 
 def footprint_scene(stamp_ns: int = 0) -> dict:

@@ -101,13 +101,26 @@ def listen(session: zenoh.Session, expr: str, duration_s: float, stop: Stop = la
     return rows
 
 
+def fleet_alive(session: zenoh.Session, timeout_s: float = 1.0) -> dict[str, list[str]]:
+    """namespace -> its live nodes, for every namespace of the network (a fleet's robots)."""
+    found: dict[str, list[str]] = {}
+    for reply in session.liveliness().get("**/alive/*", timeout=timeout_s):
+        if reply.ok is not None:
+            ns, _, node = str(reply.ok.key_expr).rpartition("/alive/")
+            found.setdefault(ns, []).append(node)
+    return {ns: sorted(nodes) for ns, nodes in sorted(found.items())}
+
+
 def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
-               stop: Stop = lambda: False, as_json: bool = False) -> int:
-    """Print what the bus carries (see the module doc); returns how many keys were heard."""
-    rows = listen(session, "**", duration_s, stop)
+               stop: Stop = lambda: False, as_json: bool = False, only: bool = False) -> int:
+    """Print what the bus carries (see the module doc); returns how many keys were heard.
+    Every key of the network and every namespace's live nodes (a fleet); ``only``: the
+    keys and nodes of ``keys``' namespace alone (one robot of a fleet)."""
+    rows = listen(session, keys.key("**") if only else "**", duration_s, stop)
     for suffix, msg_type in TOPICS.items():   # the stack's topics that stayed silent
         rows.setdefault(keys.key(suffix), TopicRow(keys.key(suffix), msg_type.TYPE, "msgpack"))
     nodes = sorted(alive_nodes(session, keys))
+    others = {} if only else {ns: n for ns, n in fleet_alive(session).items() if ns != keys.ns}
     heard = sum(1 for r in rows.values() if r.count)
     if as_json:
         for r in sorted(rows.values(), key=lambda r: r.key):
@@ -115,7 +128,7 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
             out(json.dumps(json_safe({"key": r.key, "type": r.type_name, "encoding": r.encoding,
                                       "messages": r.count, "hz": rate.hz,
                                       "stamp_hz": rate.stamp_hz})))
-        out(json.dumps({"alive": nodes}))
+        out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {})}))
         return heard
     width = max(len(r.key) for r in rows.values())
     out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
@@ -125,6 +138,8 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
         rate = "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
         out(f"{r.key:<{width}}  {r.type_name or '?':<28} {r.encoding:<8} {rate:>10}  {r.count}")
     out(f"alive ({keys.alive()}): {', '.join(nodes) if nodes else 'none'}")
+    for ns, names in others.items():   # the fleet's other namespaces
+        out(f"alive ({Keys(ns).alive()}): {', '.join(names)}")
     return heard
 
 

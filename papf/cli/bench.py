@@ -24,6 +24,7 @@ BENCHES = {
     "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
     "face": "ROS 2 face: CPU per planner cycle, added latency; lockstep run with/without --ros-face",
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
+    "fleet": "papf run with 1-8 robots and 0-50 people: x real time, CPU per robot-cycle",
     "world-scale": "driver + LiDAR against world size: N obstacles, W x W m maps (x real time, "
                    "start-up, CPU per cycle, memory)",
 }

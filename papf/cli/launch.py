@@ -22,6 +22,9 @@ def register(sub) -> None:
     p.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
                    help="the router's endpoints (profiles with a router)")
     p.add_argument("--namespace", default="rosbot", help="robot key namespace (rosbot)")
+    p.add_argument("--join", action="append", default=[], metavar="ENDPOINT",
+                   help="connect this host's router to another's (a fleet across hosts: one "
+                        "Zenoh network, each robot under its own --namespace)")
     p.add_argument("--bridge-namespace", help="zenoh-bridge-ros2dds namespace (default none)")
     p.add_argument("--zenoh-config", metavar="FILE", help="Zenoh config of the nodes (secure split)")
     p.add_argument("--router-config", metavar="FILE", help="Zenoh config of the router")
@@ -72,7 +75,7 @@ def cmd_launch(args) -> int:
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,
                         startup_timeout_s=args.startup_timeout, stall_s=args.stall_timeout,
-                        verbose=args.verbose, dry_run=args.dry_run)
+                        verbose=args.verbose, dry_run=args.dry_run, join=args.join)
     result = launch(opt)
     if result is None:
         return 0

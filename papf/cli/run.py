@@ -97,8 +97,33 @@ def print_summary(result) -> None:
             ("collisions", str(result.collisions)), ("sim time", f"{result.sim_time_s:.2f} s"),
             ("wall time", f"{result.wall_time_s:.2f} s  "
                           f"({result.sim_time_s / max(result.wall_time_s, 1e-9):.1f}x real time)")]
+    if result.fleet:
+        sep = result.min_separation_m
+        rows.insert(8, ("min separation", "-" if sep is None else f"{sep:.3f} m"))
     if result.reason:
         rows.append(("reason", result.reason))
     for k, v in rows:
         t.add_row(k, v)
     Console().print(t)
+    if result.fleet:
+        Console().print(fleet_table(result.fleet))
+
+
+def fleet_table(robots: tuple[dict, ...]):
+    """One row per robot of a fleet's run (``papf run --json``'s ``robots``)."""
+    from rich.table import Table
+
+    def num(v, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    t = Table(title="robots")
+    for col in ("robot", "planner", "outcome", "time s", "path m", "mAh", "coll.", "sep. m",
+                "disc. s"):
+        t.add_column(col, justify="left" if col in ("robot", "planner", "outcome") else "right")
+    for r in robots:
+        colour = "green" if r["outcome"] == "reached" else "red"
+        t.add_row(r["name"], r["planner"], f"[{colour}]{r['outcome']}[/]",
+                  num(r["duration_s"], ".2f"), num(r["path_length_m"], ".2f"),
+                  num(r["charge_mAh"], ".2f"), str(r["collisions"]),
+                  num(r["min_separation_m"], ".3f"), num(r["discomfort_s"], ".2f"))
+    return t

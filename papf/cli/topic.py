@@ -39,7 +39,7 @@ def register(sub) -> None:
     q.add_argument("--json", action="store_true", help="one JSON object per key")
     add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
-    q.set_defaults(func=cmd_topic_list)
+    q.set_defaults(func=cmd_topic_list, namespace=None)   # none given: the whole fleet
     q = tsub.add_parser("echo", help="print the messages on a key", epilog=TOPIC_EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter,
                         description="Print each message on KEY, decoded (until Ctrl-C or --count).")
@@ -126,8 +126,10 @@ def cmd_topic_list(args) -> int:
 
     domain = ros_domain(args)
     stop = StopRequested()
+    only = args.namespace is not None   # --namespace NS: that robot alone; else the fleet
     with _session(args) as s:
-        topic_list(s, Keys(args.namespace), args.duration, _out, lambda: bool(stop), args.json)
+        topic_list(s, Keys(args.namespace or "rosbot"), args.duration, _out, lambda: bool(stop),
+                   args.json, only)
         if args.ros == "rmw_zenoh":   # the ROS 2 graph of the domain, from rmw_zenoh's tokens
             _ros_graph(s, domain, args.json)
     return 130 if stop else 0

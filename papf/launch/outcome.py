@@ -48,6 +48,9 @@ class RunResult:
     reason: str = ""
     stop_latency_s: float | None = None  # last command -> watchdog stop, after a planner fault
     faults: tuple[str, ...] = ()         # node_fault events (e.g. a lockstep timeout)
+    fleet: tuple[dict, ...] = ()         # a fleet's robots, one object each (papf.launch.fleet)
+    min_separation_m: float | None = None  # a fleet: closest footprint approach [m]
+    discomfort_s: float | None = None    # a fleet: time people spent within 0.2 m of a robot [s]
 
     @property
     def exit_code(self) -> int:
@@ -65,6 +68,14 @@ class RunResult:
             d["faults"] = list(d["faults"])
         else:
             del d["faults"]
+        fleet = d.pop("fleet")
+        if fleet:   # several robots: the fleet's figures and one object per robot
+            d["min_separation_m"] = (round(self.min_separation_m, 6)
+                                     if self.min_separation_m is not None else None)
+            d["discomfort_s"] = round(self.discomfort_s or 0.0, 6)
+            d["robots"] = fleet
+        else:
+            del d["min_separation_m"], d["discomfort_s"]
         return d
 
 

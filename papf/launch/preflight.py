@@ -101,6 +101,12 @@ def check_run(world: World, planner: str, seed: int, timeout_s: float, port: int
     check_value("--seed", seed, SEED)
     check_value("--timeout", timeout_s, spec_timeout)
     planner_settings(planner, planner_args)
+    for robot in world.robots:   # a fleet: each robot's own planner, if it names one
+        if robot.planner is not None:
+            try:
+                planner_settings(planner_name(robot.planner), planner_args)
+            except ConfigError as exc:
+                raise ConfigError(f"world {world.name!r}, robot {robot.name!r}: {exc}") from None
     namespace(ns)
     record_path(record, force)
     if world.dims != 2:
@@ -139,9 +145,12 @@ def check_launch(opt, prof) -> None:
     if opt.stall_s is not None:
         check_value("--stall-timeout", opt.stall_s, TIMEOUT)
     namespace(opt.namespace)
-    for flag, eps in (("--listen", opt.listen), ("--connect", opt.connect)):
+    for flag, eps in (("--listen", opt.listen), ("--connect", opt.connect), ("--join", opt.join)):
         for ep in eps:
             endpoint(ep, flag)
+    if opt.join and not prof.router:
+        raise ConfigError(f"--join connects this host's router to another's, and profile "
+                          f"{prof.name} runs no router; use --connect for its nodes")
     values = {**prof.defaults, **opt.values}
     if values.get("seed") is not None:
         check_value("--seed", values["seed"], SEED)
@@ -158,4 +167,8 @@ def check_launch(opt, prof) -> None:
         if world.dims != 2:
             raise ConfigError(f"world {world.name!r} is 3-D: the stack drives the ROSbot on 2-D "
                               "worlds; plan 3-D worlds offline with papf plan")
+        if world.robots and prof.run:
+            raise ConfigError(f"world {world.name!r} has several robots ([[robots]]): papf run "
+                              "drives a fleet; papf launch drives one robot (a fleet across "
+                              "hosts: one launch per robot, each with its --namespace)")
         check_runnable(world)

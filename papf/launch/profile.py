@@ -32,6 +32,7 @@ VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record",
 ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth
+FLEET_NODES = ("energy_meter", "planner", "tracker", "lidar_sim")   # one per robot of [[robots]]
 
 
 def objects_for(planner: str | None, objects: str | None,
@@ -165,6 +166,7 @@ class LaunchOptions:
     stall_s: float | None = None             # [s wall] no clock progress: stuck (None: default)
     verbose: bool = False
     dry_run: bool = False
+    join: list[str] = field(default_factory=list)   # other hosts' routers this one connects to
 
 
 def local_endpoint(listen: str) -> str:
@@ -199,29 +201,67 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
         if not connect and not opt.zenoh_config:
             raise ConfigError(f"profile {prof.name} runs no router: give --connect "
                               "tcp/<robot>:7447 (or a --zenoh-config that has connect endpoints)")
-    common = [a for ep in connect for a in ("--connect", ep)] + ["--namespace", opt.namespace]
-    if opt.zenoh_config:
-        common += ["--zenoh-config", opt.zenoh_config]
-    if (opt.zenoh_mode or prof.zenoh_mode) == "peer":  # peers also talk directly: one loopback hop, not two
-        common += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
+
+    def common(namespace: str) -> list[str]:
+        args = [a for ep in connect for a in ("--connect", ep)] + ["--namespace", namespace]
+        if opt.zenoh_config:
+            args += ["--zenoh-config", opt.zenoh_config]
+        if (opt.zenoh_mode or prof.zenoh_mode) == "peer":  # peers also talk directly: one loopback hop, not two
+            args += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
+        return args
     procs = []
     if prof.router:
         argv = [sys.executable, "-m", ROUTER_MODULE, *[a for ep in listen for a in ("--listen", ep)]]
+        argv += [a for ep in opt.join for a in ("--join", ep)]
         procs.append(Process("router", prof.host, tuple(argv + (
             ["--zenoh-config", opt.router_config] if opt.router_config else []))))
+    fleet = fleet_of(values)
     for spec in prof.nodes:
-        if spec.needs and not _holds(spec.needs, values):
+        if fleet and spec.name in FLEET_NODES:   # one per robot, under the robot's name
+            procs += _per_robot(spec, fleet, values, prof, opt, common)
             continue
-        args = list(spec.args)
-        for cond, extra in spec.if_set.items():
-            if _holds(cond, values):
-                args += list(extra)
-        if spec.name == "planner":
-            args += opt.planner_args
-        argv = [sys.executable, "-m", spec.module, *_fill(args, values, prof, spec), *common,
-                *opt.extra_node_args.get(spec.name, ())]
-        procs.append(Process(spec.name, prof.host, tuple(argv)))
+        if fleet and spec.name in ("recorder", "viewer"):   # the first robot's namespace; a
+            extra = ["--keys", "**"] if spec.name == "recorder" else []   # recording: all keys
+            argv = _argv(spec, values, prof, opt, common(fleet[0].name) + extra)
+        else:
+            argv = _argv(spec, values, prof, opt, common(opt.namespace))
+        if argv:
+            procs.append(Process(spec.name, prof.host, tuple(argv)))
     return Resolved(prof, procs, connect, listen)
+
+
+def fleet_of(values: dict) -> tuple:
+    """The world's ``[[robots]]`` (RobotSpec), or () for a single robot or no world."""
+    return load_world(values["world"]).robots if "world" in values else ()
+
+
+def _per_robot(spec: NodeSpec, fleet: tuple, values: dict, prof: Profile, opt: LaunchOptions,
+               common) -> list[Process]:
+    """A node of each robot: ``<robot>/<node>``, its namespace the robot's name, its planner
+    the robot's own (else ``--planner``), its obstacle tracks as that planner needs."""
+    procs = []
+    for robot in fleet:
+        mine = dict(values, planner=robot.planner or values.get("planner", ""))
+        mine["objects"] = objects_for(mine["planner"], opt.values.get("objects"), prof.objects)
+        argv = _argv(spec, mine, prof, opt, common(robot.name))
+        if argv:
+            procs.append(Process(f"{robot.name}/{spec.name}", prof.host, tuple(argv)))
+    return procs
+
+
+def _argv(spec: NodeSpec, values: dict, prof: Profile, opt: LaunchOptions,
+          common: list[str]) -> list[str] | None:
+    """A node's command line with every argument filled in; None if it ``needs`` an unset variable."""
+    if spec.needs and not _holds(spec.needs, values):
+        return None
+    args = list(spec.args)
+    for cond, extra in spec.if_set.items():
+        if _holds(cond, values):
+            args += list(extra)
+    if spec.name == "planner":
+        args += opt.planner_args
+    return [sys.executable, "-m", spec.module, *_fill(args, values, prof, spec), *common,
+            *opt.extra_node_args.get(spec.name, ())]
 
 
 def _holds(cond: str, values: dict) -> bool:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import zenoh
 
@@ -21,12 +21,13 @@ from common.transport import wait_alive, zenoh_config
 from nodes.energy_meter.models import DEFAULT_MODEL
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
+from papf.launch.fleet import FleetMeter, fleet_result, progress_figures
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_run
 from papf.launch.profile import LaunchOptions, Resolved, load_profile, resolve
-from papf.launch.sequence import RunSequence
+from papf.launch.sequence import CHECK_S, COALESCE_S, STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use
-from schemas import Keys
+from schemas import Keys, People
 from worlds import World, load_world
 
 log = logging.getLogger("papf.run")
@@ -125,6 +126,8 @@ def run(cfg: RunConfig) -> RunResult:
 def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
          monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
     """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
+    if world.robots or world.people:
+        return _run_fleet(cfg, world, graph, router, run_key, wall0)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key}) as sup:
         seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key))
@@ -135,6 +138,123 @@ def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, r
             seq.end(result)  # before the nodes stop: the recorder keeps the result
     result.wall_time_s = time.monotonic() - wall0
     return result
+
+
+def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session,
+               run_key: str, wall0: float) -> RunResult:
+    """:func:`_run` for a fleet (``[[robots]]``): a sequence per robot namespace, one result
+    (:mod:`papf.launch.fleet`)."""
+    robots = [replace(r, name=r.name or cfg.namespace) for r in world.fleet]
+    names = [r.name for r in robots]
+    planners = {r.name: r.planner or cfg.planner for r in robots}
+    goals = {r.name: tuple(r.goal) for r in robots}
+    meter = FleetMeter(names, goals, bool(world.people))
+    with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
+                                       env={runauth.ENV: run_key}) as sup:
+        seqs = {}
+        for r in robots:
+            monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision,
+                                 goal=(r.goal[0], r.goal[1], r.tolerance))
+            seqs[r.name] = seq = RunSequence(session, Keys(r.name), sup, monitor,
+                                             run_key=bytes.fromhex(run_key))
+            seq.watch_poses(lambda msg, n=r.name: meter.on_pose(n, msg))
+        if world.people:   # on the driver's namespace, the run's
+            seqs[names[0]].watch_key(Keys(cfg.namespace).key("sim/people"), People,
+                                     meter.on_people)
+        try:
+            _drive_fleet(cfg, world, robots, graph.nodes, sup, session, seqs, goals)
+        finally:
+            result = fleet_result([(n, planners[n], seqs[n].monitor) for n in names], meter,
+                                  world.name, cfg.seed, time.monotonic() - wall0)
+            end_ns = max(seqs[n].monitor.t_end_ns or max(seqs[n].monitor.clock_ns, 0)
+                         for n in names)
+            for n in names[1:]:   # the recorder watches the first robot's events: last
+                seqs[n].end(result, wait_recorder=False, stamp_ns=end_ns)
+            seqs[names[0]].end(result, stamp_ns=end_ns)
+    result.wall_time_s = time.monotonic() - wall0
+    return result
+
+
+def _alive_groups(commands: dict[str, list[str]]) -> dict[str, list[str]]:
+    """Liveliness names per namespace: each process's ``--namespace``, its name's last part."""
+    groups: dict[str, list[str]] = {}
+    for name, argv in commands.items():
+        ns = argv[len(argv) - 1 - argv[::-1].index("--namespace") + 1]
+        groups.setdefault(ns, []).append(name.rpartition("/")[2])
+    return groups
+
+
+def _wait_fleet_alive(cfg: RunConfig, commands: dict[str, list[str]], sup: Supervisor,
+                      session: zenoh.Session, robots: list[str]) -> str:
+    """Wait for every process's token in its namespace (and the driver's in each robot's);
+    the reason if one never came or a process died, else ""."""
+    groups = _alive_groups(commands)
+    for n in robots:   # the driver's share of each robot
+        if "base_driver" not in groups.setdefault(n, []):
+            groups[n].append("base_driver")
+    for ns, names in groups.items():
+        missing = wait_alive(session, Keys(ns), names, cfg.startup_timeout_s,
+                             abort=lambda: bool(sup.dead()))
+        if missing or sup.dead():
+            return sup.death_reason() or (f"nodes not alive after {cfg.startup_timeout_s:g} s: "
+                                          + ", ".join(f"{ns}/{m}" for m in sorted(missing)))
+    return ""
+
+
+def _drive_fleet(cfg: RunConfig, world: World, robots: list, commands: dict[str, list[str]],
+                 sup: Supervisor, session: zenoh.Session, seqs: dict[str, RunSequence],
+                 goals: dict[str, tuple[float, float]]) -> None:
+    monitors = {n: s.monitor for n, s in seqs.items()}
+    for name, argv in commands.items():
+        sup.start(name, argv)
+    reason = _wait_fleet_alive(cfg, commands, sup, session, list(seqs))
+    if reason:
+        for m in monitors.values():
+            m.fail(reason)
+        return
+    if cfg.view is not None:
+        print(view_line(cfg.view, cfg.realtime), file=sys.stderr, flush=True)
+    for n, seq in seqs.items():
+        goal = next(r for r in robots if r.name == n)
+        if not seq.handshake(replace(world, goal=goal.goal, tolerance=goal.tolerance)):
+            for m in monitors.values():
+                if not m.done:
+                    m.fail(seq.monitor.reason)
+            return
+    for seq in seqs.values():
+        seq.start(f"world={world.name} planner={cfg.planner} seed={cfg.seed} robots={len(seqs)}")
+    with RunProgress(cfg.progress, cfg.timeout_s, world.name,
+                     f"{len(seqs)} robots") as progress:
+        watch_fleet(seqs, sup, progress, goals)
+
+
+def watch_fleet(seqs: dict[str, RunSequence], sup: Supervisor, progress,
+                goals: dict[str, tuple[float, float]]) -> None:
+    """Until every robot has an outcome: drain each robot's messages; a dead node, a stall
+    or a stop ends every robot still running; then the figures at each robot's ``t_end``."""
+    monitors = {n: s.monitor for n, s in seqs.items()}
+    last_clock, last_change, next_check = -1, time.monotonic(), 0.0
+    while not all(m.done for m in monitors.values()):
+        if not sum(len(seq.drain(0.0)) for seq in seqs.values()):
+            time.sleep(COALESCE_S)
+        now = time.monotonic()
+        if now < next_check:
+            continue
+        next_check = now + CHECK_S
+        clock = min(m.clock_ns for m in monitors.values())
+        if clock != last_clock:
+            last_clock, last_change = clock, now
+        if progress is not None:
+            progress.update(*progress_figures(monitors, goals))
+        reason = sup.death_reason() if sup.dead() else (
+            f"sim time stuck at {clock / 1e9:.2f} s for {STALL_S:g} s"
+            if now - last_change > STALL_S else "")
+        if reason:
+            for m in monitors.values():
+                if not m.done:
+                    m.fail(reason)
+    for seq in seqs.values():
+        seq.wait_for_figures()
 
 
 def view_line(port: int, realtime: bool) -> str:

@@ -57,12 +57,25 @@ class RunSequence:
             # samples carry the sim time, and the launcher is not woken for clock as well
             del self._handlers["clock"]
             self._handlers[pose_topic] = lambda msg: (monitor.on_pose(msg),
-                                                      monitor.on_time(msg.stamp_ns))
+                                                      monitor.on_time(msg.stamp_ns),
+                                                      *(hook(msg) for hook in self._pose_hooks))
+        self._pose_hooks: list[Callable] = []   # watch_poses
         self._subs = [session.declare_subscriber(keys.key(t), direct(self._callback(t)))
                       for t in self._handlers]
 
-    def _callback(self, topic: str):
-        msg_type = TOPICS[topic]
+    def watch_key(self, key: str, msg_type: type, handler: Callable) -> None:
+        """Also decode the full key ``key`` as ``msg_type`` and hand it to ``handler`` on the
+        caller's thread (drained with the rest; a fleet's people)."""
+        name = "@" + key
+        self._handlers[name] = handler
+        self._subs.append(self.session.declare_subscriber(key, direct(self._callback(name, msg_type))))
+
+    def watch_poses(self, hook: Callable) -> None:
+        """Call ``hook(odometry)`` with every pose sample too (in sim; a fleet's separations)."""
+        self._pose_hooks.append(hook)
+
+    def _callback(self, topic: str, msg_type: type | None = None):
+        msg_type = msg_type or TOPICS[topic]
 
         def on_sample(sample: zenoh.Sample) -> None:
             try:
@@ -151,6 +164,10 @@ class RunSequence:
         while time.monotonic() < deadline and not (m.watchdog_stop_ns and m.robot_stopped()):
             self.drain(0.05)
 
+    def wait_for_figures(self) -> None:
+        """Wait (at most FIGURES_S) until battery and pose samples reach ``t_end``."""
+        self._wait_for_figures()
+
     def _wait_for_figures(self) -> None:
         deadline = time.monotonic() + FIGURES_S
         while not self.monitor.figures_complete() and time.monotonic() < deadline:
@@ -162,7 +179,7 @@ class RunSequence:
             log.warning("figures at t_end=%.2f s incomplete (battery/pose samples missing)",
                         (self.monitor.t_end_ns or 0) / NS)
 
-    def end(self, result: RunResult) -> bool:
+    def end(self, result: RunResult, wait_recorder: bool = True, stamp_ns: int | None = None) -> bool:
         """``run_ended`` with the result as JSON; then, if a recorder runs, wait (at most
         :data:`RECORDER_ACK_S`) for its ``recording_closed``: its file is then complete.
         Stop listening. False if a recorder runs and did not acknowledge. Nothing is
@@ -172,10 +189,12 @@ class RunSequence:
                 sub.undeclare()
             self._subs.clear()
             return False
+        if stamp_ns is None:   # a fleet's: every robot's run_ended at the fleet's end
+            stamp_ns = self.monitor.t_end_ns or max(self.monitor.clock_ns, 0)
         self.session.put(self.keys.events, Event(
-            stamp_ns=self.monitor.t_end_ns or max(self.monitor.clock_ns, 0), kind="run_ended",
+            stamp_ns=stamp_ns, kind="run_ended",
             source="launcher", detail=json.dumps(result.to_json())).to_bytes())
-        closed = self._wait_for_recorder()
+        closed = self._wait_for_recorder() if wait_recorder else True
         for sub in self._subs:
             sub.undeclare()
         self._subs.clear()

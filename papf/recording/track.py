@@ -3,7 +3,9 @@
 Poses from ground truth (``sim/pose``) when recorded, else odometry; speed from odometry;
 charge from ``battery`` (a rosbag2 has none: re-metered from its odometry with the motor
 model, as ``papf report`` does by default); every
-``planner/state``. Times in seconds of the recording's stamps. Pure: reads the file,
+``planner/state``. A fleet's recording: one robot's, and the others' ground-truth poses
+and the people's positions (``sim/people``) beside them. Times in seconds of the
+recording's stamps. Pure: reads the file,
 nothing else.
 """
 
@@ -18,7 +20,15 @@ from common.errors import ConfigError, PapfError
 from nodes.energy_meter.core import EnergyMeter
 from papf.recording.foxglove_export import stack_topic
 from papf.recording.rosbag import NS, BagRecording, TopicMap, open_run
-from schemas.messages import BatteryState, BatteryVoltage, Odometry, PlannerState, Scan, WheelStates
+from schemas.messages import (
+    BatteryState,
+    BatteryVoltage,
+    Odometry,
+    People,
+    PlannerState,
+    Scan,
+    WheelStates,
+)
 from worlds import World, load_world
 
 
@@ -38,6 +48,11 @@ class RunTrack:
     state_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     scan_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # LiDAR scan times
     scans: list[np.ndarray] = field(default_factory=list)   # (n, 2) [m]: angle [rad], range
+    # a fleet's other robots: name -> (times [s], (n, 3) x, y, yaw); the people's discs
+    others: dict = field(default_factory=dict)
+    people_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    people_xy: list[np.ndarray] = field(default_factory=list)   # (k, 2) [m] per sample
+    people_r: np.ndarray = field(default_factory=lambda: np.zeros(0))   # (k,) [m]
 
 
 def scan_points(scan: Scan) -> np.ndarray:
@@ -63,19 +78,40 @@ def _metered(meter: EnergyMeter, msg) -> list[BatteryState]:
     return [state] if state is not None else []
 
 
+def _fleet_sample(key: str, topic: str | None, msg, mine: str | None,
+                  others: dict[str, list[Odometry]], people: list[People]) -> bool:
+    """Keep ``msg`` if it is the people's or another robot's (True: it is not this robot's)."""
+    if topic == "sim/people" and isinstance(msg, People):
+        people.append(msg)
+        return True
+    ns = key[: -len(topic) - 1] if topic else ""
+    if not (mine and ns and ns != mine):
+        return False
+    if topic == "sim/pose" and isinstance(msg, Odometry):   # another robot of a fleet
+        others.setdefault(ns, []).append(msg)
+    return True
+
+
 def load_track(path: str | Path, world: str | None = None,
-               topics: TopicMap | None = None) -> RunTrack:
-    """Poses (ground truth if recorded, else odometry), speed, charge, planner states."""
+               topics: TopicMap | None = None, robot: str | None = None) -> RunTrack:
+    """Poses (ground truth if recorded, else odometry), speed, charge, planner states of the
+    recording's robot (a fleet's: ``robot``, else the recorder's namespace, its first); the
+    other robots' ground-truth poses and the people's positions beside them."""
     poses: dict[str, list[Odometry]] = {"sim/pose": [], "odom": []}
     batt: list[BatteryState] = []
     states: list[PlannerState] = []
     scans: list[Scan] = []
+    others: dict[str, list[Odometry]] = {}
+    people: list[People] = []
     with open_run(path, topics) as rec:
         meta = rec.run_metadata
         bag = isinstance(rec, BagRecording)
         meter = EnergyMeter() if bag else None   # a bag has no meter's figures: re-meter it
+        mine = robot or meta.get("namespace")
         for key, msg, _ in rec.messages(BAG_KEYS if bag else None):
             topic = stack_topic(key)
+            if not bag and _fleet_sample(key, topic, msg, mine, others, people):
+                continue
             if meter is not None:
                 batt += _metered(meter, msg)
             if topic in poses and isinstance(msg, Odometry):
@@ -107,4 +143,9 @@ def load_track(path: str | Path, world: str | None = None,
         q_t=np.array([b.stamp_ns for b in batt]) / 1e9,
         q=np.array([b.charge_used_mAh for b in batt]),
         states=states, state_t=np.array([s.stamp_ns for s in states]) / 1e9,
-        scan_t=np.array([s.stamp_ns for s in scans]) / 1e9, scans=[scan_points(s) for s in scans])
+        scan_t=np.array([s.stamp_ns for s in scans]) / 1e9, scans=[scan_points(s) for s in scans],
+        others={n: (np.array([m.stamp_ns for m in ms]) / 1e9,
+                    np.array([(m.x, m.y, m.yaw) for m in ms])) for n, ms in sorted(others.items())},
+        people_t=np.array([p.stamp_ns for p in people]) / 1e9,
+        people_xy=[np.column_stack([p.x, p.y]).reshape(-1, 2) for p in people],
+        people_r=np.array(people[0].radius if people else ()))

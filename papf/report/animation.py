@@ -1,6 +1,7 @@
 """``papf animate FILE.mcap OUT.gif|OUT.mp4``: a recorded run as a moving picture.
 
-Left: the top view — world, the path so far, the robot's footprint, and the planner's mind
+Left: the top view — world, the path so far, the robot's footprint (a fleet's other robots
+and the people too), and the planner's mind
 of the latest cycle (prediction, abandoned predictions, top quarks, temporary goal, virtual
 walls). Right: speed and charge over the run with a cursor at the frame's time. Title:
 time, speed, charge. One frame every ``speed / fps`` seconds of sim time.
@@ -22,7 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.patches import Patch  # noqa: E402
+from matplotlib.patches import Circle, Patch  # noqa: E402
 
 from common.errors import ConfigError  # noqa: E402
 from common.outfiles import check_output, output
@@ -40,6 +41,8 @@ from papf.recording.track import RunTrack, load_track  # noqa: E402
 
 MAX_FRAMES = 1500
 LIDAR_COLOUR = "tab:red"
+OTHER_COLOUR = "0.45"         # a fleet's other robots
+PERSON_COLOUR = "tab:purple"  # [[people]]
 
 
 def _at(times: np.ndarray, t: float) -> int:
@@ -107,6 +110,24 @@ class Animator:
         return [self.ax.scatter(x + pts[:, 1] * np.cos(ang), y + pts[:, 1] * np.sin(ang),
                                 s=3, color=LIDAR_COLOUR, lw=0, zorder=4)]
 
+    def _fleet(self, t: float) -> list:
+        """A fleet's other robots (their paths so far, their chassis) and the people at ``t``."""
+        tr, ax, out = self.track, self.ax, []
+        for name, (times, xyyaw) in tr.others.items():
+            if not len(times) or times[0] > t + 1e-9:
+                continue
+            k = _at(times, t)
+            out += ax.plot(xyyaw[: k + 1, 0], xyyaw[: k + 1, 1], color=OTHER_COLOUR, lw=1.0,
+                           zorder=3)
+            out += draw_footprint(ax, *xyyaw[k], filled=False)
+            out.append(ax.annotate(name, xyyaw[k, :2], fontsize=7, zorder=7,
+                                   xytext=(4, 4), textcoords="offset points"))
+        if len(tr.people_t) and tr.people_t[0] <= t + 1e-9:
+            for (x, y), r in zip(tr.people_xy[_at(tr.people_t, t)], tr.people_r, strict=True):
+                out.append(ax.add_patch(Circle((x, y), r, color=PERSON_COLOUR, alpha=0.6,
+                                               zorder=5)))
+        return out
+
     def _legend(self) -> None:
         """What the top view's marks are (static: the frames' artists come and go)."""
         handles = [Line2D([], [], color=rgba("robot", 1.0), lw=1.6, label="path so far"),
@@ -119,6 +140,10 @@ class Animator:
                           label="top quark"),
                    Line2D([], [], marker="D", ls="", color=rgba("temporary_goal"), mec="k",
                           label="temporary goal")]
+        if self.track.others:
+            handles.append(Line2D([], [], color=OTHER_COLOUR, lw=1.0, label="other robots"))
+        if len(self.track.people_t):
+            handles.append(Patch(color=PERSON_COLOUR, alpha=0.6, label="people"))
         if self.track.world is not None and any(
                 ob.motion is not None for ob in self.track.world.obstacles):
             handles.append(Patch(color=rgba("moving"), label="moving obstacle"))
@@ -138,6 +163,7 @@ class Animator:
                 out += draw_mind(ax, s, labels=False)
         out += self._lidar(t)
         out += draw_footprint(ax, *tr.xyyaw[k])
+        out += self._fleet(t)
         if tr.world is not None and tr.world.dims == 2:
             out += draw_moving(ax, tr.world, t)
         v, q = _value(tr.v_t, tr.v, t), _value(tr.q_t, tr.q, t)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from common.errors import RecordingError
+from common.errors import PapfError, RecordingError
 from nodes.energy_meter.models import DEFAULT_MODEL
 from papf.launch.outcome import MOVING_SPEED, NS, RunMonitor
 from papf.recording.reader import Recording
@@ -33,6 +33,7 @@ from schemas import (
     Twist,
     WheelStates,
 )
+from worlds import load_world
 
 OSCILLATION_W_RAD_S = 0.1   # [rad/s] |w| a swing must exceed to count (ASSUMPTION: well above
                             # the sim's straight-line yaw corrections, ~0.02 rad/s; 5.7 deg/s)
@@ -202,18 +203,31 @@ class _Collector:
                             f"before the timeout ({m.timeout_ns / NS:g} s): its end was lost")
 
 
+def fleet_namespaces(path: str | Path) -> list[str]:
+    """The robots of a fleet's recording (every ``<ns>`` with an ``<ns>/odom`` channel) when
+    it holds more than one, else [] (one robot's recording)."""
+    with open_run(path) as rec:
+        if isinstance(rec, BagRecording):
+            return []
+        names = sorted({k[: -len("/odom")] for k in rec.keys() if k.endswith("/odom")})
+    return names if len(names) > 1 else []
+
+
 def run_metrics(path: str | Path, energy_model: str | None = None,
                 energy_params: dict | None = None, with_series: bool = True,
-                topics: TopicMap | None = None) -> RunMetrics:
+                topics: TopicMap | None = None, robot: str | None = None) -> RunMetrics:
     """Figures of the run recorded in ``path`` (see the module doc), or of a rosbag2
-    (:func:`papf.recording.rosbag.open_run`, its topics mapped by ``topics``).
+    (:func:`papf.recording.rosbag.open_run`, its topics mapped by ``topics``); of a fleet's
+    recording, robot ``robot``'s (its planner: the world's ``[[robots]]`` entry's, if any).
 
     ``energy_model``: ``paper`` | ``motor`` | None (the model the live meter ran, from the
     run metadata). Raises RecordingError for a truncated or foreign file.
     """
     with open_run(path, topics) as rec:
         meta = rec.run_metadata
-        ns = meta.get("namespace") or _guess_namespace(rec)
+        ns = robot or meta.get("namespace") or _guess_namespace(rec)
+        if robot:
+            meta = {**meta, "planner": _robot_planner(meta, robot)}
         model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or DEFAULT_MODEL
         timeout_s = float(meta.get("timeout_s") or NO_TIMEOUT_S)
         col = _Collector(ns, timeout_s, Remeter(model, energy_params))
@@ -222,10 +236,22 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
         bag = _bag_figures(rec, col) if isinstance(rec, BagRecording) else None
     col.finish()
     m = _assemble(Path(path), meta, col, model, with_series)
+    if robot:
+        m.file = f"{m.file}:{robot}"
     if bag is not None:
         m.outcome, m.reason = BAG, "a rosbag2 recorded on the robot: figures over its odometry"
         m.duration_s, m.measured_charge_mAh = bag
     return m
+
+
+def _robot_planner(meta: dict, robot: str) -> str:
+    """A fleet robot's planner: its ``[[robots]]`` entry's in the recorded world, else the run's."""
+    try:
+        fleet = load_world(meta["world"]).robots
+    except (KeyError, PapfError):
+        fleet = ()
+    own = next((r.planner for r in fleet if r.name == robot and r.planner), None)
+    return own or meta.get("planner", "unknown")
 
 
 def _bag_figures(rec: BagRecording, col: _Collector) -> tuple[float, float | None]:

@@ -35,7 +35,7 @@ from papf.plots.moment import MomentPanel, moment_png
 from papf.recording.rosbag import TopicMap, is_rosbag
 from papf.report import figures, tables
 from papf.report.markdown import markdown
-from papf.report.metrics import RunMetrics, run_metrics, seed_text
+from papf.report.metrics import RunMetrics, fleet_namespaces, run_metrics, seed_text
 from worlds import World, load_world
 
 MODELS = ("paper", "motor")
@@ -122,7 +122,8 @@ def collect(paths: Sequence[Path], energy_model: str | None = None,
             energy_params: dict | None = None, topics: TopicMap | None = None
             ) -> list[RunMetrics]:
     """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name."""
-    runs = [run_metrics(p, energy_model, energy_params, topics=topics) for p in paths]
+    runs = [run_metrics(p, energy_model, energy_params, topics=topics, robot=robot)
+            for p in paths for robot in (fleet_namespaces(p) or [None])]   # a fleet: each robot
     order = tables.planner_order([r.planner for r in runs])
     return sorted(runs, key=lambda r: (r.world, order.index(r.planner), r.seed, r.file))
 
@@ -207,7 +208,8 @@ def mind_figure(runs: Sequence[RunMetrics], files: dict, world: World | None, ou
         firsts.setdefault(r.planner, r)
     panels = []
     for planner, r in firsts.items():
-        track = load_track(files[r.file], topics=topics)
+        name, _, robot = r.file.partition(":")   # a fleet's run: "<file>:<robot>"
+        track = load_track(files[name], topics=topics, robot=robot or None)
         v = np.interp(track.t, track.v_t, track.v) if len(track.v_t) else np.zeros(len(track.t))
         panels.append(MomentPanel(f"{planner} seed {seed_text(r.seed)} ({r.outcome})",
                                   planner.split(" ")[0], track.t, track.xyyaw, v, track.states))

@@ -24,6 +24,7 @@ from papf.launch.supervisor import free_port
 from schemas import Keys
 from schemas.messages import (
     BatteryState,
+    Bodies,
     Event,
     Goal,
     Objects,
@@ -67,6 +68,9 @@ def _stack_messages(t_ns: int):
         ("events", Event(stamp_ns=t_ns, kind="info", source="test", detail="hello")),
         ("objects", Objects(stamp_ns=t_ns, source="truth", tracks=(
             ObjectTrack(id=1, x=3.0, y=0.0, vx=0.5, length=0.5, width=0.3),))),
+        ("sim/bodies", Bodies(stamp_ns=t_ns, robots=("r2",), robot_x=(2.0,), robot_y=(1.0,),
+                              robot_yaw=(0.3,), person_x=(3.0,), person_y=(2.0,),
+                              person_radius=(0.3,))),
     ]
 
 
@@ -173,8 +177,9 @@ def test_papf_run_realtime_view_serves_every_channel(tmp_path):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         client = FoxgloveClient(f"ws://127.0.0.1:{port}", timeout_s=60.0)
-        # events come when they happen; obstacle tracks only with --objects truth|tracker
-        want = {c.topic for c in CHANNELS} - {"/log", "/objects"}
+        # events come when they happen; obstacle tracks only with --objects truth|tracker;
+        # other robots and people only in a fleet or a world with people
+        want = {c.topic for c in CHANNELS} - {"/log", "/objects", "/fleet"}
         assert client.wait_for(lambda: want <= set(client.topics()), 60.0)
         client.subscribe(want)
         client.wait_for(lambda: want <= set(client.messages), 20.0)

@@ -32,6 +32,10 @@ def samples() -> list[Message]:
         s.Objects(stamp_ns=10, source="tracker", tracks=(
             s.ObjectTrack(id=3, x=1.0, y=0.5, yaw=0.1, vx=0.3, vy=0.0, length=0.5, width=0.3),
             s.ObjectTrack(id=7, x=-2.0, y=0.0))),
+        s.Bodies(stamp_ns=11, robots=("r2",), robot_x=(1.0,), robot_y=(2.0,), robot_yaw=(0.5,),
+                 person_x=(3.0,), person_y=(4.0,), person_radius=(0.3,)),
+        s.People(stamp_ns=12, x=(1.0, 2.0), y=(0.0, 1.0), vx=(0.5, 0.0), vy=(0.0, -0.5),
+                 radius=(0.3, 0.25)),
     ]
 
 

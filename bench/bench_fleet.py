@@ -1,0 +1,174 @@
+"""Cost of a fleet against its size: ``papf run`` (the whole stack, lockstep) with R robots
+and P people (generated worlds), as x real time and CPU per robot-cycle.
+
+The robots drive parallel lanes 1.2 m apart towards goals 10 m ahead; the
+people walk loops across the lanes (ORCA). Per (R, P) one run (``--continue-on-collision``)
+is watched on its own bus from the bench: between the first robot's ``sim/pose`` at
+``--short-s`` and at ``--long-s`` of sim time (start-up and shut-down left out):
+
+- ``sim_over_wall`` = the sim time between the two samples / the wall time between them;
+- ``cpu_ms_per_robot_cycle`` = the CPU of every process of the run (launcher and router,
+  nodes; from /proc by ``bench.proc_cpu.TreeCPU``) between them / (R x the 100 ms cycles
+  in it); ``driver_ms``,
+  ``lidar_ms``, ``planner_ms``, ``meter_ms``, ``launcher_ms`` split it by kind of process
+  (all robots' together; the launcher is also the run's router).
+
+``--csv FILE --label L`` writes the rows labelled ``L`` (other labels kept). The machine's
+2 cores may be shared (other work): the 1-minute load average of each row is written with it.
+
+    papf bench fleet [--robots 1,2,4,8] [--people 0,10,50] [--planner apf]
+                     [--short-s 10] [--long-s 40] [--csv docs/data/fleet-scale.csv --label L]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import zenoh  # noqa: E402
+
+from bench.csvrows import replace_label  # noqa: E402
+from bench.proc_cpu import TreeCPU  # noqa: E402
+from common.ports import plain  # noqa: E402
+from common.transport import zenoh_config  # noqa: E402
+from papf.launch.supervisor import free_port, wait_port  # noqa: E402
+from schemas import Odometry  # noqa: E402
+
+PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
+         "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
+FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_wall",
+          "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
+          "cpu_share_of_2_cores", "collisions", "load_avg_1min")
+CYCLE_S = 0.1     # [s] the lockstep cycle: one scan, one command per robot
+LANE_M = 1.2      # [m] between the robots' lanes
+
+
+def fleet_world(folder: Path, robots: int, people: int) -> Path:
+    """R robots in lanes along +x, P people walking loops across the lanes ahead."""
+    lines = [f'name = "bench-{robots}r-{people}p"\n']
+    for i in range(robots):
+        y = i * LANE_M
+        lines.append(f'[[robots]]\nname = "r{i + 1}"\nstart = [0.0, {y:.2f}, 0.0]\n'
+                     f'goal = [10.0, {y:.2f}]\n')
+    span = max(robots - 1, 1) * LANE_M
+    for k in range(people):
+        x = 4.0 + (k * 16.0 / max(people, 1))          # spread over x 4..20 m
+        y0, y1 = -2.0 - (k % 3) * 0.7, span + 2.0 + (k % 2) * 0.7
+        a, b = ((x, y0), (x + 1.0, y1)) if k % 2 else ((x, y1), (x + 1.0, y0))
+        lines.append(f'[[people]]\nstart = [{a[0]:.2f}, {a[1]:.2f}]\nwaypoints = [[{b[0]:.2f}, '
+                     f'{b[1]:.2f}], [{a[0]:.2f}, {a[1]:.2f}]]\nloop = true\nspeed = 0.8\n')
+    path = folder / f"fleet-{robots}r-{people}p.toml"
+    path.write_text("".join(lines))
+    return path
+
+
+def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
+    """CPU seconds so far of the run's processes (the bench's own excluded): per
+    :data:`PARTS` column, and ``total`` of them all (router and any other process too)."""
+    while True:
+        try:
+            threads, names = dict(tree.threads), dict(tree.names)
+            break
+        except RuntimeError:   # the sampler added a thread meanwhile
+            continue
+    out = dict.fromkeys((*PARTS.values(), "total"), 0.0)
+    for (pid, _), (_, cpu) in threads.items():
+        if pid == tree.root:
+            continue
+        out["total"] += cpu
+        col = PARTS.get(names.get(pid, ""))
+        if col:
+            out[col] += cpu
+    return out
+
+
+def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float) -> dict:
+    """One ``papf run --json``, watched on its bus: the wall time and CPU between the first
+    robot's pose samples at ``short_s`` and at ``long_s`` of sim time (module doc)."""
+    port = free_port()
+    marks: dict[str, tuple[float, dict]] = {}
+    with TreeCPU() as tree:
+        proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", str(world),
+                                 "--planner", planner, "--timeout", f"{long_s + 0.5:g}",
+                                 "--json", "--continue-on-collision", "--port", str(port)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            if not wait_port(port, 60.0):
+                raise SystemExit(f"papf run on {world.name}: no router on port {port}")
+
+            def on_pose(sample) -> None:   # Zenoh's thread: note the wall time and CPU once
+                t = Odometry.from_bytes(sample.payload.to_bytes()).stamp_ns / 1e9
+                for mark, at in (("a", short_s), ("b", long_s)):
+                    if t >= at and mark not in marks:
+                        marks[mark] = (time.perf_counter(), cpu_by_kind(tree), t)
+
+            with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as session:
+                sub = session.declare_subscriber("r1/sim/pose", on_pose)
+                out, err = proc.communicate(timeout=max(600.0, long_s * 20))
+                sub.undeclare()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    if set(marks) != {"a", "b"}:
+        raise SystemExit(f"{world.name}: the run never reached {long_s:g} s of sim time: "
+                         f"{(out.strip().splitlines() or [err.strip()[-300:]])[-1][:300]}")
+    result = json.loads(out.strip().splitlines()[-1])
+    (wall_a, cpu_a, sim_a), (wall_b, cpu_b, sim_b) = marks["a"], marks["b"]
+    sim, wall = sim_b - sim_a, wall_b - wall_a
+    cycles = robots * sim / CYCLE_S
+    return {"sim_s": round(sim, 2), "wall_s": round(wall, 2),
+            "sim_over_wall": round(sim / wall, 2),
+            "cpu_ms_per_robot_cycle": round((cpu_b["total"] - cpu_a["total"]) / cycles * 1e3, 2),
+            **{f"{col}_ms": round((cpu_b[col] - cpu_a[col]) / cycles * 1e3, 2)
+               for col in PARTS.values()},
+            "cpu_share_of_2_cores": round((cpu_b["total"] - cpu_a["total"]) / wall / 2, 2),
+            "collisions": result["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(prog="papf bench fleet",
+                                     description=plain(__doc__.splitlines()[0]))
+    parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
+    parser.add_argument("--people", default="0,10,50", help="people counts")
+    parser.add_argument("--planner", default="apf", help="every robot's planner (apf)")
+    parser.add_argument("--short-s", type=float, default=10.0, help="sim s of the short run")
+    parser.add_argument("--long-s", type=float, default=40.0, help="sim s of the long run")
+    parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
+    parser.add_argument("--label", help="the rows' label in --csv")
+    args = parser.parse_args()
+    if bool(args.csv) != bool(args.label):
+        parser.error("--csv and --label go together")
+    try:
+        robot_counts = [int(v) for v in args.robots.split(",") if v]
+        people_counts = [int(v) for v in args.people.split(",") if v]
+    except ValueError:
+        parser.error("--robots and --people are comma-separated integers, e.g. 1,2,4,8")
+    if not all(1 <= r <= 16 for r in robot_counts) or not all(0 <= p <= 200 for p in people_counts):
+        parser.error("robots in 1..16, people in 0..200 (the world format's limits)")
+    if not 0 < args.short_s < args.long_s:
+        parser.error("need 0 < --short-s < --long-s")
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
+        for people in people_counts:
+            for robots in robot_counts:
+                world = fleet_world(Path(tmp), robots, people)
+                row = {"robots": robots, "people": people, "planner": args.planner,
+                       **measure(world, robots, args.planner, args.short_s, args.long_s)}
+                print(json.dumps(row), flush=True)
+                rows.append({"label": args.label or "", **row})
+    if args.csv:
+        replace_label(args.csv, FIELDS, args.label, rows)
+
+
+if __name__ == "__main__":
+    main()
