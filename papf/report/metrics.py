@@ -21,7 +21,13 @@ from common.errors import PapfError, RecordingError
 from nodes.energy_meter.models import DEFAULT_MODEL
 from papf.launch.outcome import MOVING_SPEED, NS, RunMonitor
 from papf.recording.reader import Recording
-from papf.recording.rosbag import BagRecording, TopicMap, measured_charge_mAh, open_run
+from papf.recording.rosbag import (
+    BagRecording,
+    TopicMap,
+    is_rosbag,
+    measured_charge_mAh,
+    open_run,
+)
 from papf.report.remeter import Remeter, battery_at
 from schemas import (
     BatteryState,
@@ -203,10 +209,12 @@ class _Collector:
                             f"before the timeout ({m.timeout_ns / NS:g} s): its end was lost")
 
 
-def fleet_namespaces(path: str | Path) -> list[str]:
+def fleet_namespaces(path: str | Path, topics: TopicMap | None = None) -> list[str]:
     """The robots of a fleet's recording (every ``<ns>`` with an ``<ns>/odom`` channel) when
-    it holds more than one, else [] (one robot's recording)."""
-    with open_run(path) as rec:
+    it holds more than one, else [] (one robot's recording, or a rosbag2)."""
+    if is_rosbag(path, topics):
+        return []
+    with open_run(path, topics) as rec:
         if isinstance(rec, BagRecording):
             return []
         names = sorted({k[: -len("/odom")] for k in rec.keys() if k.endswith("/odom")})

@@ -123,7 +123,7 @@ def collect(paths: Sequence[Path], energy_model: str | None = None,
             ) -> list[RunMetrics]:
     """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name."""
     runs = [run_metrics(p, energy_model, energy_params, topics=topics, robot=robot)
-            for p in paths for robot in (fleet_namespaces(p) or [None])]   # a fleet: each robot
+            for p in paths for robot in (fleet_namespaces(p, topics) or [None])]   # a fleet: each robot
     order = tables.planner_order([r.planner for r in runs])
     return sorted(runs, key=lambda r: (r.world, order.index(r.planner), r.seed, r.file))
 

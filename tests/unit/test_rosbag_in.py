@@ -82,6 +82,9 @@ def test_other_topic_names_through_the_mapping(tmp_path, capsys):
     assert main(["info", str(tmp_path / "other"), "--topics",
                  "odom=/odom,battery=/battery_state"]) == 0
     assert "/battery_state" in capsys.readouterr().out
+    # the report too (a fleet's recording is looked for first: a bag is never one)
+    assert main(["report", str(tmp_path / "other"), "--out", str(tmp_path / "rep"), "--topics",
+                 "odom=/odom,battery=/battery_state"]) == 0
 
 
 @pytest.mark.parametrize("text", ["odom", "wheels=/x", "odom=/a,odom=/b", "odom=nope",
