@@ -6,6 +6,7 @@ import pytest
 
 from common.errors import WorldError
 from worlds import parse_world
+from worlds.checks import check_runnable
 
 TWO = {"robots": [{"name": "r1", "start": [0, 0, 0], "goal": [5, 0]},
                   {"name": "r2", "start": [5, 0.5], "goal": [0, 0.5], "planner": "apf",
@@ -60,3 +61,30 @@ def test_a_bad_fleet_or_crowd_is_refused_in_one_line(doc, says):
     with pytest.raises(WorldError) as err:
         parse_world(doc)
     assert says in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("doc, says", [
+    ({"robots": [{"name": "a", "start": [0, 0], "goal": [3, 0]},
+                 {"name": "b", "start": [0.05, 0], "goal": [3, 1]}]},
+     "robots 'a' and 'b' start with their footprints overlapping"),
+    ({"robots": [{"name": "a", "start": [0, 0], "goal": [3, 0]},
+                 {"name": "b", "start": [0, 1], "goal": [3, 1]}],
+      "obstacles": [{"kind": "box", "center": [3, 1], "size": [1, 1]}]},
+     "robot 'b': the goal (3, 1) lies inside obstacles[0]"),
+    ({"goal": {"position": [3, 0]}, "people": [{"start": [0.1, 0], "goal": [3, 0]}]},
+     "people[0] starts at (0.1, 0) on the robot's footprint"),
+    ({**TWO, "people": [{"start": [2, 2], "goal": [3, 0]}, {"start": [2.3, 2], "goal": [3, 0]}]},
+     "people[0] and people[1] start overlapping"),
+    ({**TWO, "people": [{"start": [2, 2], "goal": [3, 0]}],
+      "obstacles": [{"kind": "cylinder", "center": [2, 2.4], "radius": 0.2}]},
+     "people[0] starts at (2, 2) inside obstacles[0] (cylinder)"),
+])
+def test_a_fleet_or_crowd_that_cannot_start_is_refused(doc, says):
+    with pytest.raises(WorldError) as err:
+        check_runnable(parse_world(doc))
+    assert says in str(err.value) and "\n" not in str(err.value)
+
+
+def test_robots_side_by_side_and_people_apart_may_start():
+    check_runnable(parse_world({**TWO, "people": [{"start": [2, 2], "goal": [3, 0]},
+                                                  {"start": [2.7, 2], "goal": [3, 0]}]}))
