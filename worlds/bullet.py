@@ -41,7 +41,7 @@ def build_world(client_id: int, world: World, owners: dict[int, int] | None = No
     merged = _mergeable(world)
     ids = [-1] * len(world.obstacles)
     for tile in _by_tile(world, sorted(merged)):
-        for body, members in _meshes(client_id, world, tile):
+        for body, members in _meshes(client_id, merged, tile):
             for i in members:
                 ids[i] = body
             if owners is not None:
@@ -66,13 +66,17 @@ MERGED = -1           # owners' value for a mesh of many obstacles
 TILE_M = 10.0         # [m] side of the square places whose obstacles share meshes
 
 
-def _mergeable(world: World) -> set[int]:
-    """Indices of the static obstacles merged into meshes: all that have triangles, when
-    there are more than :data:`MERGE_MIN` (a body each costs start-up time and every physics
-    step; a mesh's BVH costs neither)."""
-    idx = {i for i, ob in enumerate(world.obstacles)
-           if ob.motion is None and ob.model.triangles(ob) is not None}
-    return idx if len(idx) > MERGE_MIN else set()
+def _mergeable(world: World) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """The static obstacles merged into meshes, index -> their triangles (vertices, faces):
+    all that have triangles, when there are more than :data:`MERGE_MIN` (a body each costs
+    start-up time and every physics step; a mesh's BVH costs neither)."""
+    tris = {}
+    for i, ob in enumerate(world.obstacles):
+        if ob.motion is None:
+            t = ob.model.triangles(ob)
+            if t is not None:
+                tris[i] = t
+    return tris if len(tris) > MERGE_MIN else {}
 
 
 def _by_tile(world: World, indices: list[int]) -> list[list[int]]:
@@ -88,13 +92,13 @@ def _by_tile(world: World, indices: list[int]) -> list[list[int]]:
     return [tiles[k] for k in sorted(tiles)]
 
 
-def _meshes(client_id: int, world: World, indices: list[int]) -> list[tuple[int, list[int]]]:
-    """Static triangle-mesh bodies holding the solids of obstacles ``indices``, about
-    :data:`MESH_VERTICES` each: (body id, the obstacle indices it holds) per mesh."""
+def _meshes(client_id: int, tris: dict[int, tuple[np.ndarray, np.ndarray]],
+            indices: list[int]) -> list[tuple[int, list[int]]]:
+    """Static triangle-mesh bodies holding the solids (``tris``) of obstacles ``indices``,
+    about :data:`MESH_VERTICES` each: (body id, the obstacle indices it holds) per mesh."""
     out, verts, faces, members, count = [], [], [], [], 0
     for k, i in enumerate(indices):
-        ob = world.obstacles[i]
-        v, f = ob.model.triangles(ob)
+        v, f = tris[i]
         verts.append(v)
         faces.append(f + count)
         members.append(i)

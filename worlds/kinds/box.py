@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -77,14 +78,25 @@ class Box(Kind):
 def prism(outline, height: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, faces) of a closed prism from the floor to ``height`` [m] over a convex
     counter-clockwise ``outline`` [(x, y)] (fans for the caps, two triangles per side)."""
-    n = len(outline)
     xy = np.asarray(outline, float)
-    verts = np.vstack([np.column_stack([xy, np.zeros(n)]), np.column_stack([xy, np.full(n, height)])])
+    n = len(xy)
+    verts = np.zeros((2 * n, 3))
+    verts[:n, :2] = xy
+    verts[n:, :2] = xy
+    verts[n:, 2] = height
+    return verts, _prism_faces(n)
+
+
+@functools.lru_cache(maxsize=64)
+def _prism_faces(n: int) -> np.ndarray:
+    """The faces of :func:`prism` over an ``n``-gon (the same for every n-gon; read-only)."""
     k = np.arange(n)
     caps = [[0, i + 1, i] for i in range(1, n - 1)] + [[n, n + i, n + i + 1] for i in range(1, n - 1)]
     sides = np.vstack([np.column_stack([k, (k + 1) % n, n + (k + 1) % n]),
                        np.column_stack([k, n + (k + 1) % n, n + k])])
-    return verts, np.vstack([np.array(caps, int).reshape(-1, 3), sides])
+    faces = np.vstack([np.array(caps, int).reshape(-1, 3), sides])
+    faces.flags.writeable = False
+    return faces
 
 
 def segment_hits(best, x, y, dx, dy, x0, y0, x1, y1):
