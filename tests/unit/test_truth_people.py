@@ -1,0 +1,70 @@
+"""People and other robots as objects: the sim's ground truth (``--objects truth``) from the
+driver's ``sim/bodies``, and the tracker on scans with people walking."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from common import robot
+from nodes.base_driver.core import DriverCore
+from schemas.messages import Bodies, Twist
+from worlds import parse_world
+from worlds.messages import truth_objects
+
+S = 1_000_000_000  # ns per s
+
+
+def crowd_fleet():
+    """Two robots facing each other, one box, a person walking across in front of r1."""
+    return parse_world({"name": "tp", "robots": [
+        {"name": "r1", "start": [0.0, 0.0, 0.0], "goal": [4.0, 0.0]},
+        {"name": "r2", "start": [4.0, 0.5, math.pi], "goal": [0.0, 0.5]}],
+        "obstacles": [{"kind": "box", "center": [2.0, -2.0], "size": [0.4, 0.4]}],
+        "people": [{"start": [2.0, 3.0], "goal": [2.0, -1.0], "speed": 0.8, "radius": 0.25}]})
+
+
+def test_truth_objects_hold_the_people_and_the_other_robots_of_the_instant():
+    world = crowd_fleet()
+    with DriverCore(world, seed=0) as core:
+        while core.t_ns < S or not core.is_scan_instant():
+            if core.is_scan_instant():
+                core.command(Twist(stamp_ns=core.t_ns, v=0.0, w=0.0), "r1")
+                core.command(Twist(stamp_ns=core.t_ns, v=0.4, w=0.0), "r2")
+            core.advance()
+        out = dict(core.outputs())
+        r2_v = core.sim.velocity(1)
+    bodies, pose, people = out["r1/sim/bodies"], out["r1/sim/pose"], out["sim/people"]
+    r2 = out["r2/sim/pose"]
+    objs = truth_objects(world, core.t_ns, (pose.x, pose.y), 25.0, bodies)
+    assert objs.stamp_ns == core.t_ns and objs.source == "truth"
+    by_id = {o.id: o for o in objs.tracks}
+    assert sorted(by_id) == [0, 1, 3]             # the box, the person (1 + 0), r2 (1 + 1 + 1)
+    person = by_id[1]
+    assert (person.x, person.y, person.vx, person.vy) == pytest.approx(
+        (people.x[0], people.y[0], people.vx[0], people.vy[0]))
+    assert people.vy[0] < -0.7                    # walking, at its 0.8 m/s
+    assert person.yaw == pytest.approx(math.atan2(people.vy[0], people.vx[0]))
+    assert (person.length, person.width) == (0.5, 0.5)
+    other = by_id[3]
+    assert (other.x, other.y, other.yaw) == pytest.approx((r2.x, r2.y, r2.yaw))
+    assert (other.vx, other.vy) == pytest.approx(r2_v) and other.vx < -0.3   # r2 drives at r1
+    assert (other.length, other.width) == (robot.BODY_LENGTH_M, robot.BODY_WIDTH_M)
+    # r2's own view: r1 is robot 0 of the file -> id 1 + 1 + 0
+    mine = truth_objects(world, core.t_ns, None, math.inf, out["r2/sim/bodies"])
+    assert {o.id for o in mine.tracks} == {0, 1, 1 + 1 + 0}
+    # the range counts for them too: only the person is within 1 m of its own place
+    near = truth_objects(world, core.t_ns, (2.0, people.y[0]), 1.0, bodies)
+    assert [o.id for o in near.tracks] == [1]
+
+
+def test_truth_objects_of_bodies_without_velocities_stand_still():
+    """A ``Bodies`` recorded before it carried velocities: the bodies are there, at rest."""
+    world = crowd_fleet()
+    old = Bodies(stamp_ns=0, robots=("r2",), robot_x=(4.0,), robot_y=(0.5,), robot_yaw=(3.0,),
+                 person_x=(2.0,), person_y=(3.0,), person_radius=(0.25,))
+    tracks = truth_objects(world, 0, bodies=old).tracks
+    assert [(o.id, o.vx, o.vy, o.yaw) for o in tracks[1:]] == [(1, 0.0, 0.0, 0.0),
+                                                                (3, 0.0, 0.0, 3.0)]
+    assert [o.id for o in truth_objects(world, 0).tracks] == [0]   # no bodies: obstacles only
