@@ -68,3 +68,35 @@ def test_truth_objects_of_bodies_without_velocities_stand_still():
     assert [(o.id, o.vx, o.vy, o.yaw) for o in tracks[1:]] == [(1, 0.0, 0.0, 0.0),
                                                                 (3, 0.0, 0.0, 3.0)]
     assert [o.id for o in truth_objects(world, 0).tracks] == [0]   # no bodies: obstacles only
+
+
+def test_a_fleet_reports_legend_names_each_robot(tmp_path):
+    """``papf report`` of a fleet's recording: one run per robot, named in the legend, and
+    every robot's start and goal on the trajectory figure (report.csv keeps its columns)."""
+    import matplotlib.pyplot as plt
+
+    from nodes.recorder.writer import RunWriter
+    from papf.plots.world import draw_world
+    from papf.report.figures import label
+    from papf.report.report import collect
+    from schemas.messages import Event, Odometry
+
+    path = tmp_path / "fleet.mcap"
+    with RunWriter(path, {"world": "fleet-corridor-swap", "planner": "apf", "namespace": "r1",
+                          "seed": "1"}) as w:
+        for ns in ("r1", "r2"):
+            w.write_message(f"{ns}/events", Event(stamp_ns=0, kind="run_started", source="t"))
+            for k in range(3):
+                odom = Odometry(stamp_ns=k * 20_000_000, x=0.01 * k, y=0.0, yaw=0.0, v=0.5, w=0.0)
+                w.write_message(f"{ns}/sim/pose", odom)
+                w.write_message(f"{ns}/odom", odom)
+    runs = collect([path])
+    assert [label(r).split(":")[0] for r in runs] == ["r1", "r2"]
+    assert label(runs[1]).startswith("r2: apf seed 1 (")
+    assert "robot" not in runs[0].row() and runs[0].row()["file"] == "fleet.mcap:r1"
+    fig, ax = plt.subplots()
+    draw_world(ax, crowd_fleet())
+    starts = [ln for ln in ax.lines if ln.get_marker() == "o"]
+    assert len(starts) == 2 and [ln.get_label() for ln in starts][0] == "start"
+    assert sorted(t.get_text() for t in ax.texts if t.get_text()) == ["r1", "r2"]   # not arrows
+    plt.close(fig)
