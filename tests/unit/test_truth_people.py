@@ -100,3 +100,58 @@ def test_a_fleet_reports_legend_names_each_robot(tmp_path):
     assert len(starts) == 2 and [ln.get_label() for ln in starts][0] == "start"
     assert sorted(t.get_text() for t in ax.texts if t.get_text()) == ["r1", "r2"]   # not arrows
     plt.close(fig)
+
+
+def test_the_tracker_follows_people_walking_past_the_robot():
+    """Scans cast with three people walking (1 m/s across, 0.6 m/s towards the robot's
+    line, 0.7 m/s diagonally) and a slower robot: one track per person, at its centre
+    (not at the visible arc: a quarter of a diameter short before the disc fit) with its
+    diameter, and its velocity."""
+    from nodes.lidar_sim.core import LidarParams, LidarSim
+    from nodes.tracker.core import Tracker
+    from schemas.messages import Odometry
+
+    world = parse_world({"name": "e", "robot": {"start": [0, 0, 0]}, "goal": {"position": [5, 0]}})
+    people = [((4.0, 2.0), (-1.0, 0.0)), ((5.0, -1.5), (0.0, 0.6)), ((1.0, -3.0), (0.5, 0.5))]
+    tracker = Tracker()
+    here = Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0)
+    worst_pos = worst_vel = 0.0
+    with LidarSim(world, LidarParams(), seed=1) as lidar:
+        for k in range(41):
+            t = k * S // 10
+            xy = [(x + vx * t / S, y + vy * t / S) for (x, y), (vx, vy) in people]
+            lidar.place_bodies(Bodies(stamp_ns=t, person_x=tuple(p[0] for p in xy),
+                                      person_y=tuple(p[1] for p in xy), person_radius=(0.3,) * 3,
+                                      robots=("r2",), robot_x=(-2.0 + 0.3 * t / S,),
+                                      robot_y=(-1.0,), robot_yaw=(0.0,)))
+            tracks = tracker.update(lidar.scan(0.0, 0.0, 0.0, t), here).tracks
+            if k < 15:      # 1.5 s for the filter to learn the velocities
+                continue
+            for (px, py), (_, v) in zip(xy, people, strict=True):
+                mine = [o for o in tracks if math.hypot(o.x - px, o.y - py) < 0.3]
+                assert len(mine) == 1, f"t = {t / S} s: person at ({px:.2f}, {py:.2f})"
+                o = mine[0]
+                worst_pos = max(worst_pos, math.hypot(o.x - px, o.y - py))
+                worst_vel = max(worst_vel, math.hypot(o.vx - v[0], o.vy - v[1]))
+                assert 0.5 < o.length < 0.7 and 0.5 < o.width < 0.7        # 0.6 m across
+    assert len(tracks) == 4                                  # the people and the robot
+    assert worst_pos < 0.06 and worst_vel < 0.12, (worst_pos, worst_vel)
+
+
+def test_an_arc_is_a_disc_a_box_corner_or_face_is_not():
+    import numpy as np
+
+    from nodes.tracker.box import disc
+
+    rng = np.random.default_rng(0)
+    a = np.linspace(math.pi / 2, 3 * math.pi / 2, 9)          # the half facing the sensor
+    arc = np.column_stack([3.0 + 0.3 * np.cos(a), 0.3 * np.sin(a)])
+    x, y, r = disc(arc + rng.normal(0, 0.005, arc.shape), (0.0, 0.0), 0.6, 0.025)
+    assert (x, y, r) == pytest.approx((3.0, 0.0, 0.3), abs=0.03)
+    assert disc(arc, (6.0, 0.0), 0.6, 0.025) is None         # seen from behind: hollow
+    side = np.linspace(0, 0.5, 7)
+    corner = np.concatenate([np.column_stack([2.5 + side[::-1], np.full(7, 0.5)]),
+                             np.column_stack([np.full(4, 2.5), np.linspace(0.45, 0.2, 4)])])
+    assert disc(corner + rng.normal(0, 0.005, corner.shape), (0.0, 0.0), 0.6, 0.025) is None
+    face = np.column_stack([np.full(8, 3.0), np.linspace(-0.25, 0.25, 8)])
+    assert disc(face + rng.normal(0, 0.005, face.shape), (0.0, 0.0), 0.6, 0.025) is None
