@@ -220,6 +220,10 @@ class Bodies(Message):
     person_x: Floats = field((), unit="m")
     person_y: Floats = field((), unit="m")
     person_radius: Floats = field((), unit="m")
+    robot_vx: Floats = field((), unit="m/s", doc="world frame; () in recordings made before")
+    robot_vy: Floats = field((), unit="m/s")
+    person_vx: Floats = field((), unit="m/s", doc="world frame; () in recordings made before")
+    person_vy: Floats = field((), unit="m/s")
 
 
 @message("People", 1)

@@ -168,14 +168,20 @@ class DriverCore:
         """What robot ``i``'s LiDAR sees move at ``t``: every other robot, every person."""
         others = [j for j in range(len(self.names)) if j != i]
         xy = self.crowd.positions if self.crowd is not None else np.zeros((0, 2))
+        pv = self.crowd.velocities if self.crowd is not None else np.zeros((0, 2))
         radii = self.crowd.radii if self.crowd is not None else ()
+        rv = [self.sim.velocity(j) for j in others]
         return Bodies(stamp_ns=t, robots=tuple(self.names[j] for j in others),
                       robot_x=tuple(odoms[j].x for j in others),
                       robot_y=tuple(odoms[j].y for j in others),
                       robot_yaw=tuple(odoms[j].yaw for j in others),
                       person_x=tuple(float(v) for v in xy[:, 0]),
                       person_y=tuple(float(v) for v in xy[:, 1]),
-                      person_radius=tuple(float(r) for r in radii))
+                      person_radius=tuple(float(r) for r in radii),
+                      robot_vx=tuple(float(a) for a, _ in rv),
+                      robot_vy=tuple(float(b) for _, b in rv),
+                      person_vx=tuple(float(a) for a in pv[:, 0]),
+                      person_vy=tuple(float(a) for a in pv[:, 1]))
 
     def _people(self, t: int) -> People:
         crowd = self.crowd

@@ -12,8 +12,8 @@ Ports: :mod:`nodes.lidar_sim.ports` (``--help`` prints them).
 Moving obstacles are placed at each scan's sim time. In a fleet (``[[robots]]`` or
 ``[[people]]`` in the world) each scan waits for ``sim/bodies`` of its instant too and
 sees the other robots and the people there. With ``--truth-objects`` the node
-also publishes the ground truth (pose, velocity, size of every obstacle within the
-LiDAR's range) as ``Objects`` with the scan's stamp, just before the scan: the sim's
+also publishes the ground truth (pose, velocity, size of every obstacle, person and other
+robot within the LiDAR's range) as ``Objects`` with the scan's stamp, just before the scan: the sim's
 answer to ``--objects truth`` (also in HIL, for the virtual obstacles).
 
 Settings: ``--world``, ``--seed`` (noise), ``--beams`` (300), ``--scan-hz`` (10),
@@ -108,7 +108,7 @@ def main_sim(args: argparse.Namespace) -> int:
         for topic, msg in node.messages():
             if topic is None:
                 continue
-            pose = msg
+            pose, bodies = msg, None
             if pairs is not None:
                 pose, bodies = pairs.add(topic, msg)
                 if pose is None:
@@ -116,7 +116,7 @@ def main_sim(args: argparse.Namespace) -> int:
                 lidar.place_bodies(bodies)
             if args.truth_objects:
                 node.publish("objects", truth_objects(world, pose.stamp_ns, (pose.x, pose.y),
-                                                      params.range_max))
+                                                      params.range_max, bodies))
             node.publish("scan", lidar.scan(pose.x, pose.y, pose.yaw, pose.stamp_ns))
             count += 1
         log.info("published %d scans", count)

@@ -20,6 +20,8 @@ from nodes.tracker import box, kernels
 from schemas.messages import Objects, ObjectTrack, Odometry, Scan
 
 GATED_COST = 1e6   # assignment cost of a pair beyond the gate (rejected afterwards)
+DISC_SIZE_GAIN = 0.2   # [-] weight of a new diameter in a disc track's size
+DISC_HITS = 2          # [-] arcs matched before a track is a disc for good
 
 
 @dataclass(frozen=True)
@@ -40,11 +42,13 @@ class TrackerParams:
     confirm_hits: int = 3          # [-] hits before a track is published
     max_misses: int = 5            # [-] scans without a hit before a track is dropped
     moving_speed: float = 0.05     # [m/s] slower tracks keep their heading
+    disc_max_radius: float = 0.6   # [m] arcs up to this radius are discs (people), not boxes
+    disc_max_rms: float = 0.025    # [m] largest RMS miss of an arc's points to its circle
     use_numba: bool = True         # the compiled clustering pass when numba is installed
 
     def __post_init__(self) -> None:
         for name in ("max_range", "cluster_radius", "breakpoint_angle", "range_sd", "max_extent", "gate", "accel_sd", "meas_sd",
-                     "init_speed_sd", "moving_speed"):
+                     "init_speed_sd", "moving_speed", "disc_max_radius", "disc_max_rms"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ConfigError(f"tracker {name} = {value!r} must be a finite number > 0")
@@ -64,6 +68,7 @@ class Cluster:
     length: float   # along ``axis``
     width: float    # across it
     points: np.ndarray | None = field(default=None, compare=False, repr=False)   # (m, 2) [m]
+    disc: bool = False   # an arc measured as a circle (box.disc): centre and diameter
 
 
 @dataclass(frozen=True)
@@ -182,10 +187,11 @@ class _Tracks:
     misses: list[int] = field(default_factory=list)
     yaw: list[float] = field(default_factory=list)
     size: list[tuple[float, float]] = field(default_factory=list)          # length, width
+    discs: list[int] = field(default_factory=list)    # arcs matched (measured as discs)
 
     def keep(self, mask: np.ndarray) -> None:
         self.x, self.P = self.x[mask], self.P[mask]
-        for name in ("ids", "hits", "misses", "yaw", "size"):
+        for name in ("ids", "hits", "misses", "yaw", "size", "discs"):
             setattr(self, name, [v for v, k in zip(getattr(self, name), mask, strict=True) if k])
 
 
@@ -217,7 +223,8 @@ class Tracker:
     4. **Box model** (:mod:`nodes.tracker.box`): a matched cluster is measured in its track's
        frame, as the centre of a box of the track's size whose faces nearest the sensor lie on
        the seen points (a car seen from behind is measured at its centre once its length has
-       been seen, not at its rear face).
+       been seen, not at its rear face). A cluster on a circle (a person, a cylinder:
+       :func:`nodes.tracker.box.disc`) is measured as the circle's centre and diameter.
     5. **Filter**: a constant-velocity Kalman filter per track (state x, y, vx, vy;
        white-noise acceleration of ``accel_sd``; position measurements of ``meas_sd``),
        vectorised over all tracks with numpy. Unmatched clusters start tracks (velocity 0,
@@ -259,7 +266,7 @@ class Tracker:
         dt = 0.0 if self.t_ns is None else (t - self.t_ns) / NS_PER_S
         self.t_ns = t
         sp = scan_points(scan, odom, p.max_range)
-        clusters = cluster_points(sp, p)
+        clusters = [self._disc(c, sp.origin) for c in cluster_points(sp, p)]
         self._predict(dt)
         rows, cols = self._associate(clusters)
         self._correct(rows, [self._box(i, clusters[j], sp.origin)
@@ -307,8 +314,25 @@ class Tracker:
         ok = cost[rows, cols] <= self.params.gate
         return rows[ok].tolist(), cols[ok].tolist()
 
+    def _disc(self, c: Cluster, origin: tuple[float, float]) -> Cluster:
+        """Cluster ``c`` as a disc (centre, diameter) when it is an arc (:func:`box.disc`)."""
+        p = self.params
+        if c.points is None or c.length > 2 * p.disc_max_radius:
+            return c
+        fit = box.disc(c.points, origin, p.disc_max_radius, p.disc_max_rms)
+        if fit is None:
+            return c
+        x, y, r = fit
+        return Cluster(x, y, c.axis, 2 * r, 2 * r, c.points, disc=True)
+
     def _box(self, i: int, c: Cluster, origin: tuple[float, float]) -> Cluster:
-        """Cluster ``c`` measured as track ``i``'s box (:func:`nodes.tracker.box.fit`)."""
+        """Cluster ``c`` measured as track ``i``'s box (:func:`nodes.tracker.box.fit`); a
+        disc as itself (its centre does not depend on the track's heading)."""
+        if c.disc:
+            return Cluster(c.x, c.y, self.tracks.yaw[i], c.length, c.width, disc=True)
+        if self.tracks.discs[i] >= DISC_HITS and c.points is not None:   # a disc seen unclean
+            x, y = box.disc_seen(c.points, origin, 0.5 * self.tracks.size[i][0])
+            return Cluster(x, y, self.tracks.yaw[i], c.length, c.width)
         pts = c.points if c.points is not None else np.array([(c.x, c.y)])
         x, y, along, across = box.fit(pts, self.tracks.yaw[i], self.tracks.size[i], origin,
                                       self.params.use_numba)
@@ -334,6 +358,10 @@ class Tracker:
             tr.hits[i] += 1
             tr.misses[i] = 0
             size = (max(tr.size[i][0], c.length), max(tr.size[i][1], c.width))
+            tr.discs[i] += c.disc
+            if c.disc:   # a fitted diameter is noisy, not a lower bound: its running mean
+                size = tuple((1 - DISC_SIZE_GAIN) * a + DISC_SIZE_GAIN * c.length
+                             for a in tr.size[i])
             vx, vy = tr.x[i, 2], tr.x[i, 3]
             speed = math.hypot(vx, vy)
             # the filter's own velocity uncertainty along the velocity: a speed within two
@@ -366,3 +394,4 @@ class Tracker:
         tr.misses.append(0)
         tr.yaw.append(c.axis)
         tr.size.append((c.length, c.width))
+        tr.discs.append(int(c.disc))

@@ -58,13 +58,18 @@ def draw_world(ax, world: World) -> None:
         return
     for ob in world.obstacles:
         draw_obstacle(ax, ob, color=OBSTACLE_COLOUR, lw=0)
-    sx, sy, yaw = world.start
-    ax.plot(sx, sy, "o", color=START_COLOUR, ms=7, label="start", zorder=5)
-    ax.annotate("", xy=(sx + 0.3 * np.cos(yaw), sy + 0.3 * np.sin(yaw)), xytext=(sx, sy),
-                arrowprops={"arrowstyle": "->", "color": START_COLOUR}, zorder=5)
-    gx, gy = world.goal[:2]
-    ax.add_patch(Circle((gx, gy), world.tolerance, fill=False, color=GOAL_COLOUR, lw=1))
-    ax.plot(gx, gy, "*", color=GOAL_COLOUR, ms=12, label="goal", zorder=5)
+    # a fleet: every robot's start (named) and goal, labelled once
+    ends = [(r.start, r.goal, r.tolerance, r.name) for r in world.robots] or \
+        [(world.start, world.goal[:2], world.tolerance, "")]
+    for k, ((sx, sy, yaw), (gx, gy), tol, name) in enumerate(ends):
+        ax.plot(sx, sy, "o", color=START_COLOUR, ms=7, label=None if k else "start", zorder=5)
+        ax.annotate("", xy=(sx + 0.3 * np.cos(yaw), sy + 0.3 * np.sin(yaw)), xytext=(sx, sy),
+                    arrowprops={"arrowstyle": "->", "color": START_COLOUR}, zorder=5)
+        if name:
+            ax.annotate(name, (sx, sy), xytext=(-4, 6), textcoords="offset points",
+                        ha="right", fontsize=8, color=START_COLOUR, zorder=5)
+        ax.add_patch(Circle((gx, gy), tol, fill=False, color=GOAL_COLOUR, lw=1))
+        ax.plot(gx, gy, "*", color=GOAL_COLOUR, ms=12, label=None if k else "goal", zorder=5)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -137,8 +142,10 @@ def view_extent(world: World | None, paths=(), pad: float = PAD_M,
     """(x0, x1, y0, y1) [m] covering the world's start, goal, obstacles and every path."""
     xs, ys = [], []
     if world is not None:
-        xs += [world.start[0], world.goal[0]]
-        ys += [world.start[1], world.goal[1]]
+        xs += [world.start[0], world.goal[0]] + [v for r in world.robots
+                                                  for v in (r.start[0], r.goal[0])]
+        ys += [world.start[1], world.goal[1]] + [v for r in world.robots
+                                                  for v in (r.start[1], r.goal[1])]
         for ob in world.obstacles_at(0.0):
             x0, y0, x1, y1 = ob.model.bounds(ob)
             xs += [x0, x1]

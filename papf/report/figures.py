@@ -69,7 +69,9 @@ def run_styles(runs: Sequence[RunMetrics]) -> dict[str, RunStyle]:
 
 
 def label(r: RunMetrics) -> str:
-    return f"{r.planner} seed {seed_text(r.seed)} ({r.outcome})"
+    """A run's legend entry: planner, seed, outcome; a fleet's robot named first."""
+    own = f"{r.planner} seed {seed_text(r.seed)} ({r.outcome})"
+    return f"{r.robot}: {own}" if r.robot else own
 
 
 def _save(fig, path: Path, title: str, note: str) -> Path:

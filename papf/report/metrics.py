@@ -98,11 +98,13 @@ class RunMetrics:
     measured_charge_mAh: float | None = None   # [mAh] ∫ current dt of a bag's /battery over
                                                #     its odometry; None: no current measured
     series: Series | None = field(default=None, repr=False, compare=False)
+    robot: str = field(default="", compare=False)   # a fleet's robot (namespace); "" alone
 
     def row(self) -> dict:
-        """Flat dict of the scalar figures (CSV row)."""
+        """Flat dict of the scalar figures (CSV row; a fleet's robot is in ``file``)."""
         d = asdict(self)
         d.pop("series")
+        d.pop("robot")
         return d
 
 
@@ -245,7 +247,7 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
     col.finish()
     m = _assemble(Path(path), meta, col, model, with_series)
     if robot:
-        m.file = f"{m.file}:{robot}"
+        m.file, m.robot = f"{m.file}:{robot}", robot
     if bag is not None:
         m.outcome, m.reason = BAG, "a rosbag2 recorded on the robot: figures over its odometry"
         m.duration_s, m.measured_charge_mAh = bag
