@@ -32,6 +32,7 @@ from bench.bench_view import TICK_NS, cpu_s, percentiles, traffic
 from common import rmw_zenoh as rz
 from common import ros2_convert as rc
 from common.transport import wait_alive, zenoh_config
+from nodes.planner.registry import one_with_role
 from papf.launch.supervisor import Supervisor, free_port, wait_port
 from schemas import Keys
 
@@ -128,7 +129,7 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=10.0, help="node benchmark length [s]")
     ap.add_argument("--runs", type=int, default=3, help="lockstep runs per case (0: skip)")
     ap.add_argument("--world", default="papf-test-4")
-    ap.add_argument("--planner", default="papf")
+    ap.add_argument("--planner", default=one_with_role("papf-proposed"))
     ap.add_argument("--csv", metavar="F", help="also write the figures as CSV rows here")
     args = ap.parse_args(argv)
     out = {"node": bench_node(args.duration)}

@@ -40,6 +40,7 @@ from bench.csvrows import replace_label  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import zenoh_config  # noqa: E402
+from nodes.planner.registry import one_with_role  # noqa: E402
 from papf.launch.supervisor import free_port, wait_port  # noqa: E402
 from schemas import Odometry  # noqa: E402
 
@@ -140,7 +141,8 @@ def main() -> None:
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
     parser.add_argument("--people", default="0,10,50", help="people counts")
-    parser.add_argument("--planner", default="apf", help="every robot's planner (apf)")
+    baseline = one_with_role("papf-baseline")
+    parser.add_argument("--planner", default=baseline, help=f"every robot's planner ({baseline})")
     parser.add_argument("--short-s", type=float, default=10.0, help="sim s of the short run")
     parser.add_argument("--long-s", type=float, default=40.0, help="sim s of the long run")
     parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")

@@ -42,7 +42,7 @@ import numpy as np
 
 from bench.csvrows import write_rows
 from common.ports import plain
-from nodes.planner.registry import PLANNERS, make_planner
+from nodes.planner.registry import PLANNERS, declared, make_planner, one_with_role
 from nodes.planner.road import Track
 from schemas.messages import Goal, Odometry
 from worlds.toy import box_segments, cast_scan, toy_world
@@ -63,10 +63,11 @@ ROAD = dict(road_lanes=2, road_y_min=-0.3, road_lane_width=0.6)   # ROSbot-scale
 # vehicles relative to the robot: (dx, y, vx) [m, m, m/s], 0.5 x 0.3 m: a slow leader, one in
 # the other lane, one behind (each within IAPF's safety distance: all fields evaluated)
 ROAD_VEHICLES = ((1.0, 0.0, 0.1), (1.6, 0.6, 0.2), (-0.8, 0.0, 0.25))
-ONLY = {"iapf": ("road",)}   # IAPF needs the road and obstacle tracks
+ONLY = dict.fromkeys(declared("uses_objects"), ("road",))   # the road and obstacle tracks (IAPF)
+PAPF = one_with_role("papf-proposed")
 CASES = [(name, name, []) for name in sorted(PLANNERS)] + [  # (label, planner, --set overrides)
-    ("papf_worst_numba", "papf", ["persist_quarks=false"]),
-    ("papf_worst_numpy", "papf", ["persist_quarks=false", "use_numba=false"]),
+    (f"{PAPF}_worst_numba", PAPF, ["persist_quarks=false"]),
+    (f"{PAPF}_worst_numpy", PAPF, ["persist_quarks=false", "use_numba=false"]),
 ]
 
 

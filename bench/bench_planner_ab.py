@@ -97,12 +97,15 @@ def compare(trees: dict[str, Path], args) -> list[dict]:
 
 
 def main() -> None:
+    from nodes.planner.registry import one_with_role  # this checkout's registry, not --before's
+
+    proposed = one_with_role("papf-proposed")
     ap = argparse.ArgumentParser(prog="papf bench planner_ab", description=__doc__.splitlines()[0])
     ap.add_argument("--before", type=Path, help="root of the other checkout (the 'before' code)")
     ap.add_argument("--labels", default="before,after", help="names of the two sides (before,after)")
-    ap.add_argument("--planner", default="papf")
+    ap.add_argument("--planner", default=proposed)
     ap.add_argument("--set", action="append", default=None,
-                    help="planner setting, repeatable (default for papf: persist_quarks=false, "
+                    help="planner setting, repeatable (default for PAPF: persist_quarks=false, "
                          "the worst case; none for the others)")
     ap.add_argument("--scene", default="trap")
     ap.add_argument("--rounds", type=int, default=30, help="turns per side (30)")
@@ -111,7 +114,7 @@ def main() -> None:
     ap.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.set is None:
-        args.set = ["persist_quarks=false"] if args.planner == "papf" else []
+        args.set = ["persist_quarks=false"] if args.planner == proposed else []
     if args.serve:
         worker(args.scene, args.planner, args.set, args.chunk)
         return

@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.csvrows import write_rows  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
+from nodes.planner.registry import one_with_role  # noqa: E402
 from papf.experiments.sweep import SweepOptions, map_runs  # noqa: E402
 from papf.experiments.trials import quiet_runner_logs, run_job, trial_job  # noqa: E402
 from worlds import load_world, world_path  # noqa: E402
@@ -38,8 +39,10 @@ FIELDS = ("date", "machine", "cpus", "workers", "runs", "planners", "outcomes", 
 
 
 def bench(runs: int, timeout_s: float, workers: int) -> dict:
+    """``runs`` energy runs through the stack, the PAPF paper's two planners alternating."""
     world = load_world("energy")
-    jobs = [trial_job(world, world_path("energy"), planner=("apf", "papf")[k % 2], seed=k + 1,
+    pair = one_with_role("papf-baseline"), one_with_role("papf-proposed")
+    jobs = [trial_job(world, world_path("energy"), planner=pair[k % 2], seed=k + 1,
                       mode="stack", timeout_s=timeout_s, index=k) for k in range(runs)]
     load0 = os.getloadavg()[0]
     t0 = time.monotonic()

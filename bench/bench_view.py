@@ -35,6 +35,7 @@ import zenoh
 
 from bench.foxglove_ws import FoxgloveClient
 from common.transport import wait_alive, zenoh_config
+from nodes.planner.registry import one_with_role
 from nodes.viewer.core import CHANNELS
 from papf.launch.supervisor import Supervisor, free_port, wait_port
 from schemas import Keys
@@ -66,7 +67,7 @@ def traffic(k: int, t_ns: int) -> list[tuple[str, object]]:
                               range_min=0.2, range_max=25.0, ranges=ranges)),
                 ("cmd_vel", Twist(stamp_ns=t_ns, v=0.1, w=0.0)),
                 ("planner/state", PlannerState(
-                    stamp_ns=t_ns, algorithm="papf", mode="drive", force=(1.0, 0.2),
+                    stamp_ns=t_ns, algorithm=one_with_role("papf-proposed"), mode="drive", force=(1.0, 0.2),
                     temporary_goal=(x + 2, 0.4), predicted_path=line,
                     abandoned_paths=(line[:30], line[:20], line[:10]),
                     top_quarks=((1.0, 1.0), (1.5, 0.5), (2.0, -0.5)))),
@@ -177,7 +178,7 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=10.0, help="node benchmark length [s]")
     ap.add_argument("--runs", type=int, default=3, help="lockstep runs per case (0: skip)")
     ap.add_argument("--world", default="papf-test-4")
-    ap.add_argument("--planner", default="papf")
+    ap.add_argument("--planner", default=one_with_role("papf-proposed"))
     args = ap.parse_args(argv)
     out = {"node": bench_node(args.duration)}
     if args.runs:

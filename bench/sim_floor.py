@@ -22,7 +22,7 @@ from nodes.base_driver.core import DriverConfig, DriverCore
 from nodes.energy_meter.core import EnergyMeter
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.loop import PlannerLoop
-from nodes.planner.registry import make_planner
+from nodes.planner.registry import make_planner, one_with_role
 from worlds import load_world
 from worlds.messages import goal_message
 
@@ -42,13 +42,14 @@ class _Timer:
         return out
 
 
-def chain(world_name: str = "energy", planner_name: str = "apf", seed: int = 1,
+def chain(world_name: str = "energy", planner_name: str | None = None, seed: int = 1,
           timeout_s: float = 300.0) -> dict:
-    """Run the lockstep chain in-process until the planner's outcome (or the timeout)."""
+    """Run the lockstep chain in-process until the planner's outcome (or the timeout);
+    the planner by default the PAPF paper's baseline (APF)."""
     world = load_world(world_name)
     core = DriverCore(world, seed, DriverConfig())
     lidar = LidarSim(world, LidarParams(), seed)
-    loop = PlannerLoop(make_planner(planner_name))
+    loop = PlannerLoop(make_planner(planner_name or one_with_role("papf-baseline")))
     meter = EnergyMeter("motor")
     tm, puts, wall0 = _Timer(), Counter(), time.perf_counter()
     loop.on_message("goal", goal_message(world), 0.0)
