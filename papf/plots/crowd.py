@@ -10,11 +10,17 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
-from papf.plots.world import draw_paths, draw_world, new_axes, set_view, view_extent  # noqa: E402
+from papf.plots.world import (  # noqa: E402
+    draw_paths,
+    draw_world,
+    new_axes,
+    saved_png,
+    set_view,
+    view_extent,
+)
 from worlds import World  # noqa: E402
 
 
@@ -23,7 +29,7 @@ def plot_crowd(world: World, robots: Mapping[str, np.ndarray], people: np.ndarra
     """Robots' paths ``{label: (N, 2)}`` [m] and people's tracks ``(T, n, 2)`` [m] (grey,
     a dot at the start, the body's disc at the end); returns the PNG's path."""
     fig, ax = new_axes(world)
-    try:
+    with saved_png(fig, out_png) as out:
         draw_world(ax, world)
         for k in range(people.shape[1] if people.ndim == 3 else 0):
             track = people[:, k]
@@ -38,9 +44,4 @@ def plot_crowd(world: World, robots: Mapping[str, np.ndarray], people: np.ndarra
         ax.set_title(title or world.name)
         fig.legend(loc="outside lower center", ncol=min(len(robots) + 3, 4), fontsize=8,
                    frameon=False)
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
     return out

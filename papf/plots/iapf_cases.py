@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from nodes.planner.registry import car_variants  # noqa: E402
+from papf.plots.world import saved_png  # noqa: E402
 from worlds import World, load_world  # noqa: E402
 from worlds.shapes import rect_corners  # noqa: E402
 
@@ -61,7 +62,7 @@ def plot_case(out_png: str | Path, case: str, csv_dir: str | Path, labels: dict[
     vehicles = _read(csv_dir / f"{case}-vehicles.csv")
     xs = [float(r["x"]) for rows in runs.values() for r in rows] + [float(r["x"]) for r in vehicles]
     fig, (ax, av) = plt.subplots(2, 1, figsize=(11, 6.2), gridspec_kw={"height_ratios": [1.5, 1]})
-    try:
+    with saved_png(fig, out_png) as out:
         x0, x1 = min(xs) - 5, max(xs) + 5
         _road(ax, world, x0, x1)
         for pl, rows in runs.items():
@@ -99,9 +100,5 @@ def plot_case(out_png: str | Path, case: str, csv_dir: str | Path, labels: dict[
         av.grid(alpha=0.3)
         av.legend(loc="lower right", fontsize=7)
         fig.tight_layout()
-        out = Path(out_png)
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
     return out
 

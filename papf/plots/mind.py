@@ -27,7 +27,7 @@ from matplotlib.patches import Polygon  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from nodes.viewer.scene import MIND_COLOURS  # noqa: E402
-from papf.plots.world import colour_for, draw_obstacle, draw_world  # noqa: E402
+from papf.plots.world import colour_for, draw_obstacle, draw_world, saved_png  # noqa: E402
 from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -129,7 +129,7 @@ def plot_plan(world: World, result, out_png: str | Path, title: str) -> Path:
     """``papf plan --plot``: the path, footprints every :data:`FOOTPRINT_EVERY_S`, and the
     mind and footprint at the snapshot cycle (named in the legend with its time)."""
     fig, ax = plt.subplots(figsize=(9.0, 6.0))
-    try:
+    with saved_png(fig, out_png) as out:
         draw_world(ax, world)
         path, t = result.path, result.times
         ax.plot(path[:, 0], path[:, 1], color=colour_for(result.planner, 0), lw=1.6,
@@ -149,11 +149,6 @@ def plot_plan(world: World, result, out_png: str | Path, title: str) -> Path:
         ax.set_title(title)
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
         ax.autoscale_view()
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
         fig.tight_layout()
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
     return out
 

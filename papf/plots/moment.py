@@ -29,7 +29,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from papf.plots.mind import draw_footprint, draw_mind, draw_moving, draw_road, rgba  # noqa: E402
-from papf.plots.world import colour_for, draw_obstacle, draw_world  # noqa: E402
+from papf.plots.world import colour_for, draw_obstacle, draw_world, saved_png  # noqa: E402
 from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -237,15 +237,10 @@ def moment_png(panels: Sequence[MomentPanel], world: World | None, out_png: str 
     """The report's ``mind.png`` (see module doc): one panel per run in ``panels``."""
     n = max(len(panels), 1)
     fig, axes = plt.subplots(1, n, figsize=(5.6 * n, 5.8), squeeze=False, layout="constrained")
-    try:
+    with saved_png(fig, out_png) as out:
         for ax, p in zip(axes[0], panels, strict=False):
             _draw_panel(ax, p, world)
             ax.set_aspect("equal", adjustable="box")
         fig.legend(handles=_legend_handles(world), loc="outside lower center", ncol=2 + n,
                    fontsize=8, frameon=False)
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
     return out

@@ -15,10 +15,16 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from papf.plots.world import draw_paths, draw_world, new_axes, set_view, view_extent  # noqa: E402
+from papf.plots.world import (  # noqa: E402
+    draw_paths,
+    draw_world,
+    new_axes,
+    saved_png,
+    set_view,
+    view_extent,
+)
 from papf.plots.world3d import plot_paths_3d  # noqa: E402
 from worlds import World  # noqa: E402
 
@@ -32,16 +38,11 @@ def plot_paths(world: World, paths: Mapping[str, np.ndarray], out_png: str | Pat
     if world.dims == 3:
         return plot_paths_3d(world, paths, out_png, title, times)
     fig, ax = new_axes(world)
-    try:
+    with saved_png(fig, out_png) as out:
         draw_world(ax, world)
         draw_paths(ax, paths, world.dims)
         set_view(ax, view_extent(world, paths.values()))
         ax.set_title(title or world.name)
         fig.legend(loc="outside lower center", ncol=min(len(paths) + 2, 4), fontsize=8,
                    frameon=False)
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
     return out

@@ -15,7 +15,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from papf.plots.moment import draw_traffic, static_world  # noqa: E402
-from papf.plots.world import GOAL_COLOUR, START_COLOUR, colour_for, draw_obstacle  # noqa: E402
+from papf.plots.world import (  # noqa: E402
+    GOAL_COLOUR,
+    START_COLOUR,
+    colour_for,
+    draw_obstacle,
+    saved_png,
+)
 from worlds import World  # noqa: E402
 
 
@@ -23,7 +29,7 @@ def plot_road_run(world: World, planner: str, outcome: str, path: np.ndarray,
                   times: np.ndarray, out_png: str | Path, title: str) -> Path:
     """One road run: world, traffic over ``times``, the path (N, 2) [m] and the finish line."""
     fig, ax = plt.subplots(figsize=(11.0, 3.4), layout="constrained")
-    try:
+    with saved_png(fig, out_png) as out:
         for ob in static_world(world).obstacles:
             draw_obstacle(ax, ob, lw=0)
         draw_traffic(ax, world, float(times[-1]) if len(times) else 0.0)
@@ -39,9 +45,4 @@ def plot_road_run(world: World, planner: str, outcome: str, path: np.ndarray,
         ax.grid(True, lw=0.3, alpha=0.5)
         ax.set_title(title)
         fig.legend(loc="outside lower center", ncol=3, fontsize=8, frameon=False)
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
-    finally:
-        plt.close(fig)
     return out

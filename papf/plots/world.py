@@ -14,7 +14,9 @@ Used by ``papf plan``, the paper-tests and random-world experiments and the ener
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import contextlib
+from collections.abc import Iterator, Mapping
+from pathlib import Path
 
 import matplotlib
 
@@ -209,3 +211,16 @@ def draw_paths(ax, paths: Mapping[str, np.ndarray], dims: int = 2) -> None:
             ax.plot(arr[:, 0], arr[:, 1], color=c, label=label, **style)
             ax.plot(arr[-1, 0], arr[-1, 1], marker, color=c, mec="k", mew=0.5, ms=7,
                     zorder=style["zorder"] + 1)
+
+
+@contextlib.contextmanager
+def saved_png(fig, out_png: str | Path, dpi: int = 110) -> Iterator[Path]:
+    """Draw on ``fig`` inside the block; when it completes, write ``out_png`` (its folder
+    made); close ``fig`` whatever happens. Yields the PNG's path."""
+    out = Path(out_png)
+    try:
+        yield out
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=dpi)
+    finally:
+        plt.close(fig)
