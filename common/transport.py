@@ -37,6 +37,8 @@ from schemas.keys import STAMP_ORDERED, TOPICS
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("client", "peer", "router")
+BATCH_POLL_S = 0.01      # [s wall] a node with batched topics drains them this often
+BATCH_CAPACITY = 65536   # [samples] per batched topic between drains (then Zenoh waits)
 
 
 def add_zenoh_args(parser: argparse.ArgumentParser) -> None:
@@ -199,6 +201,10 @@ class Node:
     Received messages are decoded in Zenoh's callback thread and queued as
     ``(topic, message)`` in a C-level ``SimpleQueue`` (one lock-free put per message, and the
     main thread sleeps until data comes); :meth:`messages` hands them to the main thread.
+    A *batched* topic (``subscribe(..., batched=True)``) skips both hand-offs: Zenoh keeps
+    its samples in its own channel, and :meth:`messages` drains them every
+    :data:`BATCH_POLL_S` on the main thread — for a node that watches a stream and is not on
+    the lockstep's path (the meter), where one wake per batch replaces two per message.
     A payload that fails to decode, or whose stamp is out of range or goes back on a
     stamp-ordered topic (:class:`common.units.StampGuard`), is logged (rate-limited),
     counted in :attr:`bad_messages` and dropped: a bad peer never crashes a node.
@@ -212,6 +218,7 @@ class Node:
         self.stop = StopRequested(wake=lambda: self.inbox.put((None, None)))  # a tick, at once
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
+        self._batched: list[tuple[str, type[Message], zenoh.Subscriber]] = []
         self._listeners: list = []                 # matching listeners of on-demand topics
         self._unheard: set[str] = set()            # on-demand topics no subscriber matches now
         self._token = None
@@ -272,9 +279,16 @@ class Node:
 
     # -- subscribing ------------------------------------------------------
     def subscribe(self, topic: str, msg_type: type[Message] | None = None, *,
-                  handler=None) -> None:
-        """Decode ``<ns>/<topic>`` as ``msg_type`` (default: TOPICS) into the inbox or ``handler``."""
+                  handler=None, batched: bool = False) -> None:
+        """Decode ``<ns>/<topic>`` as ``msg_type`` (default: TOPICS) into the inbox or
+        ``handler``; ``batched``: kept in Zenoh's channel and drained by :meth:`messages`."""
         msg_type = msg_type or TOPICS[topic]
+        if batched:
+            sub = self.session.declare_subscriber(self.keys.key(topic),
+                                                  zenoh.handlers.FifoChannel(BATCH_CAPACITY))
+            self._batched.append((topic, msg_type, sub))
+            self._subscribers.append(sub)
+            return
         deliver = handler or (lambda m, t=topic: self.inbox.put((t, m)))
 
         def on_sample(sample: zenoh.Sample) -> None:
@@ -306,12 +320,47 @@ class Node:
             self.log.warning("dropped bad message #%d on %s: %s", n, self.keys.key(topic), exc)
 
     def messages(self, tick_s: float = 0.1) -> Iterator[tuple[str | None, Message | None]]:
-        """Yield inbox items until stop; ``(None, None)`` every ``tick_s`` of silence."""
+        """Yield inbox items (and batched topics' samples) until stop; ``(None, None)``
+        every ``tick_s`` of silence."""
+        if not self._batched:
+            while not self.stop:
+                try:
+                    yield self.inbox.get(timeout=tick_s)
+                except queue.Empty:
+                    yield None, None
+            return
+        silent_s = 0.0
         while not self.stop:
+            got = False
+            for item in self._drain_batched():
+                got = True
+                yield item
             try:
-                yield self.inbox.get(timeout=tick_s)
+                item = self.inbox.get(timeout=BATCH_POLL_S)
             except queue.Empty:
-                yield None, None
+                silent_s = 0.0 if got else silent_s + BATCH_POLL_S
+                if silent_s >= tick_s:
+                    silent_s = 0.0
+                    yield None, None
+                continue
+            silent_s = 0.0
+            yield item
+
+    def _drain_batched(self) -> Iterator[tuple[str, Message]]:
+        """Every sample waiting in the batched topics' channels, decoded and checked; taken
+        one per topic in turn, so streams published in step (odom(t), wheels(t)) come out in
+        step too."""
+        live = list(self._batched)
+        while live:
+            for entry in list(live):
+                topic, msg_type, sub = entry
+                sample = sub.try_recv()
+                if sample is None:
+                    live.remove(entry)
+                    continue
+                msg = self.accept(topic, sample.payload.to_bytes(), msg_type)
+                if msg is not None:
+                    yield topic, msg
 
     # -- health -----------------------------------------------------------
     def ready(self) -> None:
@@ -325,6 +374,7 @@ class Node:
             self._token.undeclare()
         for sub in self._subscribers:
             sub.undeclare()
+        self._batched.clear()
         for listener in self._listeners:
             listener.undeclare()
         self._listeners.clear()

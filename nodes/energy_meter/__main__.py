@@ -42,9 +42,11 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
     """Subscribe, declare, get ready, then meter every message until stopped."""
     errors = 0
     with open_node(NODE_NAME, args, log) as node:
-        node.subscribe("odom")
-        node.subscribe("wheels")
-        node.subscribe("battery/measured")  # the real robot's voltage replaces the model's
+        # batched: the meter watches two 50 Hz streams off the lockstep's path, so it takes
+        # them every 10 ms in one wake instead of being woken for every message
+        node.subscribe("odom", batched=True)
+        node.subscribe("wheels", batched=True)
+        node.subscribe("battery/measured", batched=True)  # the robot's voltage replaces the model's
         node.declare_publishers("battery")
         node.ready()
         for topic, msg in node.messages():

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import logging
-import queue
 import time
 from collections.abc import Callable
 
@@ -17,7 +16,6 @@ import zenoh
 
 from common import runauth
 from common.errors import SchemaError
-from common.transport import direct
 from common.units import StampGuard
 from papf.launch.outcome import NS, RunMonitor, RunResult
 from papf.launch.supervisor import Supervisor
@@ -34,6 +32,8 @@ FIGURES_S = 10.0         # [s wall] for battery/pose samples to reach t_end
 CHECK_S = 0.05           # [s wall] period of the watch (node deaths, stall, progress, stop)
 RECORDER_ACK_S = 15.0    # [s wall] for the recorder to close its file after run_ended
 COALESCE_S = 0.01        # [s wall] the watch takes the message stream in batches this far apart
+POLL_S = 0.005           # [s wall] while waiting for messages, look this often
+CHANNEL_CAPACITY = 65536 # [samples] per topic between two looks (then Zenoh waits)
 
 
 class RunSequence:
@@ -45,7 +45,6 @@ class RunSequence:
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
         self.stop, self.stall_s = stop, stall_s
         self.run_key = run_key               # goals signed, statuses verified (common.runauth)
-        self._q: queue.SimpleQueue = queue.SimpleQueue()   # C-level: no Python lock per message
         self.stamps = StampGuard(STAMP_ORDERED, restart_at_zero=False)
         self.dropped = 0                     # bad payloads, stamps and tags: not acted on
         self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
@@ -60,47 +59,70 @@ class RunSequence:
                                                       monitor.on_time(msg.stamp_ns),
                                                       *(hook(msg) for hook in self._pose_hooks))
         self._pose_hooks: list[Callable] = []   # watch_poses
-        self._subs = [session.declare_subscriber(keys.key(t), direct(self._callback(t)))
-                      for t in self._handlers]
+        # Each topic's samples wait in Zenoh's own channel until the caller's thread drains
+        # them (:meth:`drain`): no Python on Zenoh's thread, no wake per message — the
+        # launcher watches 50 Hz streams to decide what changes at 10 Hz at most.
+        self._channels: list[tuple[str, type, zenoh.Subscriber]] = []
+        self._subs: list[zenoh.Subscriber] = []
+        for topic in self._handlers:
+            self._listen(keys.key(topic), topic, TOPICS[topic])
+
+    def _listen(self, key: str, topic: str, msg_type: type) -> None:
+        sub = self.session.declare_subscriber(key, zenoh.handlers.FifoChannel(CHANNEL_CAPACITY))
+        self._channels.append((topic, msg_type, sub))
+        self._subs.append(sub)
 
     def watch_key(self, key: str, msg_type: type, handler: Callable) -> None:
         """Also decode the full key ``key`` as ``msg_type`` and hand it to ``handler`` on the
         caller's thread (drained with the rest; a fleet's people)."""
         name = "@" + key
         self._handlers[name] = handler
-        self._subs.append(self.session.declare_subscriber(key, direct(self._callback(name, msg_type))))
+        self._listen(key, name, msg_type)
 
     def watch_poses(self, hook: Callable) -> None:
         """Call ``hook(odometry)`` with every pose sample too (in sim; a fleet's separations)."""
         self._pose_hooks.append(hook)
 
-    def _callback(self, topic: str, msg_type: type | None = None):
-        msg_type = msg_type or TOPICS[topic]
+    def _accept(self, topic: str, msg_type: type, payload: bytes):
+        """The decoded message, or None (a bad payload, stamp or tag: counted, not acted on)."""
+        try:
+            msg = msg_type.from_bytes(payload)
+        except SchemaError:
+            self.dropped += 1
+            return None
+        if self.stamps.check(topic, msg) or (
+                topic in ("planner/status", "goal") and not runauth.verify(msg, self.run_key)):
+            self.dropped += 1
+            return None
+        return msg
 
-        def on_sample(sample: zenoh.Sample) -> None:
-            try:
-                msg = msg_type.from_bytes(sample.payload.to_bytes())
-            except SchemaError:
-                self.dropped += 1
-                return
-            if self.stamps.check(topic, msg) or (
-                    topic in ("planner/status", "goal") and not runauth.verify(msg, self.run_key)):
-                self.dropped += 1
-                return
-            self._q.put((topic, msg))
-        return on_sample
+    def _take(self) -> list[tuple[str, object]]:
+        """Every waiting sample, decoded and fed to the monitor; one per topic in turn, so
+        streams published in step come out in step."""
+        got = []
+        live = [c for c in self._channels]
+        while live:
+            for entry in list(live):
+                topic, msg_type, sub = entry
+                sample = sub.try_recv()
+                if sample is None:
+                    live.remove(entry)
+                    continue
+                msg = self._accept(topic, msg_type, sample.payload.to_bytes())
+                if msg is not None:
+                    self._handlers[topic](msg)
+                    got.append((topic, msg))
+        return got
 
     def drain(self, timeout_s: float) -> list[tuple[str, object]]:
-        """Feed queued messages to the monitor (waiting up to ``timeout_s`` for the first)."""
-        got = []
-        try:
-            item = self._q.get(timeout=timeout_s)
-            while True:
-                self._handlers[item[0]](item[1])
-                got.append(item)
-                item = self._q.get_nowait()
-        except queue.Empty:
-            return got
+        """Feed waiting messages to the monitor; if none, look every :data:`POLL_S` for up to
+        ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            got = self._take()
+            if got or time.monotonic() >= deadline or not self._channels:
+                return got
+            time.sleep(POLL_S)
 
     # -- the sequence ---------------------------------------------------------
     def handshake(self, world: World) -> bool:

@@ -7,7 +7,7 @@ import pytest
 import zenoh
 
 from common.transport import Node, alive_nodes, wait_alive, zenoh_config
-from schemas import Keys, Odometry, PlannerState, Twist
+from schemas import Keys, Odometry, PlannerState, Twist, WheelStates
 
 
 def test_router_without_scouting_delay_opens_and_serves_a_client():
@@ -88,4 +88,33 @@ def test_on_demand_topic_is_put_only_while_someone_subscribes(router, session):
             assert len(encoded) == 1
         finally:
             PlannerState.to_bytes = original
+        node.close()
+
+
+def test_batched_topics_come_in_step_checked_and_with_ticks(router, session):
+    """Batched topics wait in Zenoh's channels and come out on the main thread: two streams
+    put in step come out in step, garbage is counted and dropped, silence still ticks."""
+    keys = Keys("t3")
+    with zenoh.open(zenoh_config("client", [router])) as s2:
+        node = Node("probe", s2, keys, logging.getLogger("probe"))
+        node.subscribe("odom", batched=True)
+        node.subscribe("wheels", batched=True)
+        node.ready()
+        assert not wait_alive(session, keys, ["probe"], timeout_s=30)
+        for t in range(1, 6):
+            session.put(keys.odom, Odometry(stamp_ns=t, x=0, y=0, yaw=0, v=0, w=0).to_bytes())
+            session.put(keys.key("wheels"), WheelStates(stamp_ns=t, speed=(0.0,) * 4,
+                                                        torque=(0.0,) * 4).to_bytes())
+        session.put(keys.odom, b"\x00garbage")
+        got, ticks = [], 0
+        deadline = time.monotonic() + 30
+        for topic, msg in node.messages(tick_s=0.05):
+            if topic is None:
+                ticks += 1
+            else:
+                got.append((topic, msg.stamp_ns))
+            if (len(got) == 10 and ticks) or time.monotonic() > deadline:
+                break
+        assert got == [(t, s) for s in range(1, 6) for t in ("odom", "wheels")]
+        assert ticks >= 1 and node.bad_messages["odom"] == 1
         node.close()
