@@ -14,6 +14,7 @@ Exit codes: 0 done / reached, 2 usage or configuration error (one line, no trace
 from __future__ import annotations
 
 import argparse
+import importlib
 import logging
 import os
 import signal
@@ -21,33 +22,15 @@ import sys
 
 from common import __version__
 from common.errors import PapfError
-from papf.cli import (
-    animate,
-    bench,
-    certs,
-    emulator,
-    experiment,
-    export,
-    goal,
-    info,
-    launch,
-    new,
-    node,
-    param,
-    plan,
-    record,
-    recover,
-    replay,
-    report,
-    run,
-    teleop,
-    topic,
-    view,
-    worlds,
-)
-
-COMMANDS = (run, worlds, launch, topic, node, goal, param, teleop, plan, experiment, report, record,
-            replay, recover, info, view, export, animate, bench, emulator, certs, new)
+# (command, module of papf.cli that registers it), in ``--help`` order. ``papf COMMAND``
+# imports that one module only (``papf run`` starts its processes ~0.2 s sooner than if
+# every command's imports came first); ``papf --help`` or a misspelt command, all of them.
+COMMANDS = (("run", "run"), ("worlds", "worlds"), ("launch", "launch"), ("topic", "topic"),
+            ("node", "node"), ("goal", "goal"), ("param", "param"), ("teleop", "teleop"),
+            ("plan", "plan"), ("experiment", "experiment"), ("report", "report"),
+            ("record", "record"), ("replay", "replay"), ("recover", "recover"), ("info", "info"),
+            ("view", "view"), ("export", "export"), ("animate", "animate"), ("bench", "bench"),
+            ("rosbot-emulator", "emulator"), ("make-certs", "certs"), ("new", "new"))
 
 
 class _Parser(argparse.ArgumentParser):
@@ -57,13 +40,15 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``papf`` parser: every command module of :data:`COMMANDS` registers its subcommand."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``papf`` parser: the command modules of :data:`COMMANDS` register their
+    subcommands — only ``command``'s when it names one, else every one."""
     parser = _Parser(prog="papf", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"papf-stack {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in COMMANDS:
-        module.register(sub)
+    wanted = [m for name, m in COMMANDS if name == command] or [m for _, m in COMMANDS]
+    for module in wanted:
+        importlib.import_module(f"papf.cli.{module}").register(sub)
     return parser
 
 
@@ -78,7 +63,8 @@ def main(argv: list[str] | None = None) -> int:
     # a command started in the background by a script inherits SIGINT ignored (the shell's
     # rule for `cmd &`); `kill -INT` must still stop every child process cleanly
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(argv[0] if argv else None).parse_args(argv)
     try:
         return args.func(args)
     except PapfError as exc:

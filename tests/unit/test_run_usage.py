@@ -9,3 +9,20 @@ def test_broken_world_file_is_a_clear_usage_error(tmp_path):
     code, res, err = papf_run("--world", str(bad))
     assert code == 2 and res is None
     assert "goal.position" in err
+
+
+def test_each_command_is_registered_by_the_module_the_cli_imports_for_it():
+    """``papf COMMAND`` imports one module (papf.cli.COMMANDS): it must register exactly
+    that command, and a full parse must know every command."""
+    import argparse
+    import importlib
+
+    from papf.cli import COMMANDS, build_parser
+
+    for name, module in COMMANDS:
+        sub = argparse.ArgumentParser().add_subparsers()
+        importlib.import_module(f"papf.cli.{module}").register(sub)
+        assert list(sub.choices) == [name]
+        assert list(build_parser(name)._subparsers._group_actions[0].choices) == [name]
+    every = build_parser()._subparsers._group_actions[0].choices
+    assert list(every) == [name for name, _ in COMMANDS]
