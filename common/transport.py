@@ -38,6 +38,7 @@ from schemas.keys import STAMP_ORDERED, TOPICS
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("client", "peer", "router")
 BATCH_POLL_S = 0.01      # [s wall] a node with batched topics drains them this often
+URGENT_POLL_S = 0.0002   # [s wall] ... while the node waits for a batched sample to go on
 BATCH_CAPACITY = 65536   # [samples] per batched topic between drains (then Zenoh waits)
 
 
@@ -319,9 +320,16 @@ class Node:
         if n <= 5 or n % 100 == 0:
             self.log.warning("dropped bad message #%d on %s: %s", n, self.keys.key(topic), exc)
 
-    def messages(self, tick_s: float = 0.1) -> Iterator[tuple[str | None, Message | None]]:
+    def messages(self, tick_s: float = 0.1, urgent=lambda: False
+                 ) -> Iterator[tuple[str | None, Message | None]]:
         """Yield inbox items (and batched topics' samples) until stop; ``(None, None)``
-        every ``tick_s`` of silence."""
+        every ``tick_s`` of silence.
+
+        Batched samples waiting when an inbox item comes are yielded before it (they mostly
+        arrived first: odom(t) before the scan(t) that wakes the planner); while ``urgent()``
+        (a scan waits for its odometry) the channels are looked at every
+        :data:`URGENT_POLL_S` instead of every :data:`BATCH_POLL_S`.
+        """
         if not self._batched:
             while not self.stop:
                 try:
@@ -335,15 +343,17 @@ class Node:
             for item in self._drain_batched():
                 got = True
                 yield item
+            wait_s = URGENT_POLL_S if urgent() else BATCH_POLL_S
             try:
-                item = self.inbox.get(timeout=BATCH_POLL_S)
+                item = self.inbox.get(timeout=wait_s)
             except queue.Empty:
-                silent_s = 0.0 if got else silent_s + BATCH_POLL_S
+                silent_s = 0.0 if got else silent_s + wait_s
                 if silent_s >= tick_s:
                     silent_s = 0.0
                     yield None, None
                 continue
             silent_s = 0.0
+            yield from self._drain_batched()
             yield item
 
     def _drain_batched(self) -> Iterator[tuple[str, Message]]:

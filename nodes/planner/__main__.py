@@ -24,7 +24,7 @@ from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner import lazy
-from nodes.planner.loop import HeldOdometry, PlannerLoop
+from nodes.planner.loop import PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
@@ -76,10 +76,11 @@ def run(args: argparse.Namespace) -> int:
                            runauth.key_from_env(), objects=args.objects,
                            send_command=lambda cmd: node.publish("cmd_vel", cmd),
                            want_state=lambda: node.listened("planner/state"))
-        held = None if args.realtime else HeldOdometry(loop, lambda: node.inbox.put((None, None)))
         for topic in ("scan", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
-        node.subscribe("odom", handler=held.on_odom if held else None)
+        # odometry comes at 50 Hz, scans at 10 Hz: it waits in Zenoh's channel and is taken
+        # when a scan wakes the loop (odom(t) nearly always came first), not one wake each
+        node.subscribe("odom", batched=True)
         node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
         params_check = runauth.RequestCheck(runauth.key_from_env())
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
@@ -88,14 +89,12 @@ def run(args: argparse.Namespace) -> int:
         log.info("planner %s (%s); waiting for a goal on %s (papf goal X Y)", args.planner,
                  "realtime" if args.realtime else "lockstep", node.keys.goal)
         last_status = None
-        for topic, msg in node.messages(tick_s=0.05):
+        for topic, msg in node.messages(tick_s=0.05, urgent=lambda: bool(loop.pending)):
             now = time.monotonic()
             if topic == "planner/params":
                 _answer_params(node, args.planner, planner, msg, loop.last_stamp, params_check)
                 continue
-            out = held.feed(now) if held else []
-            out += loop.on_message(topic, msg, now) if topic else []
-            out += held.after(now) if held else []
+            out = loop.on_message(topic, msg, now) if topic else []
             for out_topic, out_msg in out + loop.poll(now):
                 node.publish(out_topic, out_msg)
                 if out_topic == "planner/status" and out_msg.state != last_status:

@@ -7,7 +7,7 @@ protocol of docs/architecture.md). Used by the planner node (``nodes/planner/__m
 
 from __future__ import annotations
 
-from collections import OrderedDict, deque
+from collections import OrderedDict
 from collections.abc import Callable
 
 from common import runauth
@@ -182,37 +182,3 @@ def _latest(buffer: OrderedDict):
 def _newest_upto(buffer: OrderedDict, t: int):
     older = [m for m in buffer.values() if m.stamp_ns <= t]
     return max(older, key=lambda m: m.stamp_ns) if older else None
-
-
-class HeldOdometry:
-    """Lockstep odometry kept off the main thread until a scan needs it.
-
-    Odometry comes at 50 Hz, scans at 10 Hz, and ``odom(t)`` nearly always arrives before
-    ``scan(t)``: waking the main thread for every odometry message (four in five of them
-    never paired) is wasted. :meth:`on_odom` (Zenoh's thread) keeps the message and wakes
-    the main thread only while a scan waits for its partner; the main thread hands every
-    kept message to the loop, in arrival order, before each inbox item (:meth:`feed`), and
-    again when a scan it just took still waits (:meth:`after`). Either that second look
-    finds the odometry or :meth:`on_odom` sees the waiting scan: no wake is lost.
-    """
-
-    def __init__(self, loop: PlannerLoop, wake: Callable[[], None]):
-        self.loop, self.wake = loop, wake
-        self.kept: deque[Odometry] = deque()
-
-    def on_odom(self, msg: Odometry) -> None:
-        """Keep an odometry message; wake the loop if a scan waits for its partner."""
-        self.kept.append(msg)
-        if self.loop.pending:   # a scan waits for odometry: this may be its partner
-            self.wake()
-
-    def feed(self, now: float) -> list:
-        """Every kept message to the loop (what it answered: scans now complete)."""
-        out = []
-        while self.kept:
-            out += self.loop.on_message("odom", self.kept.popleft(), now)
-        return out
-
-    def after(self, now: float) -> list:
-        """A second :meth:`feed` when a scan still waits (its odometry may have come meanwhile)."""
-        return self.feed(now) if self.loop.pending else []
