@@ -159,14 +159,15 @@ class LidarSim:
         oy = pose_y + s * prm.sensor_x + c * prm.sensor_y
         directions = self._angles + pose_yaw
         n = prm.beams
-        end = np.empty((n, 3))
-        end[:, 0] = ox
-        end[:, 1] = oy
-        end[:, 2] = prm.height
+        start = np.empty((n, 3))
+        start[:, 0] = ox
+        start[:, 1] = oy
+        start[:, 2] = prm.height
+        end = start.copy()
         end[:, 0] += prm.range_max * np.cos(directions)
         end[:, 1] += prm.range_max * np.sin(directions)
-        hits = p.rayTestBatch([(ox, oy, prm.height)] * n, end.tolist(), numThreads=1,
-                              physicsClientId=self.cid)
+        # float64 arrays straight to pybullet (the same numbers as lists, without building them)
+        hits = p.rayTestBatch(start, end, numThreads=1, physicsClientId=self.cid)
         # hit = (body id or -1, link, fraction of the ray, position, normal); C-level maps,
         # not a Python loop per beam
         fraction = np.fromiter(map(_FRACTION, hits), float, n)
