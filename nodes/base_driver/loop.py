@@ -4,7 +4,8 @@ lockstep or real time, pure — no zenoh, wall time passed in (docs/architecture
 Per sim instant ``t`` (the core's odometry grid):
 
 1. free running only: wait until the wall clock reaches ``wall0 + t``;
-2. publish the core's outputs of ``t`` (clock, pose, odometry, wheels, events);
+2. publish the core's outputs of ``t`` (clock, pose, odometry, wheels, events) — in
+   lockstep those of every instant up to the next scan instant together, at that instant;
 3. at a scan instant in lockstep: wait until a ``cmd_vel`` answers the scan of ``t``
    (its ``stamp_ns == t``), at most ``lockstep_timeout_s`` of wall time. None came: a
    ``node_fault`` event and free running in real time, until a command answers the latest
@@ -72,8 +73,11 @@ class DriverLoop:
                 if self.free_running and now < due:
                     return out, due
                 out += self._emit(now)
-                if self.phase == DRAIN:
+                if self.phase == DRAIN and self.free_running:
                     return out, now
+                # lockstep: the instants up to the next scan go out together (one burst per
+                # cycle: one write and one wake for each reader, not five); what is queued
+                # meanwhile is taken while waiting for that scan's command
             elif self.phase == AWAIT and not self.matched:
                 if now < self.deadline:
                     return out, self.deadline

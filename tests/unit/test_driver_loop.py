@@ -61,14 +61,12 @@ def test_lockstep_waits_for_the_command_of_each_scan():
     assert not loop.ready
     loop.on_message("cmd_vel", cmd(0))
     assert loop.ready
-    out, until = loop.step(101.9)                   # t = 20 ms, not a scan: take what is queued
-    assert clocks(out) == [PERIOD_NS] and until == 101.9
-    seen = []
-    for _ in range(4):                              # 40, 60, 80 ms, then the scan at 100 ms
-        out, until = loop.step(101.9)
-        seen += clocks(out)
-    assert seen == [2 * PERIOD_NS, 3 * PERIOD_NS, 4 * PERIOD_NS, 5 * PERIOD_NS]
-    assert until == pytest.approx(103.9) and loop.faults == 0
+    out, until = loop.step(101.9)   # 20, 40, 60, 80 ms and the scan at 100 ms: one burst
+    assert clocks(out) == [k * PERIOD_NS for k in range(1, SCAN_EVERY + 1)]
+    assert until == pytest.approx(103.9) and not loop.ready and loop.faults == 0
+    loop.on_message("cmd_vel", cmd(5 * PERIOD_NS))
+    out, until = loop.step(102.0)
+    assert clocks(out) == [k * PERIOD_NS for k in range(6, 2 * SCAN_EVERY + 1)]
 
 
 def test_a_missing_command_is_a_fault_then_real_time_until_a_command_answers_again():
