@@ -30,10 +30,11 @@ from bench.csvrows import write_rows
 from bench.proc_cpu import TreeCPU
 
 HERE = Path(__file__).resolve().parent
-FIELDS = ("date", "code", "planner", "timeout_s", "runs", "command_wall_med_s", "command_wall_min_s",
-          "run_wall_med_s", "run_wall_min_s", "cpu_med_s", "cpu_min_s", "sim_s", "sim_over_wall_med",
-          "cpu_ms_per_cycle", "same_figures", "load_min", "load_max")
-PROC_FIELDS = ("date", "code", "planner", "timeout_s", "runs", "process", "cpu_med_s",
+FIELDS = ("date", "code", "planner", "seed", "timeout_s", "runs", "command_wall_med_s",
+          "command_wall_min_s", "run_wall_med_s", "run_wall_min_s", "cpu_med_s", "cpu_min_s", "sim_s",
+          "sim_over_wall_med", "sim_over_run_wall_med", "cpu_ms_per_cycle", "same_figures",
+          "load_min", "load_max")
+PROC_FIELDS = ("date", "code", "planner", "seed", "timeout_s", "runs", "process", "cpu_med_s",
                "cpu_ms_per_cycle", "load_min", "load_max")
 CYCLE_S = 0.1   # [s sim] one lockstep cycle (the LiDAR's scan period)
 
@@ -71,11 +72,13 @@ def summary(label: str, runs: list[dict], reference: dict | None = None) -> dict
     walls, inner, cpus = ([r[k] for r in runs] for k in ("command_wall_s", "run_wall_s", "cpu_s"))
     sim = runs[0]["figures"]["sim_time_s"]
     return {"date": time.strftime("%Y-%m-%dT%H:%M"), "code": label, "planner": runs[0]["planner"],
-            "timeout_s": runs[0]["timeout_s"], "runs": len(runs),
+            "seed": runs[0]["figures"].get("seed"), "timeout_s": runs[0]["timeout_s"],
+            "runs": len(runs),
             "command_wall_med_s": round(med(walls), 2), "command_wall_min_s": round(low(walls), 2),
             "run_wall_med_s": round(med(inner), 2), "run_wall_min_s": round(low(inner), 2),
             "cpu_med_s": round(med(cpus), 2), "cpu_min_s": round(low(cpus), 2), "sim_s": sim,
             "sim_over_wall_med": round(sim / med(walls), 1),
+            "sim_over_run_wall_med": round(sim / med(inner), 1),   # the JSON's wall_time_s
             "cpu_ms_per_cycle": round(1e3 * med(cpus) / max(sim / CYCLE_S, 1.0), 2),
             "same_figures": all(r["figures"] == reference for r in runs),
             "load_min": round(min(r["load_1min"] for r in runs), 1),
@@ -90,7 +93,7 @@ def process_rows(label: str, runs: list[dict]) -> list[dict]:
     rows = []
     for name in names:
         cpu = statistics.median(r["processes"].get(name, 0.0) for r in runs)
-        rows.append({**{k: head[k] for k in ("date", "code", "planner", "timeout_s", "runs",
+        rows.append({**{k: head[k] for k in ("date", "code", "planner", "seed", "timeout_s", "runs",
                                               "load_min", "load_max")},
                      "process": _short(name), "cpu_med_s": round(cpu, 2),
                      "cpu_ms_per_cycle": round(1e3 * cpu / cycles, 2)})

@@ -24,6 +24,7 @@ def test_summary_compares_figures_with_the_other_side_and_gives_cpu_per_cycle():
     row = summary("after", runs, reference=FIG)
     assert row["same_figures"] and row["cpu_med_s"] == 4.0
     assert row["cpu_ms_per_cycle"] == 40.0          # 4 s over 100 cycles of 100 ms
+    assert row["sim_over_run_wall_med"] == round(10.0 / 1.5, 1)   # sim over the JSON's wall
     assert not summary("after", runs, reference={**FIG, "charge_mAh": 1.1})["same_figures"]
 
 
