@@ -1,8 +1,8 @@
 """Before/after ``papf run``, alternated: ``papf bench run_ab --before DIR [options]``.
 
 Runs the whole command ``python -m papf run --world W --planner P --seed S --json`` with
-this tree's code and with another checkout's (``--before DIR``, e.g. ``git worktree add
-/tmp/old COMMIT``), one after the other in turns (before, after, before, …), so the load
+this tree's code (or ``--after DIR``'s) and with another checkout's (``--before DIR``, e.g.
+``git worktree add /tmp/old COMMIT``), one after the other in turns (before, after, before, …), so the load
 of other jobs on a shared machine falls on both sides alike. Per run: the command's wall
 time from start to exit (interpreter start-up, imports, start-up and shut-down of every
 process included), the run's own ``wall_time_s`` from its JSON, the CPU seconds of the
@@ -108,6 +108,8 @@ def _short(name: str) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(prog="papf bench run_ab", description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, required=True, help="the other checkout (its root)")
+    parser.add_argument("--after", type=Path, default=HERE.parent,
+                        help="the checkout measured as 'after' (default: this one)")
     parser.add_argument("--labels", default="before,after", help="the two sides' names (before,after)")
     parser.add_argument("--planners", default="apf,papf")
     parser.add_argument("--world", default="energy")
@@ -122,11 +124,12 @@ def main() -> None:
     parser.add_argument("--jsonl", type=Path, help="append every run's JSON line to this file")
     a = parser.parse_args()
     labels = a.labels.split(",")
-    root = HERE.parent
-    if not (a.before / "papf" / "__main__.py").is_file() or len(labels) != 2 or a.rounds < 1:
-        parser.error("--before must be a checkout (with papf/__main__.py), --labels two names, "
-                     "--rounds >= 1")
-    sides = ((labels[0], a.before.resolve()), (labels[1], root))
+    trees = (a.before, a.after)
+    if not all((t / "papf" / "__main__.py").is_file() for t in trees) or len(labels) != 2 \
+            or a.rounds < 1:
+        parser.error("--before and --after must be checkouts (with papf/__main__.py), "
+                     "--labels two names, --rounds >= 1")
+    sides = ((labels[0], a.before.resolve()), (labels[1], a.after.resolve()))
     runs: dict[tuple[str, str], list[dict]] = {}
     for _ in range(a.rounds):
         for planner in a.planners.split(","):
