@@ -196,6 +196,21 @@ class StopRequested:
         return self.event.is_set()
 
 
+def round_robin(channels) -> Iterator[tuple[str, type, bytes]]:
+    """``(topic, message type, payload)`` of every sample waiting in ``channels`` (tuples of
+    topic, message type and a subscriber with a ``FifoChannel``), taken one per channel in
+    turn, so streams published in step (odom(t), wheels(t)) come out in step too."""
+    live = list(channels)
+    while live:
+        for entry in list(live):
+            topic, msg_type, sub = entry
+            sample = sub.try_recv()
+            if sample is None:
+                live.remove(entry)
+            else:
+                yield topic, msg_type, sample.payload.to_bytes()
+
+
 class Node:
     """A node's Zenoh session with typed, fault-tolerant pub/sub.
 
@@ -357,20 +372,12 @@ class Node:
             yield item
 
     def _drain_batched(self) -> Iterator[tuple[str, Message]]:
-        """Every sample waiting in the batched topics' channels, decoded and checked; taken
-        one per topic in turn, so streams published in step (odom(t), wheels(t)) come out in
-        step too."""
-        live = list(self._batched)
-        while live:
-            for entry in list(live):
-                topic, msg_type, sub = entry
-                sample = sub.try_recv()
-                if sample is None:
-                    live.remove(entry)
-                    continue
-                msg = self.accept(topic, sample.payload.to_bytes(), msg_type)
-                if msg is not None:
-                    yield topic, msg
+        """Every sample waiting in the batched topics' channels, decoded and checked, in
+        :func:`round_robin` order."""
+        for topic, msg_type, payload in round_robin(self._batched):
+            msg = self.accept(topic, payload, msg_type)
+            if msg is not None:
+                yield topic, msg
 
     # -- health -----------------------------------------------------------
     def ready(self) -> None:

@@ -16,6 +16,7 @@ import zenoh
 
 from common import runauth
 from common.errors import SchemaError
+from common.transport import round_robin
 from common.units import StampGuard
 from papf.launch.outcome import NS, RunMonitor, RunResult
 from papf.launch.supervisor import Supervisor
@@ -100,18 +101,11 @@ class RunSequence:
         """Every waiting sample, decoded and fed to the monitor; one per topic in turn, so
         streams published in step come out in step."""
         got = []
-        live = [c for c in self._channels]
-        while live:
-            for entry in list(live):
-                topic, msg_type, sub = entry
-                sample = sub.try_recv()
-                if sample is None:
-                    live.remove(entry)
-                    continue
-                msg = self._accept(topic, msg_type, sample.payload.to_bytes())
-                if msg is not None:
-                    self._handlers[topic](msg)
-                    got.append((topic, msg))
+        for topic, msg_type, payload in round_robin(self._channels):
+            msg = self._accept(topic, msg_type, payload)
+            if msg is not None:
+                self._handlers[topic](msg)
+                got.append((topic, msg))
         return got
 
     def drain(self, timeout_s: float) -> list[tuple[str, object]]:
