@@ -29,7 +29,7 @@ PRESETS = ("default", "paper")
 
 #: the parts a planner may declare it plays (``Strategy.roles``): ``compared`` puts it in the
 #: comparison experiments' default planner lists, ``traffic`` in the traffic experiment's
-#: (beside the planners that read tracks); ``<paper>-baseline`` / ``<paper>-proposed``
+#: (beside the planners that read tracks) and the crowd experiment's; ``<paper>-baseline`` / ``<paper>-proposed``
 #: name the planner a paper's own comparison is about (at most one planner each).
 ROLES = ("compared", "traffic", "papf-baseline", "papf-proposed", "arapf-proposed", "wang-proposed",
          "wang-baseline", "car-proposed")

@@ -30,11 +30,12 @@ import numpy as np
 
 from common.errors import ConfigError
 from common.optional import tomllib
+from nodes.planner.registry import with_role
 from papf.experiments.sweep import SweepOptions, map_runs
 from papf.experiments.trials import markdown_table, write_csv
 from worlds import World, parse_world
 
-DEFAULT_PLANNERS = ("apf", "papf", "arapf")
+DEFAULT_PLANNERS = with_role("traffic")   # the planners compared among moving obstacles
 DEFAULT_PEOPLE = (0, 5, 10, 20)
 HALL_X = (-1.5, 9.5)          # [m] the hall's walls along x
 HALL_Y = (-3.0, 3.0)          # [m] along y
