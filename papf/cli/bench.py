@@ -25,6 +25,7 @@ BENCHES = {
     "face": "ROS 2 face: CPU per planner cycle, added latency; lockstep run with/without --ros-face",
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
     "fleet": "papf run with 1-8 robots and 0-50 people: x real time, CPU per robot-cycle",
+    "maps": "PAPF on the packaged map worlds, offline and through the stack (outcome, x real time)",
     "world-scale": "driver + LiDAR against world size: N obstacles, W x W m maps (x real time, "
                    "start-up, CPU per cycle, memory)",
 }

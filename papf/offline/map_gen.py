@@ -1,5 +1,5 @@
-"""SLAM-style occupancy maps made by code: rooms, a corridor, a warehouse (and a large
-hall for ``papf bench world-scale``), each with the free cells inside, walls, and unknown
+"""SLAM-style occupancy maps made by code: rooms, a corridor, a warehouse, a campus (and a
+large hall for ``papf bench world-scale``), each with the free cells inside, walls, and unknown
 outside the building as a SLAM tool leaves it. Cell values are Nav2's (-1 unknown, 0 free,
 100 occupied), row = y up. Used by the packaged map worlds, tests and the benchmark.
 """
@@ -66,6 +66,33 @@ def warehouse(res: float = 0.05, width_m: float = 20.0, depth_m: float = 15.0) -
             s.box(x0, y, x0 + width_m / 2 - 3.0, y + 0.9, OCCUPIED)
         px = m + 1.0 + rng.uniform(0, width_m - 2.5)
         s.box(px, y - 1.0, px + 0.6, y - 0.6, OCCUPIED)
+    return s.data
+
+
+def campus(res: float = 0.1, blocks: int = 6) -> np.ndarray:
+    """A 100 x 100 m campus: ``blocks`` x ``blocks`` buildings (unknown inside, as a LiDAR
+    never sees into them, with walls) along 6 m streets, benches, bins and bollards on the
+    pavements, the whole site walled in."""
+    size = 100.0
+    s = Sketch(size + 1, size + 1, res).building(size, size)
+    m, street = MARGIN_M, 6.0
+    pitch = (size - street) / blocks
+    side = pitch - street
+    rng = np.random.default_rng(11)
+    for i in range(blocks):
+        for j in range(blocks):
+            x0, y0 = m + street + i * pitch, m + street + j * pitch
+            s.box(x0, y0, x0 + side, y0 + side, OCCUPIED)
+            s.box(x0 + 0.3, y0 + 0.3, x0 + side - 0.3, y0 + side - 0.3, UNKNOWN)
+    for _ in range(blocks * blocks * 3):               # street furniture near the kerbs
+        k = rng.integers(0, blocks + 1)
+        along = rng.uniform(m + 2.0, m + size - 2.0)
+        kerb = m + k * pitch + rng.choice((0.6, street - 1.0))
+        w, d = rng.choice(((0.3, 0.3), (1.5, 0.5), (0.5, 0.5)))
+        if rng.random() < 0.5:
+            s.box(along, kerb, along + w, kerb + d, OCCUPIED)
+        else:
+            s.box(kerb, along, kerb + d, along + w, OCCUPIED)
     return s.data
 
 

@@ -3,11 +3,13 @@ rules pixel by pixel, the map's frame (y-flip, origin, yaw), rays and bodies aga
 grid, export -> load round trip, bad maps refused in one line before anything starts."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from PIL import Image
 
+import worlds
 from common.errors import WorldError
 from common.quiet import import_quietly
 from papf.cli import main
@@ -192,3 +194,21 @@ def test_papf_reaches_a_goal_through_a_door_offline(tmp_path):
                                       "2.5,2.0", "6.5,3.5"))
     result = simulate(world, "papf", seed=1, max_time_s=120)
     assert (result.outcome, result.collisions) == ("reached", 0), result.reason
+
+
+@pytest.mark.parametrize("name", ["map-rooms", "map-corridor", "map-warehouse", "map-campus"])
+def test_papf_reaches_every_packaged_map_world_offline(name):
+    """Each packaged map world, by name, as a user runs it (the campus is a million cells)."""
+    from papf.offline.run import simulate
+
+    result = simulate(load_world(name), "papf", seed=0, max_time_s=900)
+    assert (result.outcome, result.collisions) == ("reached", 0), result.reason
+
+
+def test_packaged_maps_are_what_map_gen_draws():
+    """worlds/maps/*.pgm are map_gen's drawings at their resolutions (re-drawn, not edited)."""
+    folder = Path(worlds.__file__).parent / "maps"
+    for name, draw in (("rooms", map_gen.rooms), ("corridor", map_gen.corridor),
+                       ("warehouse", map_gen.warehouse), ("campus", map_gen.campus)):
+        grid = load_map(folder / f"{name}.yaml")
+        assert np.array_equal(grid.data, draw(grid.resolution)), name
