@@ -22,6 +22,7 @@ import sys
 
 from common import __version__
 from common.errors import PapfError
+
 # (command, module of papf.cli that registers it), in ``--help`` order. ``papf COMMAND``
 # imports that one module only (``papf run`` starts its processes ~0.2 s sooner than if
 # every command's imports came first); ``papf --help`` or a misspelt command, all of them.
