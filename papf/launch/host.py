@@ -20,6 +20,7 @@ from common.errors import ConfigError
 from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
+from papf.launch.claim import Claim, check_network
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
@@ -45,21 +46,43 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     if opt.dry_run:
         print(graph.to_json())
         return None
-    stop = stop or StopRequested()
-    show = (lambda n, line: True) if opt.verbose else (
-        lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:", "ready as")))
     keys = Keys(opt.namespace)
-    run_key = runauth.new_key() if prof.run else None
-    if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
+    with Claim(opt.namespace, prof.name, graph.nodes):   # one launch per namespace (module doc)
+        joined = _joined_network(prof, opt, graph)
+        if joined is not None:
+            check_network(joined, keys, graph.nodes, opt.zenoh_config)
+        stop = stop or StopRequested()
+        show = (lambda n, line: True) if opt.verbose else (
+            lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:",
+                                                    "ready as")))
+        run_key = runauth.new_key() if prof.run else None
+        if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
+            try:
+                runauth.publish_key(opt.namespace, run_key)
+            except runauth.NamespaceTaken as exc:
+                raise ConfigError(str(exc)) from None
         try:
-            runauth.publish_key(opt.namespace, run_key)
-        except runauth.NamespaceTaken as exc:
-            raise ConfigError(str(exc)) from None
-    try:
-        return _launch(opt, prof, graph, stop, show, keys, run_key)
-    finally:
-        if run_key:
-            runauth.withdraw_key(opt.namespace, run_key)
+            return _launch(opt, prof, graph, stop, show, keys, run_key)
+        finally:
+            if run_key:
+                runauth.withdraw_key(opt.namespace, run_key)
+
+
+def _nodes_conf(prof: Profile, opt: LaunchOptions, connect: list[str]) -> zenoh.Config:
+    """The Zenoh config of this host's nodes and launcher (a client of ``connect``)."""
+    return zenoh_config("client", connect if (opt.connect or prof.router or not opt.zenoh_config)
+                        else [], config_file=opt.zenoh_config)
+
+
+def _joined_network(prof: Profile, opt: LaunchOptions, graph) -> zenoh.Config | None:
+    """How to reach the network of other hosts this launch's nodes will join (their router:
+    ``--connect`` of a profile without a router, ``--join`` of one with), or None (a router
+    of its own that joins nothing: a network of this launch alone)."""
+    if not prof.router:
+        return _nodes_conf(prof, opt, graph.connect)
+    if opt.join:
+        return zenoh_config("client", opt.join, config_file=opt.zenoh_config)
+    return None
 
 
 def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show, keys: Keys,
@@ -76,9 +99,7 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
                                   + " | ".join(sup.children[0].tail))
         for name, argv in cmds.items():
             sup.start(name, argv)
-        conf = zenoh_config("client", connect if (opt.connect or prof.router or not opt.zenoh_config)
-                            else [], config_file=opt.zenoh_config)
-        with zenoh.open(conf) as session:
+        with zenoh.open(_nodes_conf(prof, opt, connect)) as session:
             wanted = list(cmds) + (list(prof.remote_nodes) if prof.run else [])
             missing = wait_alive(session, keys, wanted, opt.startup_timeout_s,
                                  abort=lambda: bool(sup.dead()) or bool(stop))

@@ -146,3 +146,40 @@ def test_ctrl_c_on_the_robot_profile_stops_without_a_traceback(tmp_path, bridge)
     assert robot.returncode in (0, 130), err[-2000:]
     assert "Traceback" not in err and "Error" not in err, err[-3000:]
     assert not _leftovers(ns)
+
+
+@pytest.mark.e2e
+def test_a_second_launch_in_a_namespace_exits_2_with_one_line(world, tmp_path):
+    """A second `papf launch robot` on the host, and a laptop launch joining a network where
+    the namespace's planner is alive (another laptop's), are refused before they start."""
+    ns, port = "t5twice", free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
+                              "--namespace", ns], start_new_session=True,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    other = None
+    try:
+        assert wait_port(port, 30.0), "the robot's router did not come up"
+        second = subprocess.run([PY, "-m", "papf", "launch", "robot", "--namespace", ns],
+                                capture_output=True, text=True, timeout=60)
+        assert second.returncode == 2, second.stderr
+        assert second.stderr.strip().splitlines() == [second.stderr.strip()]
+        assert f"namespace '{ns}' is in use on this host: base_driver, lidar_sim" in second.stderr
+        other_host = {**os.environ, "XDG_RUNTIME_DIR": str(tmp_path)}   # another laptop's planner
+        other = subprocess.Popen([PY, "-m", "nodes.planner", "--connect", endpoint, "--namespace",
+                                  ns, "--realtime"], env=other_host, start_new_session=True,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with zenoh.open(zenoh_config("client", [endpoint])) as session:
+            assert not wait_alive(session, Keys(ns), ["planner"], 60.0)
+        laptop = subprocess.run([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
+                                 "--namespace", ns, "--world", world], capture_output=True,
+                                text=True, timeout=60)
+        assert laptop.returncode == 2, laptop.stderr
+        assert "is in use on the network at" in laptop.stderr and "planner" in laptop.stderr
+        assert len(laptop.stderr.strip().splitlines()) == 1, laptop.stderr
+    finally:
+        for proc in (other, robot):
+            if proc is not None and proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                proc.wait(timeout=30)
+    assert not _leftovers(ns)
