@@ -40,14 +40,15 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
         raise ConfigError(f"profile {prof.name} drives a run: give --world W")
     check_launch(opt, prof)   # ConfigError/WorldError before anything starts (one preflight)
-    if prof.router and not opt.dry_run:
-        opt = free_listen(prof, opt)
     graph = resolve(prof, opt)
     if opt.dry_run:
         print(graph.to_json())
         return None
     keys = Keys(opt.namespace)
     with Claim(opt.namespace, prof.name, graph.nodes):   # one launch per namespace (module doc)
+        if prof.router:   # a taken port: another one (said on stderr), or refused if given
+            opt = free_listen(prof, opt)
+            graph = resolve(prof, opt)
         joined = _joined_network(prof, opt, graph)
         if joined is not None:
             check_network(joined, keys, graph.nodes, opt.zenoh_config)
