@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import re
 import sys
+import threading
 import time
 
 import zenoh
@@ -166,11 +167,41 @@ def _result(monitor: RunMonitor, opt: LaunchOptions, prof: Profile, wall_s: floa
 
 
 # -- the run sequence (docs/architecture.md "Start and end of a run", real time) ---------------
+ROBOT_QUIET_S = 1.0   # [s wall] without the robot's odometry before the launcher says it waits
+
+
+def _robot_talks(session, keys: Keys, prof: Profile, opt: LaunchOptions, sup: Supervisor,
+                 stop: StopRequested) -> bool:
+    """Wait (at most ``--startup-timeout``) until the base driver publishes the robot's
+    odometry (it does, at 10 Hz between runs, once the robot's own reaches it): the run's
+    clock and timeout must not start on a robot that is not talking yet. Says so on stderr
+    after :data:`ROBOT_QUIET_S`. False on a timeout, a stop or a death."""
+    heard = threading.Event()
+    sub = session.declare_subscriber(keys.odom, lambda _sample: heard.set())
+    try:
+        if heard.wait(ROBOT_QUIET_S):
+            return True
+        print(f"papf launch {prof.name}: waiting for the robot's odometry on {keys.odom} (the "
+              "base driver has none from the robot yet: bringup and bridge up?)",
+              file=sys.stderr, flush=True)
+        deadline = time.monotonic() + opt.startup_timeout_s
+        while not heard.wait(0.2):
+            if stop or sup.dead() or time.monotonic() > deadline:
+                return False
+        return True
+    finally:
+        sub.undeclare()
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
                stop: StopRequested, run_key: bytes | None = None) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
     monitor = RunMonitor(opt.timeout_s, goal=(world.goal[0], world.goal[1], world.tolerance))
+    if prof.pose_topic == "odom" and not _robot_talks(session, keys, prof, opt, sup, stop):
+        monitor.fail("interrupted" if stop else sup.death_reason() or
+                     f"no odometry from the robot within {opt.startup_timeout_s:g} s: the base "
+                     "driver gets none over its bridge (start the robot's bringup and "
+                     "zenoh-bridge-ros2dds, or rmw_zenoh; docs/getting-started-robot.md)")
+        return _result(monitor, opt, prof, time.monotonic() - wall0)
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
                       stall_s=opt.stall_s or STALL_S, run_key=run_key)
     planner = str(opt.values.get("planner") or prof.defaults.get("planner", DEFAULT_PLANNER))
