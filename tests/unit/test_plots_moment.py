@@ -42,3 +42,22 @@ def test_moment_png_draws_one_panel_per_run(tmp_path):
 
     with Image.open(out) as im:
         assert im.size[0] > 1000 and im.size[1] > 500
+
+
+def test_a_road_panel_shows_its_lines_and_no_empty_half():
+    """road-cut-in: the window holds the road's lines around the robot, not a square of
+    empty floor below them (the before picture: 60 % empty)."""
+    from papf.plots.moment import choose_view
+
+    world = load_world("road-cut-in")
+    t = np.linspace(0.0, 6.0, 61)
+    xyyaw = np.column_stack([0.2 * t, np.zeros_like(t), np.zeros_like(t)])
+    states = [_state(1.0, predicted_path=((0.2, 0.0), (1.5, 0.0), (2.4, 0.0)), v_target=0.2),
+              _state(2.0, predicted_path=((0.4, 0.0), (1.5, 0.0), (2.4, 0.0)), v_target=0.02),
+              _state(3.0, predicted_path=((0.6, 0.0), (1.5, 0.0), (2.4, 0.0)), v_target=0.2)]
+    view = choose_view(MomentPanel("iapf", "iapf", t, xyyaw, np.full_like(t, 0.2), states), world)
+    assert view.event is not None and view.event.t_s == 2.0 and "slowest" in view.event.what
+    (_, my), (hx, hy) = view.mid, view.half
+    lines = [line.y for line in world.road.lines()]
+    assert all(my - hy < y < my + hy for y in lines)            # every line in the picture
+    assert my - hy > min(lines) - 0.65 and hx > hy                # no band of floor below it
