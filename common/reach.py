@@ -42,9 +42,12 @@ def session_error(exc: Exception, endpoints: Sequence[str], config_file: str | N
     reason = str(exc).split(" at /")[0].split("\n")[0].strip()
     up = [ep for ep in endpoints if accepts(ep)]
     if not up:
+        tls = "" if config_file or not any(ep.startswith(("tls/", "quic/")) for ep in endpoints) \
+            else ("; once it is, a TLS router authenticates its clients: give --zenoh-config "
+                  "with this host's config (papf make-certs writes laptop.json5)")
         return ConfigError(f"cannot reach the bus at {where} ({reason}): nothing accepts a "
                            "connection there; is a stack running (papf run, papf launch, python "
-                           "-m papf.launch.router)? Else give --connect ENDPOINT")
+                           f"-m papf.launch.router)? Else give --connect ENDPOINT{tls}")
     secure = any(ep.startswith(("tls/", "quic/")) for ep in up)
     if config_file is None:
         need = ("a TLS router authenticates its clients (certificate, user and password) and "
