@@ -30,6 +30,7 @@ from pathlib import Path
 import zenoh
 
 from common.errors import ConfigError, SchemaError
+from common.reach import session_error
 from common.units import StampGuard
 from schemas import Keys
 from schemas.base import Message
@@ -123,17 +124,27 @@ def config_from_args(args: argparse.Namespace) -> zenoh.Config:
                         args.zenoh_config)
 
 
+def connect_endpoints(conf: zenoh.Config) -> list[str]:
+    """The endpoints a session of ``conf`` connects to (``--connect`` or its config file's)."""
+    try:
+        eps = json.loads(conf.get_json("connect/endpoints"))
+    except (ValueError, zenoh.ZError):
+        return []
+    return [str(ep) for ep in eps] if isinstance(eps, list) else []
+
+
 @contextmanager
 def open_session(args: argparse.Namespace, where: str = ""):
-    """``zenoh.open`` for a command's ``args``; no reachable router is a ConfigError
-    (one line, exit 2) instead of a Zenoh traceback."""
+    """``zenoh.open`` for a command's ``args``; a session that does not open (no router, or
+    one that refused our credentials) is a ConfigError (one line, exit 2: :mod:`common.reach`)
+    instead of a Zenoh traceback."""
+    conf = config_from_args(args)
     try:
-        session = zenoh.open(config_from_args(args))
+        session = zenoh.open(conf)
     except zenoh.ZError as exc:
-        first = str(exc).split(" at /")[0].strip()
-        where = where or ", ".join(getattr(args, "connect", None) or []) or DEFAULT_ENDPOINT
-        raise ConfigError(f"cannot reach a Zenoh router at {where}: {first}; "
-                          "start the stack (or python -m papf.launch.router) or give --connect") from None
+        endpoints = connect_endpoints(conf)
+        raise session_error(exc, endpoints, getattr(args, "zenoh_config", None),
+                            where or ", ".join(endpoints) or DEFAULT_ENDPOINT) from None
     with session:
         yield session
 

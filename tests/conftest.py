@@ -7,12 +7,25 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 
 import pytest
 import zenoh
 
 from common.transport import zenoh_config
 from papf.launch.supervisor import Supervisor, free_port, wait_port
+
+
+def pytest_configure(config):
+    """The launchers' run keys and namespace locks (common.runauth, papf.launch.claim) of this
+    test run go to a directory of its own: never the user's, never another test run's (two
+    suites at once each launch in the namespace ``rosbot``)."""
+    config.papf_runtime = tempfile.mkdtemp(prefix="papf-tests-")
+    os.environ["XDG_RUNTIME_DIR"] = config.papf_runtime
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(getattr(config, "papf_runtime", ""), ignore_errors=True)
 
 
 @pytest.fixture

@@ -25,7 +25,7 @@ import zenoh
 from common.errors import ConfigError, PapfError, RecordingError
 from common.outfiles import check_output
 from common.ports import describe, plain
-from common.transport import Node, add_zenoh_args, open_node, setup_logging
+from common.transport import Node, add_zenoh_args, alive_nodes, open_node, setup_logging
 from nodes.recorder.ports import PORTS, VARIANTS
 from nodes.recorder.tail import TAIL_MAX_S, RunEndWatch
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
@@ -64,9 +64,11 @@ def drain(subscriber, writer: RunWriter, max_samples: int, watch: RunEndWatch | 
 def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str],
            compression: str = "zstd", flush_interval_s: float = FLUSH_INTERVAL_S,
            queue_capacity: int = QUEUE_CAPACITY, close_on_run_ended: bool = False,
-           force: bool = False) -> WriterStats:
+           force: bool = False, announce: bool = False) -> WriterStats:
     """Record until ``node.stop`` (or, with ``close_on_run_ended``, until the launcher's
-    ``run_ended``); returns the writer's counts. The file is complete on return."""
+    ``run_ended``); returns the writer's counts. The file is complete on return.
+    ``announce`` (``papf record`` by hand): say which nodes of the namespace are alive, or
+    that it waits for the stack, and when the first message came."""
     watch = RunEndWatch(node.keys.events) if close_on_run_ended else None
     meta = {"namespace": node.keys.ns, "keys": keys_expr, **metadata}
     with RunWriter(out, meta, compression=compression, flush_interval_s=flush_interval_s,
@@ -75,6 +77,8 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
         try:
             node.ready()
             node.log.info("recording %s into %s", keys_expr, out)
+            if announce:
+                _announce(node, metadata)
             _loop(node, sub, writer, watch)
             if watch is not None and watch.seen:
                 _tail(node, sub, writer, watch)
@@ -109,16 +113,40 @@ def _tail(node: Node, sub, writer: RunWriter, watch: RunEndWatch) -> None:
                          ", ".join(sorted(watch.waiting)))
 
 
+def _announce(node: Node, metadata: dict[str, str]) -> None:
+    """What a recording started by hand will hold: the namespace's nodes alive now (or none
+    yet: it waits for the stack), and what its report will not know without ``--meta``."""
+    alive = sorted(alive_nodes(node.session, node.keys) - {NAME})
+    if alive:
+        node.log.info("namespace %r: %s alive; recording from now (a run already going is "
+                      "recorded from its middle)", node.keys.ns, ", ".join(alive))
+    else:
+        node.log.warning("namespace %r: no node alive yet; waiting for the stack (papf run "
+                         "--realtime, papf launch ...) and recording from its first message "
+                         "(wrong namespace? --namespace)", node.keys.ns)
+    if "world" not in metadata:
+        node.log.info("no --meta world=W: papf report will name the world 'unknown' "
+                      "(--meta world=W --meta planner=P --meta seed=S say what ran)")
+
+
 def _loop(node: Node, sub, writer: RunWriter, watch: RunEndWatch | None) -> None:
-    next_status = time.monotonic() + STATUS_EVERY_S
-    last_count = 0
+    started = time.monotonic()
+    next_status = started + STATUS_EVERY_S
+    last_count, first = 0, True
     while not node.stop and not (watch and watch.seen):
         if drain(sub, writer, BATCH, watch) == 0:
             writer.maybe_flush()
             node.stop.event.wait(IDLE_WAIT_S)
+        elif first:
+            first = False
+            node.log.info("first messages after %.1f s", time.monotonic() - started)
         if time.monotonic() >= next_status:
             count = writer.stats.messages
-            node.log.info("%d messages (%.0f/s)", count, (count - last_count) / STATUS_EVERY_S)
+            if count == 0:
+                node.log.warning("no message in %.0f s: is a stack running in namespace %r?",
+                                 time.monotonic() - started, node.keys.ns)
+            else:
+                node.log.info("%d messages (%.0f/s)", count, (count - last_count) / STATUS_EVERY_S)
             next_status, last_count = next_status + STATUS_EVERY_S, count
 
 
@@ -165,7 +193,7 @@ def main(args: argparse.Namespace) -> int:
                 node.declare_publishers("events")   # up front: the one put must not be late
             record(node, args.out, args.keys or f"{args.namespace}/**", meta,
                    args.compression, args.flush_interval, close_on_run_ended=close,
-                   force=args.force)
+                   force=args.force, announce=not close)
             if close and not node.stop:   # the file is closed: say so, then wait to be stopped
                 node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=NAME,
                                              detail=str(args.out)))

@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 import math
 
+PROGRESS_AFTER_S = 3.0   # [s wall] a report done sooner prints no progress
+
 
 def register(sub) -> None:
     """Add ``papf report`` and its options to the subcommands ``sub``."""
@@ -49,11 +51,15 @@ def topic_map(args):
 
 def cmd_report(args) -> int:
     """``papf report``: energy report of recorded runs; the exit code."""
+    from papf.console.progress import StepProgress
     from papf.report.metrics import BAG, live_difference, metadata_notes
     from papf.report.report import build_report  # matplotlib: only when reporting
     from papf.report.tables import bags_markdown, summary_markdown
 
-    report = build_report(args.inputs, args.out, args.energy_model, topics=topic_map(args))
+    topics = topic_map(args)
+    with StepProgress("report", 1, after_s=PROGRESS_AFTER_S) as progress:   # total: set by it
+        report = build_report(args.inputs, args.out, args.energy_model, topics=topics,
+                              progress=progress)
     if args.json:
         for m in report.runs:
             print(json.dumps(finite(m.row()), allow_nan=False))   # NaN -> null (JSON has no NaN)

@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 import time
 from collections.abc import Callable
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 HEARTBEAT_S = 30.0   # [s wall] longest silence of the piped mode
@@ -44,8 +46,9 @@ class DecileProgress:
         self._start_distance: float | None = None
         self._best = 0.0
         self._last_line = clock()
-        self._bar = Progress(TextColumn(f"[bold]{label}[/]"), BarColumn(),
-                             TextColumn("{task.percentage:>3.0f} %  {task.fields[text]}"),
+        self._bar = Progress(TextColumn(f"[bold]{escape(label)}[/]"), BarColumn(),
+                             TextColumn("{task.percentage:>3.0f} %  {task.fields[text]}",
+                                        markup=False),
                              TimeElapsedColumn(), console=Console(stderr=True),
                              transient=True) if self.live and not self.quiet else None
         self._task = None
@@ -89,39 +92,80 @@ class StepProgress:
     """``with StepProgress("wang", total=16) as p: p.step("fig 5 reached")`` (see module doc).
 
     ``enabled``: None = the live bar when stderr is a terminal, else one line per step;
-    True = the live bar; False = nothing. ``out`` receives the piped lines.
+    True = the live bar; False = nothing. ``out`` receives the piped lines. ``after_s``: show
+    nothing for a job done within that many seconds; past them, the bar (or a line saying
+    what is under way, :meth:`doing`) appears and every step shows as usual.
     """
 
     def __init__(self, label: str, total: int, enabled: bool | None = None,
-                 out: Callable[[str], None] | None = None):
+                 out: Callable[[str], None] | None = None, after_s: float = 0.0):
         self.label, self.total, self.done, self.out = label, max(int(total), 1), 0, out or _err
         live = sys.stderr.isatty() if enabled is None else enabled
         self.quiet = enabled is False
-        self._bar = Progress(TextColumn(f"[bold]{label}[/]"), BarColumn(),
-                             TextColumn("{task.completed}/{task.total}  {task.fields[text]}"),
+        self._bar = Progress(TextColumn(f"[bold]{escape(label)}[/]"), BarColumn(),
+                             TextColumn("{task.completed}/{task.total}  {task.fields[text]}",
+                                        markup=False),
                              TimeElapsedColumn(), console=Console(stderr=True),
                              transient=True) if live and not self.quiet else None
         self._task = None
+        self._now = ""                       # the step under way (doing)
+        self._lock = threading.Lock()
+        self._shown = after_s <= 0
+        self._timer = None if self._shown or self.quiet else threading.Timer(after_s, self._show)
+        if self._timer is not None:
+            self._timer.daemon = True
 
     def __enter__(self) -> StepProgress:
-        if self._bar is not None:
-            self._bar.start()
-            self._task = self._bar.add_task(self.label, total=self.total, text="")
+        if self._timer is not None:
+            self._timer.start()
+        elif self._shown:
+            self._start_bar()
         return self
 
     def __exit__(self, *exc) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._shown = False               # nothing more once the job is over
+            if self._bar is not None and self._task is not None:
+                self._bar.stop()
+
+    def _start_bar(self) -> None:
         if self._bar is not None:
-            self._bar.stop()
+            self._bar.start()
+            self._task = self._bar.add_task(self.label, total=self.total, completed=self.done,
+                                            text=self._now)
+
+    def _show(self) -> None:
+        """``after_s`` passed and the job is still going: show it from now on."""
+        with self._lock:
+            if self._shown or self.quiet:
+                return
+            self._shown = True
+            if self._bar is not None:
+                self._start_bar()
+            else:
+                self.out(f"{self.label}: {self.done}/{self.total}"
+                         + (f"  {self._now} ..." if self._now else ""))
+
+    def doing(self, text: str) -> None:
+        """What the next step is (``reading run.mcap``): shown with the bar, or in the line
+        printed when ``after_s`` passes during it."""
+        with self._lock:
+            self._now = text
+            if self._shown and self._bar is not None and self._task is not None:
+                self._bar.update(self._task, text=text)
 
     def step(self, text: str = "") -> None:
         """One more step done; ``text`` says what it was (a run's outcome)."""
-        self.done += 1
-        if self.quiet:
-            return
-        if self._bar is not None:
-            self._bar.update(self._task, completed=self.done, text=text)
-            return
-        self.out(f"{self.label}: {self.done}/{self.total}" + (f"  {text}" if text else ""))
+        with self._lock:
+            self.done += 1
+            if self.quiet or not self._shown:
+                return
+            if self._bar is not None:
+                self._bar.update(self._task, completed=self.done, total=self.total, text=text)
+                return
+            self.out(f"{self.label}: {self.done}/{self.total}" + (f"  {text}" if text else ""))
 
 
 class RunProgress:

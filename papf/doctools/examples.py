@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+SESSION_MARK = "<!-- examples: one session -->"   # the blocks after it, to the next heading
+HEADING = re.compile(r"^#+ ", re.M)
 BLOCK = re.compile(r"^[ \t]*```(?P<lang>[a-z]*)\n(?P<body>.*?)^[ \t]*```", re.S | re.M)
 COMMAND_START = re.compile(r"^(papf|python|python3|\.venv/bin/\S+|make|sudo|git|scp|ros2|"
                            r"zenoh-bridge-ros2dds)\b")
@@ -34,6 +36,12 @@ class Example:
     text: str          # the command, continuations joined, comment dropped
     block: int         # index of its code block in the file
     background: bool   # ends with ``&``
+    session: int = -1  # the block whose session it runs in (-1: its own; see examples())
+
+    @property
+    def group(self) -> int:
+        """The code block whose session runs this example (:func:`examples`)."""
+        return self.block if self.session < 0 else self.session
 
     @property
     def where(self) -> str:
@@ -93,7 +101,10 @@ def examples(root: Path = ROOT) -> list[Example]:
     (``papf experiment random [--n 50] [--seed S]``) is made concrete by :func:`concrete`:
     optional ``[...]`` groups dropped, ``a|b`` choices and placeholders (``<robot>``, ``W``,
     ``DIR``) replaced by a real value. A *session* is a block with a line ending in ``&``: its
-    lines run in order in one shell, the background ones stopped at the end.
+    lines run in order in one shell, the background ones stopped at the end. A step-by-step
+    procedure whose blocks belong together (start a scheduler, then workers, then the sweep)
+    has :data:`SESSION_MARK` before its first block: the blocks from there to the next
+    heading run as one session (their ``session``: the first one's index).
 
     ``tests/unit/test_docs_examples.py`` parses every ``papf`` example with the real parser and
     checks that every other one is a known module, a Makefile target or an external tool
@@ -102,9 +113,17 @@ def examples(root: Path = ROOT) -> list[Example]:
     found = []
     for path in doc_files(root):
         text = path.read_text()
+        marks = [m.start() for m in re.finditer(re.escape(SESSION_MARK), text)]
+        spans = [(m.start(), m.end()) for m in BLOCK.finditer(text)]
+        heads = [h.start() for h in HEADING.finditer(text)   # a "# comment" in a block is none
+                 if not any(a <= h.start() < b for a, b in spans)]
+        sessions: dict[int, int] = {}   # mark position -> its first block
         for b, m in enumerate(BLOCK.finditer(text)):
             if m.group("lang") not in ("bash", "sh", ""):
                 continue
+            mark = max((k for k in marks if k < m.start()
+                        and not any(k < h < m.start() for h in heads)), default=None)
+            session = -1 if mark is None else sessions.setdefault(mark, b)
             first = text.count("\n", 0, m.start("body")) + 1
             cmds = _block_commands(m.group("body"), first)
             if m.group("lang") == "" and not all(COMMAND_START.match(c) for _, c in cmds):
@@ -112,7 +131,7 @@ def examples(root: Path = ROOT) -> list[Example]:
             for line, cmd in cmds:
                 bg = cmd.endswith("&")
                 found.append(Example(str(path.relative_to(root)), line,
-                                     cmd[:-1].rstrip() if bg else cmd, b, bg))
+                                     cmd[:-1].rstrip() if bg else cmd, b, bg, session))
     return found
 
 

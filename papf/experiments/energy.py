@@ -341,17 +341,22 @@ def _warn_foreign_files(out: Path, specs: Sequence[RunSpec], console: Console) -
     ours = {s.path.name for s in specs}
     other = sorted(p.name for p in out.glob("*.mcap") if p.name not in ours)
     if other:
-        console.print(f"[yellow]note:[/] {out} also holds {', '.join(other)}; this experiment's "
-                      f"report covers its own {len(specs)} runs, but `papf report {out}` "
-                      "would include those too")
+        from rich.markup import escape
+
+        note = (f"{out} also holds {', '.join(other)}; this experiment's report covers its own "
+                f"{len(specs)} runs, but `papf report {out}` would include those too")
+        console.print(f"[yellow]note:[/] {escape(note)}")
 
 
 def _result_line(spec: RunSpec, r: RunResult) -> str:
+    """A finished run's line (rich markup: the outcome coloured, the rest escaped)."""
+    from rich.markup import escape
+
     colour = "green" if r.outcome == "reached" else "red"
-    return (f"{spec.name:>8} seed {spec.seed:<3} [{colour}]{r.outcome:<9}[/] "
+    return (f"{escape(f'{spec.name:>8} seed {spec.seed:<3}')} [{colour}]{r.outcome:<9}[/] "
             f"{r.duration_s:7.2f} s  {r.path_length_m:6.2f} m  {r.charge_mAh:7.3f} mAh  "
             f"{r.energy_J:7.1f} J  wall {r.wall_time_s:4.1f} s"
-            + (f"  {r.reason}" if r.outcome != "reached" else ""))
+            + (f"  {escape(r.reason)}" if r.outcome != "reached" else ""))
 
 
 def _mismatches(results: Sequence[tuple[RunSpec, RunResult]], report: Report) -> list[str]:
@@ -370,20 +375,22 @@ def _mismatches(results: Sequence[tuple[RunSpec, RunResult]], report: Report) ->
 def print_summary(res, console=None) -> None:
     """The experiment's table (mean ± sd), PAPF vs APF next to the paper, and the wall time."""
     from rich.console import Console  # rich: only to print
+    from rich.markup import escape  # "[mAh]" is text, not a style tag
     from rich.table import Table
 
     from papf.report.tables import PAPER, change_pct
 
     console = console or Console()
     model = res.report.model
-    t = Table(title=f"energy experiment on {', '.join(sorted({s.world for s in res.report.summaries}))}"
-                    f" (runs that reached the goal: mean ± sd; {model} model)")
+    t = Table(title=escape(f"energy experiment on "
+                           f"{', '.join(sorted({s.world for s in res.report.summaries}))}"
+                           f" (runs that reached the goal: mean ± sd; {model} model)"))
     for col in ("planner", "reached", f"charge [mAh, {model}]", f"energy [J, {model}]",
                 "duration [s]", "path [m]"):
-        t.add_column(col, justify="right")
+        t.add_column(escape(col), justify="right")
     for s in res.report.summaries:
         st = s.stats
-        t.add_row(s.planner, f"{s.reached}/{s.runs}", st["charge_mAh"].text(".2f"),
+        t.add_row(escape(s.planner), f"{s.reached}/{s.runs}", st["charge_mAh"].text(".2f"),
                   st["energy_J"].text(".1f"), st["duration_s"].text(".2f"),
                   st["path_length_m"].text(".3f"))
     console.print(t)
@@ -394,7 +401,7 @@ def print_summary(res, console=None) -> None:
             console.print(f"PAPF vs APF {label}: {change_pct(apf.stats[attr], papf.stats[attr]):+.1f} %"
                           f"   paper: {PAPER[attr]}", highlight=False)
     for m in res.mismatches:
-        console.print(f"[red]report differs from the live run:[/] {m}")
-    console.print(f"report: {res.report.files[-1]}")
+        console.print(f"[red]report differs from the live run:[/] {escape(m)}")
+    console.print(f"report: {escape(str(res.report.files[-1]))}", highlight=False)
     console.print(f"wall time: {res.wall_s:.1f} s for {len(res.results)} runs and the report",
                   highlight=False)

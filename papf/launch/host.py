@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import re
 import sys
+import threading
 import time
 
 import zenoh
@@ -20,6 +21,7 @@ from common.errors import ConfigError
 from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
+from papf.launch.claim import Claim, check_network
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
@@ -39,27 +41,50 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
         raise ConfigError(f"profile {prof.name} drives a run: give --world W")
     check_launch(opt, prof)   # ConfigError/WorldError before anything starts (one preflight)
-    if prof.router and not opt.dry_run:
-        opt = free_listen(prof, opt)
     graph = resolve(prof, opt)
     if opt.dry_run:
         print(graph.to_json())
         return None
-    stop = stop or StopRequested()
-    show = (lambda n, line: True) if opt.verbose else (
-        lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:", "ready as")))
     keys = Keys(opt.namespace)
-    run_key = runauth.new_key() if prof.run else None
-    if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
+    with Claim(opt.namespace, prof.name, graph.nodes):   # one launch per namespace (module doc)
+        if prof.router:   # a taken port: another one (said on stderr), or refused if given
+            opt = free_listen(prof, opt)
+            graph = resolve(prof, opt)
+        joined = _joined_network(prof, opt, graph)
+        if joined is not None:
+            check_network(joined, keys, graph.nodes, opt.zenoh_config)
+        stop = stop or StopRequested()
+        show = (lambda n, line: True) if opt.verbose else (
+            lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:",
+                                                    "ready as")))
+        run_key = runauth.new_key() if prof.run else None
+        if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
+            try:
+                runauth.publish_key(opt.namespace, run_key)
+            except runauth.NamespaceTaken as exc:
+                raise ConfigError(str(exc)) from None
         try:
-            runauth.publish_key(opt.namespace, run_key)
-        except runauth.NamespaceTaken as exc:
-            raise ConfigError(str(exc)) from None
-    try:
-        return _launch(opt, prof, graph, stop, show, keys, run_key)
-    finally:
-        if run_key:
-            runauth.withdraw_key(opt.namespace, run_key)
+            return _launch(opt, prof, graph, stop, show, keys, run_key)
+        finally:
+            if run_key:
+                runauth.withdraw_key(opt.namespace, run_key)
+
+
+def _nodes_conf(prof: Profile, opt: LaunchOptions, connect: list[str]) -> zenoh.Config:
+    """The Zenoh config of this host's nodes and launcher (a client of ``connect``)."""
+    return zenoh_config("client", connect if (opt.connect or prof.router or not opt.zenoh_config)
+                        else [], config_file=opt.zenoh_config)
+
+
+def _joined_network(prof: Profile, opt: LaunchOptions, graph) -> zenoh.Config | None:
+    """How to reach the network of other hosts this launch's nodes will join (their router:
+    ``--connect`` of a profile without a router, ``--join`` of one with), or None (a router
+    of its own that joins nothing: a network of this launch alone)."""
+    if not prof.router:
+        return _nodes_conf(prof, opt, graph.connect)
+    if opt.join:
+        return zenoh_config("client", opt.join, config_file=opt.zenoh_config)
+    return None
 
 
 def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show, keys: Keys,
@@ -76,9 +101,7 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
                                   + " | ".join(sup.children[0].tail))
         for name, argv in cmds.items():
             sup.start(name, argv)
-        conf = zenoh_config("client", connect if (opt.connect or prof.router or not opt.zenoh_config)
-                            else [], config_file=opt.zenoh_config)
-        with zenoh.open(conf) as session:
+        with zenoh.open(_nodes_conf(prof, opt, connect)) as session:
             wanted = list(cmds) + (list(prof.remote_nodes) if prof.run else [])
             missing = wait_alive(session, keys, wanted, opt.startup_timeout_s,
                                  abort=lambda: bool(sup.dead()) or bool(stop))
@@ -144,11 +167,41 @@ def _result(monitor: RunMonitor, opt: LaunchOptions, prof: Profile, wall_s: floa
 
 
 # -- the run sequence (docs/architecture.md "Start and end of a run", real time) ---------------
+ROBOT_QUIET_S = 1.0   # [s wall] without the robot's odometry before the launcher says it waits
+
+
+def _robot_talks(session, keys: Keys, prof: Profile, opt: LaunchOptions, sup: Supervisor,
+                 stop: StopRequested) -> bool:
+    """Wait (at most ``--startup-timeout``) until the base driver publishes the robot's
+    odometry (it does, at 10 Hz between runs, once the robot's own reaches it): the run's
+    clock and timeout must not start on a robot that is not talking yet. Says so on stderr
+    after :data:`ROBOT_QUIET_S`. False on a timeout, a stop or a death."""
+    heard = threading.Event()
+    sub = session.declare_subscriber(keys.odom, lambda _sample: heard.set())
+    try:
+        if heard.wait(ROBOT_QUIET_S):
+            return True
+        print(f"papf launch {prof.name}: waiting for the robot's odometry on {keys.odom} (the "
+              "base driver has none from the robot yet: bringup and bridge up?)",
+              file=sys.stderr, flush=True)
+        deadline = time.monotonic() + opt.startup_timeout_s
+        while not heard.wait(0.2):
+            if stop or sup.dead() or time.monotonic() > deadline:
+                return False
+        return True
+    finally:
+        sub.undeclare()
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
                stop: StopRequested, run_key: bytes | None = None) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
     monitor = RunMonitor(opt.timeout_s, goal=(world.goal[0], world.goal[1], world.tolerance))
+    if prof.pose_topic == "odom" and not _robot_talks(session, keys, prof, opt, sup, stop):
+        monitor.fail("interrupted" if stop else sup.death_reason() or
+                     f"no odometry from the robot within {opt.startup_timeout_s:g} s: the base "
+                     "driver gets none over its bridge (start the robot's bringup and "
+                     "zenoh-bridge-ros2dds, or rmw_zenoh; docs/getting-started-robot.md)")
+        return _result(monitor, opt, prof, time.monotonic() - wall0)
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
                       stall_s=opt.stall_s or STALL_S, run_key=run_key)
     planner = str(opt.values.get("planner") or prof.defaults.get("planner", DEFAULT_PLANNER))

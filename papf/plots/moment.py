@@ -34,9 +34,11 @@ from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
 
 GOAL_MOVE_M = 0.10        # [m] a temporary goal that jumps further than this "moved"
-MIN_HALF_M = 1.2          # [m] smallest half-width of a zoomed panel
+MIN_HALF_M = 0.9          # [m] smallest half-width (and half-height) of a zoomed panel
+NEAR_M = 1.5              # [m] obstacles this close to the robot are in its panel
 TRAFFIC_EVERY_S = 2.0     # [s] between outlines of a moving obstacle
 MOVING_S = 0.02           # [m/s] the robot "moves" above this speed
+PANEL_W_IN = 5.2          # [in] width of one run's panel in mind.png
 
 
 @dataclass(frozen=True)
@@ -166,12 +168,38 @@ class MomentPanel:
     states: list[PlannerState]
 
 
-def _window(points: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, float]:
-    """Centre and half-width [m] of a square view on ``centre`` holding ``points``."""
+@dataclass(frozen=True)
+class View:
+    """What a panel shows: the moment (None: the whole path), its pose index, the window."""
+
+    event: Event | None
+    k: int                       # index of the pose at the moment
+    mid: tuple[float, float]     # [m] centre of the window
+    half: tuple[float, float]    # [m] half-width, half-height
+
+
+def _window(points: np.ndarray, centre: np.ndarray, world: World | None
+            ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Centre and half-sizes [m] of a view on ``centre`` holding ``points`` (on a road: its
+    lines too), at least :data:`MIN_HALF_M` across and at most 2:1 either way."""
     pts = np.vstack([points, centre[None, :]]) if len(points) else centre[None, :]
+    if world is not None:   # the static obstacles near the robot: what it reacts to
+        near = [ob.center[:2] for ob in world.obstacles if ob.motion is None
+                and math.dist(ob.center[:2], centre) < NEAR_M]
+        pts = np.vstack([pts, near]) if near else pts
+    if world is not None and world.road is not None:
+        ys = [y for y in _road_ys(world) if abs(y - centre[1]) < 3 * MIN_HALF_M]
+        pts = np.vstack([pts, [[centre[0], y] for y in ys]]) if ys else pts
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     mid = 0.5 * (lo + hi)
-    return mid, max(MIN_HALF_M, 0.5 * float(np.max(hi - lo)) + 0.5)
+    hx, hy = (max(MIN_HALF_M, 0.5 * float(e) + 0.4) for e in hi - lo)
+    hx, hy = max(hx, hy / 2), max(hy, hx / 2)
+    return (float(mid[0]), float(mid[1])), (hx, hy)
+
+
+def _road_ys(world: World) -> list[float]:
+    """[m] y of the road's painted lines."""
+    return [float(line.y) for line in world.road.lines()]
 
 
 def _mind_points(s: PlannerState) -> np.ndarray:
@@ -183,37 +211,63 @@ def _mind_points(s: PlannerState) -> np.ndarray:
     return np.vstack(parts)
 
 
-def _draw_panel(ax, p: MomentPanel, world: World | None) -> str:
-    """Draw one panel; returns its title."""
-    colour = colour_for(p.planner, 0)
-    event = telling_moment(p.states, first_motion_s(p.t, p.v))
+def choose_view(p: MomentPanel, world: World | None) -> View:
+    """The moment of ``p`` (what the planner did; else its slowest cycle; else the closest
+    approach to traffic) and the window around it."""
+    moving_s = first_motion_s(p.t, p.v)
+    event = telling_moment(p.states, moving_s) or slowest_moment(p.states, moving_s)
     near = closest_to_traffic(world, p.t, p.xyyaw[:, :2]) if world is not None else None
-    event = event or slowest_moment(p.states, first_motion_s(p.t, p.v))
     if event is None and near is not None:
-        k = near[0]
-        i = max(int(np.searchsorted([s.stamp_ns / 1e9 for s in p.states], p.t[k],
+        i = max(int(np.searchsorted([s.stamp_ns / 1e9 for s in p.states], p.t[near[0]],
                                     side="right")) - 1, 0)
-        event = Event(i, float(p.t[k]), f"closest to a moving obstacle ({near[1]:.2f} m)")
+        event = Event(i, float(p.t[near[0]]), f"closest to a moving obstacle ({near[1]:.2f} m)")
+    if event is not None and not p.states:
+        event = None
     t_m = event.t_s if event else float(p.t[-1])
     k = max(int(np.searchsorted(p.t, t_m, side="right")) - 1, 0)
+    xy = p.xyyaw[:, :2]
+    if event is None:   # the whole path
+        mid, half = _window(xy, xy[k], None)
+    else:
+        mid, half = _window(_mind_points(p.states[event.index]), xy[k], world)
+    return View(event, k, mid, half)
+
+
+def _draw_panel(ax, p: MomentPanel, world: World | None, view: View) -> str:
+    """Draw one panel at ``view``; returns what the planner did then ("" for none)."""
+    colour = colour_for(p.planner, 0)
+    event, k = view.event, view.k
+    t_m = event.t_s if event else float(p.t[-1])
     if world is not None and world.dims == 2:
         draw_world(ax, static_world(world))
         draw_road(ax, world)
+        _tracks(ax, world, float(p.t[-1]) if len(p.t) else 0.0)
         draw_moving(ax, world, t_m)
     xy = p.xyyaw[:, :2]
     ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=1.0, alpha=0.35, zorder=3)
     ax.plot(xy[: k + 1, 0], xy[: k + 1, 1], color=colour, lw=1.8, zorder=3)
     draw_footprint(ax, *p.xyyaw[k])
-    if event is None or not p.states:
+    (mx, my), (hx, hy) = view.mid, view.half
+    ax.set_xlim(mx - hx, mx + hx)
+    ax.set_ylim(my - hy, my + hy)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    if event is None:
         ax.set_title(f"{p.label}\nno prediction to show: the whole path", fontsize=9)
         return ""
-    state = p.states[event.index]
-    draw_mind(ax, state, labels=False)
-    mid, half = _window(_mind_points(state), xy[k])
-    ax.set_xlim(mid[0] - half, mid[0] + half)
-    ax.set_ylim(mid[1] - half, mid[1] + half)
-    ax.set_title(f"{p.label}: t = {event.t_s:.1f} s, {event.what}", fontsize=9)
+    draw_mind(ax, p.states[event.index], labels=False)
+    ax.set_title(f"{p.label}\nt = {event.t_s:.1f} s: {event.what}", fontsize=9)
     return event.what
+
+
+def _tracks(ax, world: World, t_end_s: float) -> None:
+    """Each moving obstacle's track over the run, dotted (where it came from and goes)."""
+    for ob in world.obstacles:
+        if ob.motion is not None:
+            track = np.array([ob.at(float(t)).center[:2] for t in np.linspace(0, t_end_s, 80)])
+            ax.plot(track[:, 0], track[:, 1], color=rgba("moving", 0.9), lw=0.9, ls=":",
+                    zorder=3)
 
 
 def _legend_handles(world: World | None) -> list:
@@ -228,19 +282,25 @@ def _legend_handles(world: World | None) -> list:
                Patch(color="0.35", label="obstacle")]
     if world is not None and any(ob.motion is not None for ob in world.obstacles):
         handles.append(Patch(color=rgba("moving"), label="moving obstacle then"))
+        handles.append(Line2D([], [], color=rgba("moving", 0.9), lw=0.9, ls=":",
+                              label="its track over the run"))
     if world is not None and world.road is not None:
         handles.append(Line2D([], [], color=rgba("road"), lw=1.5, label="road lines"))
     return handles
 
 
 def moment_png(panels: Sequence[MomentPanel], world: World | None, out_png: str | Path) -> Path:
-    """The report's ``mind.png`` (see module doc): one panel per run in ``panels``."""
+    """The report's ``mind.png`` (see module doc): one panel per run in ``panels``, each as
+    wide as :data:`PANEL_W_IN` and as tall as the tallest window needs."""
     n = max(len(panels), 1)
-    fig, axes = plt.subplots(1, n, figsize=(5.6 * n, 5.8), squeeze=False, layout="constrained")
+    views = [choose_view(p, world) for p in panels]
+    ratio = max([v.half[1] / v.half[0] for v in views] or [1.0])
+    height = PANEL_W_IN * ratio + 1.6   # + the two-line title, x label and the legend
+    fig, axes = plt.subplots(1, n, figsize=(PANEL_W_IN * n + 0.6, height), squeeze=False,
+                             layout="constrained")
     with saved_png(fig, out_png) as out:
-        for ax, p in zip(axes[0], panels, strict=False):
-            _draw_panel(ax, p, world)
-            ax.set_aspect("equal", adjustable="box")
-        fig.legend(handles=_legend_handles(world), loc="outside lower center", ncol=2 + n,
-                   fontsize=8, frameon=False)
+        for ax, p, v in zip(axes[0], panels, views, strict=False):
+            _draw_panel(ax, p, world, v)
+        fig.legend(handles=_legend_handles(world), loc="outside lower center",
+                   ncol=min(4, 2 + n), fontsize=8, frameon=False)
     return out

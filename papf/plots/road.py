@@ -45,4 +45,15 @@ def plot_road_run(world: World, planner: str, outcome: str, path: np.ndarray,
         ax.grid(True, lw=0.3, alpha=0.5)
         ax.set_title(title)
         fig.legend(loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+        fit_height(fig, ax)
     return out
+
+
+def fit_height(fig, ax, width_in: float | None = None, extra_in: float = 1.5) -> None:
+    """Make ``fig`` as tall as its equal-aspect axes ``ax`` need at its width (or ``width_in``),
+    plus ``extra_in`` for the title, the axis labels and a legend row: no empty band above and
+    below a long, flat road."""
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    width = width_in or fig.get_figwidth()
+    plot_w = width - 0.9                        # [in] less the y label and tick labels
+    fig.set_size_inches(width, plot_w * abs(y1 - y0) / max(abs(x1 - x0), 1e-9) + extra_in)

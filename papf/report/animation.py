@@ -43,6 +43,7 @@ MAX_FRAMES = 1500
 LIDAR_COLOUR = "tab:red"
 OTHER_COLOUR = "0.45"         # a fleet's other robots
 PERSON_COLOUR = "tab:purple"  # [[people]]
+WIDE = 2.5                    # [-] a top view wider than this times its height: the wide layout
 
 
 def _at(times: np.ndarray, t: float) -> int:
@@ -63,8 +64,28 @@ class Animator:
         self.ax_v = self.fig.add_subplot(grid[0, 1])
         self.ax_q = self.fig.add_subplot(grid[1, 1], sharex=self.ax_v)
         self.dynamic: list = []
+        self.legend_ax = None      # the legend's own row (a long, flat world's layout)
         self._static()
+        self._arrange()
         self._legend()
+
+    def _arrange(self) -> None:
+        """A long, flat world (wider than :data:`WIDE` times its height) gets the top view
+        across the whole figure, the legend under it and the speed and charge side by side
+        below: beside the plots it would be a thin strip in a white box."""
+        (x0, x1), (y0, y1) = self.ax.get_xlim(), self.ax.get_ylim()
+        if (x1 - x0) <= WIDE * (y1 - y0):
+            return
+        top = min(max(10.0 * (y1 - y0) / (x1 - x0), 1.6), 4.5)   # [in] the top view's height
+        top += 0.6                                   # its x label and tick labels
+        self.fig.set_size_inches(11.0, top + 0.45 + 2.4 + 0.5)   # + legend, plots, title
+        grid = self.fig.add_gridspec(3, 2, height_ratios=(top, 0.45, 2.4))
+        self.ax.set_subplotspec(grid[0, :])
+        self.ax_v.set_subplotspec(grid[2, 0])
+        self.ax_q.set_subplotspec(grid[2, 1])
+        self.ax_v.set_xlabel("sim time [s]")
+        self.legend_ax = self.fig.add_subplot(grid[1, :])
+        self.legend_ax.axis("off")
 
     def _static(self) -> None:
         tr, ax = self.track, self.ax
@@ -147,6 +168,10 @@ class Animator:
         if self.track.world is not None and any(
                 ob.motion is not None for ob in self.track.world.obstacles):
             handles.append(Patch(color=rgba("moving"), label="moving obstacle"))
+        if self.legend_ax is not None:
+            self.legend_ax.legend(handles=handles, loc="center", ncol=min(len(handles), 8),
+                                  fontsize=8, frameon=False)
+            return
         self.ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.34), ncol=4,
                        fontsize=7, frameon=False)
 

@@ -92,8 +92,12 @@ def trajectories_png(runs: Sequence[RunMetrics], world: World | None, path: Path
     extent = view_extent(world, arrays)
     aspect = (extent[3] - extent[2]) / (extent[1] - extent[0])
     h_world = min(max(10.0 * aspect, 3.0), 9.0)
-    fig, (ax, ax_y) = plt.subplots(2, 1, figsize=(10.0, h_world + 4.2), layout="constrained",
-                                   height_ratios=(h_world, 2.4))
+    if len(arrays) > 1:   # a stretched copy tells close runs apart; one run's would magnify noise
+        fig, (ax, ax_y) = plt.subplots(2, 1, figsize=(10.0, h_world + 4.2), layout="constrained",
+                                       height_ratios=(h_world, 2.4))
+    else:
+        fig, ax = plt.subplots(figsize=(10.0, h_world + 1.6), layout="constrained")
+        ax_y = None
     if world is not None:
         draw_world(ax, static_world(world))
         t_end = max((r.t_end_s for r in runs if math.isfinite(r.t_end_s)), default=0.0)
@@ -103,7 +107,7 @@ def trajectories_png(runs: Sequence[RunMetrics], world: World | None, path: Path
         if r.series is None or r.series.x.size == 0:
             continue
         s = style[r.file]
-        for a in (ax, ax_y):
+        for a in (ax, ax_y) if ax_y is not None else (ax,):
             a.plot(r.series.x, r.series.y, color=s.colour, ls=s.ls, lw=1.6,
                    label=label(r) if a is ax else None, zorder=5)
             a.plot(r.series.x[-1], r.series.y[-1], s.marker, color=s.colour, mec="k", mew=0.5,
@@ -113,11 +117,12 @@ def trajectories_png(runs: Sequence[RunMetrics], world: World | None, path: Path
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(True, lw=0.3, alpha=0.5)
-    ax_y.set_xlim(extent[0], extent[1])
-    ax_y.set_xlabel("x [m]")
-    ax_y.set_ylabel("y [m] (stretched)")
-    ax_y.set_title("the same paths with y stretched, to tell close runs apart", fontsize=8.5)
-    ax_y.grid(True, lw=0.3, alpha=0.5)
+    if ax_y is not None:
+        ax_y.set_xlim(extent[0], extent[1])
+        ax_y.set_xlabel("x [m]")
+        ax_y.set_ylabel("y [m] (stretched)")
+        ax_y.set_title("the same paths with y stretched, to tell close runs apart", fontsize=8.5)
+        ax_y.grid(True, lw=0.3, alpha=0.5)
     world_name = world.name if world is not None else (runs[0].world if runs else "")
     fig.legend(loc="outside lower center", ncol=4, fontsize=8, frameon=False)
     return _save(fig, path, f"trajectories on {world_name} from {pose_source or 'the pose'}, "

@@ -99,12 +99,14 @@ class RunMetrics:
                                                #     its odometry; None: no current measured
     series: Series | None = field(default=None, repr=False, compare=False)
     robot: str = field(default="", compare=False)   # a fleet's robot (namespace); "" alone
+    recorded_from_s: float = field(default=0.0, compare=False)   # [s] first message of a
+                                    # recording begun mid-run (0: it holds the run's start)
 
     def row(self) -> dict:
         """Flat dict of the scalar figures (CSV row; a fleet's robot is in ``file``)."""
         d = asdict(self)
-        d.pop("series")
-        d.pop("robot")
+        for name in ("series", "robot", "recorded_from_s"):
+            d.pop(name)
         return d
 
 
@@ -333,6 +335,7 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
         ang_accel_sq=ang, jerk_sq=jerk, heading_oscillations=heading_oscillations(w),
         collisions=res.collisions,
         series=_series(col.poses, col.odom, t_end) if with_series else None,
+        recorded_from_s=t0 / NS,
     )
 
 
@@ -342,8 +345,14 @@ def metadata_notes(m: RunMetrics) -> list[str]:
     if m.world == UNKNOWN_WORLD:
         notes.append(f"{m.file}: world unknown: recorded without the launcher's metadata "
                      "(papf record FILE --meta world=W --meta planner=P names them)")
-    if m.outcome == "partial":
-        notes.append(f"{m.file}: {m.reason}; mean power from its first message")
+    if m.recorded_from_s > 0:
+        unit = f" ({m.energy_model} model)"
+        notes.append(
+            f"{m.file}: begun mid-run: it holds {m.recorded_from_s:.2f}-{m.t_end_s:.2f} s of a "
+            f"run that started before it (no run_started); over that part: path "
+            f"{m.path_length_m:.2f} m, charge {m.charge_mAh:.2f} mAh, mean power "
+            f"{m.mean_power_W:.2f} W{unit}, from its first message; outcome {m.outcome}: "
+            f"{m.reason}")
     return notes
 
 
@@ -355,9 +364,9 @@ def live_difference(m: RunMetrics, tol_mAh: float = 0.01) -> str:
     splits into the charge drawn between the two stamps and the re-meter Δ at the live
     stamp (messages the live meter and the recorder did not both see).
     """
-    if m.energy_model != m.live_model or not (math.isfinite(m.charge_mAh)
-                                              and math.isfinite(m.live_charge_mAh)):
-        return ""
+    if m.energy_model != m.live_model or m.recorded_from_s > 0 or not (
+            math.isfinite(m.charge_mAh) and math.isfinite(m.live_charge_mAh)):
+        return ""   # a recording begun mid-run: the live meter counted from before it
     diff = m.charge_mAh - m.live_charge_mAh
     if abs(diff) <= tol_mAh:
         return ""

@@ -119,11 +119,18 @@ def default_out(inputs: Sequence[str | Path]) -> Path:
 
 
 def collect(paths: Sequence[Path], energy_model: str | None = None,
-            energy_params: dict | None = None, topics: TopicMap | None = None
-            ) -> list[RunMetrics]:
-    """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name."""
-    runs = [run_metrics(p, energy_model, energy_params, topics=topics, robot=robot)
-            for p in paths for robot in (fleet_namespaces(p, topics) or [None])]   # a fleet: each robot
+            energy_params: dict | None = None, topics: TopicMap | None = None,
+            progress=None) -> list[RunMetrics]:
+    """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name.
+    ``progress``: a :class:`papf.console.progress.StepProgress` told of each file, or None."""
+    runs = []
+    for p in paths:
+        if progress is not None:
+            progress.doing(f"reading {Path(p).name}")
+        runs += [run_metrics(p, energy_model, energy_params, topics=topics, robot=robot)
+                 for robot in (fleet_namespaces(p, topics) or [None])]   # a fleet: each robot
+        if progress is not None:
+            progress.step(f"read {Path(p).name}")
     order = tables.planner_order([r.planner for r in runs])
     return sorted(runs, key=lambda r: (r.world, order.index(r.planner), r.seed, r.file))
 
@@ -138,9 +145,11 @@ def suffix_for(runs: Sequence[RunMetrics], energy_model: str | None) -> str:
 
 def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None,
                  energy_model: str | None = None, energy_params: dict | None = None,
-                 topics: TopicMap | None = None) -> Report:
+                 topics: TopicMap | None = None, progress=None) -> Report:
     """Read the recordings (and rosbag2s, their topics mapped by ``topics``), write
-    report.md, report.csv and the PNGs into ``out_dir``."""
+    report.md, report.csv and the PNGs into ``out_dir``. ``progress``: a
+    :class:`papf.console.progress.StepProgress` (its total is set here: a step per file
+    read and per figure drawn), or None."""
     if energy_model not in (None, *MODELS):
         raise ConfigError(f"energy model {energy_model!r} is not one of {', '.join(MODELS)}")
     paths = find_recordings(inputs)
@@ -150,12 +159,14 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     except OSError as exc:
         raise RecordingError(f"cannot create the report directory {str(out)!r}: "
                              f"{exc.strerror}") from None
-    runs = collect(paths, energy_model, energy_params, topics)
+    if progress is not None:
+        progress.total = len(paths) + 2   # + the charge figure and the tables (worlds: later)
+    runs = collect(paths, energy_model, energy_params, topics, progress)
     files = {Path(p).name: Path(p) for p in paths}
     report = Report(runs, tables.summarise(runs), out, suffix=suffix_for(runs, energy_model))
     stage = Path(tempfile.mkdtemp(prefix=".papf-report-", dir=out))
     try:   # into a staging directory, moved into out only once every file is written
-        _write(report, runs, files, stage, topics)
+        _write(report, runs, files, stage, topics, progress)
         report.files = [_move(f, out) for f in report.files]
     except OSError as exc:
         raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}; "
@@ -173,29 +184,50 @@ def _move(path: Path, out: Path) -> Path:
 
 
 def _write(report: Report, runs: list, files: dict, out: Path,
-           topics: TopicMap | None = None) -> None:
+           topics: TopicMap | None = None, progress=None) -> None:
     """The report's PNGs, CSV and Markdown into ``out``."""
+    def doing(text: str) -> None:
+        if progress is not None:
+            progress.doing(text)
+
+    def done(text: str) -> None:
+        if progress is not None:
+            progress.step(text)
+
+    worlds = tables.worlds_of(runs)
+    if progress is not None:
+        progress.total += 3 * len(worlds)
     note = f"{report.model_note} · {report.pose_note} · papf report"
     charge = report.name("charge")
+    doing(f"drawing {charge}")
     report.files.append(figures.charge_png(runs, report.summaries, out / charge, note,
                                            report.model))
     report.pngs[("charge", None)] = charge
+    done(f"drew {charge}")
     pose = "; ".join(sorted({r.pose_source for r in runs}))
-    for world_name in tables.worlds_of(runs):
+    for world_name in worlds:
         mine = [r for r in runs if r.world == world_name]
         traj, motion = report.name("trajectories", world_name), report.name("motion", world_name)
-        report.files += [figures.trajectories_png(mine, _world(world_name), out / traj, note,
-                                                  pose),
-                         figures.motion_png(mine, out / motion, note)]
+        doing(f"drawing {traj}")
+        report.files.append(figures.trajectories_png(mine, _world(world_name), out / traj, note,
+                                                     pose))
+        done(f"drew {traj}")
+        doing(f"drawing {motion}")
+        report.files.append(figures.motion_png(mine, out / motion, note))
+        done(f"drew {motion}")
         report.pngs[("trajectories", world_name)] = traj
         report.pngs[("motion", world_name)] = motion
         mind = report.name("mind", world_name)
+        doing(f"drawing {mind}")
         report.files.append(mind_figure(mine, files, _world(world_name), out / mind, topics))
         report.pngs[("mind", world_name)] = mind
+        done(f"drew {mind}")
+    doing("writing the tables")
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
     tables.write_csv(csv_path, runs, report.summaries)
     md_path.write_text(markdown(report))
     report.files += [csv_path, md_path]
+    done(f"wrote {md_path.name}, {csv_path.name}")
 
 
 def mind_figure(runs: Sequence[RunMetrics], files: dict, world: World | None, out: Path,

@@ -160,3 +160,22 @@ def test_secure_hil_run_reaches_the_goal(secure_robot, tmp_path):
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert result["outcome"] == "reached", (result, out.stderr[-2000:])
     assert result["charge_mAh"] > 0                 # the meter's battery got through too
+
+
+def test_a_command_without_credentials_is_told_authentication_failed(secure_robot, tmp_path):
+    """No certificate (or a wrong password): one line naming the authentication, not "is a
+    stack running?" (the router is up)."""
+    import subprocess
+
+    bundle, tcp, tls, _ = secure_robot
+    conf = json.loads(bundle.observer.read_text())
+    conf["transport"]["auth"]["usrpwd"]["password"] = "guessed"
+    wrong = tmp_path / "wrong.json5"
+    wrong.write_text(json.dumps(conf))
+    for extra, said in ((["--connect", tls], "has none"), (["--connect", tcp], "asks for credentials"),
+                        (["--zenoh-config", str(wrong)], "refused the credentials of")):
+        r = subprocess.run([sys.executable, "-m", "papf", "topic", "list", "--namespace", NS,
+                            *extra], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and "authentication failed" in r.stderr and said in r.stderr, \
+            (extra, r.stderr)
+        assert "stack running" not in r.stderr and "Traceback" not in r.stderr

@@ -146,3 +146,81 @@ def test_ctrl_c_on_the_robot_profile_stops_without_a_traceback(tmp_path, bridge)
     assert robot.returncode in (0, 130), err[-2000:]
     assert "Traceback" not in err and "Error" not in err, err[-3000:]
     assert not _leftovers(ns)
+
+
+@pytest.mark.e2e
+def test_a_second_launch_in_a_namespace_exits_2_with_one_line(world, tmp_path):
+    """A second `papf launch robot` on the host, and a laptop launch joining a network where
+    the namespace's planner is alive (another laptop's), are refused before they start."""
+    ns, port = "t5twice", free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
+                              "--namespace", ns], start_new_session=True,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    other = None
+    try:
+        assert wait_port(port, 30.0), "the robot's router did not come up"
+        second = subprocess.run([PY, "-m", "papf", "launch", "robot", "--namespace", ns],
+                                capture_output=True, text=True, timeout=60)
+        assert second.returncode == 2, second.stderr
+        assert second.stderr.strip().splitlines() == [second.stderr.strip()]
+        assert f"namespace '{ns}' is in use on this host: base_driver, lidar_sim" in second.stderr
+        other_host = {**os.environ, "XDG_RUNTIME_DIR": str(tmp_path)}   # another laptop's planner
+        other = subprocess.Popen([PY, "-m", "nodes.planner", "--connect", endpoint, "--namespace",
+                                  ns, "--realtime"], env=other_host, start_new_session=True,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with zenoh.open(zenoh_config("client", [endpoint])) as session:
+            assert not wait_alive(session, Keys(ns), ["planner"], 60.0)
+        laptop = subprocess.run([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
+                                 "--namespace", ns, "--world", world], capture_output=True,
+                                text=True, timeout=60)
+        assert laptop.returncode == 2, laptop.stderr
+        assert "is in use on the network at" in laptop.stderr and "planner" in laptop.stderr
+        assert len(laptop.stderr.strip().splitlines()) == 1, laptop.stderr
+    finally:
+        for proc in (other, robot):
+            if proc is not None and proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                proc.wait(timeout=30)
+    assert not _leftovers(ns)
+
+
+@pytest.mark.e2e
+def test_the_laptop_waits_for_the_robots_odometry_before_the_run_clock_starts(world, tmp_path):
+    """A robot whose odometry comes late (bringup, bridge or — in these tests — the emulator
+    still starting on a loaded machine) does not eat the run's timeout: the laptop says it
+    waits, and the run starts once the robot talks (it used to start at once and time out
+    at 0.00 m: 'never drove under load')."""
+    ns, port = "t5late", free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
+                              "--namespace", ns], start_new_session=True,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    emulator = laptop = None
+    try:
+        assert wait_port(port, 30.0), "the robot's router did not come up"
+        laptop = subprocess.Popen([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
+                                   "--namespace", ns, "--world", world, "--timeout", "30",
+                                   "--json", *FAST], text=True, stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, start_new_session=True)
+        seen = []
+        for line in laptop.stderr:
+            seen.append(line)
+            if "waiting for the robot's odometry" in line:
+                break
+        assert seen and "waiting for the robot's odometry" in seen[-1], seen[-10:]
+        time.sleep(2.0)                              # the robot is late: the clock must wait
+        emulator = subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
+                                     "--namespace", ns, "--world", world],
+                                    start_new_session=True, stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.DEVNULL)
+        out, err = laptop.communicate(timeout=120)
+        result = json.loads(out.strip().splitlines()[-1])
+        assert result["outcome"] == "reached", (result, err[-2000:])
+        assert result["duration_s"] < 20.0 and result["path_length_m"] > 0.9
+    finally:
+        for proc in (laptop, emulator, robot):
+            if proc is not None and proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                proc.wait(timeout=30)
+    assert not _leftovers(ns)

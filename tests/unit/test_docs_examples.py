@@ -24,7 +24,7 @@ OTHER_TOOLS = {
     "git": "the repository's own history and clones",
     "sudo": "installs system packages",
     "scp": "copies to the robot",
-    "dask": "a Dask cluster on other hosts (docs/sweeps.md)",
+    "dask": "run: tests/e2e/test_docs_examples.py starts the scheduler and a worker here",
     "pip": "installs this project (make setup does it here)",
 }
 EXAMPLES = examples()

@@ -93,3 +93,19 @@ def test_a_recording_that_lost_its_end_is_reported_not_run_again(tmp_path):
                          Console(file=text, width=200), run_fn=fake)
     assert len(fake.configs) == 1                       # the recorder's ack makes files whole
     assert res.mismatches and res.exit_code == 6
+
+
+def test_the_table_shows_its_units_piped_and_on_a_terminal(tmp_path):
+    """"[mAh, motor]" and "[s]" are text: rich must not take them for style tags."""
+    import re
+
+    res = run_experiment(EnergyExperiment(out=tmp_path, runs=1, planners=("apf",)),
+                         Console(file=io.StringIO()), run_fn=FakeRuns())
+    for terminal in (False, True):
+        text = io.StringIO()
+        print_summary(res, Console(file=text, width=200, force_terminal=terminal))
+        shown = re.sub(r"\x1b\[[0-9;]*m", "", text.getvalue())
+        model = res.report.model
+        for header in (f"charge [mAh, {model}]", f"energy [J, {model}]", "duration [s]",
+                       "path [m]"):
+            assert header in shown, (terminal, shown)

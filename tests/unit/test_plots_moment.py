@@ -42,3 +42,51 @@ def test_moment_png_draws_one_panel_per_run(tmp_path):
 
     with Image.open(out) as im:
         assert im.size[0] > 1000 and im.size[1] > 500
+
+
+def test_a_road_panel_shows_its_lines_and_no_empty_half():
+    """road-cut-in: the window holds the road's lines around the robot, not a square of
+    empty floor below them (the before picture: 60 % empty)."""
+    from papf.plots.moment import choose_view
+
+    world = load_world("road-cut-in")
+    t = np.linspace(0.0, 6.0, 61)
+    xyyaw = np.column_stack([0.2 * t, np.zeros_like(t), np.zeros_like(t)])
+    states = [_state(1.0, predicted_path=((0.2, 0.0), (1.5, 0.0), (2.4, 0.0)), v_target=0.2),
+              _state(2.0, predicted_path=((0.4, 0.0), (1.5, 0.0), (2.4, 0.0)), v_target=0.02),
+              _state(3.0, predicted_path=((0.6, 0.0), (1.5, 0.0), (2.4, 0.0)), v_target=0.2)]
+    view = choose_view(MomentPanel("iapf", "iapf", t, xyyaw, np.full_like(t, 0.2), states), world)
+    assert view.event is not None and view.event.t_s == 2.0 and "slowest" in view.event.what
+    (_, my), (hx, hy) = view.mid, view.half
+    lines = [line.y for line in world.road.lines()]
+    assert all(my - hy < y < my + hy for y in lines)            # every line in the picture
+    assert my - hy > min(lines) - 0.65 and hx > hy                # no band of floor below it
+
+
+def test_animate_lays_a_long_world_across_the_frame(tmp_path):
+    """energy (10 m x 2 m): the top view spans the frame, the legend has its own row, speed
+    and charge sit side by side (beside the plots it was a thin strip in a white box)."""
+    from nodes.recorder.writer import RunWriter
+    from papf.recording.track import load_track
+    from papf.report.animation import Animator
+    from schemas.messages import BatteryState, Odometry
+
+    rec = tmp_path / "run.mcap"
+    with RunWriter(rec, {"world": "energy", "planner": "papf", "seed": 0}) as w:
+        for k in range(50):
+            t = k * 20_000_000
+            w.write_message("rosbot/odom", Odometry(stamp_ns=t, x=0.1 * t / S, y=0.0, yaw=0.0,
+                                                    v=0.1, w=0.0))
+            w.write_message("rosbot/battery", BatteryState(stamp_ns=t, voltage=12.0, current=1.0,
+                                                           power=12.0, charge_used_mAh=t / S,
+                                                           energy_J=12 * t / S))
+    anim = Animator(load_track(rec), fps=10, speed=4)
+    try:
+        anim.fig.tight_layout(rect=(0, 0.02, 1, 0.95))
+        top, v, q = (a.get_position() for a in (anim.ax, anim.ax_v, anim.ax_q))
+        assert anim.legend_ax is not None and top.width > 0.8
+        assert v.y1 < top.y0 and abs(v.y0 - q.y0) < 1e-6 and v.x1 < q.x0   # below, side by side
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close(anim.fig)

@@ -54,3 +54,7 @@ def test_a_recording_without_metadata_started_mid_run(tmp_path):
     assert math.isclose(m.mean_power_W, m.energy_J / (m.t_end_s - 20.0), rel_tol=1e-9)
     notes = metadata_notes(m)
     assert any("world unknown" in n for n in notes) and any("first message" in n for n in notes)
+    assert m.recorded_from_s == 20.0 and "recorded_from_s" not in m.row()
+    said = " ".join(notes)
+    assert "begun mid-run: it holds 20.00-" in said and "outcome partial" in said
+    assert live_difference(dataclasses.replace(m, live_charge_mAh=99.0, live_model=m.energy_model)) == ""

@@ -1,0 +1,46 @@
+"""papf record by hand says what it records: the namespace's nodes alive, or that it waits for
+the stack, and when the first messages came (no silent wait)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+from schemas import Clock, Keys
+
+
+def _until(proc: subprocess.Popen, needle: str, seen: list[str], timeout_s: float = 60.0) -> str:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        seen.append(line.rstrip())
+        if needle in line:
+            return line
+    raise AssertionError(f"no {needle!r} in {seen}")
+
+
+def test_record_before_the_stack_waits_aloud_then_says_when_messages_come(router, session,
+                                                                          tmp_path):
+    proc = subprocess.Popen([sys.executable, "-m", "papf", "record", str(tmp_path / "r.mcap"),
+                             "--connect", router, "--namespace", "t6rec"], text=True,
+                            stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                            start_new_session=True)
+    seen: list[str] = []
+    try:
+        line = _until(proc, "no node alive yet", seen)
+        assert "namespace 't6rec'" in line and "waiting for the stack" in line
+        _until(proc, "no --meta world=W", seen)
+        pub = session.declare_publisher(Keys("t6rec").clock)
+        for k in range(50):            # the stack starts: its clock
+            pub.put(Clock(stamp_ns=k * 10_000_000).to_bytes())
+            time.sleep(0.02)
+        _until(proc, "first messages after", seen)
+    finally:
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0 and "Traceback" not in err, err
