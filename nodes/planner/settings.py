@@ -55,6 +55,15 @@ NODE: dict[str, Spec] = {
 }
 
 
+def attraction_ratio(apf, algo=None) -> float:
+    """The goal's pull over the obstacles' push, from the gains alone: eq. 2's
+    ``k_VG q_G / (k_VO L |q_O|)`` (``q_V`` is in both), or for a planner whose own parameters
+    have ``k_att`` and ``k_rep_l`` (Wang's eqs. 6-8) ``k_att / k_rep_l``."""
+    if algo is not None and hasattr(algo, "k_att") and hasattr(algo, "k_rep_l"):
+        return algo.k_att / algo.k_rep_l
+    return apf.k_vg * apf.q_g / (apf.k_vo_l * abs(apf.q_o))
+
+
 def check_strength(apf) -> None:
     """eq. 2's repulsion product ``k_vo_l*q_v*q_o`` above its floor (:data:`REPULSION_MIN`);
     ConfigError, one line. A strategy adds its own products in ``Strategy.check_strength``."""

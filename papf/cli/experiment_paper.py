@@ -45,6 +45,10 @@ def add_paper_studies(exp) -> None:
     f.add_argument("--car", action="store_true",
                    help="instead: the car planner's obstacle field (obstacle_gain, a_x, a_y) on "
                         "the IAPF paper's cases A-D (docs/data/safety-floor-iapf.csv)")
+    f.add_argument("--attraction", action="store_true",
+                   help="instead: the attraction gains (k_vg, q_g, Wang's k_att) swept upwards, "
+                        "each row with its attraction-to-repulsion ratio "
+                        "(docs/data/safety-attraction.csv)")
     f.set_defaults(func=cmd_safety_floor)
     w = _study(exp, "wang", "Wang's Figs. 5-12: the published point simulation and the ROSbot",
                "Each of Wang's figures as published (a point stepping 0.5 along the force, J = 200, "
@@ -145,6 +149,9 @@ def cmd_safety_floor(args) -> int:
     """``papf experiment safety-floor``: each safety parameter's floor; the exit code."""
     from papf.experiments.safety_floor import run
 
-    floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car)
+    if args.car and args.attraction:
+        raise ConfigError("--car and --attraction are two sweeps: give one")
+    floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car,
+                 attraction=args.attraction)
     print("floors: " + ", ".join(f"{k}={v:g}" for k, v in floors.items()))
     return 0

@@ -162,7 +162,8 @@ def cmd_topic_echo(args) -> int:
     count = 1 if args.once else args.count
     with _session(args) as s:
         n = echo(s, key, _out, count=count, timeout_s=args.timeout, ros_type=args.ros_type,
-                 max_items=None if args.full else 8, as_json=args.json, stop=lambda: bool(stop))
+                 max_items=None if args.full else 8, as_json=args.json, stop=lambda: bool(stop),
+                 note=lambda line: print(f"papf topic echo: {line}", file=sys.stderr, flush=True))
     if stop:
         return 130 if n == 0 else 0
     if n == 0:

@@ -46,6 +46,47 @@ CAR_SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
 }
 CAR_WORLDS = ("iapf-case-a", "iapf-case-b", "iapf-case-c", "iapf-case-d")
 
+# The other side of the balance (``--attraction``): a goal pull strong enough outweighs every
+# obstacle's push, and the robot drives into what lies on the line. Each attraction gain swept
+# upwards alone, the others at their defaults, on :data:`WORLDS`; the "floor" :func:`floors_of`
+# finds is then a ceiling (the largest swept value at which nothing collided).
+WANG_APF = one_with_role("wang-baseline")
+ATTRACTION_SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
+    "k_vg": ((*APF_PAIR, ARAPF), (5.0, 10.0, 25.0, 50.0, 100.0, 250.0, 1000.0)),
+    "q_g": (APF_PAIR, (1.0, 2.0, 5.0, 10.0, 50.0)),
+    "k_att": ((WANG, WANG_APF), (10.0, 20.0, 50.0, 100.0, 250.0, 1000.0)),
+}
+# Is the tolerated ratio a property of the balance, not of one gain? The APF pair at the
+# repulsion's floor (k_vo_l q_v q_o = 2, nodes/planner/settings.py), Wang's at twice its default
+# repulsion, each at ratios 0.5 .. 10.
+ATTRACTION_COMBOS: tuple[tuple[str, tuple[str, ...]], ...] = tuple(
+    (planner, ("k_vo_l=2.0", f"k_vg={k!r}")) for planner in APF_PAIR for k in (1.0, 2.0, 5.0, 10.0)
+) + tuple((WANG, ("k_rep_l=10.0", f"k_att={k!r}")) for k in (20.0, 40.0, 50.0, 100.0))
+ATTRACTION_FIELDS = (*FIELDS, "ratio")
+
+
+def attraction_ratio(planner: str, sets) -> float:
+    """The attraction-to-repulsion ratio of ``planner`` with ``sets`` (``name=value`` strings,
+    the rest at defaults): eq. 2's ``k_VG q_G / (k_VO L |q_O|)`` for the APF family (``q_V`` is
+    in both), ``k_att / k_rep_l`` for Wang's (nodes/planner/settings.py ``attraction_ratio``)."""
+    import dataclasses
+
+    from nodes.planner.field import APFParams
+    from nodes.planner.registry import PLANNERS
+    from nodes.planner.settings import attraction_ratio as ratio
+
+    # not through load_params: the sweep goes beyond the ranges on purpose (its rows are why
+    # the ranges end where they do)
+    apf, algo = APFParams(), PLANNERS[planner].Params()
+    shared = {f.name for f in dataclasses.fields(APFParams)}
+    for text in sets:
+        name, value = text.split("=", 1)
+        if name in shared:
+            apf = dataclasses.replace(apf, **{name: float(value)})
+        else:
+            algo = dataclasses.replace(algo, **{name: float(value)})
+    return ratio(apf, algo)
+
 
 @dataclass(frozen=True)
 class Case:
@@ -66,13 +107,13 @@ class Case:
         return " ".join(self.sets) if self.param == "combo" else f"{self.value:g}"
 
 
-def cases(worlds=WORLDS, combos: bool = False, sweep=None) -> Iterator[Case]:
+def cases(worlds=WORLDS, combos: bool = False, sweep=None, combo_runs=None) -> Iterator[Case]:
     """Every (world, planner, parameter, value) of ``sweep`` (default :data:`SWEEP`); with
-    ``combos``, the runs of :data:`COMBOS` instead (the strength floor reached by several
-    factors at once)."""
+    ``combos``, the runs of ``combo_runs`` (default :data:`COMBOS`: the strength floor reached
+    by several factors at once) instead."""
     for world in worlds:
         if combos:
-            for planner, sets in COMBOS:
+            for planner, sets in (COMBOS if combo_runs is None else combo_runs):
                 yield Case(world, planner, "combo", 0.0, sets)
             continue
         for param, (planners, values) in (sweep or SWEEP).items():
@@ -128,9 +169,21 @@ def floors_of(rows: list[dict], sweep=None) -> dict[str, float]:
     return out
 
 
-def run(out: Path, worlds=WORLDS, progress=print, car: bool = False) -> dict[str, float]:
+def ratio_limit(rows: list[dict], planners) -> float | None:
+    """The largest attraction-to-repulsion ratio of ``planners``' rows below the smallest that
+    collided (None: none of them ran without a collision below it)."""
+    mine = [(float(r["ratio"]), r["outcome"]) for r in rows if r["planner"] in planners]
+    worst = min((x for x, o in mine if o == "collision"), default=float("inf"))
+    safe = [x for x, o in mine if o != "collision" and x < worst]
+    return max(safe, default=None)
+
+
+def run(out: Path, worlds=WORLDS, progress=print, car: bool = False,
+        attraction: bool = False) -> dict[str, float]:
     """Sweep into ``out`` (appending; runs already there skipped), then :data:`COMBOS`;
     returns the single-factor floors. ``car``: :data:`CAR_SWEEP` on :data:`CAR_WORLDS` instead.
+    ``attraction``: :data:`ATTRACTION_SWEEP` and :data:`ATTRACTION_COMBOS` (each row with its
+    ``ratio``), returning the gains' ceilings and each family's tolerated ratio.
 
     A safety parameter's range must exclude every value that switches its protection off, and a
     value only just above zero does that as surely as zero (``d_o = 1e-9`` m repels from nothing).
@@ -145,17 +198,27 @@ def run(out: Path, worlds=WORLDS, progress=print, car: bool = False) -> dict[str
 
     rows = _read(out)
     have = done_keys(out)
-    sweep = CAR_SWEEP if car else SWEEP
+    sweep = CAR_SWEEP if car else ATTRACTION_SWEEP if attraction else SWEEP
+    fields = ATTRACTION_FIELDS if attraction else FIELDS
     for combos in ((False,) if car else (False, True)):
-        for case in cases(CAR_WORLDS if car else worlds, combos, sweep):
+        for case in cases(CAR_WORLDS if car else worlds, combos, sweep,
+                          ATTRACTION_COMBOS if attraction else None):
             if case.key in have:
                 continue
             row = run_case(case)
-            write_rows(out, FIELDS, [row], append=True)   # each run on disk as it ends
+            if attraction:
+                row["ratio"] = round(attraction_ratio(case.planner, case.sets), 4)
+            write_rows(out, fields, [row], append=True)   # each run on disk as it ends
             rows.append(row)
             progress(f"{case.world} {case.planner} {' '.join(case.sets)}: {row['outcome']} "
                      f"(min clearance {row['min_clearance_m']} m)")
-    return floors_of(rows, sweep)
+    found = floors_of(rows, sweep)
+    if attraction:
+        for family, planners in (("ratio_apf", (*APF_PAIR, ARAPF)), ("ratio_wang", (WANG,))):
+            limit = ratio_limit(rows, planners)
+            if limit is not None:
+                found[family] = limit
+    return found
 
 
 def _read(path: Path) -> list[dict]:

@@ -1,0 +1,93 @@
+"""Issue 20, second round: the holes a fresh probe found after the first round held.
+
+A bounded ``papf topic echo`` inbox, terminal-safe text everywhere (errors, logs, node
+names), the attraction-to-repulsion balance, the goal tolerance floor, the outputs of plan,
+report, bench and view under the one output rule, launch's preflight, and the crowd and
+traffic experiments' journals. Property-based where the input space is open.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from common.text import MAX_LINE_CHARS, SafeLogFilter, safe_line, safe_text
+from papf.bus.topics import Inbox, _echo
+
+SETTINGS = settings(max_examples=60, deadline=None)
+
+
+# -- papf topic echo: a flood is dropped oldest-first, counted, and said -------------------------
+@SETTINGS
+@given(st.lists(st.integers(0, 3000), min_size=1, max_size=300))
+def test_inbox_stays_within_its_bounds_and_keeps_the_newest(sizes):
+    inbox = Inbox(None, "x", max_items=50, max_bytes=20_000)
+    for i, n in enumerate(sizes):
+        inbox.put(f"k{i}", b"x" * n, float(i))
+        assert len(inbox) <= 50
+        assert len(inbox) == 1 or sum(len(d) for _, d, _ in inbox._items) <= 20_000
+    assert inbox.dropped + len(inbox) == len(sizes)
+    assert inbox._items[-1][0] == f"k{len(sizes) - 1}"   # the newest is never the one dropped
+
+
+def test_echo_under_a_flood_says_it_dropped_and_how_many():
+    inbox = Inbox(None, "x", max_items=10)
+    for i in range(1000):
+        inbox.put("rosbot/odom", b"\x80", float(i))
+    printed, notes = [], []
+    shown = _echo(inbox, printed.append, 0, 0.0, None, 8, False, lambda: len(printed) >= 10,
+                  notes.append)
+    assert shown == 10 and inbox.dropped == 990
+    assert len(notes) == 1 and "dropped" in notes[0]
+
+
+# -- terminal text -------------------------------------------------------------------------------
+@SETTINGS
+@given(st.text(max_size=2000), st.booleans())
+def test_safe_text_never_passes_a_control_character(text, keep):
+    out = safe_text(text, 300, keep_newlines=keep)
+    assert all(c.isprintable() or (keep and c == "\n") for c in out)
+    assert len(out) <= 300 * 10 + 40   # an escaped character is at most 10 long (\U0010ffff)
+
+
+def test_an_error_quoting_a_hostile_world_name_is_one_short_safe_line(capsys):
+    from papf.cli import main
+
+    name = "\x1b]0;owned\x07\x1b[2J" + "w" * 100_000
+    assert main(["plan", "--world", name]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "\x1b" not in err and "\x07" not in err
+    assert len(err) < MAX_LINE_CHARS + 100
+
+
+def test_a_usage_error_quoting_the_user_is_escaped(capsys):
+    from papf.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["run", "--planner", "\x1b[31mred" + "p" * 5000])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and len(err) < MAX_LINE_CHARS + 200
+
+
+def test_log_lines_show_escape_sequences_never_run_them():
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    handler.addFilter(SafeLogFilter())
+    log = logging.getLogger("test_hostile_round2")
+    log.addHandler(handler)
+    try:
+        log.warning("ignored a goal from %s", "\x1b[2Jpeer\r" + "z" * 10_000)
+    finally:
+        log.removeHandler(handler)
+    line = stream.getvalue()
+    assert "\x1b" not in line and "\r" not in line and "\\x1b[2Jpeer" in line
+    assert len(line) < MAX_LINE_CHARS + 40
+
+
+def test_safe_line_cuts_and_says_how_long():
+    assert safe_line("a" * 10_000).endswith("(10,000 chars)")
