@@ -14,6 +14,7 @@ from pathlib import Path
 
 from common.errors import WorldError
 from common.optional import tomllib
+from common.robot import GOAL_TOLERANCE_MIN_M
 from worlds.fleet import PersonSpec, RobotSpec, parse_people, parse_robots
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
@@ -136,7 +137,7 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         start = (*start, 0.0)
     goal_t = ctx.table(data, "goal")
     goal = ctx.vec(goal_t, "position", (2, 3), "goal.position")
-    tolerance = ctx.positive(goal_t, "tolerance", "goal.tolerance", default=0.1)
+    tolerance = ctx.tolerance(goal_t, "tolerance", "goal.tolerance")
     obstacles = []
     raw = data.get("obstacles", [])
     if not isinstance(raw, list):
@@ -256,6 +257,14 @@ class _Ctx:
         v = self.number(t, key, where, default)
         if v <= 0:
             self.fail(where, f"must be > 0, got {v}")
+        return v
+
+    def tolerance(self, t: dict, key: str, where: str) -> float:
+        """A goal tolerance [m]: at least GOAL_TOLERANCE_MIN_M (common/robot.py), default 0.1."""
+        v = self.number(t, key, where, 0.1)
+        if not v >= GOAL_TOLERANCE_MIN_M:
+            self.fail(where, f"must be at least {GOAL_TOLERANCE_MIN_M:g} m (a smaller tolerance "
+                             f"is never reached), got {v}")
         return v
 
     def vec(self, t: dict, key: str, lengths: tuple[int, ...], where: str, default=_MISSING,

@@ -91,3 +91,37 @@ def test_log_lines_show_escape_sequences_never_run_them():
 
 def test_safe_line_cuts_and_says_how_long():
     assert safe_line("a" * 10_000).endswith("(10,000 chars)")
+
+
+# -- goal tolerance floor ------------------------------------------------------------------------
+@pytest.mark.parametrize("tolerance", [0.0, 1e-300, -1.0, 0.004])
+def test_a_goal_tolerance_below_the_floor_is_refused_by_goal_and_worlds(tolerance, capsys):
+    from common.errors import WorldError
+    from papf.cli import main
+    from worlds import parse_world
+
+    with pytest.raises(SystemExit) as exc:
+        main(["goal", "1", "0", "--tolerance", repr(tolerance)])
+    assert exc.value.code == 2 and "0.005" in capsys.readouterr().err
+    with pytest.raises(WorldError, match="at least 0.005 m"):
+        parse_world({"goal": {"position": [1.0, 0.0], "tolerance": tolerance}}, "t")
+
+
+@pytest.mark.parametrize("tolerance", [0.0, 1e-300, -5.0])
+def test_a_bus_goal_with_a_tolerance_below_the_floor_is_reached_at_the_floor(tolerance):
+    import math
+
+    import numpy as np
+
+    from common.robot import GOAL_TOLERANCE_MIN_M
+    from nodes.planner.apf.strategy import APFStrategy
+    from nodes.planner.core import Planner
+    from schemas.messages import Goal, Odometry, Scan
+
+    pl = Planner(APFStrategy())
+    pl.set_goal(Goal(stamp_ns=1, x=1.0, y=0.0, tolerance=tolerance))
+    scan = Scan(stamp_ns=2, angle_min=0.0, angle_increment=2 * math.pi / 8, range_min=0.2,
+                range_max=10.0, ranges=np.full(8, np.inf, dtype=np.float32))
+    near = 1.0 - 0.9 * GOAL_TOLERANCE_MIN_M
+    status = pl.step(scan, Odometry(stamp_ns=2, x=near, y=0.0, yaw=0.0, v=0.0, w=0.0))[2]
+    assert status.state == "reached"
