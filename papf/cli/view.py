@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from common.params import PORT, arg_type
 from common.transport import add_zenoh_args
 
 DEFAULT_VIEW_PORT = 8765
@@ -12,7 +13,8 @@ DEFAULT_VIEW_PORT = 8765
 
 def add_view_flag(parser: argparse.ArgumentParser) -> None:
     """``--view [PORT]`` of ``papf run | launch | replay``."""
-    parser.add_argument("--view", nargs="?", type=int, const=DEFAULT_VIEW_PORT, metavar="PORT",
+    parser.add_argument("--view", nargs="?", type=arg_type("--view", PORT), const=DEFAULT_VIEW_PORT,
+                        metavar="PORT",
                         help=f"also serve a live Foxglove view on ws://127.0.0.1:PORT "
                              f"(default {DEFAULT_VIEW_PORT}; see docs/viewer.md)")
 

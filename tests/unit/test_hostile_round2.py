@@ -125,3 +125,68 @@ def test_a_bus_goal_with_a_tolerance_below_the_floor_is_reached_at_the_floor(tol
     near = 1.0 - 0.9 * GOAL_TOLERANCE_MIN_M
     status = pl.step(scan, Odometry(stamp_ns=2, x=near, y=0.0, yaw=0.0, v=0.0, w=0.0))[2]
     assert status.state == "reached"
+
+
+# -- papf launch / run preflight: configs, bridge namespace, view port ---------------------------
+def _launch(**kw):
+    from papf.launch.profile import LaunchOptions
+
+    values = {"world": "energy", **kw.pop("values", {})}
+    return LaunchOptions(kw.pop("profile", "sim"), values=values, **kw)
+
+
+def _config_cases(tmp_path):
+    bad = tmp_path / "bad.json5"
+    bad.write_text("{ mode: 'router', listen: { endpoints: [ ")
+    big = tmp_path / "big.json5"
+    big.write_bytes(b" " * (2 * 1024 * 1024))
+    binary = tmp_path / "bin.json5"
+    binary.write_bytes(b"\xff\xfe\x00garbage")
+    return [(str(tmp_path / "missing.json5"), "does not exist"), (str(tmp_path), "is a directory"),
+            (str(bad), "not a valid Zenoh JSON5"), (str(big), "bytes is not a Zenoh config"),
+            (str(binary), "not a valid Zenoh JSON5")]
+
+
+def test_launch_refuses_a_bad_router_or_node_config_before_anything_starts(tmp_path):
+    from common.errors import ConfigError
+    from papf.launch.preflight import check_launch
+    from papf.launch.profile import load_profile
+
+    for path, match in _config_cases(tmp_path):
+        for opt in (_launch(router_config=path), _launch(zenoh_config=path)):
+            with pytest.raises(ConfigError, match=match):
+                check_launch(opt, load_profile("sim"))
+    good = tmp_path / "good.json5"
+    good.write_text('{"mode": "router"}')
+    check_launch(_launch(router_config=str(good)), load_profile("sim"))
+
+
+@pytest.mark.parametrize("ns,match", [("a//b", "plain key"), ("lab/*", "plain key"),
+                                      ("has space", "plain key"), ("rosbot", "overlaps")])
+def test_launch_refuses_a_bridge_namespace_that_makes_no_key(ns, match):
+    from common.errors import ConfigError
+    from papf.launch.preflight import check_launch
+    from papf.launch.profile import load_profile
+
+    with pytest.raises(ConfigError, match=match):
+        check_launch(_launch(values={"bridge_namespace": ns}), load_profile("sim"))
+
+
+def test_a_busy_or_out_of_range_view_port_is_refused_before_anything_starts(capsys):
+    import socket
+
+    from common.errors import ConfigError
+    from papf.cli import main
+    from papf.launch.preflight import check_launch
+    from papf.launch.profile import load_profile
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        busy = s.getsockname()[1]
+        with pytest.raises(ConfigError, match=f"--view {busy}: something already listens"):
+            check_launch(_launch(values={"view": busy}), load_profile("sim"))
+    for bad in ("99999", "0", "nan", "-1"):
+        with pytest.raises(SystemExit) as exc:
+            main(["launch", "sim", "--view", bad])
+        assert exc.value.code == 2 and "--view" in capsys.readouterr().err
