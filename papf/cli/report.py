@@ -28,6 +28,8 @@ def register(sub) -> None:
     p.add_argument("--out", metavar="DIR",
                    help="output directory (default: the one DIR given, else the first file's)")
     p.add_argument("--json", action="store_true", help="print per-run figures as JSON lines")
+    p.add_argument("--force", action="store_true",
+                   help="replace the report files of an earlier report in the output directory")
     add_topics_option(p)
     p.set_defaults(func=cmd_report)
 
@@ -53,7 +55,8 @@ def cmd_report(args) -> int:
     from papf.report.report import build_report  # matplotlib: only when reporting
     from papf.report.tables import bags_markdown, summary_markdown
 
-    report = build_report(args.inputs, args.out, args.energy_model, topics=topic_map(args))
+    report = build_report(args.inputs, args.out, args.energy_model, topics=topic_map(args),
+                          force=args.force)
     if args.json:
         for m in report.runs:
             print(json.dumps(finite(m.row()), allow_nan=False))   # NaN -> null (JSON has no NaN)

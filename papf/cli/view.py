@@ -31,6 +31,7 @@ def register(sub) -> None:
     p.add_argument("--layout", metavar="OUT.json",
                    help="write the Foxglove layout of the view (3D, plots, log, parameters) "
                         "to this file and exit (the repository has it: docs/foxglove-layout.json)")
+    p.add_argument("--force", action="store_true", help="replace an existing --layout file")
     p.add_argument("--log-level", default="INFO")
     add_zenoh_args(p)
     p.set_defaults(func=cmd_view)
@@ -38,12 +39,12 @@ def register(sub) -> None:
 
 def cmd_view(args: argparse.Namespace) -> int:
     """``papf view``: serve a namespace to Foxglove (or write its layout); the exit code."""
-    if args.layout:
-        from pathlib import Path
-
+    if args.layout:   # the one output rule (common/outfiles.py): --force to replace
+        from common.outfiles import output
         from nodes.viewer.layout import layout_json
 
-        Path(args.layout).write_text(layout_json())
+        with output(args.layout, force=args.force) as tmp:
+            tmp.write_text(layout_json())
         print(f"wrote {args.layout}")
         return 0
     from common.transport import setup_logging

@@ -190,3 +190,110 @@ def test_a_busy_or_out_of_range_view_port_is_refused_before_anything_starts(caps
         with pytest.raises(SystemExit) as exc:
             main(["launch", "sim", "--view", bad])
         assert exc.value.code == 2 and "--view" in capsys.readouterr().err
+
+
+# -- the one output rule for plan, report, view --layout and the benchmarks' CSVs ----------------
+def test_plan_refuses_its_outputs_before_the_run(tmp_path, capsys):
+    import os
+    import time
+
+    from papf.cli import main
+    from worlds import world_path
+
+    world = tmp_path / "w.toml"
+    world.write_text(world_path("papf-test-1").read_text())
+    link = tmp_path / "w.csv"
+    os.link(world, link)                 # --out a hard link of the world: never, even forced
+    mine = tmp_path / "mine.png"
+    mine.write_bytes(b"user's")
+    for argv, match in ((["--out", str(link), "--force"], "is the input"),
+                        (["--plot", str(mine)], "already exists"),
+                        (["--out", str(tmp_path / "p.txt")], ".csv or .json"),
+                        (["--plot", str(tmp_path / "no" / "p.png")], "does not exist")):
+        t0 = time.monotonic()
+        assert main(["plan", "--world", str(world), *argv]) == 2
+        assert time.monotonic() - t0 < 5.0        # before the run, not after it
+        assert match in capsys.readouterr().err
+    assert mine.read_bytes() == b"user's" and world.read_text() == link.read_text()
+
+
+def test_a_forced_plot_replaces_a_symlink_never_its_target(tmp_path):
+    from papf.cli import main
+
+    precious = tmp_path / "run.mcap"
+    precious.write_bytes(b"recording")
+    plot = tmp_path / "p.png"
+    plot.symlink_to(precious)
+    assert main(["plan", "--world", "papf-test-1", "--timeout", "3", "--plot", str(plot),
+                 "--force"]) in (0, 5)
+    assert precious.read_bytes() == b"recording"
+    assert not plot.is_symlink() and plot.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_view_layout_refuses_an_existing_file_and_follows_no_symlink(tmp_path, capsys):
+    from papf.cli import main
+
+    target = tmp_path / "user.json"
+    target.write_text("mine")
+    link = tmp_path / "layout.json"
+    link.symlink_to(target)
+    assert main(["view", "--layout", str(link)]) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert main(["view", "--layout", str(link), "--force"]) == 0
+    assert target.read_text() == "mine" and not link.is_symlink()
+
+
+def test_report_refuses_to_replace_an_earlier_report_unless_forced(tmp_path):
+    from common.outfiles import OutputError
+    from papf.report import build_report
+    from tests.support.recordings import write_synthetic
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    write_synthetic(runs / "apf-1.mcap", "apf", seed=1, speed=0.4)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "report.md").write_text("the user's notes")
+    with pytest.raises(OutputError, match="report.md: a file already exists"):
+        build_report([runs], out)
+    assert sorted(p.name for p in out.iterdir()) == ["report.md"]     # nothing moved
+    assert (out / "report.md").read_text() == "the user's notes"
+    (out / "charge.png").symlink_to(runs / "apf-1.mcap")   # a name that is an input
+    with pytest.raises(OutputError, match="is the input"):
+        build_report([runs], out, force=True)
+    (out / "charge.png").unlink()
+    build_report([runs], out, force=True)
+    assert (out / "report.md").read_text() != "the user's notes"
+
+
+@SETTINGS
+@given(st.binary(min_size=1, max_size=200))
+def test_a_benchmark_csv_appends_only_to_its_own_table(tmp_path_factory, head):
+    from bench.csvrows import write_rows
+    from common.outfiles import OutputError
+
+    d = tmp_path_factory.mktemp("csv")
+    other = d / "other.csv"
+    other.write_bytes(head)
+    if head.split(b"\n")[0].rstrip(b"\r") != b"a,b":
+        with pytest.raises(OutputError, match="not this benchmark's CSV"):
+            write_rows(other, ("a", "b"), [{"a": 1, "b": 2}], append=True)
+        assert other.read_bytes() == head
+
+
+def test_a_benchmark_csv_never_writes_through_a_symlink_or_into_a_directory(tmp_path):
+    from bench.csvrows import replace_label, write_rows
+    from common.outfiles import OutputError
+
+    ours = tmp_path / "ours.csv"
+    write_rows(ours, ("a", "b"), [{"a": 1, "b": 2}], append=True)
+    write_rows(ours, ("a", "b"), [{"a": 3, "b": 4}], append=True)
+    assert ours.read_text().splitlines() == ["a,b", "1,2", "3,4"]
+    link = tmp_path / "link.csv"
+    link.symlink_to(ours)
+    for path in (link, tmp_path):
+        with pytest.raises(OutputError):
+            write_rows(path, ("a", "b"), [{"a": 5}], append=True)
+        with pytest.raises(OutputError):
+            replace_label(path, ("a", "b", "label"), "x", [{"a": 5}])
+    assert ours.read_text().splitlines() == ["a,b", "1,2", "3,4"]
