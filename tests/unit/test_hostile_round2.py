@@ -297,3 +297,56 @@ def test_a_benchmark_csv_never_writes_through_a_symlink_or_into_a_directory(tmp_
         with pytest.raises(OutputError):
             replace_label(path, ("a", "b", "label"), "x", [{"a": 5}])
     assert ours.read_text().splitlines() == ["a,b", "1,2", "3,4"]
+
+
+# -- the crowd and traffic experiments keep every finished run -----------------------------------
+def test_crowd_keeps_each_finished_run_and_resumes_after_an_interrupt(tmp_path, monkeypatch):
+    from papf.experiments import crowd
+
+    real, calls = crowd.run_crowd_job, []
+
+    def interrupted_second(job):
+        calls.append(job.people)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(job)
+
+    monkeypatch.setattr(crowd, "run_crowd_job", interrupted_second)
+    with pytest.raises(KeyboardInterrupt):
+        crowd.run_crowd(tmp_path, planners=["apf"], people=[0, 2], seeds=[0], timeout_s=5)
+    assert len(list((tmp_path / "runs").glob("*.json"))) == 1
+    calls.clear()
+    monkeypatch.setattr(crowd, "run_crowd_job", lambda job: calls.append(job.people) or real(job))
+    crowd.run_crowd(tmp_path, planners=["apf"], people=[0, 2], seeds=[0], timeout_s=5)
+    assert calls == [2]                  # the finished run was taken from its file
+    rows = (tmp_path / "crowd.csv").read_text().splitlines()
+    assert len(rows) == 3 and rows[1].split(",")[3] == "0"   # in job order
+
+
+def test_traffic_keeps_each_finished_run_and_resumes_after_an_interrupt(tmp_path, monkeypatch):
+    from papf.experiments import traffic
+
+    calls = []
+
+    def fake_stack(world, planner, seed, timeout_s, **kw):
+        calls.append(planner)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return object()
+
+    def fake_row(name, planner, objects, trial, mcap):
+        return {"world": name, "planner": planner, "objects": objects, "seed": 0,
+                "outcome": "reached", "duration_s": 1.0, "path_length_m": 1.0, "collisions": 0,
+                "left_road": 0, "lane_changes": 0, "min_speed_mps": 0.1, "max_speed_mps": 0.2,
+                "wall_time_s": 1.0, "reason": ""}
+
+    monkeypatch.setattr(traffic, "run_stack", fake_stack)
+    monkeypatch.setattr(traffic, "road_row", fake_row)
+    cases = (("apf", "none"), ("papf", "none"), ("arapf", "none"))
+    world = traffic.ROAD_WORLDS[0]
+    with pytest.raises(KeyboardInterrupt):
+        traffic.run_traffic(tmp_path, [world], cases, echo=lambda _l: None)
+    calls.clear()
+    monkeypatch.setattr(traffic, "run_stack", lambda *a, **k: calls.append(a[1]) or object())
+    rows = traffic.run_traffic(tmp_path, [world], cases, echo=lambda _l: None)
+    assert calls == ["papf", "arapf"] and [r["planner"] for r in rows] == ["apf", "papf", "arapf"]
