@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.params import SEED, arg_type, integer
 
 
 def preset_list(text: str) -> list[str]:
@@ -55,22 +56,22 @@ def add_paper_studies(exp) -> None:
                "Table 1 gains) and with the wang-apf / wang planners offline; writes wang.md and "
                "wang.csv into --out.", cmd_wang)
     w.set_defaults(out="wang-figs")
-    w.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    w.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="LiDAR noise seed (default 0)")
 
     h = _study(exp, "horizon", "PAPF's horizon of prediction (paper Fig. 7), offline",
                "PAPF with lambda in {0.5, 1, 1.5, 2} m (both presets) and APF on the Fig. 7-like "
                "world papf-horizon: path, duration, turning, cycle time; writes horizon.md and "
                "horizon.csv into --out.", cmd_horizon)
-    h.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    h.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="LiDAR noise seed (default 0)")
 
     d = _study(exp, "deviations", "each PAPF deviation from the paper switched alone, offline",
                "PAPF default and paper presets, and each deviation switched on alone over the paper "
                "preset (--both: and off alone from the default), on N random worlds and PAPF Tests "
                "I-VI; writes deviations.md/.csv.", cmd_deviations)
-    d.add_argument("--n", type=int, default=3, help="random worlds (default 3: a field, a dead end, a gap)")
+    d.add_argument("--n", type=arg_type("--n", integer(1, 10_000)), default=3, help="random worlds (default 3: a field, a dead end, a gap)")
     d.add_argument("--both", action="store_true",
                    help="also switch each deviation off alone from the default preset")
-    d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
+    d.add_argument("--seed", type=arg_type("--seed", SEED), default=1, help="random world set (default 1)")
 
     t = _study(exp, "test1-sweep", "papf-test-1's box sized and placed by APF alone, offline",
                "APF (offline, seeds 0-2) on papf-test-1 with its box's side, distance along the "

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
-from common.params import SEED, TIMEOUT, arg_type
+from common.params import SEED, TIMEOUT, arg_type, num
 from nodes.planner.registry import car_variants, one_with_role
 from papf.cli.options import (
     add_planner_settings,
@@ -32,7 +32,7 @@ def register(sub) -> None:
                    help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
-    p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
+    p.add_argument("--dt", type=arg_type("--dt", num(0.001, 1.0, "s")), default=0.1, metavar="S", help="control period [s] (0.1)")
     add_planner_settings(p)
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper literally)")

@@ -350,3 +350,32 @@ def test_traffic_keeps_each_finished_run_and_resumes_after_an_interrupt(tmp_path
     monkeypatch.setattr(traffic, "run_stack", lambda *a, **k: calls.append(a[1]) or object())
     rows = traffic.run_traffic(tmp_path, [world], cases, echo=lambda _l: None)
     assert calls == ["papf", "arapf"] and [r["planner"] for r in rows] == ["apf", "papf", "arapf"]
+
+
+# -- every numeric option of every command: nan, inf, huge, negative refused by argparse ---------
+NUMERIC_OPTIONS = [
+    (["teleop"], o) for o in ("--max-v", "--max-w", "--step-v", "--step-w", "--rate")
+] + [(["animate", "a.mcap", "a.gif"], o) for o in ("--fps", "--speed", "--dpi")] + [
+    (["rosbot-emulator"], o) for o in ("--scan-beams", "--seed", "--rate", "--cmd-timeout",
+                                       "--battery-voltage")
+] + [(["topic", "list"], "--duration"), (["topic", "echo", "odom"], "--count"),
+     (["topic", "echo", "odom"], "--timeout"), (["topic", "hz", "odom"], "--window"),
+     (["topic", "hz", "odom"], "--duration"), (["topic", "pub", "cmd_vel"], "--times"),
+     (["topic", "pub", "cmd_vel"], "--rate"), (["plan", "--world", "energy"], "--dt"),
+     (["plan", "--world", "energy"], "--seed"), (["plan", "--world", "energy"], "--timeout"),
+     (["goal", "1", "0"], "--tolerance"), (["goal", "1", "0"], "--timeout"),
+     (["experiment", "crowd"], "--workers"), (["experiment", "crowd"], "--runs"),
+     (["experiment", "crowd"], "--seed"), (["experiment", "crowd"], "--timeout"),
+     (["experiment", "random"], "--n"), (["experiment", "energy"], "--runs"),
+     (["experiment", "traffic"], "--seed"), (["run", "--world", "energy"], "--view"), (["launch", "sim"], "--view")]
+
+
+@pytest.mark.parametrize("prefix,option", NUMERIC_OPTIONS)
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf", "1e308", "-1", "1e999"])
+def test_a_non_finite_huge_or_negative_number_is_a_usage_error(prefix, option, value, capsys):
+    from papf.cli import build_parser
+
+    with pytest.raises(SystemExit) as exc:
+        build_parser(prefix[0]).parse_args([*prefix, f"{option}={value}"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and option in err and err.count("\n") == 1
