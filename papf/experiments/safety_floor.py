@@ -47,14 +47,20 @@ CAR_SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
 CAR_WORLDS = ("iapf-case-a", "iapf-case-b", "iapf-case-c", "iapf-case-d")
 
 # The other side of the balance (``--attraction``): a goal pull strong enough outweighs every
-# obstacle's push, and the robot drives into what lies on the line. Each attraction gain swept
-# upwards alone, the others at their defaults, on :data:`WORLDS`; the "floor" :func:`floors_of`
-# finds is then a ceiling (the largest swept value at which nothing collided).
+# obstacle's push, and the robot drives into what lies on the line. Each attraction gain (and
+# each setting that pushes the robot on) swept upwards alone, the others at their defaults, on
+# :data:`WORLDS`; the "floor" :func:`floors_of` finds is then a ceiling (the largest swept
+# value at which nothing collided).
 WANG_APF = one_with_role("wang-baseline")
 ATTRACTION_SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
     "k_vg": ((*APF_PAIR, ARAPF), (5.0, 10.0, 25.0, 50.0, 100.0, 250.0, 1000.0)),
     "q_g": (APF_PAIR, (1.0, 2.0, 5.0, 10.0, 50.0)),
     "k_att": ((WANG, WANG_APF), (10.0, 20.0, 50.0, 100.0, 250.0, 1000.0)),
+    # the other settings that push on, at the top of their ranges: the speed limit, the
+    # heading error the robot still drives at (eq. 5), and Wang's control point ahead
+    "v_max": ((*APF_PAIR, ARAPF), (0.1, 0.2, 0.3, 0.5, 0.9)),
+    "theta_err_max_deg": (APF_PAIR, (30.0, 60.0, 90.0, 180.0)),
+    "control_offset_m": ((WANG,), (0.05, 0.1, 0.25, 0.5, 1.0)),
 }
 # Is the tolerated ratio a property of the balance, not of one gain? The APF pair at the
 # repulsion's floor (k_vo_l q_v q_o = 2, nodes/planner/settings.py), Wang's at twice its default
