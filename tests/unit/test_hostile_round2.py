@@ -379,3 +379,21 @@ def test_a_non_finite_huge_or_negative_number_is_a_usage_error(prefix, option, v
         build_parser(prefix[0]).parse_args([*prefix, f"{option}={value}"])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and option in err and err.count("\n") == 1
+
+
+# -- the viewer's WebSocket: steering only from this host ----------------------------------------
+@pytest.mark.parametrize("host,goals,params,ok", [
+    ("127.0.0.1", "accept", "accept", True), ("localhost", "accept", "accept", True),
+    ("::1", "accept", "accept", True), ("0.0.0.0", "accept", "accept", False),
+    ("0.0.0.0", "refuse", "accept", False), ("192.168.1.5", "accept", "refuse", False),
+    ("robot.lan", "refuse", "refuse", True), ("0.0.0.0", "refuse", "refuse", True)])
+def test_the_viewer_steers_only_from_this_host(host, goals, params, ok):
+    from common.errors import ConfigError
+    from nodes.viewer.__main__ import check_exposure, parse_args
+
+    args = parse_args(["--host", host, "--goals", goals, "--params", params])
+    if ok:
+        check_exposure(args)
+    else:
+        with pytest.raises(ConfigError, match="no authentication"):
+            check_exposure(args)
