@@ -280,6 +280,8 @@ class Planner:
         if not self.apf.scale_to_scan or beams == 0 or beams == self.apf.lidar_points:
             return self.apf
         if beams not in self._apf_for_l:
+            if len(self._apf_for_l) >= 16:   # scans of ever new lengths (a peer's): bounded
+                self._apf_for_l.clear()
             self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
         return self._apf_for_l[beams]
 

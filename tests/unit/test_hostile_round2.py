@@ -397,3 +397,21 @@ def test_the_viewer_steers_only_from_this_host(host, goals, params, ok):
     else:
         with pytest.raises(ConfigError, match="no authentication"):
             check_exposure(args)
+
+
+def test_scans_of_ever_new_lengths_keep_the_planner_memory_bounded():
+    import math
+
+    import numpy as np
+
+    from nodes.planner.apf.strategy import APFStrategy
+    from nodes.planner.core import Planner
+    from schemas.messages import Goal, Odometry, Scan
+
+    pl = Planner(APFStrategy())
+    pl.set_goal(Goal(stamp_ns=1, x=5.0, y=0.0))
+    for n in range(1, 300):
+        scan = Scan(stamp_ns=n, angle_min=0.0, angle_increment=2 * math.pi / n, range_min=0.2,
+                    range_max=10.0, ranges=np.full(n, 3.0, dtype=np.float32))
+        pl.step(scan, Odometry(stamp_ns=n, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    assert len(pl._apf_for_l) <= 16
