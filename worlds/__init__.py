@@ -8,6 +8,7 @@ entry and what would be valid.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
@@ -111,11 +112,32 @@ def world_data(name_or_path: str | Path) -> dict:
         raise WorldError(f"world file {str(path)!r}: tables or arrays nested too deeply") from None
 
 
+# A world's name names files (recordings, reports, an experiment's runs) and is printed: no path
+# separators, no control characters (an ESC sequence would run in the terminal), not hidden.
+MAX_NAME_CHARS = 100
+_WORLD_NAME = re.compile(rf"[\w+\-][\w .+\-]{{0,{MAX_NAME_CHARS - 1}}}")
+
+
+def _world_name(ctx, data: dict, source: str) -> str:
+    """``name``, a plain name (:data:`_WORLD_NAME`); without one, the file's stem made plain
+    (any other character becomes ``_``: a file may be called anything)."""
+    if "name" not in data:
+        stem = re.sub(r"[^\w .+\-]", "_", Path(source).stem).lstrip(". ")
+        return stem[:MAX_NAME_CHARS] or "world"
+    name = ctx.str(data, "name")
+    if not _WORLD_NAME.fullmatch(name):
+        shown = repr(name if len(name) <= 60 else name[:57] + "...")
+        ctx.fail("name", f"{shown} must be a plain name (letters, digits, spaces and '-', '_', "
+                 f"'.', '+'; not starting with '.'; at most {MAX_NAME_CHARS} characters): runs, "
+                 "recordings and reports are named after it")
+    return name
+
+
 def parse_world(data: dict, source: str = "<dict>") -> World:
     """Validate a decoded TOML document as a world (keys and limits first: :mod:`worlds.validate`)."""
     check_document(data, source)
     ctx = _Ctx(source)
-    name = ctx.str(data, "name", default=Path(source).stem)
+    name = _world_name(ctx, data, source)
     robots = people = ()
     if "robots" in data:
         for table in ("robot", "goal"):

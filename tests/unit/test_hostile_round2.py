@@ -415,3 +415,29 @@ def test_scans_of_ever_new_lengths_keep_the_planner_memory_bounded():
                     range_max=10.0, ranges=np.full(n, 3.0, dtype=np.float32))
         pl.step(scan, Odometry(stamp_ns=n, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     assert len(pl._apf_for_l) <= 16
+
+
+# -- a world's name names files and is printed ----------------------------------------------------
+@SETTINGS
+@given(st.text(max_size=120))
+def test_a_world_name_that_is_taken_is_a_plain_file_name(name):
+    from common.errors import WorldError
+    from worlds import parse_world, world_data
+
+    data = {**world_data("papf-test-1"), "name": name}
+    try:
+        world = parse_world(data, "w.toml")
+    except WorldError as exc:
+        assert "\x1b" not in str(exc) and "\n" not in str(exc)
+        return
+    assert world.name.isprintable() and "/" not in world.name and "\\" not in world.name
+    assert not world.name.startswith(".") and len(world.name) <= 100
+
+
+@pytest.mark.parametrize("stem", ["my world (copy)", ".hidden", "\x1b[2Jx", "a" * 300])
+def test_a_default_world_name_is_the_file_stem_made_plain(stem):
+    from worlds import parse_world, world_data
+
+    data = {k: v for k, v in world_data("papf-test-1").items() if k != "name"}
+    name = parse_world(data, f"/tmp/{stem}.toml").name
+    assert name.isprintable() and not name.startswith(".") and 0 < len(name) <= 100
