@@ -38,6 +38,8 @@ def check_output(out: str | Path, inputs: Iterable[str | Path] = (), force: bool
             raise OutputError(f"{out}: is the input {src} (the same file); name another output")
     if not out.parent.is_dir():
         raise OutputError(f"{out}: directory {str(out.parent)!r} does not exist")
+    if not os.access(out.parent, os.W_OK | os.X_OK):   # found now, not after the work
+        raise OutputError(f"{out}: directory {str(out.parent)!r} is not writable")
     if os.path.lexists(out):
         if out.is_dir() and not out.is_symlink():
             raise OutputError(f"{out}: is a directory; name a file")

@@ -441,3 +441,34 @@ def test_a_default_world_name_is_the_file_stem_made_plain(stem):
     data = {k: v for k, v in world_data("papf-test-1").items() if k != "name"}
     name = parse_world(data, f"/tmp/{stem}.toml").name
     assert name.isprintable() and not name.startswith(".") and 0 < len(name) <= 100
+
+
+# -- files where files are expected --------------------------------------------------------------
+@pytest.mark.parametrize("text,match", [("a = " + "[" * 5000 + "]" * 5000, "nested too deeply"),
+                                        ("# " + "x" * (2 * 1024 * 1024), "bytes; a settings file"),
+                                        ("\xff\xfe", "not a readable TOML"),
+                                        ("d_o = nan", "d_o=nan")])
+def test_a_hostile_params_file_is_one_line(tmp_path, text, match):
+    from common.errors import ConfigError
+    from nodes.planner.registry import load_params
+
+    f = tmp_path / "p.toml"
+    f.write_text(text, encoding="latin-1" if text.startswith("\xff") else "utf-8")
+    with pytest.raises(ConfigError, match=match):
+        load_params("papf", f)
+    with pytest.raises(ConfigError, match="no such file"):
+        load_params("papf", tmp_path)      # a directory where a file is expected
+
+
+@pytest.mark.skipif(__import__("os").geteuid() == 0, reason="root writes anywhere")
+def test_an_output_in_a_read_only_directory_is_refused_before_the_work(tmp_path):
+    from common.outfiles import OutputError, check_output
+
+    d = tmp_path / "ro"
+    d.mkdir()
+    d.chmod(0o555)
+    try:
+        with pytest.raises(OutputError, match="not writable"):
+            check_output(d / "x.png")
+    finally:
+        d.chmod(0o755)
