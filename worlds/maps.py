@@ -24,6 +24,8 @@ import numpy as np
 
 from common.errors import WorldError
 
+MAX_YAML_BYTES = 1024 * 1024   # [bytes] a map's YAML (a few lines; as a world file)
+
 MODES = ("trinary", "scale", "raw")
 FREE, OCCUPIED, UNKNOWN = 0, 100, -1          # nav2_util/occ_grid_values.hpp
 # free_thresh written: ROS 1 map_saver's 0.196, not Nav2's default 0.25 — with 0.25 the
@@ -171,9 +173,14 @@ def _read_yaml(path: Path) -> dict:
     import yaml
 
     try:
+        if path.stat().st_size > MAX_YAML_BYTES:   # a map's YAML is a few lines
+            raise WorldError(f"map {str(path)!r}: {path.stat().st_size:,} bytes; a map's YAML "
+                             f"has at most {MAX_YAML_BYTES:,}")
         meta = yaml.safe_load(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"cannot read map {str(path)!r}: {exc}") from None
+    except RecursionError:   # thousands of nested brackets
+        raise WorldError(f"map {str(path)!r}: nested too deeply to be a map's YAML") from None
     except yaml.YAMLError as exc:
         raise WorldError(f"map {str(path)!r} is not valid YAML: "
                          f"{str(exc).splitlines()[0]}") from None

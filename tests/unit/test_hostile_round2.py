@@ -472,3 +472,34 @@ def test_an_output_in_a_read_only_directory_is_refused_before_the_work(tmp_path)
             check_output(d / "x.png")
     finally:
         d.chmod(0o755)
+
+
+@pytest.mark.parametrize("what", ["profile", "map", "pub"])
+def test_thousands_of_nested_brackets_are_one_line(tmp_path, what):
+    from common.errors import PapfError
+
+    deep = "[" * 5000 + "]" * 5000
+    with pytest.raises(PapfError, match="nested too deeply"):
+        if what == "profile":
+            from papf.launch.profile import load_profile
+
+            (tmp_path / "p.toml").write_text(f"a = {deep}\n")
+            load_profile(str(tmp_path / "p.toml"))
+        elif what == "map":
+            from worlds.maps import load_map
+
+            (tmp_path / "m.yaml").write_text(f"image: {deep}\n")
+            load_map(tmp_path / "m.yaml")
+        else:
+            from papf.bus.fields import parse_value
+
+            parse_value(deep)
+
+
+def test_a_binary_launch_profile_is_one_line(tmp_path):
+    from common.errors import ConfigError
+    from papf.launch.profile import load_profile
+
+    (tmp_path / "p.toml").write_bytes(b"\xff\xfe\x00\x01" * 100)
+    with pytest.raises(ConfigError, match="cannot read it as UTF-8"):
+        load_profile(str(tmp_path / "p.toml"))
