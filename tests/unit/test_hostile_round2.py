@@ -503,3 +503,28 @@ def test_a_binary_launch_profile_is_one_line(tmp_path):
     (tmp_path / "p.toml").write_bytes(b"\xff\xfe\x00\x01" * 100)
     with pytest.raises(ConfigError, match="cannot read it as UTF-8"):
         load_profile(str(tmp_path / "p.toml"))
+
+
+# -- make-certs: keys and passwords never written through a planted link -------------------------
+def test_make_certs_never_writes_secrets_through_a_planted_symlink(tmp_path):
+    import os
+    import stat
+
+    from common.errors import ConfigError
+    from papf.robot.certs import write_bundle
+
+    out = tmp_path / "bundle"
+    out.mkdir(mode=0o700)
+    stolen = tmp_path / "stolen.txt"
+    (out / "credentials.txt").symlink_to(stolen)          # dangling: exists() said "no bundle"
+    with pytest.raises(ConfigError, match="already holds a bundle"):
+        write_bundle(out, ["10.0.0.1"])
+    write_bundle(out, ["10.0.0.1"], force=True)
+    assert not stolen.exists() and not (out / "credentials.txt").is_symlink()
+    for f in out.iterdir():
+        assert stat.S_IMODE(f.stat().st_mode) & 0o077 == 0, f.name
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    os.chmod(shared, 0o777)
+    with pytest.raises(ConfigError, match="every user may write in it"):
+        write_bundle(shared, ["10.0.0.1"])
