@@ -528,3 +528,19 @@ def test_make_certs_never_writes_secrets_through_a_planted_symlink(tmp_path):
     os.chmod(shared, 0o777)
     with pytest.raises(ConfigError, match="every user may write in it"):
         write_bundle(shared, ["10.0.0.1"])
+
+
+def test_a_key_directory_another_user_made_or_linked_is_not_used(tmp_path, monkeypatch):
+    import os
+
+    from common import runauth
+
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    elsewhere = tmp_path / "attacker"
+    elsewhere.mkdir()
+    (tmp_path / f"papf-{os.getuid()}").symlink_to(elsewhere)
+    (elsewhere / "rosbot.key").write_text("00" * 32 + " 1\n")
+    with pytest.raises(runauth.KeyDirError, match="not a directory of your own"):
+        runauth.publish_key("rosbot", runauth.new_key())
+    assert runauth.read_key("rosbot") is None
+    assert (elsewhere / "rosbot.key").read_text() == "00" * 32 + " 1\n"
