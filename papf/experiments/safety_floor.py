@@ -32,6 +32,8 @@ SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
     "k_ro_l": ((ARAPF,), (5.0, 1.0, 0.5, 0.1, 0.01)),
     "k_rep_l": ((WANG,), (5.0, 1.0, 0.5, 0.1, 0.01)),
     "rho_0": ((WANG,), (0.5, 0.3, 0.2, 0.1, 0.05, 0.01)),
+    # the turn-rate limit at the bottom of its range: a robot that cannot turn away
+    "w_max": (APF_PAIR, (1.0, 0.5, 0.2, 0.1, 0.01)),
 }
 WORLDS = ("energy-blocking", "papf-test-1")
 TIMEOUT_S = 200.0   # [s] sim time: energy-blocking takes ~100 s at the defaults

@@ -544,3 +544,18 @@ def test_a_key_directory_another_user_made_or_linked_is_not_used(tmp_path, monke
         runauth.publish_key("rosbot", runauth.new_key())
     assert runauth.read_key("rosbot") is None
     assert (elsewhere / "rosbot.key").read_text() == "00" * 32 + " 1\n"
+
+
+def test_papf_info_shows_a_recorded_peers_escape_sequences_never_runs_them(tmp_path, capsys):
+    from nodes.recorder.writer import RunWriter
+    from papf.cli import main
+    from schemas import Twist
+
+    path = tmp_path / "r.mcap"
+    with RunWriter(path, {"world": "\x1b]0;owned\x07", "note": "\x1b[2J" + "n" * 5000}) as w:
+        w.write("rosbot/cmd_vel", Twist(stamp_ns=1, v=0.1, w=0.0).to_bytes())
+        w.write("rosbot/\x1b[2J" + "k" * 100_000, b"\x80", 2)
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out and "\\x1b[2J" in out
+    assert max(len(line) for line in out.splitlines()) < 1000   # a 100 KB key: one short line
