@@ -86,7 +86,10 @@ def cmd_run(args) -> int:
 
 def print_summary(result) -> None:
     from rich.console import Console  # rich: only to print a table
+    from rich.markup import escape
     from rich.table import Table
+
+    from common.text import safe_text
 
     colour = "green" if result.outcome == "reached" else "red"
     t = Table(title=f"papf run: [{colour}]{result.outcome}[/]", show_header=False)
@@ -102,8 +105,8 @@ def print_summary(result) -> None:
         rows.insert(8, ("min separation", "-" if sep is None else f"{sep:.3f} m"))
     if result.reason:
         rows.append(("reason", result.reason))
-    for k, v in rows:
-        t.add_row(k, v)
+    for k, v in rows:   # a reason may quote a node's output: no markup, no ESC (common.text)
+        t.add_row(k, escape(safe_text(v, 400)))
     Console().print(t)
     if result.fleet:
         Console().print(fleet_table(result.fleet))
@@ -111,6 +114,7 @@ def print_summary(result) -> None:
 
 def fleet_table(robots: tuple[dict, ...]):
     """One row per robot of a fleet's run (``papf run --json``'s ``robots``)."""
+    from rich.markup import escape
     from rich.table import Table
 
     def num(v, fmt: str) -> str:
@@ -122,7 +126,7 @@ def fleet_table(robots: tuple[dict, ...]):
         t.add_column(col, justify="left" if col in ("robot", "planner", "outcome") else "right")
     for r in robots:
         colour = "green" if r["outcome"] == "reached" else "red"
-        t.add_row(r["name"], r["planner"], f"[{colour}]{r['outcome']}[/]",
+        t.add_row(escape(r["name"]), escape(r["planner"]), f"[{colour}]{escape(r['outcome'])}[/]",
                   num(r["duration_s"], ".2f"), num(r["path_length_m"], ".2f"),
                   num(r["charge_mAh"], ".2f"), str(r["collisions"]),
                   num(r["min_separation_m"], ".3f"), num(r["discomfort_s"], ".2f"))

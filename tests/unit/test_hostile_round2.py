@@ -559,3 +559,18 @@ def test_papf_info_shows_a_recorded_peers_escape_sequences_never_runs_them(tmp_p
     out = capsys.readouterr().out
     assert "\x1b" not in out and "\x07" not in out and "\\x1b[2J" in out
     assert max(len(line) for line in out.splitlines()) < 1000   # a 100 KB key: one short line
+
+
+def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
+    from types import SimpleNamespace
+
+    from papf.cli.run import print_summary
+
+    result = SimpleNamespace(outcome="failed", world="energy", planner="apf", seed=0,
+                             duration_s=1.0, path_length_m=1.0, charge_mAh=1.0, energy_J=1.0,
+                             collisions=0, sim_time_s=1.0, wall_time_s=1.0, fleet=(),
+                             min_separation_m=None,
+                             reason="planner: \x1b]0;owned\x07[link=http://e]click[/link]")
+    print_summary(result)
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "[link=http://e]click" in out
