@@ -35,6 +35,25 @@ def register(sub) -> None:
     _add_traffic(exp)
     _add_crowd(exp)
     add_paper_studies(exp)
+    for name, parser in exp.choices.items():   # every experiment that writes into --out DIR
+        if name != "safety-floor":
+            parser.set_defaults(func=_out_dir_checked(parser.get_default("func")))
+
+
+def _out_dir_checked(func):
+    """``func`` after a check of ``--out DIR``: a directory, or nothing yet, whose parent
+    exists (ConfigError, exit 2, before any run: a file there was a traceback after them)."""
+    def checked(args):
+        out = Path(args.out)
+        if out.exists() and not out.is_dir():
+            raise ConfigError(f"--out {str(out)!r} is a file; an experiment writes into a "
+                              "directory (give a new name or an existing directory)")
+        if not out.exists() and not out.absolute().parent.is_dir():
+            raise ConfigError(f"--out {str(out)!r}: directory {str(out.absolute().parent)!r} "
+                              "does not exist")
+        return func(args)
+    checked.__name__ = getattr(func, "__name__", "experiment")
+    return checked
 
 
 def _add_energy(exp) -> None:

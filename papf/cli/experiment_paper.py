@@ -152,6 +152,10 @@ def cmd_safety_floor(args) -> int:
 
     if args.car and args.attraction:
         raise ConfigError("--car and --attraction are two sweeps: give one")
+    from bench.csvrows import check_csv
+    from papf.experiments.safety_floor import ATTRACTION_FIELDS, FIELDS
+
+    check_csv(Path(args.out), ATTRACTION_FIELDS if args.attraction else FIELDS)   # before a run
     floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car,
                  attraction=args.attraction)
     print("floors: " + ", ".join(f"{k}={v:g}" for k, v in floors.items()))

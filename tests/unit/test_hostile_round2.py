@@ -574,3 +574,24 @@ def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
     print_summary(result)
     out = capsys.readouterr().out
     assert "\x1b" not in out and "[link=http://e]click" in out
+
+
+@pytest.mark.parametrize("experiment", [["crowd", "--people", "0", "--runs", "1"],
+                                        ["random", "--n", "1"], ["traffic"], ["paper-tests"],
+                                        ["energy", "--runs", "1"], ["wang"], ["cases"]])
+def test_an_experiment_out_that_is_a_file_is_one_line_before_any_run(tmp_path, capsys, experiment):
+    from papf.cli import main
+
+    f = tmp_path / "afile"
+    f.write_text("mine")
+    assert main(["experiment", *experiment, "--out", str(f)]) == 2
+    assert "is a file" in capsys.readouterr().err and f.read_text() == "mine"
+
+
+def test_safety_floor_refuses_a_csv_that_is_not_its_table_before_a_run(tmp_path, capsys):
+    from papf.cli import main
+
+    f = tmp_path / "x.csv"
+    f.write_text("not,ours\n")
+    assert main(["experiment", "safety-floor", "--attraction", "--out", str(f)]) == 2
+    assert "not this benchmark's CSV" in capsys.readouterr().err and f.read_text() == "not,ours\n"
