@@ -595,3 +595,26 @@ def test_safety_floor_refuses_a_csv_that_is_not_its_table_before_a_run(tmp_path,
     f.write_text("not,ours\n")
     assert main(["experiment", "safety-floor", "--attraction", "--out", str(f)]) == 2
     assert "not this benchmark's CSV" in capsys.readouterr().err and f.read_text() == "not,ours\n"
+
+
+@SETTINGS
+@given(st.text(min_size=1, max_size=300))
+def test_a_namespace_taken_is_a_plain_printable_key(ns):
+    from schemas import Keys
+
+    try:
+        Keys(ns)
+    except ValueError:
+        return
+    assert ns.isprintable() and len(ns) <= 200 and "//" not in ns and not set(ns) & set("*$?# ")
+
+
+def test_export_map_never_writes_through_a_dangling_link_and_checks_its_directory(tmp_path, capsys):
+    from papf.cli import main
+
+    target = tmp_path / "target.pgm"
+    (tmp_path / "m.pgm").symlink_to(target)
+    assert main(["export", "map", "energy", str(tmp_path / "m.yaml")]) == 2
+    assert not target.exists() and "exists" in capsys.readouterr().err
+    assert main(["export", "map", "energy", str(tmp_path / "no" / "m.yaml")]) == 2
+    assert "does not exist" in capsys.readouterr().err
