@@ -109,6 +109,14 @@ def _publish(tmp: Path, out: Path, force: bool) -> None:
         os.replace(tmp, out)
 
 
+def replace_text(out: str | Path, text: str, encoding: str = "utf-8") -> None:
+    """``text`` into ``out``, replacing the file an earlier run of the same command made (an
+    experiment's own tables in its ``--out`` directory): beside, then renamed; a symlink there
+    is replaced, never written through."""
+    with output(out, force=True) as tmp:
+        tmp.write_text(text, encoding=encoding)
+
+
 def exclusive(out: str | Path, force: bool = False, mode: str = "wb"):
     """``out`` opened for writing, created new (never through a symlink): OutputError if it
     exists, unless ``force`` (then the old file or link is removed first)."""

@@ -31,6 +31,7 @@ import numpy as np
 
 from common.errors import ConfigError
 from common.optional import tomllib
+from common.outfiles import output, replace_text
 from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions, map_runs
 from papf.experiments.trials import markdown_table, write_csv
@@ -206,7 +207,7 @@ def run_crowd(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
         for n in people:
             for seed in seeds:
                 world, text = crowd_scene(n, seed)
-                (out / "worlds" / f"{world.name}.toml").write_text(text)
+                replace_text((out / "worlds" / f"{world.name}.toml"), text)
                 jobs += [CrowdJob(world, planner, n, seed, timeout_s, tuple(sets), text)
                          for planner in planners]
     opts = SweepOptions(workers=(sweep or SweepOptions()).workers,
@@ -217,7 +218,7 @@ def run_crowd(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     write_csv(rows, out / f"{stem}.csv")
     summary = summarize(rows, by)
     write_csv(summary, out / f"{stem}-summary.csv")
-    (out / f"{stem}.md").write_text(summary_markdown(summary, seeds, by))
+    replace_text((out / f"{stem}.md"), summary_markdown(summary, seeds, by))
     if not worlds:
         plot_summary(summary, out / "crowd.png")
     return summary
@@ -272,6 +273,7 @@ def plot_summary(summary: list[dict], png: Path) -> Path:
     axes[0].legend(fontsize=8)
     fig.suptitle("papf experiment crowd (offline, ORCA people in a 11 x 6 m hall)")
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=100)
+    with output(png, force=True) as tmp:   # beside, then renamed (common/outfiles.py)
+        fig.savefig(tmp, dpi=100, format="png")
     plt.close(fig)
     return png

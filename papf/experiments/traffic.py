@@ -15,6 +15,7 @@ import numpy as np
 
 from common import robot
 from common.errors import RecordingError
+from common.outfiles import replace_text
 from nodes.planner.registry import declared, with_role
 from nodes.planner.road import Lanes
 from papf.experiments.journal import Journal, run_key
@@ -124,5 +125,5 @@ def run_traffic(out: str | Path, worlds: Sequence[str] = ROAD_WORLDS,
         echo(f"traffic: {journal.taken} of {len(rows)} runs finished before, taken from "
              f"{journal.dir} (delete it to make them again)")
     write_csv(rows, out / "traffic.csv")
-    (out / "traffic.md").write_text(table(rows))
+    replace_text((out / "traffic.md"), table(rows))
     return rows
