@@ -618,3 +618,21 @@ def test_export_map_never_writes_through_a_dangling_link_and_checks_its_director
     assert not target.exists() and "exists" in capsys.readouterr().err
     assert main(["export", "map", "energy", str(tmp_path / "no" / "m.yaml")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_jsonl_trace_appends_only_to_json_lines(tmp_path):
+    from common.outfiles import OutputError, append_jsonl
+
+    rec = tmp_path / "run.mcap"
+    rec.write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 100)
+    link = tmp_path / "t.jsonl"
+    link.symlink_to(tmp_path / "elsewhere.jsonl")
+    for bad in (rec, link, tmp_path):
+        with pytest.raises(OutputError):
+            append_jsonl(bad)
+    assert rec.read_bytes().startswith(b"\x89MCAP0") and not (tmp_path / "elsewhere.jsonl").exists()
+    good = tmp_path / "trace.jsonl"
+    for _ in range(2):
+        with append_jsonl(good) as fh:
+            fh.write('{"v": 1}\n')
+    assert good.read_text() == '{"v": 1}\n{"v": 1}\n'
