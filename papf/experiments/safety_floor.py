@@ -73,18 +73,13 @@ ATTRACTION_COMBOS: tuple[tuple[str, tuple[str, ...]], ...] = tuple(
 ATTRACTION_FIELDS = (*FIELDS, "ratio")
 
 
-def attraction_ratio(planner: str, sets) -> float:
-    """The attraction-to-repulsion ratio of ``planner`` with ``sets`` (``name=value`` strings,
-    the rest at defaults): eq. 2's ``k_VG q_G / (k_VO L |q_O|)`` for the APF family (``q_V`` is
-    in both), ``k_att / k_rep_l`` for Wang's (nodes/planner/settings.py ``attraction_ratio``)."""
+def _unchecked(planner: str, sets):
+    """(APFParams, the planner's Params) of ``sets`` (``name=value`` numbers), not checked."""
     import dataclasses
 
     from nodes.planner.field import APFParams
     from nodes.planner.registry import PLANNERS
-    from nodes.planner.settings import attraction_ratio as ratio
 
-    # not through load_params: the sweep goes beyond the ranges on purpose (its rows are why
-    # the ranges end where they do)
     apf, algo = APFParams(), PLANNERS[planner].Params()
     shared = {f.name for f in dataclasses.fields(APFParams)}
     for text in sets:
@@ -93,7 +88,26 @@ def attraction_ratio(planner: str, sets) -> float:
             apf = dataclasses.replace(apf, **{name: float(value)})
         else:
             algo = dataclasses.replace(algo, **{name: float(value)})
-    return ratio(apf, algo)
+    return apf, algo
+
+
+def planner_beyond_ranges(planner: str, sets):
+    """A :class:`~nodes.planner.core.Planner` with ``sets`` applied as given: for measuring
+    past the ranges' ends only (never reachable from a command line, a file or the bus)."""
+    from nodes.planner.core import Planner
+    from nodes.planner.registry import PLANNERS
+
+    apf, algo = _unchecked(planner, sets)
+    return Planner(PLANNERS[planner](algo), apf)
+
+
+def attraction_ratio(planner: str, sets) -> float:
+    """The attraction-to-repulsion ratio of ``planner`` with ``sets`` (``name=value`` strings,
+    the rest at defaults): eq. 2's ``k_VG q_G / (k_VO L |q_O|)`` for the APF family (``q_V`` is
+    in both), ``k_att / k_rep_l`` for Wang's (nodes/planner/settings.py ``attraction_ratio``)."""
+    from nodes.planner.settings import attraction_ratio as ratio
+
+    return ratio(*_unchecked(planner, sets))   # beyond the ranges on purpose, as the runs
 
 
 @dataclass(frozen=True)
@@ -150,11 +164,23 @@ def done_keys(path: Path) -> set[tuple[str, str, str, str]]:
 
 
 def run_case(case: Case, seed: int = 0) -> dict:
-    """One offline run of ``case``; its CSV row."""
-    from papf.offline.run import simulate
+    """One offline run of ``case``; its CSV row.
 
-    s = simulate(case.world, case.planner, params=list(case.sets), seed=seed,
-                 max_time_s=TIMEOUT_S).summary()
+    On the ROSbot worlds the planner is built from the settings without the range checks
+    (:func:`planner_beyond_ranges`): the sweep measures what happens past the ends of the
+    ranges, which the checks exist to refuse — so the table can be made again from nothing.
+    The run is otherwise :func:`papf.offline.run.simulate`'s (the same loop, LiDAR, gate)."""
+    from papf.offline.plan import _plan_2d
+    from papf.offline.run import simulate
+    from worlds import load_world
+
+    world = load_world(case.world)
+    if world.vehicle == "rosbot" and world.dims == 2 and not (world.robots or world.people):
+        s = _plan_2d(world, planner_beyond_ranges(case.planner, case.sets), case.planner, seed,
+                     TIMEOUT_S, 0.1, None, False).summary()
+    else:
+        s = simulate(case.world, case.planner, params=list(case.sets), seed=seed,
+                     max_time_s=TIMEOUT_S).summary()
     return {"world": case.world, "planner": case.planner, "param": case.param,
             "value": case.label, "outcome": s["outcome"], "collisions": s["collisions"],
             "min_clearance_m": round(s["min_clearance_m"], 3), "duration_s": round(s["duration_s"], 1),
