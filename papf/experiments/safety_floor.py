@@ -71,6 +71,7 @@ ATTRACTION_COMBOS: tuple[tuple[str, tuple[str, ...]], ...] = tuple(
     (planner, ("k_vo_l=2.0", f"k_vg={k!r}")) for planner in APF_PAIR for k in (1.0, 2.0, 5.0, 10.0)
 ) + tuple((WANG, ("k_rep_l=10.0", f"k_att={k!r}")) for k in (20.0, 40.0, 50.0, 100.0))
 ATTRACTION_FIELDS = (*FIELDS, "ratio")
+ATTRACTION_GAINS = ("k_vg", "q_g", "k_att", "combo")   # the rows that vary the ratio
 
 
 def _unchecked(planner: str, sets):
@@ -206,7 +207,8 @@ def floors_of(rows: list[dict], sweep=None) -> dict[str, float]:
 def ratio_limit(rows: list[dict], planners) -> float | None:
     """The largest attraction-to-repulsion ratio of ``planners``' rows below the smallest that
     collided (None: none of them ran without a collision below it)."""
-    mine = [(float(r["ratio"]), r["outcome"]) for r in rows if r["planner"] in planners]
+    mine = [(float(r["ratio"]), r["outcome"]) for r in rows
+            if r["planner"] in planners and r["param"] in ATTRACTION_GAINS]
     worst = min((x for x, o in mine if o == "collision"), default=float("inf"))
     safe = [x for x, o in mine if o != "collision" and x < worst]
     return max(safe, default=None)
