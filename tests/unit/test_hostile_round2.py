@@ -636,3 +636,22 @@ def test_a_jsonl_trace_appends_only_to_json_lines(tmp_path):
         with append_jsonl(good) as fh:
             fh.write('{"v": 1}\n')
     assert good.read_text() == '{"v": 1}\n{"v": 1}\n'
+
+
+# -- the attraction sweep's reading ---------------------------------------------------------------
+def test_the_attraction_sweep_reads_ceilings_and_the_tolerated_ratio():
+    from papf.experiments import safety_floor as sf
+
+    def row(planner, param, value, outcome, ratio):
+        return {"world": "w", "planner": planner, "param": param, "value": f"{value:g}",
+                "outcome": outcome, "ratio": ratio}
+
+    rows = [row("apf", "k_vg", 5, "reached", 0.5), row("apf", "k_vg", 10, "reached", 1.0),
+            row("apf", "k_vg", 25, "collision", 2.5), row("apf", "k_vg", 50, "reached", 5.0),
+            row("apf", "v_max", 0.9, "collision", 0.5),          # not a ratio row
+            row("papf", "combo", 0, "reached", 2.0)]
+    sweep = {"k_vg": (("apf",), (5.0, 10.0, 25.0, 50.0))}
+    assert sf.floors_of(rows, sweep) == {"k_vg": 10.0}      # stops at the first collision
+    assert sf.ratio_limit(rows, ("apf", "papf")) == 2.0      # below the smallest colliding ratio
+    assert sf.attraction_ratio("papf", ("k_vo_l=2.0", "k_vg=5.0")) == 2.5
+    assert sf.attraction_ratio("wang", ("k_att=20.0",)) == 4.0
