@@ -55,14 +55,14 @@ CAR_WORLDS = ("iapf-case-a", "iapf-case-b", "iapf-case-c", "iapf-case-d")
 # value at which nothing collided).
 WANG_APF = one_with_role("wang-baseline")
 ATTRACTION_SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
-    "k_vg": ((*APF_PAIR, ARAPF), (5.0, 10.0, 25.0, 50.0, 100.0, 250.0, 1000.0)),
+    "k_vg": ((*APF_PAIR, ARAPF), (5.0, 10.0, 25.0, 50.0, 75.0, 100.0, 250.0, 1000.0)),
     "q_g": (APF_PAIR, (1.0, 2.0, 5.0, 10.0, 50.0)),
-    "k_att": ((WANG, WANG_APF), (10.0, 20.0, 50.0, 100.0, 250.0, 1000.0)),
+    "k_att": ((WANG, WANG_APF), (10.0, 20.0, 30.0, 40.0, 50.0, 100.0, 250.0, 1000.0)),
     # the other settings that push on, at the top of their ranges: the speed limit, the
     # heading error the robot still drives at (eq. 5), and Wang's control point ahead
     "v_max": ((*APF_PAIR, ARAPF), (0.1, 0.2, 0.3, 0.5, 0.9)),
     "theta_err_max_deg": (APF_PAIR, (30.0, 60.0, 90.0, 180.0)),
-    "control_offset_m": ((WANG,), (0.05, 0.1, 0.25, 0.5, 1.0)),
+    "control_offset_m": ((WANG,), (0.05, 0.1, 0.25, 0.3, 0.4, 0.5, 1.0)),
 }
 # Is the tolerated ratio a property of the balance, not of one gain? The APF pair at the
 # repulsion's floor (k_vo_l q_v q_o = 2, nodes/planner/settings.py), Wang's at twice its default
@@ -192,10 +192,11 @@ def floors_of(rows: list[dict], sweep=None) -> dict[str, float]:
     """Per parameter, the smallest-magnitude swept value down to which no run collided
     (the sweep stops counting at the first value that collided on any world or planner)."""
     out = {}
-    for param, (_, values) in (sweep or SWEEP).items():
+    for param, (planners, values) in (sweep or SWEEP).items():
         safe = None
         for v in values:
-            hit = [r for r in rows if r["param"] == param and r["value"] == f"{v:g}"]
+            hit = [r for r in rows if r["param"] == param and r["value"] == f"{v:g}"
+                   and r["planner"] in planners]
             if not hit or any(r["outcome"] == "collision" for r in hit):
                 break
             safe = v

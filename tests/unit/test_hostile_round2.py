@@ -655,3 +655,60 @@ def test_the_attraction_sweep_reads_ceilings_and_the_tolerated_ratio():
     assert sf.ratio_limit(rows, ("apf", "papf")) == 2.0      # below the smallest colliding ratio
     assert sf.attraction_ratio("papf", ("k_vo_l=2.0", "k_vg=5.0")) == 2.5
     assert sf.attraction_ratio("wang", ("k_att=20.0",)) == 4.0
+
+
+# -- attraction: a pull that outweighs the push is refused ---------------------------------------
+@SETTINGS
+@given(k_vg=st.floats(0.01, 60.0), q_g=st.floats(0.01, 12.0), k_vo_l=st.floats(1.0, 60.0),
+       q_o=st.floats(-5.0, -0.2))
+def test_the_attraction_ratio_has_a_measured_ceiling(k_vg, q_g, k_vo_l, q_o):
+    from common.errors import ConfigError
+    from nodes.planner import settings as S
+    from nodes.planner.registry import load_params
+
+    sets = [f"k_vg={k_vg!r}", f"q_g={q_g!r}", f"k_vo_l={k_vo_l!r}", f"q_o={q_o!r}"]
+    ok = (k_vg <= S.K_VG_MAX and q_g <= S.Q_G_MAX and k_vo_l * abs(q_o) >= S.REPULSION_MIN
+          and k_vg * q_g / (k_vo_l * abs(q_o)) <= S.ATTRACTION_RATIO_MAX)
+    if ok:
+        apf, _ = load_params("papf", None, sets)
+        assert S.attraction_ratio(apf) <= S.ATTRACTION_RATIO_MAX
+    else:
+        with pytest.raises(ConfigError):
+            load_params("papf", None, sets)
+
+
+@pytest.mark.parametrize("planner,sets,match", [
+    ("papf", ["k_vg=1000"], "k_vg=1000: must be"), ("apf", ["q_g=50"], "q_g=50: must be"),
+    ("papf", ["k_vg=50", "k_vo_l=2"], "the goal's pull may be at most 5"),
+    ("wang", ["k_att=1000"], "k_att=1000: must be"),
+    ("wang", ["k_att=20", "k_rep_l=5"], None), ("wang", ["k_att=20", "k_rep_l=4.9"], "k_rep_l"),
+    ("wang", ["control_offset_m=0.5"], "control_offset_m=0.5: must be")])
+def test_attraction_settings_measured_to_collide_are_refused(planner, sets, match):
+    from common.errors import ConfigError
+    from nodes.planner.registry import load_params
+
+    if match is None:
+        load_params(planner, None, sets)
+        return
+    with pytest.raises(ConfigError, match=match):
+        load_params(planner, None, sets)
+
+
+def test_the_ceilings_are_the_measured_ones():
+    import csv
+    from pathlib import Path
+
+    from nodes.planner import settings as S
+    from nodes.planner.wang import settings as W
+    from papf.experiments import safety_floor as sf
+
+    path = Path(__file__).resolve().parents[2] / "docs" / "data" / "safety-attraction.csv"
+    rows = list(csv.DictReader(path.open()))
+    found = sf.floors_of(rows, sf.ATTRACTION_SWEEP)
+    assert (found["k_vg"], found["q_g"], found["control_offset_m"]) == (
+        S.K_VG_MAX, S.Q_G_MAX, W.CONTROL_OFFSET_MAX_M)
+    wang_only = {"k_att": ((sf.WANG,), sf.ATTRACTION_SWEEP["k_att"][1])}   # wang-apf: below
+    assert sf.floors_of(rows, wang_only)["k_att"] == W.K_ATT_MAX
+    assert "k_att" not in found   # wang-apf, the paper's failing baseline, collides at Table 1's
+    assert sf.ratio_limit(rows, (sf.APF_PAIR + (sf.ARAPF,))) == S.ATTRACTION_RATIO_MAX
+    assert sf.ratio_limit(rows, (sf.WANG,)) == W.WANG_RATIO_MAX
