@@ -38,7 +38,7 @@ def add_paper_studies(exp) -> None:
     """Add the paper studies (safety-floor, wang, horizon, ...) to the experiments ``exp``."""
     f = exp.add_parser("safety-floor", help="the safety parameters' floors, measured offline",
                        description="Each safety parameter (d_o, k_vo_l, q_o, k_ro_l, k_rep_l, "
-                                   "rho_0) swept downwards alone on energy-blocking and papf-test-1, "
+                                   "rho_0, w_max) swept downwards alone on energy-blocking and papf-test-1, "
                                    "then their product at its floor; one CSV row per run, written "
                                    "as it ends (a re-run skips the runs already in the CSV).")
     f.add_argument("--out", default="safety-floor.csv", metavar="FILE.csv",
