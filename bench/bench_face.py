@@ -19,16 +19,17 @@ Not a test: numbers depend on the machine and its load.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import statistics
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import zenoh
 
 from bench.bench_view import TICK_NS, cpu_s, percentiles, traffic
+from bench.csvrows import check_csv, write_rows
 from common import rmw_zenoh as rz
 from common import ros2_convert as rc
 from common.transport import wait_alive, zenoh_config
@@ -108,6 +109,9 @@ def bench_runs(world: str, planner: str, runs: int) -> dict:
             "face_wall_ms_per_cycle": round((wall["face"] - wall["plain"]) / cycles * 1e3, 3)}
 
 
+CSV_FIELDS = ("metric", "value", "unit")
+
+
 def rows(out: dict) -> list[tuple[str, float, str]]:
     n = out["node"]
     r = [("face_cpu_share", n["face_cpu_share"], "cores"),
@@ -132,15 +136,15 @@ def main(argv=None) -> int:
     ap.add_argument("--planner", default=one_with_role("papf-proposed"))
     ap.add_argument("--csv", metavar="F", help="also write the figures as CSV rows here")
     args = ap.parse_args(argv)
+    if args.csv:   # this benchmark's table or a new file, known before the benchmark runs
+        check_csv(Path(args.csv), CSV_FIELDS)
     out = {"node": bench_node(args.duration)}
     if args.runs:
         out["run"] = bench_runs(args.world, args.planner, args.runs)
     print(json.dumps(out, indent=2))
-    if args.csv:
-        with open(args.csv, "w", newline="", encoding="utf-8") as f:
-            w = csv.writer(f)
-            w.writerow(("metric", "value", "unit"))
-            w.writerows(rows(out))
+    if args.csv:   # the one output rule for a benchmark's CSV (bench/csvrows.py)
+        write_rows(Path(args.csv), CSV_FIELDS, [dict(zip(CSV_FIELDS, r, strict=True))
+                                               for r in rows(out)])
     return 0
 
 

@@ -28,6 +28,7 @@ from pathlib import Path
 
 from bench.csvrows import write_rows
 from bench.proc_cpu import TreeCPU
+from common.outfiles import append_jsonl
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ("date", "code", "planner", "seed", "timeout_s", "runs", "command_wall_med_s",
@@ -139,7 +140,7 @@ def main() -> None:
                 runs.setdefault((label, planner), []).append(r)
                 print(json.dumps(r), flush=True)
                 if a.jsonl:
-                    with a.jsonl.open("a") as fh:
+                    with append_jsonl(a.jsonl) as fh:   # JSON lines only, never a link
                         fh.write(json.dumps(r) + "\n")
     first = {}   # planner -> the figures of its first run (before): both sides must match
     for (_, planner), rs in runs.items():

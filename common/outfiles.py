@@ -38,6 +38,8 @@ def check_output(out: str | Path, inputs: Iterable[str | Path] = (), force: bool
             raise OutputError(f"{out}: is the input {src} (the same file); name another output")
     if not out.parent.is_dir():
         raise OutputError(f"{out}: directory {str(out.parent)!r} does not exist")
+    if not os.access(out.parent, os.W_OK | os.X_OK):   # found now, not after the work
+        raise OutputError(f"{out}: directory {str(out.parent)!r} is not writable")
     if os.path.lexists(out):
         if out.is_dir() and not out.is_symlink():
             raise OutputError(f"{out}: is a directory; name a file")
@@ -105,6 +107,39 @@ def _publish(tmp: Path, out: Path, force: bool) -> None:
         if os.path.lexists(out):
             raise OutputError(f"{out}: appeared while writing; nothing replaced") from None
         os.replace(tmp, out)
+
+
+def replace_text(out: str | Path, text: str, encoding: str = "utf-8") -> None:
+    """``text`` into ``out``, replacing the file an earlier run of the same command made (an
+    experiment's own tables in its ``--out`` directory): beside, then renamed; a symlink there
+    is replaced, never written through."""
+    with output(out, force=True) as tmp:
+        tmp.write_text(text, encoding=encoding)
+
+
+def append_jsonl(out: str | Path):
+    """``out`` opened to append JSON lines (a trace, a benchmark's log: append-only by design),
+    line-buffered. An existing ``out`` must be a regular file, never a symlink, that is empty
+    or starts with a JSON object line: a recording or a user's text is never appended to."""
+    import json
+
+    out = Path(out)
+    if os.path.lexists(out):
+        if out.is_symlink() or not out.is_file():
+            raise OutputError(f"{out}: is not a regular file (a symlink, a directory); name a "
+                              ".jsonl file of this tool or a new one")
+        with out.open("rb") as fh:
+            first = fh.readline(1024 * 1024)
+        try:
+            ok = not first.strip() or isinstance(json.loads(first), dict)
+        except ValueError:
+            ok = False
+        if not ok:
+            raise OutputError(f"{out}: exists and is not a file of JSON lines; name a new file")
+    else:
+        check_output(out)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0)
+    return os.fdopen(os.open(out, flags, 0o644), "a", encoding="utf-8", buffering=1)
 
 
 def exclusive(out: str | Path, force: bool = False, mode: str = "wb"):

@@ -77,6 +77,7 @@ FLAG = Spec(bool)
 SEED = Spec(int, 0, 2**32 - 1)   # every noise seed (numpy's SeedSequence takes any, pybullet not)
 TIMEOUT = Spec(float, 0.0, 1e6, lo_open=True, unit="s")   # a run's limit: 11.6 days, not forever
 PORT = Spec(int, 1, 65535)       # a TCP port
+RATE_HZ = Spec(float, 0.0, 1000.0, lo_open=True, unit="Hz")   # a tool's publishing rate
 
 
 def choice(*values: str) -> Spec:

@@ -37,6 +37,13 @@ CMD_VEL_TIMEOUT_NS = 500_000_000   # [ns] the controller's cmd_vel_timeout (0.5 
 # the launcher's outcome judge and the offline loops)
 MOVING_SPEED = 0.01
 
+# -- goals ---------------------------------------------------------------------------------------
+# [m] the smallest goal tolerance taken (ours): a tolerance of 0 or 1e-300 m is in "(0, ...]"
+# and makes a goal no robot ever reaches — the pose is known to millimetres (odometry, the sim's
+# float64) and a 10 Hz planner's step is 1 cm at 0.1 m/s. Worlds and `papf goal` refuse less;
+# a goal on the bus with less is judged at this floor (docs/planners.md "Safety floors").
+GOAL_TOLERANCE_MIN_M = 0.005
+
 # -- battery -------------------------------------------------------------------------------------
 CELLS_IN_SERIES = 3            # 3 x 18650 Li-ion, 3500 mAh
 CELL_CAPACITY_MAH = 3500.0     # [mAh]

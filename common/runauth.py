@@ -17,10 +17,13 @@ import json
 import os
 import re
 import secrets
+import stat
 import tempfile
 from pathlib import Path
 
 import msgpack
+
+from common.errors import PapfError
 
 ENV = "PAPF_RUN_KEY"          # environment variable that carries the key (hex)
 TAG_HEX = 32                  # [hex digits] 128-bit tag
@@ -65,6 +68,7 @@ def publish_key(namespace: str, key_hex: str) -> Path:
     """
     path = key_file(namespace)
     path.parent.mkdir(mode=0o700, exist_ok=True)
+    _check_own_dir(path.parent)
     os.chmod(path.parent, 0o700)
     holder = _holder(path)
     if holder is not None and holder != os.getpid():
@@ -74,6 +78,19 @@ def publish_key(namespace: str, key_hex: str) -> Path:
     with os.fdopen(fd, "w") as f:
         f.write(f"{key_hex} {os.getpid()}\n")
     return path
+
+
+class KeyDirError(PapfError):
+    """The key directory is not this user's own (another user made it, or it is a link)."""
+
+
+def _check_own_dir(d: Path) -> None:
+    """KeyDirError unless ``d`` is a real directory (not a symlink) owned by this user: in a
+    shared temporary directory another user could have made ``papf-<uid>`` first."""
+    st = os.lstat(d)
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
+        raise KeyDirError(f"{d}: not a directory of your own (made by another user, or a link); "
+                          "remove it, or set XDG_RUNTIME_DIR")
 
 
 def _holder(path: Path) -> int | None:
@@ -95,10 +112,13 @@ def _holder(path: Path) -> int | None:
 
 
 def read_key(namespace: str) -> bytes | None:
-    """The run key a launcher of ``namespace`` left for this user, or None."""
+    """The run key a launcher of ``namespace`` left for this user, or None (also when the key
+    directory is not this user's own: a key another user left is no key)."""
+    path = key_file(namespace)
     try:
-        return bytes.fromhex(key_file(namespace).read_text().split()[0])
-    except (OSError, ValueError, IndexError):
+        _check_own_dir(path.parent)
+        return bytes.fromhex(path.read_text().split()[0])
+    except (OSError, ValueError, IndexError, KeyDirError):
         return None
 
 

@@ -31,6 +31,7 @@ import zenoh
 
 from common.errors import ConfigError, SchemaError
 from common.reach import session_error
+from common.text import install_log_filter
 from common.units import StampGuard
 from schemas import Keys
 from schemas.base import Message
@@ -180,6 +181,7 @@ def setup_logging(name: str, level: str = "INFO") -> logging.Logger:
     """The node's logger, its lines stamped with the time and ``name``."""
     logging.basicConfig(level=level, format=f"%(asctime)s {name:>12} %(levelname)-7s %(message)s",
                         datefmt="%H:%M:%S")
+    install_log_filter()   # a peer's text in a log line is shown, never run (common.text)
     return logging.getLogger(name)
 
 

@@ -55,9 +55,10 @@ class Keys:
     def __post_init__(self) -> None:
         ns = self.ns
         if (not ns or ns.startswith("/") or ns.endswith("/") or "//" in ns
-                or set(ns) & set("*$?# \t\n")):
-            raise ValueError(f"namespace {ns!r} must be a plain key like 'rosbot' or 'lab/r1' "
-                             "(no empty parts, no spaces, no * $ ? #)")
+                or set(ns) & set("*$?# \t\n") or not ns.isprintable() or len(ns) > 200):
+            raise ValueError(f"namespace {ns[:60]!r} must be a plain key like 'rosbot' or "
+                             "'lab/r1' (no empty parts, no spaces or control characters, "
+                             "no * $ ? #, at most 200 characters)")
 
     def key(self, suffix: str) -> str:
         """The key of ``suffix`` in this namespace."""

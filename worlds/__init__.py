@@ -8,12 +8,14 @@ entry and what would be valid.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
 from common.errors import WorldError
 from common.optional import tomllib
+from common.robot import GOAL_TOLERANCE_MIN_M
 from worlds.fleet import PersonSpec, RobotSpec, parse_people, parse_robots
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
@@ -110,11 +112,32 @@ def world_data(name_or_path: str | Path) -> dict:
         raise WorldError(f"world file {str(path)!r}: tables or arrays nested too deeply") from None
 
 
+# A world's name names files (recordings, reports, an experiment's runs) and is printed: no path
+# separators, no control characters (an ESC sequence would run in the terminal), not hidden.
+MAX_NAME_CHARS = 100
+_WORLD_NAME = re.compile(rf"[\w+\-][\w .+\-]{{0,{MAX_NAME_CHARS - 1}}}")
+
+
+def _world_name(ctx, data: dict, source: str) -> str:
+    """``name``, a plain name (:data:`_WORLD_NAME`); without one, the file's stem made plain
+    (any other character becomes ``_``: a file may be called anything)."""
+    if "name" not in data:
+        stem = re.sub(r"[^\w .+\-]", "_", Path(source).stem).lstrip(". ")
+        return stem[:MAX_NAME_CHARS] or "world"
+    name = ctx.str(data, "name")
+    if not _WORLD_NAME.fullmatch(name):
+        shown = repr(name if len(name) <= 60 else name[:57] + "...")
+        ctx.fail("name", f"{shown} must be a plain name (letters, digits, spaces and '-', '_', "
+                 f"'.', '+'; not starting with '.'; at most {MAX_NAME_CHARS} characters): runs, "
+                 "recordings and reports are named after it")
+    return name
+
+
 def parse_world(data: dict, source: str = "<dict>") -> World:
     """Validate a decoded TOML document as a world (keys and limits first: :mod:`worlds.validate`)."""
     check_document(data, source)
     ctx = _Ctx(source)
-    name = ctx.str(data, "name", default=Path(source).stem)
+    name = _world_name(ctx, data, source)
     robots = people = ()
     if "robots" in data:
         for table in ("robot", "goal"):
@@ -136,7 +159,7 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         start = (*start, 0.0)
     goal_t = ctx.table(data, "goal")
     goal = ctx.vec(goal_t, "position", (2, 3), "goal.position")
-    tolerance = ctx.positive(goal_t, "tolerance", "goal.tolerance", default=0.1)
+    tolerance = ctx.tolerance(goal_t, "tolerance", "goal.tolerance")
     obstacles = []
     raw = data.get("obstacles", [])
     if not isinstance(raw, list):
@@ -256,6 +279,14 @@ class _Ctx:
         v = self.number(t, key, where, default)
         if v <= 0:
             self.fail(where, f"must be > 0, got {v}")
+        return v
+
+    def tolerance(self, t: dict, key: str, where: str) -> float:
+        """A goal tolerance [m]: at least GOAL_TOLERANCE_MIN_M (common/robot.py), default 0.1."""
+        v = self.number(t, key, where, 0.1)
+        if not v >= GOAL_TOLERANCE_MIN_M:
+            self.fail(where, f"must be at least {GOAL_TOLERANCE_MIN_M:g} m (a smaller tolerance "
+                             f"is never reached), got {v}")
         return v
 
     def vec(self, t: dict, key: str, lengths: tuple[int, ...], where: str, default=_MISSING,

@@ -75,8 +75,7 @@ def parse_robots(ctx, raw) -> tuple[RobotSpec, ...]:
             planner = ctx.str(t, "planner", f"{where}.planner")
         robots.append(RobotSpec(name=name, start=(*start, 0.0) if len(start) == 2 else tuple(start),
                                 goal=tuple(goal), planner=planner,
-                                tolerance=ctx.positive(t, "tolerance", f"{where}.tolerance",
-                                                       default=0.1)))
+                                tolerance=ctx.tolerance(t, "tolerance", f"{where}.tolerance")))
     return tuple(robots)
 
 

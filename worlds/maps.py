@@ -17,12 +17,15 @@ Occupied and unknown cells are walls (:attr:`OccupancyMap.walls`).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from common.errors import WorldError
+
+MAX_YAML_BYTES = 1024 * 1024   # [bytes] a map's YAML (a few lines; as a world file)
 
 MODES = ("trinary", "scale", "raw")
 FREE, OCCUPIED, UNKNOWN = 0, 100, -1          # nav2_util/occ_grid_values.hpp
@@ -125,21 +128,26 @@ def save_map(grid: OccupancyMap, yaml_path: str | Path, free: float = FREE_THRES
     Nav2 reads but never writes); FileExistsError, nothing written, if either file exists."""
     from PIL import Image
 
+    from common.outfiles import check_output, output
+
     yaml_path = Path(yaml_path)
     image = yaml_path.with_suffix(".png" if mode == "scale" else ".pgm")
     for p in (yaml_path, image):
-        if p.exists():
+        if os.path.lexists(p):   # a dangling symlink too: never written through
             raise FileExistsError(f"{p} exists; choose another name (nothing is overwritten)")
+        check_output(p)          # its directory exists and is writable (OutputError)
     pixels = _encode(grid.data, mode, free, occupied)
     if negate and mode != "raw":                              # raw ignores negate
         pixels[..., :3] = 255 - pixels[..., :3]
     pixels = pixels[::-1]                                       # row 0 is the map's top
     im = Image.fromarray(pixels, "RGBA") if mode == "scale" else Image.fromarray(pixels[..., 0])
-    im.save(image)
+    with output(image) as tmp:   # beside, then renamed (common/outfiles.py)
+        im.save(tmp)
     x, y, yaw = grid.origin
-    yaml_path.write_text(f"image: {image.name}\nmode: {mode}\nresolution: {grid.resolution!r}\n"
-                         f"origin: [{x!r}, {y!r}, {yaw!r}]\nnegate: {int(negate)}\n"
-                         f"occupied_thresh: {occupied!r}\nfree_thresh: {free!r}\n", encoding="utf-8")
+    with output(yaml_path) as tmp:
+        tmp.write_text(f"image: {image.name}\nmode: {mode}\nresolution: {grid.resolution!r}\n"
+                       f"origin: [{x!r}, {y!r}, {yaw!r}]\nnegate: {int(negate)}\n"
+                       f"occupied_thresh: {occupied!r}\nfree_thresh: {free!r}\n", encoding="utf-8")
     return yaml_path, image
 
 
@@ -171,9 +179,14 @@ def _read_yaml(path: Path) -> dict:
     import yaml
 
     try:
+        if path.stat().st_size > MAX_YAML_BYTES:   # a map's YAML is a few lines
+            raise WorldError(f"map {str(path)!r}: {path.stat().st_size:,} bytes; a map's YAML "
+                             f"has at most {MAX_YAML_BYTES:,}")
         meta = yaml.safe_load(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"cannot read map {str(path)!r}: {exc}") from None
+    except RecursionError:   # thousands of nested brackets
+        raise WorldError(f"map {str(path)!r}: nested too deeply to be a map's YAML") from None
     except yaml.YAMLError as exc:
         raise WorldError(f"map {str(path)!r} is not valid YAML: "
                          f"{str(exc).splitlines()[0]}") from None

@@ -18,6 +18,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from common.robot import GOAL_TOLERANCE_MIN_M
 from common.units import NS_PER_S
 from nodes.planner.field import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
 from nodes.planner.road import Lanes, Track
@@ -244,8 +245,9 @@ class Planner:
         dist = float(np.hypot(self.goal.x - odom.x, self.goal.y - odom.y))
         if self.state in ("reached", "stagnated", "failed"):
             return self._stop(t, self.state, self.reason, dist, t0)
-        if dist <= self.goal.tolerance:
-            return self._stop(t, "reached", f"within {self.goal.tolerance} m of the goal", dist, t0)
+        tolerance = max(self.goal.tolerance, GOAL_TOLERANCE_MIN_M)   # a peer's 0 is never reached
+        if dist <= tolerance:
+            return self._stop(t, "reached", f"within {tolerance} m of the goal", dist, t0)
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom, self.jit_scan)
         self.strategy.observe(self.objects, self.road, t / NS_PER_S, odom.v)
@@ -278,6 +280,8 @@ class Planner:
         if not self.apf.scale_to_scan or beams == 0 or beams == self.apf.lidar_points:
             return self.apf
         if beams not in self._apf_for_l:
+            if len(self._apf_for_l) >= 16:   # scans of ever new lengths (a peer's): bounded
+                self._apf_for_l.clear()
             self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
         return self._apf_for_l[beams]
 

@@ -211,12 +211,22 @@ def load_params(planner: str, file: str | Path | None = None, sets: list[str] = 
     return _apply(apf, algo, _with_preset(planner, items), planner)
 
 
+MAX_PARAMS_BYTES = 1024 * 1024   # [bytes] a --params file (as a world file: worlds/validate.py)
+
+
 def _read_toml(file: str | Path) -> dict:
     path = Path(file)
     if not path.is_file():
         raise ConfigError(f"planner params {str(file)!r}: no such file")
     try:
+        size = path.stat().st_size
+        if size > MAX_PARAMS_BYTES:   # a settings file is a few hundred bytes
+            raise ConfigError(f"planner params {str(file)!r}: {size:,} bytes; a settings file "
+                              f"has at most {MAX_PARAMS_BYTES:,}")
         return tomllib.loads(path.read_text(encoding="utf-8"))
+    except RecursionError:   # tomllib on thousands of nested arrays or tables
+        raise ConfigError(f"planner params {str(file)!r}: nested too deeply to be "
+                          "settings") from None
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ConfigError(f"planner params {str(file)!r} is not a readable TOML file: "

@@ -28,12 +28,21 @@ CHARGE_MIN = 0.2         # [-] |q_V|, |q_O| (0.1 collided: PAPF on energy-blocki
 REPULSION_MIN = 2.0      # [-] k_vo_l * q_v * q_o (1 collided: q_o = -0.1 with PAPF)
 # The floors of a planner's own settings are in its folder's settings.py (arapf, wang).
 
+# The other side of the balance, measured the same way upwards (`papf experiment safety-floor
+# --attraction`, docs/data/safety-attraction.csv): a goal pull that outweighs the obstacles'
+# push drives the robot into what lies on the line as surely as a weak push.
+K_VG_MAX = 50.0          # [-] k_VG (75 collided: PAPF on papf-test-1; 100 on both worlds)
+Q_G_MAX = 10.0           # [-] q_G (50 collided: APF and PAPF)
+# The gains do not act alone: eq. 2 weighs k_VG q_G against k_VO L |q_O| (q_V is in both), so
+# their ratio has a ceiling of its own, reached at the repulsion floor too (k_vo_l = 2).
+ATTRACTION_RATIO_MAX = 5.0   # [-] k_vg q_g / (k_vo_l |q_o|) (7.5 collided: PAPF, k_vg = 75)
+
 APF: dict[str, Spec] = {
     "lidar_points": integer(1, MAX_BEAMS),
     "q_v": num(-100.0, -CHARGE_MIN, safety=True),
     "q_o": num(-100.0, -CHARGE_MIN, safety=True),
-    "q_g": num(0.0, 100.0, lo_open=True),
-    "k_vg": pos(MAX_GAIN),
+    "q_g": num(0.0, Q_G_MAX, lo_open=True, safety=True),
+    "k_vg": pos(K_VG_MAX, safety=True),
     "k_vo_l": num(K_VO_L_MIN, MAX_GAIN, safety=True),
     "d_o": num(D_O_MIN_M, LIDAR_RANGE_MAX_M, "m", safety=True),
     "theta_err_max_deg": pos(180.0, "deg"),
@@ -55,10 +64,29 @@ NODE: dict[str, Spec] = {
 }
 
 
+def attraction_ratio(apf, algo=None) -> float:
+    """The goal's pull over the obstacles' push, from the gains alone: eq. 2's
+    ``k_VG q_G / (k_VO L |q_O|)`` (``q_V`` is in both), or for a planner whose own parameters
+    have ``k_att`` and ``k_rep_l`` (Wang's eqs. 6-8) ``k_att / k_rep_l``."""
+    if algo is not None and hasattr(algo, "k_att") and hasattr(algo, "k_rep_l"):
+        return algo.k_att / algo.k_rep_l
+    return apf.k_vg * apf.q_g / (apf.k_vo_l * abs(apf.q_o))
+
+
 def check_strength(apf) -> None:
     """eq. 2's repulsion product ``k_vo_l*q_v*q_o`` above its floor (:data:`REPULSION_MIN`);
     ConfigError, one line. A strategy adds its own products in ``Strategy.check_strength``."""
     require_product("k_vo_l*q_v*q_o", apf.k_vo_l * apf.q_v * apf.q_o, REPULSION_MIN)
+    require_ratio("k_vg*q_g/(k_vo_l*|q_o|)", attraction_ratio(apf), ATTRACTION_RATIO_MAX)
+
+
+def require_ratio(name: str, value: float, ceiling: float) -> None:
+    """ConfigError (one line) unless the attraction-to-repulsion ratio ``value`` is at most
+    ``ceiling``."""
+    if not value <= ceiling:
+        raise ConfigError(f"{name} = {value:g}: the goal's pull may be at most {ceiling:g} times "
+                          "the obstacles' push (above it the robot drives into obstacles; "
+                          "docs/planners.md \"Safety floors\")")
 
 
 def require_product(name: str, value: float, floor: float) -> None:

@@ -26,7 +26,8 @@ import zenoh
 from foxglove.websocket import Capability, Parameter, ParameterType
 
 from common import runauth
-from common.errors import PapfError
+from common.errors import ConfigError, PapfError
+from common.params import PORT, arg_type
 from common.ports import describe
 from common.transport import Node, add_zenoh_args, open_node, setup_logging
 from nodes.viewer.convert import LOG_INFO, LOG_WARNING
@@ -119,7 +120,8 @@ def parse_args(argv=None) -> argparse.Namespace:
 def add_view_args(ap: argparse.ArgumentParser) -> None:
     """The viewer's own options (shared with ``papf view``)."""
     ap.add_argument("--host", default="127.0.0.1", help="WebSocket address (default 127.0.0.1)")
-    ap.add_argument("--port", type=int, default=8765, help="WebSocket port (default 8765)")
+    ap.add_argument("--port", type=arg_type("--port", PORT), default=8765,
+                    help="WebSocket port (default 8765)")
     ap.add_argument("--world", help="world to draw (packaged name or .toml path)")
     ap.add_argument("--params", choices=("accept", "refuse"), default="accept",
                     help="parameter changes from Foxglove: pass them to the planner, signed with "
@@ -183,8 +185,36 @@ class Viewer:
                 self.channels.log_all(self.core.static_outputs())
 
 
+def check_exposure(args: argparse.Namespace) -> None:
+    """ConfigError unless goals and parameter changes come from this host only.
+
+    Foxglove's WebSocket protocol has no authentication: whoever connects may publish goals
+    and set parameters, which this viewer passes on signed with the run's key. On a loopback
+    ``--host`` (the default, 127.0.0.1) that is this host's users, like ``papf goal``; on any
+    other address it would be anyone who can reach the port, so there both must be refused
+    (``--goals refuse --params refuse``: watching only); to steer from another machine, serve
+    on 127.0.0.1 and reach it through an SSH tunnel (docs/viewer.md)."""
+    if _loopback(args.host) or (args.goals == "refuse" and args.params == "refuse"):
+        return
+    raise ConfigError(f"--host {args.host!r}: the Foxglove WebSocket has no authentication, so "
+                      "on an address other hosts reach give --goals refuse --params refuse "
+                      "(watch only), or serve on 127.0.0.1 and use an SSH tunnel to steer")
+
+
+def _loopback(host: str) -> bool:
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:   # a host name: it may resolve to anything
+        return False
+
+
 def serve(args: argparse.Namespace, log: logging.Logger) -> int:
     """Serve ``args``' namespace to Foxglove; the exit code."""
+    check_exposure(args)
     world = load_world(args.world) if args.world else None
     try:
         with open_node(NAME, args, log) as node:

@@ -17,6 +17,7 @@ import numpy as np
 
 from common import rmw_zenoh, ros2
 from common.errors import SchemaError
+from common.text import MAX_TEXT_CHARS, safe_text  # noqa: F401  (papf.bus's names for them)
 from nodes.recorder.writer import peek_stamp
 from schemas.messages import BY_TYPE
 
@@ -149,18 +150,6 @@ def plain(value: Any) -> Any:
 
 
 # -- text -----------------------------------------------------------------------------------------
-MAX_TEXT_CHARS = 200   # [chars] of a string printed (the rest counted); --full: all
-
-
-def safe_text(text: str, max_chars: int | None = MAX_TEXT_CHARS) -> str:
-    """``text`` fit for a terminal: control and other non-printable characters escaped (a
-    peer's ESC sequences are shown, never run), cut at ``max_chars`` (None: whole)."""
-    cut = text if max_chars is None or len(text) <= max_chars else text[:max_chars]
-    shown = cut if cut.isprintable() else "".join(
-        c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in cut)
-    return shown + (f"… ({len(text):,} chars)" if len(cut) < len(text) else "")
-
-
 def _scalar(v: Any) -> str:
     if isinstance(v, float):
         return repr(v) if math.isfinite(v) else str(v)

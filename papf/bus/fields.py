@@ -27,6 +27,8 @@ def parse_value(text: str) -> dict:
     """VALUE -> a mapping of fields (ConfigError if it is not one)."""
     try:
         value = yaml.safe_load(text) if text.strip() else {}
+    except RecursionError:   # thousands of nested brackets
+        raise ConfigError("VALUE is nested too deeply to be a message") from None
     except yaml.YAMLError as exc:
         raise ConfigError(f"VALUE {text!r} is not YAML/JSON: {str(exc).splitlines()[0]}") from None
     if value is None:

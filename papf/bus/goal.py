@@ -43,9 +43,13 @@ class GoalResult:
         return EXIT_CODES.get(self.outcome, 6)
 
 
+WATCH_MAX = 10_000   # [messages] waiting to be looked at (a peer's flood: the rest dropped)
+
+
 class _Watch:
     def __init__(self, session: zenoh.Session, keys: Keys):
-        self.q: queue.Queue = queue.Queue()
+        self.q: queue.Queue = queue.Queue(maxsize=WATCH_MAX)
+        self.dropped = 0
         self.subs = [session.declare_subscriber(keys.planner_status, self._cb(PlannerStatus)),
                      session.declare_subscriber(keys.events, self._cb(Event)),
                      session.declare_subscriber(keys.goal, self._cb(Goal))]
@@ -53,7 +57,9 @@ class _Watch:
     def _cb(self, msg_type):
         def on_sample(sample: zenoh.Sample) -> None:
             try:
-                self.q.put(msg_type.from_bytes(sample.payload.to_bytes()))
+                self.q.put_nowait(msg_type.from_bytes(sample.payload.to_bytes()))
+            except queue.Full:   # memory bounded under a flood
+                self.dropped += 1
             except Exception:  # a bad payload is not this command's business
                 pass
         return on_sample

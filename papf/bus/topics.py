@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import json
 import math
-import queue
+import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -42,27 +43,61 @@ def resolve_key(name: str, keys: Keys, ros: str = "bridge", domain: int = 0) -> 
     return f"{domain}/{name.strip('/')}/*/*" if ros == "rmw_zenoh" else name[1:]
 
 
-class Inbox:
-    """Samples of a key expression queued as (key, payload, arrival monotonic s)."""
+MAX_INBOX_ITEMS = 1000               # samples waiting to be printed or counted
+MAX_INBOX_BYTES = 64 * 1024 * 1024   # [bytes] their payloads together
 
-    def __init__(self, session: zenoh.Session, expr: str):
-        self.q: queue.Queue = queue.Queue()
-        self.sub = session.declare_subscriber(expr, self._on_sample)
+
+class Inbox:
+    """Samples of a key expression queued as (key, payload, arrival monotonic s), bounded.
+
+    A peer may publish faster than a terminal prints (or publish 10 MB messages): past
+    ``max_items`` samples or ``max_bytes`` of payload the oldest waiting samples are dropped
+    and counted in :attr:`dropped` (the newest one always stays), so memory stays bounded
+    whatever the bus carries.
+    """
+
+    def __init__(self, session: zenoh.Session | None, expr: str, max_items: int = MAX_INBOX_ITEMS,
+                 max_bytes: int = MAX_INBOX_BYTES):
+        self.max_items, self.max_bytes = max_items, max_bytes
+        self.dropped = 0
+        self._items: deque = deque()
+        self._bytes = 0
+        self._cond = threading.Condition()
+        self.sub = None if session is None else session.declare_subscriber(expr, self._on_sample)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         if sample.kind == zenoh.SampleKind.PUT:
-            self.q.put((str(sample.key_expr), sample.payload.to_bytes(), time.monotonic()))
+            self.put(str(sample.key_expr), sample.payload.to_bytes(), time.monotonic())
+
+    def put(self, key: str, data: bytes, arrival: float) -> None:
+        """Queue a sample; drop the oldest waiting ones past the bounds."""
+        with self._cond:
+            self._items.append((key, data, arrival))
+            self._bytes += len(data)
+            while len(self._items) > 1 and (len(self._items) > self.max_items
+                                            or self._bytes > self.max_bytes):
+                self._bytes -= len(self._items.popleft()[1])
+                self.dropped += 1
+            self._cond.notify()
 
     def get(self, timeout_s: float):
         """The next sample within ``timeout_s`` [s], else None."""
-        try:
-            return self.q.get(timeout=max(timeout_s, 0.0))
-        except queue.Empty:
-            return None
+        with self._cond:
+            if not self._items:
+                self._cond.wait(max(timeout_s, 0.0))
+            if not self._items:
+                return None
+            item = self._items.popleft()
+            self._bytes -= len(item[1])
+            return item
+
+    def __len__(self) -> int:
+        return len(self._items)
 
     def close(self) -> None:
         """Undeclare the subscriber."""
-        self.sub.undeclare()
+        if self.sub is not None:
+            self.sub.undeclare()
 
 
 # -- list ---------------------------------------------------------------------------------------
@@ -130,42 +165,75 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
                                       "stamp_hz": rate.stamp_hz})))
         out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {})}))
         return heard
-    width = max(len(r.key) for r in rows.values())
+    shown = {r.key: safe_text(r.key, MAX_KEY_CHARS) for r in rows.values()}   # a peer's key
+    width = max(len(k) for k in shown.values())
     out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
         f"(heard for {duration_s:g} s)")
     for r in sorted(rows.values(), key=lambda r: (r.count == 0, r.key)):
         hz = r.stats.rate().hz
         rate = "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
-        out(f"{r.key:<{width}}  {r.type_name or '?':<28} {r.encoding:<8} {rate:>10}  {r.count}")
-    out(f"alive ({keys.alive()}): {', '.join(nodes) if nodes else 'none'}")
+        out(f"{shown[r.key]:<{width}}  {safe_text(r.type_name or '?', 60):<28} "
+            f"{safe_text(r.encoding, 20):<8} {rate:>10}  {r.count}")
+    out(f"alive ({safe_text(keys.alive())}): {_names(nodes)}")
     for ns, names in others.items():   # the fleet's other namespaces
-        out(f"alive ({Keys(ns).alive()}): {', '.join(names)}")
+        out(f"alive ({safe_text(Keys(ns).alive() if _plain(ns) else ns)}): {_names(names)}")
     return heard
+
+
+MAX_KEY_CHARS = 120   # [chars] of a key shown in the table (a peer's 10 MB key stays one line)
+
+
+def _names(names) -> str:
+    """Node names as a peer announced them, terminal-safe."""
+    return ", ".join(safe_text(n, 80) for n in names) if names else "none"
+
+
+def _plain(ns: str) -> bool:
+    try:
+        Keys(ns)
+    except ValueError:
+        return False
+    return True
 
 
 # -- echo ---------------------------------------------------------------------------------------
 def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout_s: float = 0.0,
          ros_type: str | None = None, max_items: int | None = 8, as_json: bool = False,
-         stop: Stop = lambda: False) -> int:
+         stop: Stop = lambda: False, note: Out = lambda _line: None) -> int:
     """Print each message on ``expr`` until ``count`` (0: forever) or stop; returns how many.
 
     ``timeout_s`` > 0: give up when the first message has not come within that long.
+    Messages that came faster than they could be printed are dropped, oldest first
+    (:class:`Inbox`); ``note`` (stderr) says so the first time and how many at the end.
     """
     inbox = Inbox(session, expr)
-    shown = 0
-    deadline = time.monotonic() + timeout_s if timeout_s > 0 else math.inf
     try:
-        while not stop() and (count <= 0 or shown < count):
-            item = inbox.get(0.1)
-            if item is None:
-                if shown == 0 and time.monotonic() > deadline:
-                    break
-                continue
-            key, data, _ = item
-            out(format_sample(key, decode(key, data, ros_type), max_items, as_json))
-            shown += 1
+        return _echo(inbox, out, count, timeout_s, ros_type, max_items, as_json, stop, note)
     finally:
         inbox.close()
+        if inbox.dropped:
+            note(f"{inbox.dropped} messages dropped in all: they came faster than they could "
+                 f"be printed (the {inbox.max_items} newest are kept)")
+
+
+def _echo(inbox: Inbox, out: Out, count: int, timeout_s: float, ros_type: str | None,
+          max_items: int | None, as_json: bool, stop: Stop, note: Out) -> int:
+    shown = 0
+    told = False
+    deadline = time.monotonic() + timeout_s if timeout_s > 0 else math.inf
+    while not stop() and (count <= 0 or shown < count):
+        item = inbox.get(0.1)
+        if item is None:
+            if shown == 0 and time.monotonic() > deadline:
+                break
+            continue
+        if inbox.dropped and not told:
+            told = True
+            note("messages come faster than they can be printed: the oldest waiting are "
+                 "dropped (counted at the end)")
+        key, data, _ = item
+        out(format_sample(key, decode(key, data, ros_type), max_items, as_json))
+        shown += 1
     return shown
 
 

@@ -22,6 +22,7 @@ import sys
 
 from common import __version__
 from common.errors import PapfError
+from common.text import install_log_filter, safe_line
 
 # (command, module of papf.cli that registers it), in ``--help`` order. ``papf COMMAND``
 # imports that one module only (``papf run`` starts its processes ~0.2 s sooner than if
@@ -37,8 +38,8 @@ COMMANDS = (("run", "run"), ("worlds", "worlds"), ("launch", "launch"), ("topic"
 class _Parser(argparse.ArgumentParser):
     """A usage error is one line (what was wrong and what is valid) and exit 2."""
 
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+    def error(self, message: str):   # the message quotes the user's text: shown, never run
+        self.exit(2, f"{self.prog}: {safe_line(message)} (see {self.prog} --help)\n")
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -60,6 +61,7 @@ def _sigterm_as_interrupt(*_) -> None:
 def main(argv: list[str] | None = None) -> int:
     """``papf``: parse ``argv``, run the command; its exit code (2 on a user's mistake)."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    install_log_filter()   # a world's or a peer's text in a log line: shown, never run
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     # a command started in the background by a script inherits SIGINT ignored (the shell's
     # rule for `cmd &`); `kill -INT` must still stop every child process cleanly
@@ -69,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except PapfError as exc:
-        print(f"papf {args.command}: {exc}", file=sys.stderr)
+        print(f"papf {args.command}: {safe_line(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"papf {args.command}: interrupted; every process was stopped", file=sys.stderr)

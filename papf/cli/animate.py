@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from common.params import arg_type, integer, pos
+
 
 def register(sub) -> None:
     """Add ``papf animate`` and its options to the subcommands ``sub``."""
@@ -16,11 +18,11 @@ def register(sub) -> None:
 
     p.add_argument("src", metavar="FILE.mcap|BAG")
     p.add_argument("out", metavar="OUT.gif|OUT.mp4")
-    p.add_argument("--fps", type=float, default=10.0, help="frames per second (default 10)")
-    p.add_argument("--speed", type=float, default=4.0,
+    p.add_argument("--fps", type=arg_type("--fps", pos(120.0, "1/s")), default=10.0, help="frames per second (default 10)")
+    p.add_argument("--speed", type=arg_type("--speed", pos(1e4)), default=4.0,
                    help="sim seconds per video second (default 4)")
     p.add_argument("--world", help="world to draw (default: the recording's metadata)")
-    p.add_argument("--dpi", type=int, default=110,
+    p.add_argument("--dpi", type=arg_type("--dpi", integer(10, 600)), default=110,
                    help="resolution [dots per inch] (default 110: 1210 x 616 pixels)")
     add_topics_option(p)
     p.add_argument("--force", action="store_true", help="replace OUT if it exists")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from common.params import RATE_HZ, SEED, arg_type, integer, num
 from common.ros_link import add_ros_args
 from common.transport import add_zenoh_args
 
@@ -18,12 +19,12 @@ def register(sub) -> None:
                    help="bridge namespace of the emulated topics (default: none)")
     p.add_argument("--world", help="world the robot stands in: scan it (start pose too)")
     p.add_argument("--no-scan", action="store_true", help="no LaserScan even with --world")
-    p.add_argument("--scan-beams", type=int, default=720, help="LaserScan readings (720)")
-    p.add_argument("--seed", type=int, default=0, help="scan noise seed (0)")
-    p.add_argument("--rate", type=float, default=50.0, help="odometry rate [Hz] (50)")
-    p.add_argument("--cmd-timeout", type=float, default=0.5, metavar="S",
+    p.add_argument("--scan-beams", type=arg_type("--scan-beams", integer(1, 100_000)), default=720, help="LaserScan readings (720)")
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="scan noise seed (0)")
+    p.add_argument("--rate", type=arg_type("--rate", RATE_HZ), default=50.0, help="odometry rate [Hz] (50)")
+    p.add_argument("--cmd-timeout", type=arg_type("--cmd-timeout", num(0.0, 10.0, "s")), default=0.5, metavar="S",
                    help="controller cmd_vel_timeout [s] (0.5; 0 = never)")
-    p.add_argument("--battery-voltage", type=float, default=12.0, metavar="V",
+    p.add_argument("--battery-voltage", type=arg_type("--battery-voltage", num(0.0, 30.0, "V")), default=12.0, metavar="V",
                    help="pack voltage reported on battery (12.0)")
     p.add_argument("--trace", metavar="FILE", help="append a JSON line per command received")
     p.add_argument("--log-level", default="INFO")

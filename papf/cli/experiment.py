@@ -13,11 +13,13 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.params import SEED, TIMEOUT, arg_type, integer
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS, car_variants, declared, with_role
 from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import PAPER_PAIR, TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
+from papf.experiments.sweep import MAX_WORKERS
 
 
 def register(sub) -> None:
@@ -33,6 +35,25 @@ def register(sub) -> None:
     _add_traffic(exp)
     _add_crowd(exp)
     add_paper_studies(exp)
+    for name, parser in exp.choices.items():   # every experiment that writes into --out DIR
+        if name != "safety-floor":
+            parser.set_defaults(func=_out_dir_checked(parser.get_default("func")))
+
+
+def _out_dir_checked(func):
+    """``func`` after a check of ``--out DIR``: a directory, or nothing yet, whose parent
+    exists (ConfigError, exit 2, before any run: a file there was a traceback after them)."""
+    def checked(args):
+        out = Path(args.out)
+        if out.exists() and not out.is_dir():
+            raise ConfigError(f"--out {str(out)!r} is a file; an experiment writes into a "
+                              "directory (give a new name or an existing directory)")
+        if not out.exists() and not out.absolute().parent.is_dir():
+            raise ConfigError(f"--out {str(out)!r}: directory {str(out.absolute().parent)!r} "
+                              "does not exist")
+        return func(args)
+    checked.__name__ = getattr(func, "__name__", "experiment")
+    return checked
 
 
 def _add_energy(exp) -> None:
@@ -41,16 +62,16 @@ def _add_energy(exp) -> None:
         description="World 'energy'; every planner x --runs, run k with seed S+k, each recorded "
                     "to OUT/<planner>-<k>.mcap through the whole process stack; then the "
                     "report in OUT.")
-    p.add_argument("--runs", type=int, default=3, help="runs per planner (default 3)")
+    p.add_argument("--runs", type=arg_type("--runs", integer(1, 10_000)), default=3, help="runs per planner (default 3)")
     p.add_argument("--planners", default=",".join(PAPER_PAIR),
                    help=f"comma-separated (default {','.join(PAPER_PAIR)})")
     p.add_argument("--out", default="energy-experiment", metavar="DIR",
                    help="directory for the recordings and the report (default energy-experiment)")
-    p.add_argument("--seed", type=int, default=0,
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0,
                    help="base seed S: runs are numbered 1..N and run k uses S+k (default 0); kept "
                         "1-based so the committed figures of docs/data reproduce seed for seed")
     p.add_argument("--world", default=WORLD, help=f"world (default {WORLD})")
-    p.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="S",
+    p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=TIMEOUT_S, metavar="S",
                    help=f"sim-time limit per run [s] (default {TIMEOUT_S:g})")
     p.add_argument("--energy-model", choices=sorted(MODELS), default=DEFAULT_MODEL,
                    help=f"the live meter's model (default {DEFAULT_MODEL})")
@@ -70,7 +91,7 @@ def _add_presets(p) -> None:
 
 def _add_sweep(p) -> None:
     g = p.add_argument_group("sweep (docs/sweeps.md)")
-    g.add_argument("--workers", type=int, default=1, metavar="N",
+    g.add_argument("--workers", type=arg_type("--workers", integer(1, MAX_WORKERS)), default=1, metavar="N",
                    help="runs at once on a local Dask cluster of N worker processes "
                         "(default 1: one after the other, no Dask)")
     g.add_argument("--scheduler", metavar="tcp://HOST:8786",
@@ -89,8 +110,8 @@ def sweep_options(args):
 def _add_common(p, default_out: str) -> None:
     p.add_argument("--planners", default=",".join(with_role("compared")), help="comma-separated")
     p.add_argument("--out", default=default_out, metavar="DIR", help="output directory")
-    p.add_argument("--seed", type=int, default=0, help="noise (and world-set) seed (default 0)")
-    p.add_argument("--timeout", type=float, default=300.0, metavar="S", help="sim-time limit per run")
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="noise (and world-set) seed (default 0)")
+    p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S", help="sim-time limit per run")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable (e.g. a shared APF one)")
     _add_presets(p)
@@ -113,7 +134,7 @@ def _add_random(exp) -> None:
                        description="Generate N solvable random worlds (obstacle fields, dead ends, "
                                    "narrow gaps), run every planner on each, report rates per "
                                    "planner into --out (random.md, random.csv, worlds/).")
-    p.add_argument("--n", type=int, default=50, help="solvable worlds (default 50)")
+    p.add_argument("--n", type=arg_type("--n", integer(1, 10_000)), default=50, help="solvable worlds (default 50)")
     _add_common(p, "random-worlds")
     p.add_argument("--plots", action="store_true", help="one PNG per world with every path")
     mode = p.add_mutually_exclusive_group()
@@ -135,10 +156,10 @@ def _add_crowd(exp) -> None:
                                                                 "(default apf,papf,arapf)")
     p.add_argument("--people", default="0,5,10,20", metavar="N1,N2",
                    help="numbers of people, comma-separated, each 0-20 (default 0,5,10,20)")
-    p.add_argument("--runs", type=int, default=3, help="seeds per planner and number (default 3)")
-    p.add_argument("--seed", type=int, default=0, help="first seed S: runs use S..S+runs-1")
+    p.add_argument("--runs", type=arg_type("--runs", integer(1, 10_000)), default=3, help="seeds per planner and number (default 3)")
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="first seed S: runs use S..S+runs-1")
     p.add_argument("--out", default="crowd", metavar="DIR", help="output directory")
-    p.add_argument("--timeout", type=float, default=300.0, metavar="S",
+    p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit per run (default 300)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="planner setting for every planner, repeatable")
@@ -245,8 +266,8 @@ def _add_traffic(exp) -> None:
                                    "and traffic.csv (outcome, collisions, left_road, lane "
                                    "changes, speeds) into --out.")
     p.add_argument("--out", default="traffic", metavar="DIR", help="output directory")
-    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    p.add_argument("--timeout", type=float, default=150.0, metavar="S",
+    p.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="noise seed (default 0)")
+    p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=150.0, metavar="S",
                    help="sim-time limit per run (default 150)")
     p.add_argument("--worlds", help="comma-separated subset of the road-* worlds")
     p.add_argument("--seeds", help="comma-separated seeds, each a full round (instead of --seed)")

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.params import SEED, arg_type, integer
 
 
 def preset_list(text: str) -> list[str]:
@@ -37,7 +38,7 @@ def add_paper_studies(exp) -> None:
     """Add the paper studies (safety-floor, wang, horizon, ...) to the experiments ``exp``."""
     f = exp.add_parser("safety-floor", help="the safety parameters' floors, measured offline",
                        description="Each safety parameter (d_o, k_vo_l, q_o, k_ro_l, k_rep_l, "
-                                   "rho_0) swept downwards alone on energy-blocking and papf-test-1, "
+                                   "rho_0, w_max) swept downwards alone on energy-blocking and papf-test-1, "
                                    "then their product at its floor; one CSV row per run, written "
                                    "as it ends (a re-run skips the runs already in the CSV).")
     f.add_argument("--out", default="safety-floor.csv", metavar="FILE.csv",
@@ -45,28 +46,32 @@ def add_paper_studies(exp) -> None:
     f.add_argument("--car", action="store_true",
                    help="instead: the car planner's obstacle field (obstacle_gain, a_x, a_y) on "
                         "the IAPF paper's cases A-D (docs/data/safety-floor-iapf.csv)")
+    f.add_argument("--attraction", action="store_true",
+                   help="instead: the attraction gains (k_vg, q_g, Wang's k_att) swept upwards, "
+                        "each row with its attraction-to-repulsion ratio "
+                        "(docs/data/safety-attraction.csv)")
     f.set_defaults(func=cmd_safety_floor)
     w = _study(exp, "wang", "Wang's Figs. 5-12: the published point simulation and the ROSbot",
                "Each of Wang's figures as published (a point stepping 0.5 along the force, J = 200, "
                "Table 1 gains) and with the wang-apf / wang planners offline; writes wang.md and "
                "wang.csv into --out.", cmd_wang)
     w.set_defaults(out="wang-figs")
-    w.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    w.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="LiDAR noise seed (default 0)")
 
     h = _study(exp, "horizon", "PAPF's horizon of prediction (paper Fig. 7), offline",
                "PAPF with lambda in {0.5, 1, 1.5, 2} m (both presets) and APF on the Fig. 7-like "
                "world papf-horizon: path, duration, turning, cycle time; writes horizon.md and "
                "horizon.csv into --out.", cmd_horizon)
-    h.add_argument("--seed", type=int, default=0, help="LiDAR noise seed (default 0)")
+    h.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="LiDAR noise seed (default 0)")
 
     d = _study(exp, "deviations", "each PAPF deviation from the paper switched alone, offline",
                "PAPF default and paper presets, and each deviation switched on alone over the paper "
                "preset (--both: and off alone from the default), on N random worlds and PAPF Tests "
                "I-VI; writes deviations.md/.csv.", cmd_deviations)
-    d.add_argument("--n", type=int, default=3, help="random worlds (default 3: a field, a dead end, a gap)")
+    d.add_argument("--n", type=arg_type("--n", integer(1, 10_000)), default=3, help="random worlds (default 3: a field, a dead end, a gap)")
     d.add_argument("--both", action="store_true",
                    help="also switch each deviation off alone from the default preset")
-    d.add_argument("--seed", type=int, default=1, help="random world set (default 1)")
+    d.add_argument("--seed", type=arg_type("--seed", SEED), default=1, help="random world set (default 1)")
 
     t = _study(exp, "test1-sweep", "papf-test-1's box sized and placed by APF alone, offline",
                "APF (offline, seeds 0-2) on papf-test-1 with its box's side, distance along the "
@@ -145,6 +150,13 @@ def cmd_safety_floor(args) -> int:
     """``papf experiment safety-floor``: each safety parameter's floor; the exit code."""
     from papf.experiments.safety_floor import run
 
-    floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car)
+    if args.car and args.attraction:
+        raise ConfigError("--car and --attraction are two sweeps: give one")
+    from bench.csvrows import check_csv
+    from papf.experiments.safety_floor import ATTRACTION_FIELDS, FIELDS
+
+    check_csv(Path(args.out), ATTRACTION_FIELDS if args.attraction else FIELDS)   # before a run
+    floors = run(Path(args.out), progress=lambda line: print(line, flush=True), car=args.car,
+                 attraction=args.attraction)
     print("floors: " + ", ".join(f"{k}={v:g}" for k, v in floors.items()))
     return 0

@@ -6,13 +6,15 @@ import sys
 
 from common.errors import ConfigError
 from common.params import arg_type, num
+from common.robot import GOAL_TOLERANCE_MIN_M
 from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
 from worlds import MAX_COORD_M
 
 # A goal within the world's span (worlds.MAX_COORD_M): nan, inf or 1e308 are refused at once.
 GOAL_COORD = num(-MAX_COORD_M, MAX_COORD_M, "m")
-GOAL_TOLERANCE = num(0.0, 100.0, "m", lo_open=True)
+# A tolerance of 0 or 1e-300 m is never reached: the floor is common.robot's.
+GOAL_TOLERANCE = num(GOAL_TOLERANCE_MIN_M, 100.0, "m")
 
 
 def register(sub) -> None:
@@ -60,8 +62,9 @@ def cmd_goal(args) -> int:
         raise ConfigError("give the goal as X Y [m] (e.g. papf goal 9 0) or --world W")
     else:
         x, y, tol = args.x, args.y, 0.1 if args.tolerance is None else args.tolerance
-    if not tol > 0:
-        raise ConfigError(f"--tolerance {tol} must be > 0 m")
+    if not tol >= GOAL_TOLERANCE_MIN_M:
+        raise ConfigError(f"--tolerance {tol}: must be at least {GOAL_TOLERANCE_MIN_M:g} m "
+                          "(a smaller tolerance is never reached)")
     stop = StopRequested()
     with _session(args) as s:
         res = send_goal(s, Keys(args.namespace), x, y, tol, start_run=args.start_run,

@@ -7,6 +7,7 @@ import json
 import sys
 
 from common.errors import PapfError
+from common.text import safe_line, safe_text
 
 
 def register(sub) -> None:
@@ -39,7 +40,7 @@ def cmd_info(args) -> int:
                     "first_log_ns": first, "last_log_ns": last}
         scan, intact = scan_file(args.file)
     except PapfError as exc:
-        print(f"papf info: {exc}", file=sys.stderr)
+        print(f"papf info: {safe_line(str(exc))}", file=sys.stderr)
         return 2
     info.update(intact_messages=intact, damaged_chunks=scan.bad_chunks,
                 damaged_bytes=scan.damaged_bytes)
@@ -58,15 +59,20 @@ def cmd_info(args) -> int:
 
 
 def _print_info(file, info: dict, channels: dict, first: int, last: int) -> None:
-    print(f"{file}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
+    # keys, metadata and schema names are whatever a peer put on the bus: shown, never run
+    # (common.text), and a key of megabytes stays one short line
+    print(f"{safe_text(str(file))}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
     for name, meta in info["metadata"].items():
-        print(f"  metadata {name}: " + ", ".join(f"{k}={v}" for k, v in meta.items()))
-    width = max((len(k) for k in channels), default=10)
+        print(f"  metadata {safe_text(name, 80)}: "
+              + safe_text(", ".join(f"{k}={v}" for k, v in meta.items()), 400))
+    shown = {k: safe_text(k, 120) for k in channels}
+    width = max((len(k) for k in shown.values()), default=10)
     print(f"  {'KEY':<{width}} {'MESSAGES':>8}  {'SCHEMA':<24} ENCODING (message / schema)")
     for key, (schema, schema_enc, msg_enc) in sorted(channels.items()):
         n = info["messages"].get(key, 0)
         enc = f"{msg_enc} / {schema_enc}" if schema_enc else f"{msg_enc} / no schema (raw)"
-        print(f"  {key:<{width}} {n:>8}  {schema or '-':<24} {enc}")
+        print(f"  {shown[key]:<{width}} {n:>8}  {safe_text(schema or '-', 60):<24} "
+              f"{safe_text(enc, 80)}")
 
 
 def _bag_info(args) -> int:
@@ -87,8 +93,10 @@ def _bag_info(args) -> int:
         return 0
     print(f"{args.file}: rosbag2, {info['duration_s']:.3f} s")
     role_of = {t: r for r, t in info["roles"].items()}
-    width = max(len(t) for t in info["topics"])
+    shown = {t: safe_text(t, 120) for t in info["topics"]}   # a bag's names: shown, never run
+    width = max((len(t) for t in shown.values()), default=10)
     print(f"  {'TOPIC':<{width}} {'MESSAGES':>8}  {'TYPE':<32} READ AS")
     for t, d in sorted(info["topics"].items()):
-        print(f"  {t:<{width}} {d['messages']:>8}  {d['type']:<32} {role_of.get(t, '-')}")
+        print(f"  {shown[t]:<{width}} {d['messages']:>8}  {safe_text(d['type'], 80):<32} "
+              f"{role_of.get(t, '-')}")
     return 0

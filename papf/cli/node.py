@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 
 from common.ros_link import add_ros_args, ros_domain
+from common.text import safe_text
 from common.transport import add_zenoh_args
 from schemas import Keys
 
@@ -57,10 +58,10 @@ def cmd_node_list(args) -> int:
         else:
             ros = [f"{n.name}  (ROS 2, zenoh-bridge-ros2dds {n.bridge[:8]})"
                    for n in bridge_nodes(s)]
-    for name in ours:
-        print(f"{keys.ns}/{name}")
+    for name in ours:   # names as peers announced them: shown, never run (common.text)
+        print(f"{keys.ns}/{safe_text(name, 120)}")
     for line in ros:
-        print(line)
+        print(safe_text(line, 200))
     if not ours and not ros:
         where = (f"ROS domain {domain}" if args.ros == "rmw_zenoh"
                  else "any zenoh-bridge-ros2dds's admin space")
@@ -124,5 +125,5 @@ def _ros_node_info(args, domain: int) -> int:
         if items or role in ("publishers", "subscriptions", "subscribers"):
             print(f"  {role.capitalize()}:")
             for item in items:
-                print(f"    {item}")
+                print(f"    {safe_text(item, 200)}")
     return 0

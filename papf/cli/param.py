@@ -72,6 +72,7 @@ def _full_name(name: str, planner: str, params: dict) -> str:
 def cmd_param(args) -> int:
     """``papf param``: list, get or set a running node's settings; the exit code."""
     from common import runauth
+    from common.text import safe_text
     from nodes.planner.registry import check_setting
     from papf.bus.session import open_session
     from schemas import Keys
@@ -96,7 +97,7 @@ def cmd_param(args) -> int:
     if args.json:
         print(json.dumps({"node": args.node, "planner": planner, "params": shown}))
     else:
-        for k, v in sorted(shown.items()):
-            print(f"{k} = {v}")
+        for k, v in sorted(shown.items()):   # a node's reply: shown, never run (common.text)
+            print(f"{safe_text(str(k), 80)} = {safe_text(str(v), 200)}")
     sys.stdout.flush()
     return 0

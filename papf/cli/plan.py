@@ -5,8 +5,10 @@ from __future__ import annotations
 import json
 import os
 import sys
+from pathlib import Path
 
-from common.params import SEED, TIMEOUT, arg_type
+from common.errors import ConfigError
+from common.params import SEED, TIMEOUT, arg_type, num
 from nodes.planner.registry import car_variants, one_with_role
 from papf.cli.options import (
     add_planner_settings,
@@ -30,7 +32,7 @@ def register(sub) -> None:
                    help="LiDAR noise seed (default 0)")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit [s] (default 300)")
-    p.add_argument("--dt", type=float, default=0.1, metavar="S", help="control period [s] (0.1)")
+    p.add_argument("--dt", type=arg_type("--dt", num(0.001, 1.0, "s")), default=0.1, metavar="S", help="control period [s] (0.1)")
     add_planner_settings(p)
     p.add_argument("--preset", choices=("default", "paper"), default="default",
                    help="planner preset: default (our improvements) or paper (the paper literally)")
@@ -43,6 +45,8 @@ def register(sub) -> None:
                         "abandoned predictions, top quarks and temporary goal at its most "
                         "telling cycle")
     p.add_argument("--out", metavar="PATH.csv|.json", help="write the path (CSV or JSON)")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing --plot or --out file (never the world or --params)")
     p.add_argument("--json", action="store_true", help="print one JSON summary object")
     p.set_defaults(func=cmd_plan)
 
@@ -53,17 +57,19 @@ def cmd_plan(args) -> int:
     from nodes.planner.registry import preset_sets
     from papf.offline.result import write_path
     from papf.offline.run import simulate  # pybullet: only when planning
-    from worlds import load_world
+    from worlds import load_world, world_path
     from worlds.checks import check_runnable
 
+    given = args.world
     world = load_world(resolve_world(args))
     check_runnable(world)
+    check_outputs(args, [given, world_path(args.world), args.params])   # before the run
     sets = [*preset_sets(args.preset), *args.set]
     result = simulate(world, args.planner, params=sets, seed=args.seed, max_time_s=args.timeout,
                       dt=args.dt, params_file=args.params, keep_states=bool(args.plot),
                       motion=args.motion)
     if args.out:
-        write_path(result, args.out)
+        write_path(result, args.out, force=True)   # checked above (check_outputs)
     if args.plot:  # matplotlib: only with --plot
         _plot(world, result, args)
     s = result.summary()
@@ -89,6 +95,26 @@ def cmd_plan(args) -> int:
         if path:  # on stderr: with --json, stdout holds the one JSON object only
             print(f"{what}: {os.path.abspath(path)}", file=sys.stderr)
     return EXIT_CODES.get(result.outcome, 6)
+
+
+def check_outputs(args, inputs) -> None:
+    """``--plot`` and ``--out`` may be written (:func:`common.outfiles.check_output`): no
+    existing file unless ``--force``, never an input (the world, ``--params``), not each other;
+    OutputError/ConfigError (exit 2, one line) before the run."""
+    from common.outfiles import OutputError, check_output, same_file
+
+    inputs = [p for p in inputs if p and Path(p).is_file()]
+    for flag, path in (("--plot", args.plot), ("--out", args.out)):
+        if path:
+            try:
+                check_output(path, inputs, args.force)
+            except OutputError as exc:
+                raise OutputError(f"{flag} {exc}") from None
+    if args.out and Path(args.out).suffix.lower() not in (".csv", ".json"):
+        raise ConfigError(f"--out {args.out!r}: the path file's suffix must be .csv or .json")
+    if args.plot and args.out and (Path(args.plot).absolute() == Path(args.out).absolute()
+                                   or same_file(args.plot, args.out)):
+        raise ConfigError("--plot and --out name the same file; give two")
 
 
 def _plot(world, result, args) -> None:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from common.errors import PapfError
+from common.text import safe_line
 
 
 def register(sub) -> None:
@@ -31,7 +32,7 @@ def cmd_recover(args) -> int:
     try:
         stats = recover(broken, fixed, force=args.force)
     except PapfError as exc:
-        print(f"papf recover: {exc}", file=sys.stderr)
+        print(f"papf recover: {safe_line(str(exc))}", file=sys.stderr)
         return 2
     if args.json:
         print(json.dumps(stats.to_json(str(fixed))))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from common.errors import ConfigError, PapfError
+from common.text import safe_line
 from common.transport import (
     DEFAULT_ENDPOINT,
     StopRequested,
@@ -69,14 +70,14 @@ def _replay(args, stop: StopRequested) -> int:
                            progress=_progress_printer(bar), stop=lambda: bool(stop),
                            topics=topics)
     except PapfError as exc:
-        print(f"papf replay: {exc}", file=sys.stderr)
+        print(f"papf replay: {safe_line(str(exc))}", file=sys.stderr)
         return 2
     print(f"replayed {stats.messages} messages ({stats.log_span_s:.2f} s of recorded time) "
           f"in {stats.wall_s:.2f} s", file=sys.stderr)
     if stats.skipped_keys:
-        print(f"papf replay: skipped {sum(stats.skipped_keys.values())} messages on recorded "
-              f"topics that are not Zenoh keys: {', '.join(sorted(stats.skipped_keys))}",
-              file=sys.stderr)
+        print(safe_line(f"papf replay: skipped {sum(stats.skipped_keys.values())} messages on "
+                        f"recorded topics that are not Zenoh keys: "
+                        f"{', '.join(sorted(stats.skipped_keys))}"), file=sys.stderr)
     return 130 if stop else 0
 
 

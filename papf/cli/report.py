@@ -30,6 +30,8 @@ def register(sub) -> None:
     p.add_argument("--out", metavar="DIR",
                    help="output directory (default: the one DIR given, else the first file's)")
     p.add_argument("--json", action="store_true", help="print per-run figures as JSON lines")
+    p.add_argument("--force", action="store_true",
+                   help="replace the report files of an earlier report in the output directory")
     add_topics_option(p)
     p.set_defaults(func=cmd_report)
 
@@ -51,6 +53,7 @@ def topic_map(args):
 
 def cmd_report(args) -> int:
     """``papf report``: energy report of recorded runs; the exit code."""
+    from common.text import safe_text
     from papf.console.progress import StepProgress
     from papf.report.metrics import BAG, live_difference, metadata_notes
     from papf.report.report import build_report  # matplotlib: only when reporting
@@ -59,25 +62,28 @@ def cmd_report(args) -> int:
     topics = topic_map(args)
     with StepProgress("report", 1, after_s=PROGRESS_AFTER_S) as progress:   # total: set by it
         report = build_report(args.inputs, args.out, args.energy_model, topics=topics,
-                              progress=progress)
+                              progress=progress, force=args.force)
     if args.json:
         for m in report.runs:
             print(json.dumps(finite(m.row()), allow_nan=False))   # NaN -> null (JSON has no NaN)
         return 0
-    print(f"{report.model_note}; {report.pose_note}")
+    def say(text: str) -> None:   # a recording's world, reason, notes: shown, never run
+        print(safe_text(text, None, keep_newlines=True))
+
+    say(f"{report.model_note}; {report.pose_note}")
     for m in report.runs:
         for line in [*metadata_notes(m), live_difference(m)]:
             if line:
-                print(line)
+                say(line)
     bags = [r for r in report.runs if r.outcome == BAG]
     if bags:
-        print("\nbags recorded on the robot:")
-        print(bags_markdown(bags, report.model))
+        say("\nbags recorded on the robot:")
+        say(bags_markdown(bags, report.model))
     bag_worlds = {r.world for r in bags}
     for world in sorted({s.world for s in report.summaries} - bag_worlds):
-        print(f"\nworld {world}:")
-        print(summary_markdown([s for s in report.summaries if s.world == world], report.model))
-    print(f"\nwrote {', '.join(str(f) for f in report.files)}")
+        say(f"\nworld {world}:")
+        say(summary_markdown([s for s in report.summaries if s.world == world], report.model))
+    say(f"\nwrote {', '.join(str(f) for f in report.files)}")
     return 0
 
 

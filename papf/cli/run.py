@@ -89,6 +89,8 @@ def print_summary(result) -> None:
     from rich.markup import escape  # values are text: a "[...]" in them is no style tag
     from rich.table import Table
 
+    from common.text import safe_text
+
     colour = "green" if result.outcome == "reached" else "red"
     t = Table(title=f"papf run: [{colour}]{result.outcome}[/]", show_header=False)
     rows = [("world", result.world), ("planner", result.planner), ("seed", str(result.seed)),
@@ -103,8 +105,8 @@ def print_summary(result) -> None:
         rows.insert(8, ("min separation", "-" if sep is None else f"{sep:.3f} m"))
     if result.reason:
         rows.append(("reason", result.reason))
-    for k, v in rows:
-        t.add_row(k, escape(v))
+    for k, v in rows:   # a reason may quote a node's output: no markup, no ESC (common.text)
+        t.add_row(k, escape(safe_text(v, 400)))
     Console().print(t)
     if result.fleet:
         Console().print(fleet_table(result.fleet))

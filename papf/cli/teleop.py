@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import sys
 
+from common import robot
+from common.params import RATE_HZ, arg_type, pos
 from common.transport import add_zenoh_args
 from schemas import Keys
 
@@ -18,13 +20,13 @@ def register(sub) -> None:
                                    "driver's limits and 0.5 s watchdog like the planner's "
                                    f"commands. Keys: {HELP}. Run no planner at the same time "
                                    "(both would command the robot).")
-    p.add_argument("--max-v", type=float, default=0.3, metavar="M_S",
+    p.add_argument("--max-v", type=arg_type("--max-v", pos(robot.V_MAX_M_S, "m/s")), default=0.3, metavar="M_S",
                    help="teleop speed limit [m/s] (default 0.3; the driver's is 0.9)")
-    p.add_argument("--max-w", type=float, default=1.0, metavar="RAD_S",
+    p.add_argument("--max-w", type=arg_type("--max-w", pos(robot.W_MAX_RAD_S, "rad/s")), default=1.0, metavar="RAD_S",
                    help="teleop turn-rate limit [rad/s] (default 1.0; the driver's is 3.0)")
-    p.add_argument("--step-v", type=float, default=0.05, help="[m/s] per key press (0.05)")
-    p.add_argument("--step-w", type=float, default=0.2, help="[rad/s] per key press (0.2)")
-    p.add_argument("--rate", type=float, default=10.0, help="commands per second (10)")
+    p.add_argument("--step-v", type=arg_type("--step-v", pos(robot.V_MAX_M_S, "m/s")), default=0.05, help="[m/s] per key press (0.05)")
+    p.add_argument("--step-w", type=arg_type("--step-w", pos(robot.W_MAX_RAD_S, "rad/s")), default=0.2, help="[rad/s] per key press (0.2)")
+    p.add_argument("--rate", type=arg_type("--rate", RATE_HZ), default=10.0, help="commands per second (10)")
     p.add_argument("--start-run", action="store_true",
                    help="publish run_started first (a sim driver started alone waits for it)")
     add_zenoh_args(p)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from common.params import RATE_HZ, TIMEOUT, arg_type, integer, num
 from common.ros_link import add_ros_args, ros_domain
 from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
@@ -34,7 +35,7 @@ def register(sub) -> None:
     q = tsub.add_parser("list", help="keys heard, with type, encoding and rate; nodes alive",
                         description="Listen to every key for --duration seconds and list what "
                                     "arrived (plus the stack's silent topics and live nodes).")
-    q.add_argument("--duration", type=float, default=2.0, metavar="S",
+    q.add_argument("--duration", type=arg_type("--duration", TIMEOUT), default=2.0, metavar="S",
                    help="how long to listen [s] (default 2)")
     q.add_argument("--json", action="store_true", help="one JSON object per key")
     add_ros_args(q, cmd_vel=False)
@@ -44,9 +45,9 @@ def register(sub) -> None:
                         formatter_class=argparse.RawDescriptionHelpFormatter,
                         description="Print each message on KEY, decoded (until Ctrl-C or --count).")
     q.add_argument("key", metavar="KEY")
-    q.add_argument("--count", "-n", type=int, default=0, help="stop after N messages")
+    q.add_argument("--count", "-n", type=arg_type("--count", integer(0, None)), default=0, help="stop after N messages")
     q.add_argument("--once", action="store_true", help="the same as --count 1")
-    q.add_argument("--timeout", type=float, default=0.0, metavar="S",
+    q.add_argument("--timeout", type=arg_type("--timeout", num(0.0, 1e6, "s")), default=0.0, metavar="S",
                    help="exit 5 if no message came within S seconds (default: wait forever)")
     q.add_argument("--full", action="store_true", help="print whole arrays (default: first 8)")
     q.add_argument("--json", action="store_true", help="one JSON object per message")
@@ -61,8 +62,8 @@ def register(sub) -> None:
                                     "arrival (wall clock) and by the messages' own stamps "
                                     "(sim time in a lockstep simulation).")
     q.add_argument("key", metavar="KEY")
-    q.add_argument("--window", type=int, default=1000, help="messages in the statistics (1000)")
-    q.add_argument("--duration", type=float, default=0.0, metavar="S",
+    q.add_argument("--window", type=arg_type("--window", integer(2, 1_000_000)), default=1000, help="messages in the statistics (1000)")
+    q.add_argument("--duration", type=arg_type("--duration", num(0.0, 1e6, "s")), default=0.0, metavar="S",
                    help="stop after S seconds (default: until Ctrl-C)")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of CDR payloads (stamps)")
     add_ros_args(q, cmd_vel=False)
@@ -76,9 +77,9 @@ def register(sub) -> None:
     q.add_argument("key", metavar="KEY")
     q.add_argument("value", metavar="VALUE", nargs="?", default="{}")
     q.add_argument("--once", "-1", action="store_true", help="publish once and exit")
-    q.add_argument("--times", "-t", type=int, default=0, metavar="N",
+    q.add_argument("--times", "-t", type=arg_type("--times", integer(0, None)), default=0, metavar="N",
                    help="publish N times and exit (default: until Ctrl-C)")
-    q.add_argument("--rate", "-r", type=float, default=1.0, metavar="HZ", help="rate (1 Hz)")
+    q.add_argument("--rate", "-r", type=arg_type("--rate", RATE_HZ), default=1.0, metavar="HZ", help="rate (1 Hz)")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of a /topic (default: the "
                    "ROSbot's type of that topic)")
     add_ros_args(q, cmd_vel=False)
@@ -162,7 +163,8 @@ def cmd_topic_echo(args) -> int:
     count = 1 if args.once else args.count
     with _session(args) as s:
         n = echo(s, key, _out, count=count, timeout_s=args.timeout, ros_type=args.ros_type,
-                 max_items=None if args.full else 8, as_json=args.json, stop=lambda: bool(stop))
+                 max_items=None if args.full else 8, as_json=args.json, stop=lambda: bool(stop),
+                 note=lambda line: print(f"papf topic echo: {line}", file=sys.stderr, flush=True))
     if stop:
         return 130 if n == 0 else 0
     if n == 0:

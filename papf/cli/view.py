@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from common.params import PORT, arg_type
 from common.transport import add_zenoh_args
 
 DEFAULT_VIEW_PORT = 8765
@@ -12,7 +13,8 @@ DEFAULT_VIEW_PORT = 8765
 
 def add_view_flag(parser: argparse.ArgumentParser) -> None:
     """``--view [PORT]`` of ``papf run | launch | replay``."""
-    parser.add_argument("--view", nargs="?", type=int, const=DEFAULT_VIEW_PORT, metavar="PORT",
+    parser.add_argument("--view", nargs="?", type=arg_type("--view", PORT), const=DEFAULT_VIEW_PORT,
+                        metavar="PORT",
                         help=f"also serve a live Foxglove view on ws://127.0.0.1:PORT "
                              f"(default {DEFAULT_VIEW_PORT}; see docs/viewer.md)")
 
@@ -29,6 +31,7 @@ def register(sub) -> None:
     p.add_argument("--layout", metavar="OUT.json",
                    help="write the Foxglove layout of the view (3D, plots, log, parameters) "
                         "to this file and exit (the repository has it: docs/foxglove-layout.json)")
+    p.add_argument("--force", action="store_true", help="replace an existing --layout file")
     p.add_argument("--log-level", default="INFO")
     add_zenoh_args(p)
     p.set_defaults(func=cmd_view)
@@ -36,12 +39,12 @@ def register(sub) -> None:
 
 def cmd_view(args: argparse.Namespace) -> int:
     """``papf view``: serve a namespace to Foxglove (or write its layout); the exit code."""
-    if args.layout:
-        from pathlib import Path
-
+    if args.layout:   # the one output rule (common/outfiles.py): --force to replace
+        from common.outfiles import output
         from nodes.viewer.layout import layout_json
 
-        Path(args.layout).write_text(layout_json())
+        with output(args.layout, force=args.force) as tmp:
+            tmp.write_text(layout_json())
         print(f"wrote {args.layout}")
         return 0
     from common.transport import setup_logging

@@ -22,6 +22,7 @@ measures of :mod:`common.crowd_measures`) and ``OUT/crowd.png``.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,7 +31,9 @@ import numpy as np
 
 from common.errors import ConfigError
 from common.optional import tomllib
+from common.outfiles import output, replace_text
 from nodes.planner.registry import with_role
+from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions, map_runs
 from papf.experiments.trials import markdown_table, write_csv
 from worlds import World, parse_world
@@ -108,6 +111,13 @@ class CrowdJob:
     seed: int
     timeout_s: float = 300.0
     sets: tuple[str, ...] = ()
+    world_text: str = ""       # the world's TOML: what defines the run (its journal key)
+
+    @property
+    def key(self) -> str:
+        """The run's journal key (:func:`papf.experiments.journal.run_key`)."""
+        return run_key("crowd", self.world.name, self.world_text, self.planner, self.people,
+                       self.seed, self.timeout_s, self.sets)
 
 
 def run_crowd_job(job: CrowdJob) -> list[dict]:
@@ -181,7 +191,7 @@ def run_crowd(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     """Run the experiment into ``out`` (the hall scenes; or, given ``worlds``, those worlds
     as they are, files ``crowd-worlds*``); return the summary rows."""
     from nodes.planner.registry import make_planner
-    from worlds import load_world
+    from worlds import load_world, world_path
 
     if not planners or not seeds or not (people or worlds):
         raise ConfigError("need at least one planner, one number of people and one seed")
@@ -190,33 +200,56 @@ def run_crowd(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
     out = Path(out)
     jobs = []
     if worlds:
-        loaded = [load_world(w) for w in worlds]
-        jobs = [CrowdJob(w, planner, len(w.people), seed, timeout_s, tuple(sets))
-                for w in loaded for seed in seeds for planner in planners]
+        loaded = [(load_world(w), world_path(w).read_text(encoding="utf-8")) for w in worlds]
+        jobs = [CrowdJob(w, planner, len(w.people), seed, timeout_s, tuple(sets), text)
+                for w, text in loaded for seed in seeds for planner in planners]
     else:
         (out / "worlds").mkdir(parents=True, exist_ok=True)
         for n in people:
             for seed in seeds:
                 world, text = crowd_scene(n, seed)
-                (out / "worlds" / f"{world.name}.toml").write_text(text)
-                jobs += [CrowdJob(world, planner, n, seed, timeout_s, tuple(sets))
+                replace_text((out / "worlds" / f"{world.name}.toml"), text)
+                jobs += [CrowdJob(world, planner, n, seed, timeout_s, tuple(sets), text)
                          for planner in planners]
     opts = SweepOptions(workers=(sweep or SweepOptions()).workers,
                         scheduler=(sweep or SweepOptions()).scheduler, progress=progress)
-    runs = map_runs(run_crowd_job, jobs, opts,
-                    label=lambda j: f"{j.planner} {j.world.name} seed {j.seed}", title="crowd",
-                    line=lambda j, rows: f"{j.planner}, {j.world.name}, seed {j.seed}: "
-                                         + ", ".join(r["outcome"] for r in rows))
-    rows = [r for rs in runs for r in rs]
+    rows = [r for rs in _journaled_runs(jobs, opts, out) for r in rs]
     stem, by = ("crowd-worlds", "world") if worlds else ("crowd", "people")
     out.mkdir(parents=True, exist_ok=True)
     write_csv(rows, out / f"{stem}.csv")
     summary = summarize(rows, by)
     write_csv(summary, out / f"{stem}-summary.csv")
-    (out / f"{stem}.md").write_text(summary_markdown(summary, seeds, by))
+    replace_text((out / f"{stem}.md"), summary_markdown(summary, seeds, by))
     if not worlds:
         plot_summary(summary, out / "crowd.png")
     return summary
+
+
+def _journaled_runs(jobs: list[CrowdJob], opts: SweepOptions, out: Path) -> list[list[dict]]:
+    """Each job's rows, in job order: those finished before from ``out/runs/`` (the journal,
+    :mod:`papf.experiments.journal`), the others run now, each written there as it ends."""
+    journal = Journal(out)
+    kept = {i: rows for i, rows in ((i, _resumed(journal, j)) for i, j in enumerate(jobs))
+            if rows is not None}
+    if kept:
+        print(f"crowd: {len(kept)} of {len(jobs)} runs finished before, taken from "
+              f"{journal.dir} (delete it to make them again)", file=sys.stderr)
+    todo = [j for i, j in enumerate(jobs) if i not in kept]
+    done = iter(map_runs(run_crowd_job, todo, opts,
+                         label=lambda j: f"{j.planner} {j.world.name} seed {j.seed}", title="crowd",
+                         line=lambda j, rows: f"{j.planner}, {j.world.name}, seed {j.seed}: "
+                                              + ", ".join(r["outcome"] for r in rows),
+                         on_done=lambda j, rows: journal.put(j.key, {"rows": rows})))
+    return [kept[i] if i in kept else next(done) for i in range(len(jobs))]
+
+
+def _resumed(journal: Journal, job: CrowdJob) -> list[dict] | None:
+    """The rows of a finished run of ``job``, or None (not finished, or not rows: run again)."""
+    data = journal.get(job.key)
+    rows = None if data is None else data.get("rows")
+    if not (isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows)):
+        return None
+    return rows
 
 
 def plot_summary(summary: list[dict], png: Path) -> Path:
@@ -241,6 +274,7 @@ def plot_summary(summary: list[dict], png: Path) -> Path:
     axes[0].legend(fontsize=8)
     fig.suptitle("papf experiment crowd (offline, ORCA people in a 11 x 6 m hall)")
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=100)
+    with output(png, force=True) as tmp:   # beside, then renamed (common/outfiles.py)
+        fig.savefig(tmp, dpi=100, format="png")
     plt.close(fig)
     return png

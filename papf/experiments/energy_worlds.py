@@ -13,6 +13,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from common.outfiles import replace_text
 from nodes.planner.registry import one_with_role
 
 # the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
@@ -95,7 +96,7 @@ def write_tables(out: Path, reports, runs: int, seed: int) -> None:
         write_csv(split, out / "energy-decomposition.csv")
         text += "\n## Where the saving in `energy` comes from\n\n" + markdown_table(
             list(split[0]), [list(r.values()) for r in split])
-    (out / "energy-worlds.md").write_text(text)
+    replace_text((out / "energy-worlds.md"), text)
 
 
 def decomposition(rows: list[dict], course: str = "energy", control: str = "energy-empty") -> list[dict]:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from common.outfiles import output, replace_text
 from nodes.planner.iapf.algorithm import HostState, IAPFCore
 from nodes.planner.registry import car_variants
 from nodes.planner.road import Track
@@ -96,7 +97,7 @@ def _row(case: str, planner: str, run, horizon: list) -> dict:
 
 def write_series(out: Path, case: str, planner: str, run) -> None:
     """The host's time series of one run as CSV."""
-    with open(out / f"{case}-{planner}.csv", "w", newline="") as f:
+    with output(out / f"{case}-{planner}.csv", force=True) as _tmp, open(_tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t", "x", "y", "v", "yaw", "temp_goal_y", "local_count"])
         for t, (x, y, v, yaw), tg, lc in zip(run.times, run.states, run.temp_goal,
@@ -108,7 +109,7 @@ def write_series(out: Path, case: str, planner: str, run) -> None:
 def write_vehicles(out: Path, case: str, world, duration: float, step_s: float) -> None:
     """The other vehicles' tracks at the planning step, as CSV (t, id, x, y, yaw, v, length, width)."""
     movers = [mover(ob, i) for i, ob in enumerate(world.obstacles)]
-    with open(out / f"{case}-vehicles.csv", "w", newline="") as f:
+    with output(out / f"{case}-vehicles.csv", force=True) as _tmp, open(_tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t", "id", "x", "y", "yaw", "v", "length", "width"])
         for k in range(int(round(duration / step_s)) + 1):
@@ -175,9 +176,9 @@ def run_iapf_experiment(out: str | Path, planners=PLANNERS, cases=tuple(CASES), 
             from papf.plots.iapf_cases import plot_case  # matplotlib: only with plots
 
             plot_case(out / f"{case}.png", case, out, CAR_PLANNERS)
-    with open(out / "iapf.csv", "w", newline="") as f:
+    with output(out / "iapf.csv", force=True) as _tmp, open(_tmp, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
         w.writeheader()
         w.writerows(rows)
-    (out / "iapf.md").write_text(markdown(rows))
+    replace_text((out / "iapf.md"), markdown(rows))
     return rows

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from common.outfiles import output, replace_text
 from nodes.planner.iapf.algorithm import PAPER_PRESET
 from papf.experiments.iapf import CASES, IAPF, IAPF_NP, TRADITIONAL
 from papf.offline.run import simulate
@@ -76,7 +77,7 @@ def run_readings(out: str | Path, progress=None) -> list[dict]:
         rows.append(row)
         if progress:
             progress(label)
-    with open(out / "readings.csv", "w", newline="") as f:
+    with output(out / "readings.csv", force=True) as _tmp, open(_tmp, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
@@ -85,5 +86,5 @@ def run_readings(out: str | Path, progress=None) -> list[dict]:
     for r in rows:
         lines.append("| " + " | ".join([r["reading"], f"`{r['settings']}`" if r["settings"] else "",
                                          *(r[c] for c in CASES)]) + " |")
-    (out / "readings.md").write_text("\n".join(lines) + "\n")
+    replace_text((out / "readings.md"), "\n".join(lines) + "\n")
     return rows

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from common.outfiles import replace_text
 from nodes.planner.registry import one_with_role
 
 # the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
@@ -72,7 +73,7 @@ def run_horizon(out: str | Path, seed: int = 0, horizons: Sequence[float] = HORI
             rows.append(_horizon_row(world, planner, preset, h, seed))
             progress.step(f"{planner} {preset} lambda {h or '-'} m: {rows[-1]['outcome']}")
     write_csv(rows, out / "horizon.csv")
-    (out / "horizon.md").write_text(f"# Horizon of prediction on {world} (offline, seed {seed})\n\n"
+    replace_text((out / "horizon.md"), f"# Horizon of prediction on {world} (offline, seed {seed})\n\n"
                                     + markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
     return rows
 
@@ -159,7 +160,7 @@ def run_deviations(out: str | Path, n: int = 3, seed: int = 1, timeout_s: float 
                          "tests_I_VI_path_m": " ".join(f"{t.path_length_m:.2f}" if t.outcome == "reached"
                                                        else "-" for t in paper)})
     write_csv(rows, out / ("deviations.csv" if parts == 1 else f"deviations-{k}.csv"))
-    (out / "deviations.md").write_text(
+    replace_text((out / "deviations.md"),
         f"# PAPF deviations, each alone (offline; random set {seed}, {len(worlds)} worlds; PAPF "
         f"Tests I-VI seed 0)\n\n" + markdown_table(list(rows[0]), [list(r.values()) for r in rows]))
     return rows

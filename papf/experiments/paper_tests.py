@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.outfiles import replace_text
 from nodes.planner.registry import one_with_role, with_role
 from papf.experiments.sweep import SweepOptions
 from papf.experiments.trials import (
@@ -193,7 +194,7 @@ def write_tables(out: Path, trials, mode: str, seed: int) -> None:
     write_csv([dict(zip(TABLE_KEYS, r, strict=True)) for r in rows], Path(out) / "paper-tests-table.csv")
     text = (f"# Paper tests ({mode}, seed {seed})\n\n" + markdown_table(HEADER, rows)
             + "\n" + "\n".join(f"- {s}" for s in acceptance(trials)) + "\n")
-    (Path(out) / "paper-tests.md").write_text(text)
+    replace_text((Path(out) / "paper-tests.md"), text)
 
 
 def rebuild(out: str | Path) -> None:

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from common.errors import ConfigError
+from common.outfiles import replace_text
 from nodes.planner.registry import with_role
 from papf.experiments.sweep import SweepOptions
 from papf.experiments.trials import (
@@ -112,7 +113,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     jobs = []
     for world in worlds:
         file = out / "worlds" / f"{world.name}.toml"
-        file.write_text(world_to_toml(world))
+        replace_text(file, world_to_toml(world))
         jobs += [trial_job(world, file, planner=planner, seed=seed, mode=mode, timeout_s=timeout_s,
                            sets=tuple(sets), record=plots and mode == "stack", index=len(jobs) + k,
                            preset=preset)
@@ -126,7 +127,7 @@ def run_random(out: str | Path, n: int = 50, seed: int = 0,
     summary = summarize(trials, bottleneck)
     write_csv([{**t.row(), "bottleneck_m": round(bottleneck[t.world], 3)} for t in trials],
               out / "random.csv")
-    (out / "random.md").write_text(summary_markdown(summary, len(worlds), seed, mode, rejected))
+    replace_text((out / "random.md"), summary_markdown(summary, len(worlds), seed, mode, rejected))
     write_summary_csv(summary, out / "random-summary.csv")
     return trials, summary
 

@@ -20,6 +20,10 @@ from common.errors import ConfigError
 J = TypeVar("J")
 R = TypeVar("R")
 
+# Local worker processes at most: each runs a stack (several processes) or an offline run; more
+# than this is a typo (--workers 1000000 would fork until the machine stops), not a sweep.
+MAX_WORKERS = 256
+
 SCHEDULER_RE = re.compile(r"^(tcp|tls)://[\w.\-\[\]:]+:\d+$")
 
 
@@ -31,8 +35,8 @@ class SweepOptions:
 
     def validate(self) -> None:
         """ConfigError naming the bad value (before anything starts)."""
-        if not isinstance(self.workers, int) or self.workers < 1:
-            raise ConfigError(f"--workers {self.workers!r}: need an integer >= 1")
+        if not isinstance(self.workers, int) or not 1 <= self.workers <= MAX_WORKERS:
+            raise ConfigError(f"--workers {self.workers!r}: need an integer in [1, {MAX_WORKERS}]")
         if self.scheduler is not None and not SCHEDULER_RE.match(self.scheduler):
             raise ConfigError(f"--scheduler {self.scheduler!r}: expected tcp://HOST:PORT "
                               "(a Dask scheduler, e.g. tcp://10.0.0.5:8786)")

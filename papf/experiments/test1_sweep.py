@@ -12,6 +12,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from common.outfiles import replace_text
 from nodes.planner.registry import one_with_role
 
 # the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
@@ -151,7 +152,7 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
         return ("none qualifies" if g is None else
                 f"side {g['side_m']} m, {g['along_m']} m along, {g['offset_m']} m right: "
                 f"APF {g['path_mean_m']} m / {g['duration_mean_s']} s")
-    (out / "test1-sweep.md").write_text(
+    replace_text((out / "test1-sweep.md"),
         f"# {WORLD}: APF over the box's size and place (offline, seeds {list(seeds)})\n\n"
         f"Paper (Table 2): APF {APF_PATH_M} m / {APF_DURATION_S} s. Chosen (path, duration "
         f"within {DURATION_BAND_PCT:g} %): {pick(chosen)}. Path alone: {pick(path_only)}.\n\n"

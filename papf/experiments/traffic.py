@@ -15,8 +15,10 @@ import numpy as np
 
 from common import robot
 from common.errors import RecordingError
+from common.outfiles import replace_text
 from nodes.planner.registry import declared, with_role
 from nodes.planner.road import Lanes
+from papf.experiments.journal import Journal, run_key
 from papf.experiments.trials import markdown_table, quiet_runner_logs, run_stack, write_csv
 from papf.offline.car import road_figures
 from worlds import load_world, packaged_worlds, world_path
@@ -91,25 +93,37 @@ def run_traffic(out: str | Path, worlds: Sequence[str] = ROAD_WORLDS,
     ever beyond a solid line), ``lane_changes`` (the centre crossed a broken line),
     ``min_speed_mps`` / ``max_speed_mps`` after the first motion
     (:func:`papf.offline.car.road_figures`). Writes ``OUT/traffic.csv`` (one row per run) and
-    ``OUT/traffic.md`` (the table).
+    ``OUT/traffic.md`` (the table). Each finished run's row is kept in ``OUT/runs/`` the moment
+    it ends (:mod:`papf.experiments.journal`): after Ctrl-C the same command makes only the
+    runs not made yet.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quiet_runner_logs()
     rows = []
     seeds = tuple(seeds) if seeds else (seed,)
+    journal = Journal(out)   # each finished run on disk as it ends; a re-run resumes
     for s in seeds:
         for name in worlds:
+            text = world_path(name).read_text(encoding="utf-8")
             for planner, objects in cases:
-                tag = f"-s{s}" if len(seeds) > 1 else ""
-                mcap = out / "recordings" / f"{name}-{planner}-{objects}{tag}.mcap"
-                trial = run_stack(world_path(name), planner, s, timeout_s, record=mcap,
-                                  objects=objects, startup_timeout_s=STARTUP_S)
-                rows.append(road_row(name, planner, objects, trial, mcap))
+                key = run_key("traffic", name, text, planner, objects, s, timeout_s)
+                row = journal.get(key)
+                if row is None:
+                    tag = f"-s{s}" if len(seeds) > 1 else ""
+                    mcap = out / "recordings" / f"{name}-{planner}-{objects}{tag}.mcap"
+                    trial = run_stack(world_path(name), planner, s, timeout_s, record=mcap,
+                                      objects=objects, startup_timeout_s=STARTUP_S)
+                    row = road_row(name, planner, objects, trial, mcap)
+                    journal.put(key, row)
+                rows.append(row)
                 r = rows[-1]
                 echo(f"{name:>17} {planner:<6} {objects:<8} seed {s} {r['outcome']:<9} "
                      f"{r['duration_s']:7.2f} s  collisions {r['collisions']}  "
                      f"left road {r['left_road']}  {r['reason']}")
+    if journal.taken:
+        echo(f"traffic: {journal.taken} of {len(rows)} runs finished before, taken from "
+             f"{journal.dir} (delete it to make them again)")
     write_csv(rows, out / "traffic.csv")
-    (out / "traffic.md").write_text(table(rows))
+    replace_text((out / "traffic.md"), table(rows))
     return rows

@@ -23,7 +23,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from common.errors import RecordingError
-from common.outfiles import output
+from common.outfiles import output, replace_text
 from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions, map_runs
 from papf.launch.supervisor import free_port
@@ -169,7 +169,7 @@ def run_job(job: TrialJob) -> tuple[Trial, bytes | None]:
                            preset=job.preset), None
     with tempfile.TemporaryDirectory(prefix="papf-sweep-") as tmp:
         file = Path(tmp) / job.world_file
-        file.write_text(job.world_text, encoding="utf-8")
+        replace_text(file, job.world_text, encoding="utf-8")
         rec = Path(tmp) / "run.mcap" if job.record else None
         trial = run_stack(file, job.planner, job.seed, job.timeout_s, record=rec,
                           planner_args=[a for kv in job.sets for a in ("--set", kv)],
@@ -213,7 +213,7 @@ def write_csv(rows: list[dict], path: str | Path) -> Path:
     """Write ``rows`` as CSV (header from the first row) to ``path``; the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
+    with output(path, force=True) as tmp, tmp.open("w", newline="") as fh:
         if rows:
             w = csv.DictWriter(fh, fieldnames=list(rows[0]))
             w.writeheader()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from common.outfiles import replace_text
 from nodes.planner.registry import one_with_role
 from papf.experiments.trials import markdown_table, write_csv
 
@@ -70,5 +71,5 @@ def run_wang(out: str | Path, seed: int = 0, timeout_s: float = 300.0) -> list[d
                          "rosbot": robot.outcome, "rosbot_path_m": round(robot.length_m, 2)})
     write_csv(rows, out / "wang.csv")
     table = markdown_table(HEADER, [list(r.values()) for r in rows])
-    (out / "wang.md").write_text(f"# Wang's figures (seed {seed})\n\n{table}")
+    replace_text((out / "wang.md"), f"# Wang's figures (seed {seed})\n\n{table}")
     return rows

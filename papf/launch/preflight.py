@@ -81,6 +81,63 @@ def port_free(port: int | None) -> None:
                           "there would reach it. Give a free --port, or none to pick one")
 
 
+def view_port(port: int | None) -> None:
+    """The live view's port (``--view``) in range and free: the viewer would fail to bind
+    after every other process started (or serve beside another program)."""
+    if port is None:
+        return
+    check_value("--view", port, PORT)
+    if port_in_use(int(port)):
+        raise ConfigError(f"--view {port}: something already listens on 127.0.0.1:{port} "
+                          "(another view, or another program); give a free port")
+
+
+MAX_CONFIG_BYTES = 1024 * 1024   # [bytes] a Zenoh config file (they are a few KB)
+
+
+def zenoh_config_file(path: str | None, flag: str) -> None:
+    """A Zenoh config file (``--zenoh-config``, ``--router-config``) that exists, is a readable
+    file of a sane size and parses as Zenoh's JSON5 — checked here, not by the processes that
+    would each fail on it after the others started."""
+    if path is None:
+        return
+    from common.transport import load_config_file  # zenoh: only when a file is given
+
+    p = Path(path)
+    if not p.is_file():
+        what = "is a directory" if p.is_dir() else "does not exist"
+        raise ConfigError(f"{flag} {_short(path)}: {what}; give a Zenoh JSON5 config file")
+    try:
+        size = p.stat().st_size
+        if size > MAX_CONFIG_BYTES:
+            raise ConfigError(f"{flag} {_short(path)}: {size:,} bytes is not a Zenoh config "
+                              f"(at most {MAX_CONFIG_BYTES:,})")
+        load_config_file(str(p))
+    except ConfigError:
+        raise
+    except OSError as exc:
+        raise ConfigError(f"{flag} {_short(path)}: cannot read it ({exc.strerror})") from None
+    except Exception as exc:   # zenoh's parser: ZError, ValueError, UnicodeDecodeError
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ConfigError(f"{flag} {_short(path)}: not a valid Zenoh JSON5 config "
+                          f"({first[:160]})") from None
+
+
+def bridge_namespace(ns: str | None, ours: str) -> None:
+    """``--bridge-namespace``: a plain key (a ROS namespace, leading ``/`` allowed) whose keys
+    do not fall under our namespace (:meth:`BridgeTopics.check_separate`)."""
+    if not ns or not ns.strip("/"):
+        return
+    from nodes.base_driver.rosbot import BridgeTopics
+
+    try:
+        Keys(ns.strip("/"))
+    except ValueError:
+        raise ConfigError(f"--bridge-namespace {_short(ns)}: must be a plain key like 'robot1' "
+                          "or '/lab/r1' (no empty parts, no spaces, no * $ ? #)") from None
+    BridgeTopics(ns).check_separate(ours)
+
+
 def planner_settings(planner: str, planner_args: list[str]) -> None:
     """``--set``/``--params`` items (as passed to the planner node) in their ranges."""
     sets, params, it = [], None, iter(planner_args)
@@ -95,7 +152,7 @@ def planner_settings(planner: str, planner_args: list[str]) -> None:
 
 def check_run(world: World, planner: str, seed: int, timeout_s: float, port: int | None,
               ns: str, record: str | None, planner_args: list[str],
-              spec_timeout: Spec = TIMEOUT, force: bool = False) -> None:
+              spec_timeout: Spec = TIMEOUT, force: bool = False, view: int | None = None) -> None:
     """Every pre-start check of ``papf run`` (module doc)."""
     planner_name(planner)
     check_value("--seed", seed, SEED)
@@ -114,6 +171,7 @@ def check_run(world: World, planner: str, seed: int, timeout_s: float, port: int
                           "worlds; plan 3-D worlds offline with papf plan")
     check_runnable(world)
     port_free(port)
+    view_port(view)
 
 
 _ENDPOINT = re.compile(r"^(tcp|udp|tls|quic|ws)/(?P<host>\[[0-9a-fA-F:.]+\]|[^/:\[\]#]+):(?P<port>[^#/]*)(#.*)?$")
@@ -148,6 +206,10 @@ def check_launch(opt, prof) -> None:
     for flag, eps in (("--listen", opt.listen), ("--connect", opt.connect), ("--join", opt.join)):
         for ep in eps:
             endpoint(ep, flag)
+    zenoh_config_file(opt.zenoh_config, "--zenoh-config")
+    zenoh_config_file(opt.router_config, "--router-config")
+    bridge_namespace(opt.values.get("bridge_namespace"), opt.namespace)
+    view_port(opt.values.get("view"))
     if opt.join and not prof.router:
         raise ConfigError(f"--join connects this host's router to another's, and profile "
                           f"{prof.name} runs no router; use --connect for its nodes")

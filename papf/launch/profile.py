@@ -114,6 +114,9 @@ def packaged_profiles() -> list[str]:
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
+MAX_PROFILE_BYTES = 1024 * 1024   # [bytes] a launch profile (the packaged ones are ~2 KB)
+
+
 def load_profile(name_or_path: str) -> Profile:
     """A packaged profile by name, or a TOML file by path; ConfigError says what is wrong."""
     path = Path(name_or_path)
@@ -123,6 +126,9 @@ def load_profile(name_or_path: str) -> Profile:
         raise ConfigError(f"no launch profile {name_or_path!r}; packaged: "
                           f"{', '.join(packaged_profiles())} (or a path to a .toml file)")
     try:
+        if path.stat().st_size > MAX_PROFILE_BYTES:
+            raise ConfigError(f"launch profile {str(path)!r}: {path.stat().st_size:,} bytes; a "
+                              f"profile has at most {MAX_PROFILE_BYTES:,}")
         data = tomllib.loads(path.read_text(encoding="utf-8"))
         nodes = tuple(NodeSpec(n["name"], n["module"], tuple(n.get("args", ())), n.get("needs"),
                                dict(n.get("if_set", {}))) for n in data.get("nodes", ()))
@@ -136,9 +142,15 @@ def load_profile(name_or_path: str) -> Profile:
         if prof.zenoh_mode not in ("client", "peer"):
             raise ConfigError(f"launch profile {str(path)!r}: zenoh_mode = {prof.zenoh_mode!r}; "
                               "valid: client, peer")
-    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError) as exc:
+    except RecursionError:   # tomllib on thousands of nested arrays or tables
+        raise ConfigError(f"launch profile {str(path)!r}: nested too deeply to be a "
+                          "profile") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"launch profile {str(path)!r}: cannot read it as UTF-8 text "
+                          f"({type(exc).__name__})") from None
+    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError, ValueError) as exc:
         raise ConfigError(f"launch profile {str(path)!r} is invalid: {type(exc).__name__}: "
-                          f"{exc} (see docs/architecture.md for the format)") from None
+                          f"{str(exc)[:200]} (see docs/architecture.md for the format)") from None
     if prof.pose_topic not in TOPICS:
         raise ConfigError(f"profile {prof.name}: pose_topic {prof.pose_topic!r} is not one of "
                           f"{sorted(TOPICS)}")

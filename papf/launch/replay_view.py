@@ -17,11 +17,13 @@ def replay_with_view(args: argparse.Namespace, replay_fn) -> int:
     import zenoh
 
     from common.transport import DEFAULT_ENDPOINT, StopRequested, config_from_args, wait_alive
+    from papf.launch.preflight import view_port
     from papf.launch.supervisor import Supervisor, port_in_use, wait_port
     from papf.recording.replay import recorded_namespace
     from papf.recording.rosbag import SOURCE, TopicMap, open_run
     from schemas import Keys
 
+    view_port(args.view)   # a busy port: exit 2 before the router and viewer start
     with open_run(args.file, TopicMap.parse(getattr(args, "topics", None))) as rec:
         meta, recorded_ns = rec.run_metadata, recorded_namespace(rec)
     ns = args.namespace or recorded_ns or "rosbot"

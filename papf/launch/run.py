@@ -92,7 +92,7 @@ def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = load_world(cfg.world)  # WorldError before anything starts
     check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
-              cfg.planner_args, force=cfg.force)   # ConfigError/WorldError before anything starts
+              cfg.planner_args, force=cfg.force, view=cfg.view)   # before anything starts
     port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
     if cfg.port is None and port != DEFAULT_PORT:
         log.warning("port %d is in use; the embedded router listens on %d instead",

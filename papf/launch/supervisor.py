@@ -21,6 +21,8 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import TextIO
 
+from common.text import safe_line
+
 _PR_SET_PDEATHSIG = 1
 PUMP_JOIN_S = 5.0   # [s wall] at most, after stop(), for the children's last output lines
 
@@ -93,7 +95,7 @@ class Supervisor:
             child.tail.append(line)
             if self.show(child.name, line):
                 with self._lock:
-                    print(f"[{child.name}] {line}", file=self.log_stream, flush=True)
+                    print(f"[{child.name}] {safe_line(line)}", file=self.log_stream, flush=True)
 
     def dead(self) -> list[Child]:
         """Children that have exited."""

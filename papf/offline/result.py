@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import ConfigError
+from common.outfiles import output
 
 
 @dataclass
@@ -54,22 +55,28 @@ class PlanResult:
                 "reason": self.reason}
 
 
-def write_path(result: PlanResult, out: str | Path) -> None:
-    """The path as CSV (``t,x,y[,z],yaw``) or JSON (summary + ``path``), by file suffix."""
+def write_path(result: PlanResult, out: str | Path, force: bool = False, inputs=()) -> None:
+    """The path as CSV (``t,x,y[,z],yaw``) or JSON (summary + ``path``), by file suffix
+    (:func:`common.outfiles.output`: an existing ``out`` only with ``force``, never an input)."""
     out = Path(out)
+    with output(out, inputs, force) as tmp:
+        tmp.write_text(path_text(result, out.suffix.lower()))
+
+
+def path_text(result: PlanResult, suffix: str) -> str:
+    """The text of :func:`write_path` for ``suffix`` (``.csv`` or ``.json``)."""
     dims = result.path.shape[1]
     cols = ["t", "x", "y", "z"][: dims + 1]
-    if out.suffix.lower() == ".json":
+    if suffix == ".json":
         doc = {**result.summary(), "columns": cols,
                "path": [[float(t), *map(float, row)] for t, row in zip(result.times, result.path, strict=True)]}
-        out.write_text(json.dumps(doc))
-        return
-    if out.suffix.lower() != ".csv":
-        raise ConfigError(f"path file {str(out)!r}: suffix must be .csv or .json")
+        return json.dumps(doc)
+    if suffix != ".csv":
+        raise ConfigError(f"path file suffix {suffix!r}: must be .csv or .json")
     lines = [",".join(cols + (["yaw"] if result.headings.size else []))]
     for i, (t, row) in enumerate(zip(result.times, result.path, strict=True)):
         vals = [f"{t:.3f}", *(f"{v:.5f}" for v in row)]
         if result.headings.size:
             vals.append(f"{result.headings[i]:.5f}")
         lines.append(",".join(vals))
-    out.write_text("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"

@@ -28,6 +28,7 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 from matplotlib.transforms import Affine2D  # noqa: E402
 
+from common.outfiles import output  # noqa: E402
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
 from nodes.planner.registry import declared  # noqa: E402
 from worlds import Obstacle, World  # noqa: E402
@@ -216,11 +217,16 @@ def draw_paths(ax, paths: Mapping[str, np.ndarray], dims: int = 2) -> None:
 @contextlib.contextmanager
 def saved_png(fig, out_png: str | Path, dpi: int = 110) -> Iterator[Path]:
     """Draw on ``fig`` inside the block; when it completes, write ``out_png`` (its folder
-    made); close ``fig`` whatever happens. Yields the PNG's path."""
+    made); close ``fig`` whatever happens. Yields the PNG's path.
+
+    Written beside and renamed into place, a symlink replaced and never followed
+    (:func:`common.outfiles.output`); whether an existing file may be replaced is the
+    caller's check, made before the work (``papf plan --plot``: ``--force``)."""
     out = Path(out_png)
     try:
         yield out
         out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=dpi)
+        with output(out, force=True) as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
     finally:
         plt.close(fig)

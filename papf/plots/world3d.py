@@ -21,6 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
+from common.outfiles import output  # noqa: E402
 from papf.plots.world import (  # noqa: E402
     GOAL_COLOUR,
     MARKERS,
@@ -108,7 +109,8 @@ def plot_paths_3d(world: World, paths: Mapping[str, np.ndarray], out_png: str | 
                    ncol=min(len(arrays) + 2, 4), fontsize=8, frameon=False)
         out = Path(out_png)
         out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=100)
+        with output(out, force=True) as tmp:   # beside, then renamed (papf.plots.world.saved_png)
+            fig.savefig(tmp, dpi=100, format="png")
     finally:
         plt.close(fig)
     return out

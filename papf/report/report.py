@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import ConfigError, PapfError, RecordingError
+from common.outfiles import check_output
 from papf.plots.moment import MomentPanel, moment_png
 from papf.recording.rosbag import TopicMap, is_rosbag
 from papf.report import figures, tables
@@ -145,11 +146,17 @@ def suffix_for(runs: Sequence[RunMetrics], energy_model: str | None) -> str:
 
 def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None,
                  energy_model: str | None = None, energy_params: dict | None = None,
-                 topics: TopicMap | None = None, progress=None) -> Report:
+                 topics: TopicMap | None = None, progress=None, force: bool = False) -> Report:
     """Read the recordings (and rosbag2s, their topics mapped by ``topics``), write
     report.md, report.csv and the PNGs into ``out_dir``. ``progress``: a
     :class:`papf.console.progress.StepProgress` (its total is set here: a step per file
-    read and per figure drawn), or None."""
+    read and per figure drawn), or None.
+
+    The one output rule (:mod:`common.outfiles`): the files are written into a staging
+    directory and moved into ``out_dir`` only once all are written; a report file already
+    there is replaced only with ``force``, a symlink is replaced (never followed), and a
+    name that is one of the inputs (a hard link, a symlink to a recording) is refused even
+    with ``force`` — checked for every file before the first one moves."""
     if energy_model not in (None, *MODELS):
         raise ConfigError(f"energy model {energy_model!r} is not one of {', '.join(MODELS)}")
     paths = find_recordings(inputs)
@@ -167,6 +174,8 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     stage = Path(tempfile.mkdtemp(prefix=".papf-report-", dir=out))
     try:   # into a staging directory, moved into out only once every file is written
         _write(report, runs, files, stage, topics, progress)
+        for f in report.files:   # every name checked before the first file moves
+            check_output(out / f.name, paths, force)
         report.files = [_move(f, out) for f in report.files]
     except OSError as exc:
         raise RecordingError(f"cannot write the report into {str(out)!r}: {exc.strerror}; "
@@ -177,7 +186,7 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
 
 
 def _move(path: Path, out: Path) -> Path:
-    """A staged report file into ``out`` (replacing the previous report's file of that name)."""
+    """A staged report file into ``out`` (checked: :func:`common.outfiles.check_output`)."""
     dst = out / path.name
     os.replace(path, dst)
     return dst

@@ -215,20 +215,42 @@ def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosb
                           "laptop connects to)")
     robot_hosts = [check_host(h) for h in robot_hosts]
     out = Path(out).resolve()
-    existing = [f for f in BUNDLE_FILES if (out / f).exists()]
+    # lexists: a symlink planted where a key or the passwords go counts (never written through)
+    existing = [f for f in BUNDLE_FILES if os.path.lexists(out / f)]
     if existing and not force:
         raise ConfigError(f"{out} already holds a bundle ({', '.join(existing[:3])}…); "
                           "replacing it would change the CA and every password: give --force, "
                           "or another directory")
     try:
         out.mkdir(parents=True, exist_ok=True)
+        if out.stat().st_mode & 0o002:   # anyone could swap a key for a link between our steps
+            raise ConfigError(f"{out}: every user may write in it; keys and passwords go into "
+                              "a directory only you can write (e.g. mkdir -m 700 bundle)")
+        for f in existing:   # --force: the old files (or links) go, never what a link points to
+            (out / f).unlink()
     except OSError as exc:
-        raise ConfigError(f"cannot create {out}: {exc.strerror}") from None
+        raise ConfigError(f"cannot prepare {out}: {exc.strerror}") from None
+    old_mask = os.umask(0o077)   # keys and passwords are never readable by others, not even briefly
+    try:
+        return _write_bundle(out, robot_hosts, namespace, bridge, local_port, tls_port, ros,
+                             ros_domain, papf_port)
+    finally:
+        os.umask(old_mask)
+
+
+def _write_secret(path: Path, text: str) -> None:
+    """``path`` created new, mode 600, never through a symlink (the caller removed the old)."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600)
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
+def _write_bundle(out: Path, robot_hosts: list[str], namespace: str, bridge, local_port: int,
+                  tls_port: int, ros: str, ros_domain: int, papf_port: int) -> Bundle:
+    """:func:`write_bundle`'s files into the prepared ``out`` (under umask 077)."""
     make_certs(out, robot_hosts)
     passwords = {role: secrets.token_urlsafe(18) for role in ROLES}
-    cred = out / "credentials.txt"
-    cred.write_text("".join(f"{u}:{p}\n" for u, p in passwords.items()))
-    cred.chmod(0o600)
+    _write_secret(out / "credentials.txt", "".join(f"{u}:{p}\n" for u, p in passwords.items()))
     host = robot_hosts[0]
     local = f"tcp/127.0.0.1:{local_port}"
     remote = f"tls/[{host}]:{tls_port}" if ":" in host else f"tls/{host}:{tls_port}"
@@ -248,13 +270,9 @@ def write_bundle(out: str | Path, robot_hosts: list[str], namespace: str = "rosb
     if ros == "rmw_zenoh":
         configs.update(rmw_configs(passwords, router_tls, access_control(namespace, bridge, ros_domain),
                                    local_port, tls_port, papf_port))
-    for name in RMW_ROBOT_FILES:          # a bridge bundle replacing an rmw_zenoh one (--force)
-        (out / name).unlink(missing_ok=True)
-    for name, conf in configs.items():
-        path = out / f"{name}.json5"
-        path.write_text(json.dumps(conf, indent=2) + "\n")
-        os.chmod(path, 0o600)
-    (out / "README.txt").write_text(where_files_go(ros))
+    for name, conf in configs.items():   # they hold passwords
+        _write_secret(out / f"{name}.json5", json.dumps(conf, indent=2) + "\n")
+    _write_secret(out / "README.txt", where_files_go(ros))
     return Bundle(out)
 
 

@@ -18,6 +18,7 @@ import time
 
 from common import ros2
 from common.errors import SchemaError
+from common.outfiles import append_jsonl
 from common.ros_link import cmd_vel_type, open_link, ros_domain
 from common.transport import open_node, setup_logging
 from nodes.base_driver.limits import CommandGate, RosbotLimits, unicycle
@@ -113,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     robot = EmulatedRosbot(args.cmd_timeout, start)
     lidar = _lidar(args)
     # line-buffered: the trace can be read while the emulator runs (tests, a live tail -f)
-    trace = open(args.trace, "a", encoding="utf-8", buffering=1) if args.trace else None  # noqa: SIM115
+    trace = append_jsonl(args.trace) if args.trace else None   # JSON lines only, never a link
     with open_node(NAME, args, log) as node:
         link = open_link(args, node.session, ROS_NODE, topics.namespace)
         link.subscribe(topics.cmd_vel, cmd_type,

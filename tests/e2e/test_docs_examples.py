@@ -57,6 +57,7 @@ SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
     ("plan",): ([], {0, 3, 4, 5}),     # its exit code is the run's outcome (docs: the papers'
                                        # collisions and stagnations are examples too)
     ("make-certs",): (["--force"], {0}),
+    ("report",): (["--force"], {0}),   # a block's report after its experiment wrote one
 }
 WHY_MINUTES = "takes minutes (tests/e2e/test_progress_piped.py runs its first steps)"
 HELP: dict[tuple[str, ...], str] = {

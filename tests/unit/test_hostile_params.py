@@ -44,11 +44,15 @@ def test_no_value_between_zero_and_the_floor_is_taken(name, frac):
        qo=st.floats(-5.0, -S.CHARGE_MIN))
 def test_the_repulsion_product_has_its_own_floor(k, qv, qo):
     sets = [f"k_vo_l={k!r}", f"q_v={qv!r}", f"q_o={qo!r}"]
-    if k * qv * qo >= S.REPULSION_MIN:
+    pull = 5.0 * 1.0 / (k * abs(qo))   # the default k_vg q_g over k_vo_l |q_o| (q_v in both)
+    if k * qv * qo >= S.REPULSION_MIN and pull <= S.ATTRACTION_RATIO_MAX:
         apf, _ = load_params("apf", None, sets)
         assert apf.k_vo_l * apf.q_v * apf.q_o >= S.REPULSION_MIN
-    else:
+    elif k * qv * qo < S.REPULSION_MIN:
         with pytest.raises(ConfigError, match=r"k_vo_l\*q_v\*q_o"):
+            load_params("apf", None, sets)
+    else:   # pushed hard enough, but pulled harder still (the attraction ratio's ceiling)
+        with pytest.raises(ConfigError, match=r"k_vg\*q_g/\(k_vo_l\*\|q_o\|\)"):
             load_params("apf", None, sets)
 
 

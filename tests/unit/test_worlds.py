@@ -71,7 +71,7 @@ def test_energy_world_is_the_paper_setup():
 @pytest.mark.parametrize("text, match", [
     ("name = 'x'", r"\[goal\]: is missing"),
     ("[goal]\nposition = [1]", "goal.position: must be an array of 2 numbers or 3 numbers"),
-    ("[goal]\nposition = [1, 2]\ntolerance = -1", "goal.tolerance: must be > 0"),
+    ("[goal]\nposition = [1, 2]\ntolerance = -1", "goal.tolerance: must be at least 0.005 m"),
     ("[goal]\nposition = [1, 2]\n[[obstacles]]\nkind = 'blob'", "kind: 'blob' is not one of"),
     ("[goal]\nposition = [1, 2]\n[[obstacles]]\nkind = 'box'\ncenter = [1, 1]", r"obstacles\[0\].size: is missing"),
     ("[goal]\nposition = [1, 2]\n[[obstacles]]\nkind = 'cylinder'\ncenter = [1, 1]\nradius = 0", "radius: must be > 0"),

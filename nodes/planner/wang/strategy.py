@@ -16,7 +16,8 @@ import numpy as np
 from common.errors import ConfigError
 from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import EPS_M, APFParams
-from nodes.planner.wang.settings import WANG, WANG_APF
+from nodes.planner.settings import attraction_ratio, require_ratio
+from nodes.planner.wang.settings import WANG, WANG_APF, WANG_RATIO_MAX
 
 
 @dataclass(frozen=True)
@@ -130,6 +131,11 @@ class WangStrategy(Strategy):
     SPECS = WANG
     #: ``--preset paper``: the force at the robot itself (Wang moves a point along it).
     PAPER_PRESET = {"control_offset_m": 0.0}
+
+    @classmethod
+    def check_strength(cls, apf, params) -> None:
+        """The goal's pull ``k_att / k_rep_l`` at most its measured ceiling."""
+        require_ratio("k_att/k_rep_l", attraction_ratio(apf, params), WANG_RATIO_MAX)
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
