@@ -80,11 +80,13 @@ def cmd_run(args) -> int:
     if args.json:
         print(json.dumps(result.to_json()))
     else:
-        print_summary(result)
+        print_summary(result, args.energy_model)
     return result.exit_code
 
 
-def print_summary(result) -> None:
+def print_summary(result, energy_model: str | None = None) -> None:
+    """The run's table (and a fleet's, one row per robot); ``energy_model`` named beside the
+    charge (the meter's model: its figures differ from the paper's model's)."""
     from rich.console import Console  # rich: only to print a table
     from rich.markup import escape  # values are text: a "[...]" in them is no style tag
     from rich.table import Table
@@ -96,7 +98,9 @@ def print_summary(result) -> None:
     rows = [("world", result.world), ("planner", result.planner), ("seed", str(result.seed)),
             ("duration", f"{result.duration_s:.2f} s"),
             ("path length", f"{result.path_length_m:.2f} m"),
-            ("charge", f"{result.charge_mAh:.2f} mAh"), ("energy", f"{result.energy_J:.1f} J"),
+            ("charge", f"{result.charge_mAh:.2f} mAh"
+                       + (f" ({energy_model} model)" if energy_model else "")),
+            ("energy", f"{result.energy_J:.1f} J"),
             ("collisions", str(result.collisions)), ("sim time", f"{result.sim_time_s:.2f} s"),
             ("wall time", f"{result.wall_time_s:.2f} s  "
                           f"({result.sim_time_s / max(result.wall_time_s, 1e-9):.1f}x real time)")]

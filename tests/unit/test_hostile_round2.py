@@ -571,9 +571,10 @@ def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
                              collisions=0, sim_time_s=1.0, wall_time_s=1.0, fleet=(),
                              min_separation_m=None,
                              reason="planner: \x1b]0;owned\x07[link=http://e]click[/link]")
-    print_summary(result)
+    print_summary(result, "motor")
     out = capsys.readouterr().out
     assert "\x1b" not in out and "[link=http://e]click" in out
+    assert "1.00 mAh (motor model)" in out          # the charge names the meter's model
 
 
 @pytest.mark.parametrize("experiment", [["crowd", "--people", "0", "--runs", "1"],
