@@ -1,7 +1,9 @@
-"""PAPF on the packaged map worlds, offline and through the stack: outcome, collisions and
-x real time per world.
+"""PAPF on the packaged map worlds (or any ``--worlds``), offline and through the stack:
+outcome, collisions and x real time per world.
 
-For each world (``--worlds``, default every packaged ``map-*`` world): ``papf plan --world W
+For each world (``--worlds``, default every packaged ``map-*`` world; the crowd and fleet
+worlds too, where ``path_m`` is the JSON's: ``papf run`` sums a fleet's robots, ``papf
+plan`` gives the first robot's): ``papf plan --world W
 --planner P --json`` (offline: the planner core, the simulated LiDAR on the grid, the
 ROSbot's unicycle) and ``papf run --world W --planner P --json`` (every node a process,
 lockstep, pybullet). A row per world and mode: the map's cells, the JSON's outcome,
