@@ -4,24 +4,18 @@ the stack, and when the first messages came (no silent wait)."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
 import time
 
 from schemas import Clock, Keys
+from tests.support.cli import stderr_until
 
 
-def _until(proc: subprocess.Popen, needle: str, seen: list[str], timeout_s: float = 60.0) -> str:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        line = proc.stderr.readline()
-        if not line:
-            break
-        seen.append(line.rstrip())
-        if needle in line:
-            return line
-    raise AssertionError(f"no {needle!r} in {seen}")
+def _until(proc: subprocess.Popen, needle: str, seen: list[str]) -> str:
+    return stderr_until(proc, re.escape(needle), seen)
 
 
 def test_record_before_the_stack_waits_aloud_then_says_when_messages_come(router, session,

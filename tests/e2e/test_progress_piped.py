@@ -9,21 +9,17 @@ before its last line.
 from __future__ import annotations
 
 import os
-import re
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 
-from nodes.recorder.writer import RunWriter
 from papf.launch.supervisor import free_port
-from schemas.messages import BatteryState, Odometry
+from tests.support.cli import stderr_until
+from tests.support.recordings import write_drive
 
 pytestmark = pytest.mark.e2e
-
-NS = 1_000_000_000
 
 
 def _first_progress(argv: list[str], pattern: str, cwd, timeout_s: float = 240.0) -> str:
@@ -34,17 +30,9 @@ def _first_progress(argv: list[str], pattern: str, cwd, timeout_s: float = 240.0
                             start_new_session=True)
     seen: list[str] = []
     try:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            line = proc.stderr.readline()
-            if not line:
-                break
-            seen.append(line.rstrip())
-            if re.search(pattern, line):
-                assert proc.poll() is None, "the progress line came only at the end"
-                return line.strip()
-        raise AssertionError(f"no progress line /{pattern}/ from papf {' '.join(argv)}: "
-                             f"{seen[-10:]}")
+        line = stderr_until(proc, pattern, seen, timeout_s)
+        assert proc.poll() is None, "the progress line came only at the end"
+        return line.strip()
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGINT)
@@ -76,14 +64,7 @@ def test_run_view_prints_the_url_without_realtime(tmp_path):
 
 def test_animate_prints_progress_before_its_last_line(tmp_path):
     rec, out = tmp_path / "run.mcap", tmp_path / "run.gif"
-    with RunWriter(rec, {"world": "open", "planner": "apf", "seed": 0}) as w:
-        for k in range(100):
-            t = k * 20_000_000
-            w.write_message("rosbot/odom", Odometry(stamp_ns=t, x=0.1 * t / NS, y=0.0, yaw=0.0,
-                                                    v=0.1, w=0.0))
-            w.write_message("rosbot/battery", BatteryState(stamp_ns=t, voltage=12.0, current=1.0,
-                                                           power=12.0, charge_used_mAh=t / NS,
-                                                           energy_J=12 * t / NS))
+    write_drive(rec, 100, {"world": "open", "planner": "apf", "seed": 0})
     proc = subprocess.run([sys.executable, "-m", "papf", "animate", str(rec), str(out),
                            "--speed", "0.5", "--fps", "10"], cwd=tmp_path, text=True,
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=240)

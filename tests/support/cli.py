@@ -10,3 +10,22 @@ def papf(*args, timeout: float = 60) -> subprocess.CompletedProcess:
     """``python -m papf ARGS`` with no stdin; its exit code, stdout and stderr (text)."""
     return subprocess.run([sys.executable, "-m", "papf", *map(str, args)], capture_output=True,
                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+def stderr_until(proc: subprocess.Popen, pattern: str, seen: list[str],
+                 timeout_s: float = 60.0) -> str:
+    """The first line of ``proc``'s stderr (a text pipe) that matches the regular expression
+    ``pattern``; every line read is appended to ``seen``. AssertionError when the stream
+    ends or ``timeout_s`` passes first (checked between lines)."""
+    import re
+    import time
+
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        seen.append(line.rstrip())
+        if re.search(pattern, line):
+            return line
+    raise AssertionError(f"no line /{pattern}/ in {seen[-10:]}")

@@ -11,7 +11,7 @@ from common.units import NS_PER_S as NS
 from nodes.energy_meter.core import EnergyMeter
 from nodes.energy_meter.models import WHEEL_RADIUS_M
 from nodes.recorder.writer import RunWriter
-from schemas import Clock, Event, Keys, Odometry, PlannerStatus, WheelStates
+from schemas import BatteryState, Clock, Event, Keys, Odometry, PlannerStatus, WheelStates
 from schemas.keys import TOPICS
 
 VALUES = {"int": 123, "float": 1.5, "bool": True, "floats": (1.0, 2.0),
@@ -76,6 +76,21 @@ def write_synthetic(path: Path, planner: str = "apf", seed: int = 1, end_k: int 
                 state = outcome if (k == end_k and outcome) else "driving"
                 w.write_message("rosbot/planner/status", PlannerStatus(stamp_ns=t, state=state))
     return meter
+
+
+def write_drive(path: Path, n: int, meta: dict) -> Path:
+    """A drive along x at 0.1 m/s: ``n`` odometry and battery samples at 50 Hz (12 W, 1 A)
+    on ``rosbot/``, with the recording metadata ``meta`` (pictures' and progress tests);
+    ``path``."""
+    with RunWriter(path, meta) as w:
+        for k in range(n):
+            t = k * STEP_NS
+            w.write_message("rosbot/odom", Odometry(stamp_ns=t, x=0.1 * t / NS, y=0.0, yaw=0.0,
+                                                    v=0.1, w=0.0))
+            w.write_message("rosbot/battery", BatteryState(stamp_ns=t, voltage=12.0, current=1.0,
+                                                           power=12.0, charge_used_mAh=t / NS,
+                                                           energy_J=12 * t / NS))
+    return path
 
 
 ODOM_RUN_N = 600               # samples of :func:`write_odom_recording` (12 s at 50 Hz)

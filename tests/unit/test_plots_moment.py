@@ -66,20 +66,12 @@ def test_a_road_panel_shows_its_lines_and_no_empty_half():
 def test_animate_lays_a_long_world_across_the_frame(tmp_path):
     """energy (10 m x 2 m): the top view spans the frame, the legend has its own row, speed
     and charge sit side by side (beside the plots it was a thin strip in a white box)."""
-    from nodes.recorder.writer import RunWriter
     from papf.recording.track import load_track
     from papf.report.animation import Animator
-    from schemas.messages import BatteryState, Odometry
+    from tests.support.recordings import write_drive
 
     rec = tmp_path / "run.mcap"
-    with RunWriter(rec, {"world": "energy", "planner": "papf", "seed": 0}) as w:
-        for k in range(50):
-            t = k * 20_000_000
-            w.write_message("rosbot/odom", Odometry(stamp_ns=t, x=0.1 * t / S, y=0.0, yaw=0.0,
-                                                    v=0.1, w=0.0))
-            w.write_message("rosbot/battery", BatteryState(stamp_ns=t, voltage=12.0, current=1.0,
-                                                           power=12.0, charge_used_mAh=t / S,
-                                                           energy_J=12 * t / S))
+    write_drive(rec, 50, {"world": "energy", "planner": "papf", "seed": 0})
     anim = Animator(load_track(rec), fps=10, speed=4)
     try:
         anim.fig.tight_layout(rect=(0, 0.02, 1, 0.95))
