@@ -54,7 +54,7 @@ class NamespaceTaken(Exception):
     """Another launcher of this user holds the namespace (its key file names a live process)."""
 
 
-def publish_key(namespace: str, key_hex: str) -> Path:
+def publish_key(namespace: str, key_hex: str, run_id: str = "") -> Path:
     """Write the run key (and this process id) for this user's ``papf goal``.
 
     NamespaceTaken when a live launcher already holds ``namespace``: two launches in one
@@ -76,7 +76,7 @@ def publish_key(namespace: str, key_hex: str) -> Path:
                              f"(process {holder}); stop it, or give another --namespace")
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0), 0o600)
     with os.fdopen(fd, "w") as f:
-        f.write(f"{key_hex} {os.getpid()}\n")
+        f.write(f"{key_hex} {os.getpid()} {run_id or '-'}\n")
     return path
 
 
@@ -120,6 +120,72 @@ def read_key(namespace: str) -> bytes | None:
         return bytes.fromhex(path.read_text().split()[0])
     except (OSError, ValueError, IndexError, KeyDirError):
         return None
+
+
+def read_run(namespace: str) -> bytes | None:
+    """The run id a launcher of ``namespace`` left beside its key (tools seal with it so the
+    run's nodes take what they put: ``papf goal``), or None (no run: a serving launch)."""
+    path = key_file(namespace)
+    try:
+        _check_own_dir(path.parent)
+        parts = path.read_text().split()
+        return bytes.fromhex(parts[2]) if len(parts) > 2 and parts[2] != "-" else None
+    except (OSError, ValueError, KeyDirError):
+        return None
+
+
+def sealed_put(session, key_expr: str, payload: bytes, key: bytes | None,
+               run: bytes | None = None) -> None:
+    """``session.put`` with the seal of ``key`` and ``run`` (common.seal); plain without a key."""
+    if key is None:
+        session.put(key_expr, payload)
+        return
+    from common.seal import Sealer  # imported here: seal imports nothing of ours, no cycle
+
+    session.put(key_expr, payload, attachment=Sealer(key, run).seal(key_expr, payload))
+
+
+# -- a key made once for a split (robot and laptop launched separately) ------------------------
+KEY_FILE_BYTES = 32   # [bytes] a pairing key: 256 bits
+
+
+def pair_file(namespace: str) -> Path:
+    """The pairing key both sides of a split on one host use when given no ``--key``."""
+    return key_file(namespace).with_suffix(".pair")
+
+
+def load_pair_key(path: str | Path, create: bool = False) -> tuple[bytes, bool]:
+    """The key in ``path`` (hex; made there, mode 600, when missing and ``create``) and
+    whether it was made now. PapfError (one line) for a file that is no key, or is readable
+    by others (a secret anyone on the host could read steers the robot)."""
+    path = Path(path)
+    if create and not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL |
+                         getattr(os, "O_NOFOLLOW", 0), 0o600)
+        except FileExistsError:
+            return load_pair_key(path)
+        with os.fdopen(fd, "w") as f:
+            f.write(secrets.token_hex(KEY_FILE_BYTES) + "\n")
+        return load_pair_key(path)[0], True
+    try:
+        st = os.stat(path)
+        text = path.read_text().split()
+    except OSError as exc:
+        raise PapfError(f"--key {path}: {exc.strerror or exc} (make one with papf launch robot "
+                        "--key FILE, then copy FILE to the laptop)") from None
+    if st.st_mode & 0o077:
+        raise PapfError(f"--key {path}: readable by other users (mode {st.st_mode & 0o777:o}); "
+                        f"chmod 600 {path}")
+    try:
+        key = bytes.fromhex(text[0]) if text else b""
+    except ValueError:
+        key = b""
+    if len(key) < 16:
+        raise PapfError(f"--key {path}: not a key file (expected at least 32 hex digits on its "
+                        "first line; papf launch robot --key FILE makes one)")
+    return key, False
 
 
 def withdraw_key(namespace: str, key_hex: str) -> None:

@@ -30,6 +30,7 @@ from pathlib import Path
 import zenoh
 
 from common.errors import ConfigError, SchemaError
+from common.intake import Trust
 from common.reach import session_error
 from common.text import install_log_filter
 from common.units import StampGuard
@@ -185,34 +186,86 @@ def setup_logging(name: str, level: str = "INFO") -> logging.Logger:
     return logging.getLogger(name)
 
 
+STOP_BOUND_S = 5.0       # [s wall] a node still running this long after a stop request exits
+PARENT_POLL_S = 0.5      # [s wall] how often a node looks whether its launcher still lives
+
+
 class StopRequested:
     """SIGINT/SIGTERM -> a flag the main loop polls (the session then closes cleanly).
 
     ``wake`` (optional) is called right after, from the signal handler, to wake a main
     thread that sleeps on a queue (a ``SimpleQueue.put``, which is reentrant): the node
     then stops at once instead of at its next idle tick.
+
+    ``bound_s`` (nodes): the stop is bounded — a process still alive that long after the
+    request leaves at once (``os._exit``). Closing a Zenoh session whose router is gone can
+    block for minutes; a node must not outlive its launcher that way (issue 30: a meter
+    lived on for 5 minutes with its router gone, keeping its liveliness token). Every
+    instance of a process hears the signal (a fleet driver has one node per robot).
     """
 
-    def __init__(self, wake=None) -> None:
+    _instances: list[StopRequested] = []
+
+    def __init__(self, wake=None, bound_s: float | None = None) -> None:
         self.event = threading.Event()
         self._wake = wake
+        self.bound_s = bound_s
+        self._timer: threading.Timer | None = None
+        StopRequested._instances.append(self)
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
-                signal.signal(sig, self._on_signal)
+                signal.signal(sig, StopRequested._on_signal)
 
-    def _on_signal(self, *_) -> None:
+    @staticmethod
+    def _on_signal(*_) -> None:
+        for stop in list(StopRequested._instances):
+            stop.request()
+
+    def request(self, why: str = "") -> None:
+        """Stop (from a signal handler or any thread); arms the bound once."""
         self.event.set()
         if self._wake is not None:
             self._wake()
+        if self.bound_s is not None and self._timer is None:
+            self._timer = threading.Timer(self.bound_s, _bounded_exit, args=(self.bound_s, why))
+            self._timer.daemon = True
+            self._timer.start()
 
     def __bool__(self) -> bool:
         return self.event.is_set()
 
 
-def round_robin(channels) -> Iterator[tuple[str, type, bytes]]:
-    """``(topic, message type, payload)`` of every sample waiting in ``channels`` (tuples of
-    topic, message type and a subscriber with a ``FifoChannel``), taken one per channel in
-    turn, so streams published in step (odom(t), wheels(t)) come out in step too."""
+def _bounded_exit(bound_s: float, why: str) -> None:
+    """The stop took longer than its bound: say so and leave without closing anything."""
+    logging.getLogger("papf.node").warning(
+        "still running %g s after the stop request%s (a Zenoh close waiting for a router "
+        "that is gone?): exiting now", bound_s, f" ({why})" if why else "")
+    exit_fast(1)
+
+
+def watch_parent(stop: StopRequested, poll_s: float = PARENT_POLL_S) -> threading.Thread:
+    """Stop when the process that started this one is gone (its parent id changes): the
+    launcher's ``PR_SET_PDEATHSIG`` does it on Linux from the kernel, this on any system and
+    for a node whose signal was lost. Returns the (daemon) watcher thread."""
+    parent = os.getppid()
+
+    def watch() -> None:
+        while not stop.event.wait(poll_s):
+            if os.getppid() != parent:
+                logging.getLogger("papf.node").warning(
+                    "the launcher (process %d) is gone: stopping", parent)
+                stop.request("launcher gone")
+                return
+
+    thread = threading.Thread(target=watch, daemon=True, name="parent-watch")
+    thread.start()
+    return thread
+
+
+def round_robin(channels) -> Iterator[tuple[str, type, bytes, bytes | None]]:
+    """``(topic, message type, payload, attachment)`` of every sample waiting in ``channels``
+    (tuples of topic, message type and a subscriber with a ``FifoChannel``), taken one per
+    channel in turn, so streams published in step (odom(t), wheels(t)) come out in step too."""
     live = list(channels)
     while live:
         for entry in list(live):
@@ -221,7 +274,13 @@ def round_robin(channels) -> Iterator[tuple[str, type, bytes]]:
             if sample is None:
                 live.remove(entry)
             else:
-                yield topic, msg_type, sample.payload.to_bytes()
+                yield topic, msg_type, sample.payload.to_bytes(), attachment_of(sample)
+
+
+def attachment_of(sample: zenoh.Sample) -> bytes | None:
+    """A sample's attachment as bytes (a seal: :mod:`common.seal`), or None."""
+    att = sample.attachment
+    return None if att is None else att.to_bytes()
 
 
 class Node:
@@ -237,14 +296,26 @@ class Node:
     A payload that fails to decode, or whose stamp is out of range or goes back on a
     stamp-ordered topic (:class:`common.units.StampGuard`), is logged (rate-limited),
     counted in :attr:`bad_messages` and dropped: a bad peer never crashes a node.
+
+    Seals (:mod:`common.seal`, policy :class:`common.intake.Trust`): with the run's key in
+    its environment the node seals every put and accepts only sealed samples of its run
+    that are new; the others are counted per topic and reason (``trust.refused``) and
+    dropped. ``<ns>/health/<name>`` answers what it refused and dropped (``papf topic list``,
+    the launcher's run JSON).
     """
 
-    def __init__(self, name: str, session: zenoh.Session, keys: Keys, log: logging.Logger):
+    def __init__(self, name: str, session: zenoh.Session, keys: Keys, log: logging.Logger,
+                 trust: Trust | None = None):
         self.name, self.session, self.keys, self.log = name, session, keys, log
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.bad_messages: Counter[str] = Counter()
         self.stamps = StampGuard(STAMP_ORDERED)
-        self.stop = StopRequested(wake=lambda: self.inbox.put((None, None)))  # a tick, at once
+        self.trust = trust if trust is not None else Trust.from_env()
+        self._key_exprs: dict[str, str] = {}
+        self._health = None
+        self.extra_health: dict = {}   # what a node adds to its health answer (the recorder's file)
+        self.stop = StopRequested(wake=lambda: self.inbox.put((None, None)),  # a tick, at once
+                                  bound_s=STOP_BOUND_S)
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
         self._batched: list[tuple[str, type[Message], zenoh.Subscriber]] = []
@@ -266,7 +337,18 @@ class Node:
             pub = self._declare(topic)
         if msg is not self._last[0]:  # the same message on two keys (sim/pose, odom): encode once
             self._last = (msg, msg.to_bytes())
-        pub.put(self._last[1])
+        payload = self._last[1]
+        if self.trust.keyed:
+            pub.put(payload, attachment=self.trust.seal(self.key_expr(topic), payload))
+        else:
+            pub.put(payload)
+
+    def key_expr(self, topic: str) -> str:
+        """``<ns>/<topic>`` (cached: the seal covers the key)."""
+        key = self._key_exprs.get(topic)
+        if key is None:
+            key = self._key_exprs[topic] = self.keys.key(topic)
+        return key
 
     def declare_publishers(self, *topics: str, on_demand: Iterable[str] = ()) -> None:
         """Declare publishers up front (before :meth:`ready`) so first puts are not late.
@@ -321,20 +403,27 @@ class Node:
         deliver = handler or (lambda m, t=topic: self.inbox.put((t, m)))
 
         def on_sample(sample: zenoh.Sample) -> None:
-            msg = self.accept(topic, sample.payload.to_bytes(), msg_type)
+            msg = self.accept(topic, sample.payload.to_bytes(), msg_type, attachment_of(sample))
             if msg is not None:
                 deliver(msg)
 
         self._subscribers.append(self.session.declare_subscriber(self.keys.key(topic),
                                                                  direct(on_sample)))
 
-    def accept(self, topic: str, payload: bytes, msg_type: type[Message] | None = None):
+    def accept(self, topic: str, payload: bytes, msg_type: type[Message] | None = None,
+               attachment: bytes | None = None):
         """``payload`` decoded as ``topic``'s message, or None: a bad payload or stamp is
-        counted in :attr:`bad_messages` and dropped (never an exception)."""
+        counted in :attr:`bad_messages`, a sample without this run's seal in
+        ``trust.refused``, and dropped (never an exception). The seal is checked before the
+        stamp: what a keyless peer sends moves no stamp window."""
         try:
             msg = (msg_type or TOPICS[topic]).from_bytes(payload)
         except SchemaError as exc:
             self._count_bad(topic, exc)
+            return None
+        verdict = self.trust.check(topic, self.key_expr(topic), payload, attachment, msg)
+        if verdict != "ok":
+            self._count_refused(topic, verdict)
             return None
         why = self.stamps.check(topic, msg)
         if why:
@@ -347,6 +436,12 @@ class Node:
         n = self.bad_messages[topic]
         if n <= 5 or n % 100 == 0:
             self.log.warning("dropped bad message #%d on %s: %s", n, self.keys.key(topic), exc)
+
+    def _count_refused(self, topic: str, verdict: str) -> None:
+        n = sum(self.trust.refused.values())
+        if n <= 5 or n % 100 == 0:
+            self.log.warning("refused #%d on %s: %s (not sealed with this run's key, a replay, "
+                             "or another run's)", n, self.keys.key(topic), verdict)
 
     def messages(self, tick_s: float = 0.1, urgent=lambda: False
                  ) -> Iterator[tuple[str | None, Message | None]]:
@@ -387,21 +482,43 @@ class Node:
     def _drain_batched(self) -> Iterator[tuple[str, Message]]:
         """Every sample waiting in the batched topics' channels, decoded and checked, in
         :func:`round_robin` order."""
-        for topic, msg_type, payload in round_robin(self._batched):
-            msg = self.accept(topic, payload, msg_type)
+        for topic, msg_type, payload, attachment in round_robin(self._batched):
+            msg = self.accept(topic, payload, msg_type, attachment)
             if msg is not None:
                 yield topic, msg
 
     # -- health -----------------------------------------------------------
     def ready(self) -> None:
-        """Declare the liveliness token: subscriptions and publishers now exist."""
+        """Declare the liveliness token (subscriptions and publishers now exist) and the
+        health queryable ``<ns>/health/<name>``."""
+        self._health = self.session.declare_queryable(self.keys.key(f"health/{self.name}"),
+                                                      self._answer_health)
         self._token = self.session.liveliness().declare_token(self.keys.alive(self.name))
         self.log.info("ready as %s", self.keys.alive(self.name))
+
+    def health(self) -> dict:
+        """What this node refused and dropped so far, and its run (JSON-ready)."""
+        try:
+            bad = dict(self.bad_messages.copy())
+        except RuntimeError:   # counted on Zenoh's thread right now: next time
+            bad = {}
+        return {"node": self.name, "run": self.trust.run_hex(), "keyed": self.trust.keyed,
+                "refused": self.trust.counts(), "bad": bad, "stamp_resyncs": self.stamps.resyncs,
+                **self.extra_health}
+
+    def _answer_health(self, query) -> None:   # Zenoh's thread: a copy of counters, one reply
+        try:
+            query.reply(query.key_expr, json.dumps(self.health()).encode())
+        except Exception as exc:   # a closing session: nothing to answer with
+            self.log.debug("health query not answered: %s", exc)
 
     def close(self) -> None:
         """Undeclare the node's liveliness token and subscribers."""
         if self._token is not None:
             self._token.undeclare()
+        if self._health is not None:
+            self._health.undeclare()
+            self._health = None
         for sub in self._subscribers:
             sub.undeclare()
         self._batched.clear()
@@ -420,12 +537,16 @@ def open_node(name: str, args: argparse.Namespace, log: logging.Logger | None = 
     log = log or setup_logging(name, getattr(args, "log_level", "INFO"))
     with open_session(args) as session:   # no router: one line (ConfigError), no traceback
         node = Node(name, session, Keys(args.namespace), log)
+        watch_parent(node.stop)
         try:
             yield node
         finally:
+            node.stop.request()   # from here on the exit is bounded (STOP_BOUND_S)
             node.close()
             if node.bad_messages:
                 log.info("bad messages dropped: %s", dict(node.bad_messages))
+            if node.trust.refused:
+                log.info("refused (seal): %s", node.trust.counts())
 
 
 def alive_nodes(session: zenoh.Session, keys: Keys, timeout_s: float = 1.0) -> set[str]:

@@ -8,6 +8,8 @@ on a topic whose stamps only go forward.
 
 from __future__ import annotations
 
+import time
+
 NS_PER_S = 1_000_000_000       # [ns/s]
 MAX_STAMP_NS = 2**62           # [ns] largest stamp any node accepts (see module doc)
 # [s] wall time a lockstep scan waits for its partners (odometry, pose, objects) in the
@@ -35,29 +37,72 @@ def stamp_ok(stamp_ns: int) -> bool:
         0 <= stamp_ns <= MAX_STAMP_NS)
 
 
+AHEAD_SLACK_NS = 2 * NS_PER_S   # [ns] a stamp may lead the receiver's clock by this much
+SIM_RATE_MAX = 1000             # [-] sim seconds a lockstep run may pass per wall second, at most
+RESYNC_AFTER = 5                # [-] samples in order among themselves that outvote one ahead
+
+
 class StampGuard:
     """Decide whether a received message's stamp may be acted on.
 
     :meth:`check` returns ``""`` for a good stamp, else why it is bad: outside
-    ``[0, MAX_STAMP_NS]``, or — on the ``ordered`` topics — older than the last good one.
+    ``[0, MAX_STAMP_NS]``, or — on the ``ordered`` topics — older than the last good one, or
+    further ahead of the receiver's own clock than time can have passed.
     A stamp of 0 is in order for a node that serves run after run (sim time restarts at 0
     with each run); ``restart_at_zero=False`` for a watcher of one run (the launcher).
+
+    The receiver's clock window (issue 31: one scan stamped 2^62 ns, or spoofed scans a
+    little ahead, must not blind a node): after the last good stamp ``s`` received at wall
+    time ``w``, a stamp is "from the future" when it lies beyond ``s + AHEAD_SLACK_NS +
+    SIM_RATE_MAX * (now - w)`` (sim time never runs faster than that against the wall, in
+    lockstep or real time); it is dropped and moves nothing. And a stamp that got through but
+    is ahead of the stream — every later sample older than it — is outvoted: after
+    :data:`RESYNC_AFTER` samples in order among themselves but behind it, the guard takes
+    them as the stream's clock again (counted in :attr:`resyncs`). Sealed streams
+    (:mod:`common.seal`) keep keyless peers out altogether; this is the guard for what
+    is left (nodes run alone, a faulty node).
     """
 
     def __init__(self, ordered: frozenset[str] | set[str] = frozenset(),
-                 restart_at_zero: bool = True):
+                 restart_at_zero: bool = True, wall=None):
         self.ordered = ordered
         self.restart_at_zero = restart_at_zero
+        self.wall = wall or time.monotonic_ns
         self.last: dict[str, int] = {}
+        self._seen_at: dict[str, int] = {}          # wall ns the last good stamp came
+        self._behind: dict[str, list[int]] = {}     # stamps behind `last`, in order, recent
+        self.resyncs = 0
 
     def check(self, topic: str, msg) -> str:
-        """What is wrong with ``msg`` on ``topic`` (stamp out of range or back); "" if nothing."""
+        """What is wrong with ``msg`` on ``topic`` (stamp out of range, back, or ahead); ""
+        if nothing."""
         stamp = getattr(msg, "stamp_ns", 0)
         if not stamp_ok(stamp):
             return f"stamp {stamp!r} ns is outside [0, {MAX_STAMP_NS}]"
-        if topic in self.ordered:
-            last = self.last.get(topic, 0)
+        if topic not in self.ordered:
+            return ""
+        now = self.wall()
+        last = self.last.get(topic)
+        if last is not None:
+            horizon = last + AHEAD_SLACK_NS + SIM_RATE_MAX * max(0, now - self._seen_at[topic])
+            if stamp > horizon:
+                return (f"stamp {stamp} ns is ahead of this node's clock (at most {horizon} ns "
+                        "now): from the future")
             if stamp < last and (stamp > 0 or not self.restart_at_zero):
-                return f"stamp {stamp} ns is older than the last one on this topic ({last} ns)"
-            self.last[topic] = stamp
+                if not self._outvoted(topic, stamp):
+                    return f"stamp {stamp} ns is older than the last one on this topic ({last} ns)"
+        self.last[topic], self._seen_at[topic] = stamp, now
+        self._behind.pop(topic, None)
         return ""
+
+    def _outvoted(self, topic: str, stamp: int) -> bool:
+        """True when ``stamp`` and the samples behind ``last`` before it are in order and
+        enough: the stream goes on from them (``last`` was a stamp from the future)."""
+        behind = self._behind.setdefault(topic, [])
+        if behind and stamp <= behind[-1]:
+            behind.clear()
+        behind.append(stamp)
+        if len(behind) < RESYNC_AFTER:
+            return False
+        self.resyncs += 1
+        return True

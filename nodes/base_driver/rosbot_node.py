@@ -47,6 +47,7 @@ odometry older than 0.5 s is not republished (the planner then stops on stale od
 from __future__ import annotations
 
 import argparse
+import json
 import queue
 import time
 from collections import Counter
@@ -152,7 +153,10 @@ class RosbotDriver:
     def on_event(self, msg: Event, now: int) -> None:
         if msg.kind == "run_started":
             self.t0, self.tick, self.prev_odom, self.last_run_ns = now, 0, None, 0
-            if self.robot is not None:
+            # "frame=keep": a new run after a laptop crash starts where the robot stands, in
+            # the world frame it had (papf.launch.resume): no re-anchoring at the world's start
+            keep = "frame=keep" in msg.detail.split() and self.frame.anchored
+            if self.robot is not None and not keep:
                 self.frame.anchor(self.robot.pose)
             self.log.info("run started: clock at 0%s", "" if self.robot else
                           " (no robot odometry yet: waiting for it)")
@@ -254,6 +258,29 @@ class RosbotDriver:
             self.node.publish("events", Event(stamp_ns=stamp, kind="info", source=NAME,
                                               detail=f"battery_voltage_V={voltage:.3f}"))
 
+    def run_state(self, query) -> None:
+        """Answer ``<ns>/run/state`` (Zenoh's thread): the run this driver is in, sealed
+        (:func:`papf.launch.resume.robot_run` reads it: a laptop that comes back)."""
+        now = time.monotonic_ns()
+        pose = None
+        if self.robot is not None:
+            odom = self.frame.to_world(self.robot, 0)
+            pose = (odom.x, odom.y)
+        running = self.t0 is not None
+        t_ns = now - self.t0 if running else self.last_run_ns
+        x, y = pose if pose is not None else (None, None)
+        payload = json.dumps({"run": self.node.trust.run_hex() if running else "",
+                              "running": running, "t_ns": t_ns, "x": x, "y": y}).encode()
+        key = str(query.key_expr)
+        att = self.node.trust.seal(self.node.keys.key("run/state"), payload)
+        try:
+            if att is None:
+                query.reply(key, payload)
+            else:
+                query.reply(key, payload, attachment=att)
+        except Exception as exc:   # a closing session
+            self.log.debug("run state not answered: %s", exc)
+
     def stop_robot(self) -> None:
         for _ in range(EXIT_ZEROS):
             self.cmd_pub.put(twist_to_cdr(0.0, 0.0, self.cmd_type, time.time_ns()))
@@ -319,12 +346,16 @@ def main(args: argparse.Namespace) -> int:
         log.info("rosbot driver over %s: cmd_vel %s (%s), odometry %s; limits %s",
                  link.middleware, driver.cmd_key, cmd_type,
                  link.key(topics.odometry, ros2.ODOMETRY), limits)
+        state_q = node.session.declare_queryable(node.keys.key("run/state"), driver.run_state)
         node.ready()
         try:
             driver.run()
         finally:
             driver.stop_robot()
+            state_q.undeclare()
             link.close()
-            log.info("stopped: %d commands sent to the robot, %d late ones dropped", driver.sent,
-                     driver.late)
+            refused = node.trust.counts().get("cmd_vel", {})
+            log.info("stopped: %d commands sent to the robot, %d late ones dropped, %d refused "
+                     "(not this run's planner: %s)", driver.sent, driver.late,
+                     sum(refused.values()), refused or "none")
     return 0

@@ -38,6 +38,17 @@ def parse_settings(items: list[str]) -> dict[str, str]:
     return out
 
 
+def parse_resume(text: str) -> tuple[float, float, float, int]:
+    """``"1.5,20.3,0.99,123000000"`` -> (mAh, J, SoC, stamp ns); ConfigError otherwise."""
+    parts = text.split(",")
+    try:
+        if len(parts) != 4:
+            raise ValueError
+        return float(parts[0]), float(parts[1]), float(parts[2]), int(parts[3])
+    except ValueError:
+        raise ConfigError(f"--resume {text!r}: expected MAH,J,SOC,STAMP_NS") from None
+
+
 def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
     """Subscribe, declare, get ready, then meter every message until stopped."""
     errors = 0
@@ -79,12 +90,17 @@ def main(argv: list[str] | None = None) -> int:
                         help="power model: motor (DC motors, default) or paper (eq. 6)")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override a pack or model constant (repeatable)")
+    parser.add_argument("--resume", metavar="MAH,J,SOC,STAMP_NS",
+                        help="go on with a run's account (a laptop that came back: papf launch "
+                             "laptop --resume gives it)")
     parser.add_argument("--log-level", default="INFO")
     add_zenoh_args(parser)
     args = parser.parse_args(argv)
     log = setup_logging(NODE_NAME, args.log_level)
     try:
         meter = EnergyMeter(args.model, parse_settings(args.set))
+        if args.resume:
+            meter.resume(*parse_resume(args.resume))
         run(meter, args, log)
     except ConfigError as exc:
         parser.error(str(exc))

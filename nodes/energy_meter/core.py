@@ -65,6 +65,20 @@ class EnergyMeter:
         self.stale = 0          # pairs dropped as older than the last processed one
         self.discarded = 0      # half pairs dropped (their partner never came)
 
+    def resume(self, charge_mAh: float, energy_J: float, soc: float, stamp_ns: int) -> None:
+        """Go on with an account another meter kept up to ``stamp_ns`` (a laptop that died and
+        came back, ``--resume``): the first pair after it integrates its power over the whole
+        gap, which the robot spent standing (its watchdog stopped it), so the gap is metered
+        at standstill power."""
+        for name, value in (("charge_mAh", charge_mAh), ("energy_J", energy_J), ("soc", soc)):
+            if not math.isfinite(value):
+                raise ConfigError(f"--resume: {name} {value!r} is not a finite number")
+        if not 0.0 <= soc <= 1.0:
+            raise ConfigError(f"--resume: soc {soc!r} is outside [0, 1]")
+        self.battery.charge_used_mAh, self.battery.energy_J = float(charge_mAh), float(energy_J)
+        self.battery.soc = float(soc)
+        self._last_ns = int(stamp_ns) if stamp_ns >= 0 else None
+
     # -- input ------------------------------------------------------------------------------
     def feed(self, msg: Odometry | WheelStates) -> BatteryState | None:
         """Take one message; return the pack state if it completed a pair, else None."""

@@ -4,10 +4,10 @@
 
 Ports: :mod:`nodes.recorder.ports` (``--help`` prints them); liveliness ``<ns>/alive/recorder``.
 
-Samples are queued by Zenoh itself (a FIFO channel handler: no Python runs on the
-receive thread) and drained in batches by the main thread into
-:class:`papf.recording.RunWriter`, which flushes at least every ``--flush-interval``
-seconds. SIGINT/SIGTERM: drain the queue, write the summary and footer, exit 0.
+Samples are triaged on Zenoh's receive thread (:class:`Intake`: this run's seal, then the
+per-key budgets of :mod:`nodes.recorder.budget` — a few look-ups, no decoding), queued, and
+drained in batches by the main thread into :class:`nodes.recorder.writer.RunWriter`, which
+flushes at least every ``--flush-interval`` seconds. SIGINT/SIGTERM: drain the queue, write the summary and footer, exit 0.
 With ``--close-on-run-ended`` (the launch profiles that drive a run): the launcher's
 ``run_ended`` closes the file the same way (once the samples of its instant still on
 their way are in: :mod:`nodes.recorder.tail`), and a ``recording_closed`` event (detail: the
@@ -17,7 +17,10 @@ file) tells the launcher it may stop the processes — no fixed wait, no lost ta
 from __future__ import annotations
 
 import argparse
+import contextlib
+import queue
 import time
+from collections import Counter
 from pathlib import Path
 
 import zenoh
@@ -25,45 +28,94 @@ import zenoh
 from common.errors import ConfigError, PapfError, RecordingError
 from common.outfiles import check_output
 from common.ports import describe, plain
-from common.transport import Node, add_zenoh_args, alive_nodes, open_node, setup_logging
+from common.transport import (
+    Node,
+    add_zenoh_args,
+    alive_nodes,
+    attachment_of,
+    direct,
+    open_node,
+    setup_logging,
+)
+from nodes.recorder.budget import Budget
 from nodes.recorder.ports import PORTS, VARIANTS
 from nodes.recorder.tail import TAIL_MAX_S, RunEndWatch
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
 from schemas.messages import Event
 
 NAME = "recorder"
-QUEUE_CAPACITY = 1_000_000  # [samples] Zenoh-side buffer: 20 s at 50 kHz before back-pressure
 BATCH = 5_000               # [samples] drained between stop/flush checks
 IDLE_WAIT_S = 0.01           # [s] sleep when the queue is empty (the FIFO holds the backlog)
 FINAL_DRAIN_S = 2.0         # [s] at most spent draining the queue after a stop request
 STATUS_EVERY_S = 10.0       # [s] wall time between progress log lines
 
 
-def drain(subscriber, writer: RunWriter, max_samples: int, watch: RunEndWatch | None = None) -> int:
+class Intake:
+    """What reaches the writer (docs/recording.md "Bounds"), decided on Zenoh's thread:
+
+    1. with the run's key (a recorder started by a launcher), only samples sealed by this
+       run's processes (:mod:`common.seal`): a keyless peer's, a replay, another run's are
+       counted per key and reason and never written — checked first, so that a flood of
+       them spends no key's budget;
+    2. then the per-key budgets of :class:`nodes.recorder.budget.Budget`.
+
+    Admitted samples wait in a queue the main thread drains (:func:`drain`); nothing else
+    runs here.
+    """
+
+    def __init__(self, node: Node, budget: Budget | None = None):
+        self.trust, self.budget = node.trust, budget or Budget()
+        self.queue: queue.SimpleQueue = queue.SimpleQueue()
+        self.refused: Counter[tuple[str, str]] = Counter()
+        self.ns = node.keys.ns
+
+    def on_sample(self, sample: zenoh.Sample) -> None:
+        if sample.kind != zenoh.SampleKind.PUT:   # a DELETE has no payload to record
+            return
+        key, zb = str(sample.key_expr), sample.payload
+        if self.trust.keyed:
+            payload = zb.to_bytes()
+            verdict = self.trust.check(key, key, payload, attachment_of(sample))
+            if verdict != "ok":
+                self.refused[(key, verdict)] += 1
+                return
+        if self.budget.admit(key, len(zb)):
+            return
+        payload = payload if self.trust.keyed else zb.to_bytes()
+        self.queue.put((key, payload, time.time_ns()))
+
+    def dropped(self) -> dict[str, dict[str, int]]:
+        """``{key: {reason: n}}``: refused seals and budget drops together."""
+        out = self.budget.counts()
+        for (key, why), n in list(self.refused.items()):
+            out.setdefault(key, {})[why] = n
+        return out
+
+
+def drain(intake: Intake, writer: RunWriter, max_samples: int, watch: RunEndWatch | None = None) -> int:
     """Write up to ``max_samples`` queued samples; returns how many were taken.
 
-    The hot loop of the recorder: locals only, one ``try_recv`` per sample.
+    The hot loop of the recorder: locals only, one ``get_nowait`` per sample.
     """
-    recv, write, now, put = subscriber.try_recv, writer.write, time.time_ns, zenoh.SampleKind.PUT
+    get, write, written = intake.queue.get_nowait, writer.write, intake.budget.written
     arrived = watch.arrived if watch is not None else None
     n = 0
     while n < max_samples:
-        sample = recv()
-        if sample is None:
+        try:
+            key, payload, t = get()
+        except queue.Empty:
             break
         n += 1
-        if sample.kind == put:  # a DELETE has no payload to record
-            key, payload = str(sample.key_expr), sample.payload.to_bytes()
-            t = now()
-            write(key, payload, t)
-            if arrived is not None:
-                arrived(key, payload, t)
+        written(key, len(payload))
+        write(key, payload, t)
+        if arrived is not None:
+            arrived(key, payload, t)
     return n
 
 
 def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str],
            compression: str = "zstd", flush_interval_s: float = FLUSH_INTERVAL_S,
-           queue_capacity: int = QUEUE_CAPACITY, close_on_run_ended: bool = False,
+           close_on_run_ended: bool = False,
            force: bool = False, announce: bool = False) -> WriterStats:
     """Record until ``node.stop`` (or, with ``close_on_run_ended``, until the launcher's
     ``run_ended``); returns the writer's counts. The file is complete on return.
@@ -71,21 +123,29 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
     that it waits for the stack, and when the first message came."""
     watch = RunEndWatch(node.keys.events) if close_on_run_ended else None
     meta = {"namespace": node.keys.ns, "keys": keys_expr, **metadata}
+    run = node.trust.run_hex()
+    if run:
+        meta["run_id"] = run   # only this run's samples are in it (Intake)
+    intake = Intake(node)
     with RunWriter(out, meta, compression=compression, flush_interval_s=flush_interval_s,
                    force=force) as writer:
-        sub = node.session.declare_subscriber(keys_expr, zenoh.handlers.FifoChannel(queue_capacity))
+        node.extra_health["recording"] = account(out, writer, intake, complete=False)
+        sub = node.session.declare_subscriber(keys_expr, direct(intake.on_sample))
         try:
             node.ready()
             node.log.info("recording %s into %s", keys_expr, out)
             if announce:
                 _announce(node, metadata)
-            _loop(node, sub, writer, watch)
+            _loop(node, intake, writer, watch)
             if watch is not None and watch.seen:
-                _tail(node, sub, writer, watch)
+                _tail(node, intake, writer, watch)
+            sub.undeclare()   # nothing more comes in: the queue can be emptied
             deadline = time.monotonic() + FINAL_DRAIN_S
-            while drain(sub, writer, BATCH, watch) and time.monotonic() < deadline:
+            while drain(intake, writer, BATCH, watch) and time.monotonic() < deadline:
                 pass
+            writer.dropped_by_key = intake.dropped()
             writer.close()
+            node.extra_health["recording"] = account(out, writer, intake, complete=True)
         except OSError as exc:   # the disk is full (or gone): stop, keep what is written
             writer.abandon()
             raise RecordingError(
@@ -93,20 +153,30 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
                 f"messages: the recording stops here; salvage it with: papf recover {out} "
                 "FIXED.mcap") from None
         finally:
-            sub.undeclare()
+            with contextlib.suppress(Exception):   # undeclared twice: Zenoh says so, harmless
+                sub.undeclare()
     node.log.info("closed %s: %d messages, %d bytes, %d channels", out, writer.stats.messages,
                   writer.stats.bytes, writer.stats.channels)
     if writer.stats.dropped:
         node.log.warning("dropped %d messages on %d keys beyond %d channels", writer.stats.dropped,
                          writer.stats.dropped_keys, writer.stats.channels)
+    if writer.dropped_by_key:
+        node.log.warning("not recorded (refused or over budget), per key: %s",
+                         writer.dropped_by_key)
     return writer.stats
 
 
-def _tail(node: Node, sub, writer: RunWriter, watch: RunEndWatch) -> None:
+def account(out, writer: RunWriter, intake: Intake, complete: bool) -> dict:
+    """The recording as the launcher reports it (``papf run --json`` ``recording``)."""
+    return {"file": str(out), "complete": complete, "messages": writer.stats.messages,
+            "bytes": writer.stats.bytes, "dropped": intake.dropped()}
+
+
+def _tail(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch) -> None:
     """After run_ended: the samples of its instant still on other links (nodes.recorder.tail)."""
     deadline = time.monotonic() + TAIL_MAX_S
     while not watch.complete and not node.stop and time.monotonic() < deadline:
-        if drain(sub, writer, BATCH, watch) == 0:
+        if drain(intake, writer, BATCH, watch) == 0:
             node.stop.event.wait(IDLE_WAIT_S)
     if not watch.complete:
         node.log.warning("run_ended: closing without a sample of its instant on %s",
@@ -129,12 +199,12 @@ def _announce(node: Node, metadata: dict[str, str]) -> None:
                       "(--meta world=W --meta planner=P --meta seed=S say what ran)")
 
 
-def _loop(node: Node, sub, writer: RunWriter, watch: RunEndWatch | None) -> None:
+def _loop(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch | None) -> None:
     started = time.monotonic()
     next_status = started + STATUS_EVERY_S
     last_count, first = 0, True
     while not node.stop and not (watch and watch.seen):
-        if drain(sub, writer, BATCH, watch) == 0:
+        if drain(intake, writer, BATCH, watch) == 0:
             writer.maybe_flush()
             node.stop.event.wait(IDLE_WAIT_S)
         elif first:

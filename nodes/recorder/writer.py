@@ -28,6 +28,8 @@ MESSAGE_ENCODING = "msgpack"
 RAW_ENCODING = "application/octet-stream"
 SCHEMA_ENCODING = "jsonschema"
 RUN_METADATA = "run"
+NOT_RECORDED = "not_recorded"   # metadata: {key: {reason: n}} of samples the recorder refused
+MAX_NAMED_KEYS = 1000           # [-] keys named in it (a hostile peer may use millions)
 PROFILE = "papf"  # MCAP header profile: our own conventions (RunWriter's docstring)
 
 # Defaults. A chunk is closed at whichever limit comes first.
@@ -171,6 +173,7 @@ class RunWriter:
         self._dirty = False
         self._last_stamp_ns: int | None = None  # [ns] log time of unstamped payloads
         self.stats = WriterStats()
+        self.dropped_by_key: dict[str, dict[str, int]] = {}   # the recorder's bounds and seals
         self.closed = False
 
     def __enter__(self) -> RunWriter:
@@ -281,6 +284,10 @@ class RunWriter:
                 self._mcap.add_metadata("dropped", metadata_strings(
                     {"messages": self.stats.dropped, "keys": self.stats.dropped_keys,
                      "max_channels": self._max_channels}))
+            if self.dropped_by_key:   # not recorded: refused seals, over a key's budget
+                self._mcap.add_metadata(NOT_RECORDED, metadata_strings(
+                    {key: why
+                     for key, why in sorted(self.dropped_by_key.items())[:MAX_NAMED_KEYS]}))
             self._mcap.finish()
         finally:
             self._file.close()

@@ -93,16 +93,18 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
     watch = _Watch(session, keys)
     try:
         key = runauth.read_key(keys.ns)   # a launched session's key, if any
+        run = runauth.read_run(keys.ns)   # and its run: the planner takes that run's goals only
         goal = runauth.sign(Goal(stamp_ns=0, x=float(x), y=float(y), tolerance=float(tolerance)),
                             key)
-        acked, heard = _handshake(session, keys, goal, watch, stop)
+        acked, heard = _handshake(session, keys, goal, watch, stop, key, run)
         if not acked:
             return GoalResult("interrupted" if stop() else "no_planner",
                               "interrupted" if stop() else _unanswered(keys, heard, key), math.nan)
         out(f"goal ({x:g}, {y:g}) ±{tolerance:g} m acknowledged by the planner")
         if start_run:
-            session.put(keys.events, Event(stamp_ns=0, kind="run_started", source="papf-goal",
-                                           detail=f"goal=({x:g},{y:g})").to_bytes())
+            runauth.sealed_put(session, keys.events, Event(
+                stamp_ns=0, kind="run_started", source="papf-goal",
+                detail=f"goal=({x:g},{y:g})").to_bytes(), key, run)
             out(f"run_started published on {keys.events}")
         if not wait:
             return GoalResult("acknowledged", "", math.nan)
@@ -111,12 +113,14 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
         watch.close()
 
 
-def _handshake(session, keys: Keys, goal: Goal, watch: _Watch, stop) -> tuple[bool, bool]:
-    """(the planner acknowledged the goal, a planner's status was heard at all)."""
+def _handshake(session, keys: Keys, goal: Goal, watch: _Watch, stop, key: bytes | None = None,
+               run: bytes | None = None) -> tuple[bool, bool]:
+    """(the planner acknowledged the goal, a planner's status was heard at all). Each put is
+    sealed afresh (a new seq: common.seal) with the launch's key and run."""
     deadline = time.monotonic() + HANDSHAKE_S
     heard = False
     while time.monotonic() < deadline and not stop():
-        session.put(keys.goal, goal.to_bytes())
+        runauth.sealed_put(session, keys.goal, goal.to_bytes(), key, run)
         t_next = time.monotonic() + REPEAT_S
         while (left := t_next - time.monotonic()) > 0:
             msg = watch.next(min(left, 0.05))

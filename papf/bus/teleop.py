@@ -21,8 +21,9 @@ from dataclasses import dataclass
 
 import zenoh
 
-from common import robot
-from common.errors import ConfigError
+from common import robot, runauth
+from common.errors import ConfigError, PapfError
+from common.seal import Sealer
 from schemas import Clock, Event, Keys, Odometry, Twist
 
 ARROWS = {"\x1b[A": "up", "\x1b[B": "down", "\x1b[C": "right", "\x1b[D": "left"}
@@ -99,8 +100,11 @@ def _clamp(x: float, limit: float) -> float:
 class _Bus:
     """Publisher of cmd_vel plus the latest clock stamp and odometry the driver publishes."""
 
-    def __init__(self, session: zenoh.Session, keys: Keys):
+    def __init__(self, session: zenoh.Session, keys: Keys, key: bytes | None = None):
         self.session, self.keys = session, keys
+        # sealed outside any run with this host's key (common.seal): a keyed driver between
+        # runs obeys it, and no run's planner is overruled (a driver in a run refuses it)
+        self.sealer = Sealer(key) if key is not None else None
         self.stamp_ns = 0
         self.odom: Odometry | None = None
         self.pub = session.declare_publisher(keys.cmd_vel,
@@ -117,12 +121,28 @@ class _Bus:
             self.odom = Odometry.from_bytes(sample.payload.to_bytes())
 
     def send(self, v: float, w: float) -> None:
-        self.pub.put(Twist(stamp_ns=self.stamp_ns, v=v, w=w).to_bytes())
+        payload = Twist(stamp_ns=self.stamp_ns, v=v, w=w).to_bytes()
+        if self.sealer is None:
+            self.pub.put(payload)
+        else:
+            self.pub.put(payload, attachment=self.sealer.seal(self.keys.cmd_vel, payload))
 
     def close(self) -> None:
         for s in self.subs:
             s.undeclare()
         self.pub.undeclare()
+
+
+def teleop_key(namespace: str, key_file: str | None = None) -> bytes | None:
+    """The key a teleop seals with: ``key_file`` (``--key``), else this host's pairing key
+    (``papf launch robot`` on this host), else none (a driver started alone takes anything)."""
+    if key_file is not None:
+        return runauth.load_pair_key(key_file)[0]
+    path = runauth.pair_file(namespace)
+    try:
+        return runauth.load_pair_key(path)[0] if path.exists() else None
+    except PapfError:
+        return None
 
 
 @contextlib.contextmanager
@@ -154,11 +174,13 @@ def run(session: zenoh.Session, keys: Keys, state: TeleopState, *, period_s: flo
     out = out or sys.stdout
     if not os.isatty(fd):
         raise ConfigError("papf teleop reads the keyboard: run it in a terminal (stdin is not one)")
-    bus = _Bus(session, keys)
+    key = teleop_key(keys.ns)
+    bus = _Bus(session, keys, key)
     try:
         if start_run:
-            session.put(keys.events, Event(stamp_ns=0, kind="run_started", source="papf-teleop",
-                                           detail="teleop").to_bytes())
+            runauth.sealed_put(session, keys.events, Event(
+                stamp_ns=0, kind="run_started", source="papf-teleop", detail="teleop").to_bytes(),
+                key)
         with cbreak(fd):   # discards keys typed before it: the banner says it is listening
             out.write(f"papf teleop on {keys.cmd_vel}: {HELP}\r\n")
             out.flush()

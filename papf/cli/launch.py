@@ -51,6 +51,18 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
     p.add_argument("--dry-run", action="store_true", help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
+    # trust and a laptop that comes back (docs/robot.md "Pairing", "A laptop that comes back")
+    p.add_argument("--key", metavar="FILE",
+                   help="robot/laptop split: the pairing key both sides seal with (the robot "
+                        "side makes FILE when missing; copy it to the laptop). Default: this "
+                        "host's own, so a split on one host needs none")
+    crash = p.add_mutually_exclusive_group()
+    crash.add_argument("--resume", dest="after_crash", action="store_const", const="resume",
+                       help="laptop: the robot is still in the run of a launcher that died: go "
+                            "on with it (same run, clock, charge, goal)")
+    crash.add_argument("--new-run", dest="after_crash", action="store_const", const="new",
+                       help="laptop: the robot is still in a dead launcher's run: start a new "
+                            "run from where the robot stands (fresh clock and meter)")
     add_view_flag(p)
     add_ros_args(p)
     add_face_args(p)
@@ -75,7 +87,8 @@ def cmd_launch(args) -> int:
                         args.router_config, {k: v for k, v in values.items() if v is not None},
                         [x for kv in args.set for x in ("--set", kv)], args.timeout,
                         startup_timeout_s=args.startup_timeout, stall_s=args.stall_timeout,
-                        verbose=args.verbose, dry_run=args.dry_run, join=args.join)
+                        verbose=args.verbose, dry_run=args.dry_run, join=args.join,
+                        key_file=args.key, after_crash=args.after_crash or "refuse")
     result = launch(opt)
     if result is None:
         return 0

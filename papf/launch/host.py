@@ -16,8 +16,8 @@ import time
 
 import zenoh
 
-from common import runauth
-from common.errors import ConfigError
+from common import runauth, seal
+from common.errors import ConfigError, PapfError
 from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
@@ -25,6 +25,7 @@ from papf.launch.claim import Claim, check_network
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
+from papf.launch.resume import Journal, JournalWriter, decide, drop_journal, robot_run
 from papf.launch.sequence import STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use, wait_port
 from schemas import Keys
@@ -57,17 +58,76 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
         show = (lambda n, line: True) if opt.verbose else (
             lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:",
                                                     "ready as")))
-        run_key = runauth.new_key() if prof.run else None
-        if run_key:   # this user's `papf goal` may re-target the session (common.runauth)
+        run_key = launch_key(prof, opt)
+        run_id = seal.new_run_id() if prof.run else None
+        journal = None
+        if prof.run and prof.host == "laptop":   # a split: is the robot still in a run?
+            run_id, journal = _run_to_join(prof, opt, graph, keys, run_key, run_id)
+            if journal is not None:   # the meter goes on from the journal's account
+                opt = with_meter_resume(opt, journal)
+                graph = resolve(prof, opt)
+        if prof.run:   # this user's `papf goal` may re-target the session (common.runauth)
             try:
-                runauth.publish_key(opt.namespace, run_key)
+                runauth.publish_key(opt.namespace, run_key, run_id or "")
             except runauth.NamespaceTaken as exc:
                 raise ConfigError(str(exc)) from None
         try:
-            return _launch(opt, prof, graph, stop, show, keys, run_key)
+            return _launch(opt, prof, graph, stop, show, keys, run_key, run_id, journal)
         finally:
-            if run_key:
+            if prof.run:
                 runauth.withdraw_key(opt.namespace, run_key)
+
+
+def _run_to_join(prof: Profile, opt: LaunchOptions, graph, keys: Keys, run_key: str,
+                 new_run: str) -> tuple[str, Journal | None]:
+    """Ask the robot which run it is in, and decide by ``--resume``/``--new-run``
+    (:mod:`papf.launch.resume`); ConfigError when it is in one and nothing was said."""
+    try:
+        with zenoh.open(_nodes_conf(prof, opt, graph.connect)) as session:
+            robot = robot_run(session, keys, bytes.fromhex(run_key))
+    except zenoh.ZError:
+        robot = None   # no robot network yet: it has no run; the launch says why it waits
+    run, journal = decide(robot, opt.after_crash, opt.namespace, new_run)
+    if journal is not None:
+        print(f"papf launch {prof.name}: resuming run {run} at {robot.t_ns / 1e9:.1f} s "
+              f"({journal.charge_mAh:.2f} mAh, {journal.path_m:.2f} m so far)",
+              file=sys.stderr, flush=True)
+    elif robot is not None and robot.running:
+        print(f"papf launch {prof.name}: run {robot.run} left behind; a new run {run} from "
+              "where the robot stands", file=sys.stderr, flush=True)
+    return run, journal
+
+
+def with_meter_resume(opt: LaunchOptions, journal: Journal) -> LaunchOptions:
+    """``opt`` with the energy meter told to go on from the journal's account."""
+    extra = dict(opt.extra_node_args)
+    extra["energy_meter"] = [*extra.get("energy_meter", []), "--resume",
+                             f"{journal.charge_mAh!r},{journal.energy_J!r},{journal.soc!r},"
+                             f"{journal.battery_ns}"]
+    return dataclasses.replace(opt, extra_node_args=extra)
+
+
+SPLIT_HOSTS = ("robot", "laptop")   # profiles launched apart that must share a key
+
+
+def launch_key(prof: Profile, opt: LaunchOptions) -> str:
+    """The key this launch's processes seal with (hex). A split's two sides are launched
+    apart, so they share a key made once: ``--key FILE`` (the robot side makes FILE when it is
+    missing; copy it to the laptop), else this host's pairing file (robot and laptop on one
+    host). Every other launch (``sim``): a fresh key of its own."""
+    if prof.host not in SPLIT_HOSTS:
+        return runauth.new_key()
+    path = opt.key_file or runauth.pair_file(opt.namespace)
+    if opt.key_file is None:
+        runauth.key_file(opt.namespace).parent.mkdir(mode=0o700, exist_ok=True)
+    try:
+        key, made = runauth.load_pair_key(path, create=prof.host == "robot" or opt.key_file is None)
+    except PapfError as exc:
+        raise ConfigError(str(exc)) from None
+    if made and opt.key_file is not None:
+        print(f"papf launch {prof.name}: made the pairing key {path}; copy it to the other side "
+              f"and give it there too (--key {path})", file=sys.stderr, flush=True)
+    return key.hex()
 
 
 def _nodes_conf(prof: Profile, opt: LaunchOptions, connect: list[str]) -> zenoh.Config:
@@ -88,10 +148,11 @@ def _joined_network(prof: Profile, opt: LaunchOptions, graph) -> zenoh.Config | 
 
 
 def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show, keys: Keys,
-            run_key: str | None) -> RunResult | None:
+            run_key: str, run_id: str | None, journal: Journal | None = None) -> RunResult | None:
     """:func:`launch` once the graph is resolved: start, wait alive, drive or serve."""
     cmds, connect = graph.nodes, graph.connect
-    with Supervisor(show=show, env={runauth.ENV: run_key} if run_key else None) as sup:
+    env = {runauth.ENV: run_key, **({seal.RUN_ID_ENV: run_id} if run_id else {})}
+    with Supervisor(show=show, env=env) as sup:
         if prof.router:
             sup.start("router", list(graph.processes[0].argv))
             host, _, port = connect[0].partition("/")[2].rpartition(":")
@@ -111,9 +172,9 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
                 return _failed(reason, opt, prof)
             print(f"papf launch {prof.name}: ready ({', '.join(wanted)} alive)", file=sys.stderr,
                   flush=True)
-            if prof.run:   # the goal is signed only for a planner this launcher started
-                key = bytes.fromhex(run_key) if "planner" in cmds else None
-                return _drive_run(session, keys, sup, prof, opt, stop, key)
+            if prof.run:
+                return _drive_run(session, keys, sup, prof, opt, stop, bytes.fromhex(run_key),
+                                  run_id, journal)
             while not stop and not sup.dead():   # a serving host: until Ctrl-C or a death
                 stop.event.wait(0.2)
             return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
@@ -192,10 +253,15 @@ def _robot_talks(session, keys: Keys, prof: Profile, opt: LaunchOptions, sup: Su
     finally:
         sub.undeclare()
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
-               stop: StopRequested, run_key: bytes | None = None) -> RunResult:
+               stop: StopRequested, run_key: bytes, run_id: str,
+               journal: Journal | None = None) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
-    monitor = RunMonitor(opt.timeout_s, goal=(world.goal[0], world.goal[1], world.tolerance))
+    goal = journal.goal if journal is not None else (world.goal[0], world.goal[1], world.tolerance)
+    monitor = RunMonitor(opt.timeout_s, goal=goal)
+    if journal is not None:   # the same run: path and first motion go on from the journal
+        monitor.resume(journal.path_m, journal.motion_start_ns)
+        world = dataclasses.replace(world, goal=goal[:2], tolerance=goal[2])
     if prof.pose_topic == "odom" and not _robot_talks(session, keys, prof, opt, sup, stop):
         monitor.fail("interrupted" if stop else sup.death_reason() or
                      f"no odometry from the robot within {opt.startup_timeout_s:g} s: the base "
@@ -203,16 +269,20 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
                      "zenoh-bridge-ros2dds, or rmw_zenoh; docs/getting-started-robot.md)")
         return _result(monitor, opt, prof, time.monotonic() - wall0)
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
-                      stall_s=opt.stall_s or STALL_S, run_key=run_key)
+                      stall_s=opt.stall_s or STALL_S, run_key=run_key, run_id=bytes.fromhex(run_id))
+    if prof.host == "laptop":   # a crash of this laptop can be resumed from it
+        writer = JournalWriter(opt.namespace, journal or Journal(run_id, world.name, goal))
+        seq.watchers.append(writer.update)
     planner = str(opt.values.get("planner") or prof.defaults.get("planner", DEFAULT_PLANNER))
     try:
         if seq.handshake(world):
-            seq.start(f"profile={prof.name} world={world.name}")
+            if journal is None:   # resumed: the robot's clock goes on, no new start
+                seq.start(f"profile={prof.name} world={world.name}"
+                          + (" frame=keep" if opt.after_crash == "new" else ""))
             with RunProgress(None, opt.timeout_s, world.name, planner) as progress:
                 seq.until_outcome(progress, world.goal[:2])
     finally:
         result = _result(monitor, opt, prof, time.monotonic() - wall0)
         seq.end(result)
+        drop_journal(opt.namespace, run_id)
     return result
-
-

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from collections import deque
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 from common.outcomes import EXIT_CODES
 from common.robot import MOVING_SPEED
@@ -51,6 +51,10 @@ class RunResult:
     fleet: tuple[dict, ...] = ()         # a fleet's robots, one object each (papf.launch.fleet)
     min_separation_m: float | None = None  # a fleet: closest footprint approach [m]
     discomfort_s: float | None = None    # a fleet: time people spent within 0.2 m of a robot [s]
+    run_id: str = ""                     # the run's id (hex; common.seal), on every sealed sample
+    refused: dict = field(default_factory=dict)   # {process: {topic: {reason: n}}}: samples
+    # not sealed by this run's processes (foreign, replayed, another run's), dropped
+    recording: dict | None = None        # --record: file, complete, messages, dropped per key
 
     @property
     def exit_code(self) -> int:
@@ -68,6 +72,8 @@ class RunResult:
             d["faults"] = list(d["faults"])
         else:
             del d["faults"]
+        if d["recording"] is None:
+            del d["recording"]
         fleet = d.pop("fleet")
         if fleet:   # several robots: the fleet's figures and one object per robot
             d["min_separation_m"] = (round(self.min_separation_m, 6)
@@ -118,6 +124,17 @@ class RunMonitor:
         self.watchdog_stop_ns: int | None = None
         self.faults: list[str] = []
         self.more_faults = 0
+        self._path0 = 0.0                     # [m] driven before this launcher (a resumed run)
+
+    def resume(self, path_m: float, motion_start_ns: int | None) -> None:
+        """Go on with a run another launcher began (:mod:`papf.launch.resume`): its path so
+        far and its first motion."""
+        self._path0 = max(0.0, float(path_m))
+        self._motion_start_ns = motion_start_ns
+
+    def path_so_far(self) -> float:
+        """The path driven up to the newest pose sample [m]."""
+        return self._poses[-1].path_m if self._poses else self._path0
 
     # -- inputs ---------------------------------------------------------------
     def on_clock(self, msg: Clock) -> None:
@@ -158,7 +175,8 @@ class RunMonitor:
 
     def on_pose(self, msg: Odometry) -> None:
         last = self._poses[-1] if self._poses else None
-        path = 0.0 if last is None else last.path_m + math.hypot(msg.x - last.x, msg.y - last.y)
+        path = self._path0 if last is None else last.path_m + math.hypot(msg.x - last.x,
+                                                                          msg.y - last.y)
         self._poses.append(_Pose(msg, path))
         if self._motion_start_ns is None and abs(msg.v) > MOVING_SPEED:
             self._motion_start_ns = msg.stamp_ns
@@ -228,7 +246,7 @@ class RunMonitor:
 
     def path_length_m(self) -> float:
         if not self._poses:
-            return 0.0
+            return self._path0
         pose = self._pose_at(self.t_end_ns or 0)
         return pose.path_m if pose is not None else 0.0
 

@@ -179,6 +179,8 @@ class LaunchOptions:
     verbose: bool = False
     dry_run: bool = False
     join: list[str] = field(default_factory=list)   # other hosts' routers this one connects to
+    key_file: str | None = None              # a split's pairing key (common.runauth.load_pair_key)
+    after_crash: str = "refuse"              # a run the robot is still in: refuse | resume | new
 
 
 def local_endpoint(listen: str) -> str:

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import zenoh
 
-from common import runauth
+from common import runauth, seal
 from common.transport import wait_alive, zenoh_config
 from nodes.energy_meter.models import DEFAULT_MODEL
 from nodes.planner.registry import DEFAULT_PLANNER
@@ -128,9 +128,11 @@ def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, r
     """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
     if world.robots or world.people:
         return _run_fleet(cfg, world, graph, router, run_key, wall0)
+    run_id = seal.new_run_id()    # every sample of this run carries it (common.seal)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
-                                       env={runauth.ENV: run_key}) as sup:
-        seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key))
+                                       env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
+        seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key),
+                          run_id=bytes.fromhex(run_id))
         try:
             _drive(cfg, world, graph.nodes, sup, session, keys, seq)
         finally:
@@ -149,14 +151,16 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
     planners = {r.name: r.planner or cfg.planner for r in robots}
     goals = {r.name: tuple(r.goal) for r in robots}
     meter = FleetMeter(names, goals, bool(world.people))
+    run_id = seal.new_run_id()
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
-                                       env={runauth.ENV: run_key}) as sup:
+                                       env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
         seqs = {}
         for r in robots:
             monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision,
                                  goal=(r.goal[0], r.goal[1], r.tolerance))
             seqs[r.name] = seq = RunSequence(session, Keys(r.name), sup, monitor,
-                                             run_key=bytes.fromhex(run_key))
+                                             run_key=bytes.fromhex(run_key),
+                                             run_id=bytes.fromhex(run_id))
             seq.watch_poses(lambda msg, n=r.name: meter.on_pose(n, msg))
         if world.people:   # on the driver's namespace, the run's
             seqs[names[0]].watch_key(Keys(cfg.namespace).key("sim/people"), People,

@@ -16,6 +16,7 @@ import zenoh
 
 from common import runauth
 from common.errors import SchemaError
+from common.intake import Trust
 from common.transport import round_robin
 from common.units import StampGuard
 from papf.launch.outcome import NS, RunMonitor, RunResult
@@ -35,6 +36,7 @@ RECORDER_ACK_S = 15.0    # [s wall] for the recorder to close its file after run
 COALESCE_S = 0.01        # [s wall] the watch takes the message stream in batches this far apart
 POLL_S = 0.005           # [s wall] while waiting for messages, look this often
 CHANNEL_CAPACITY = 65536 # [samples] per topic between two looks (then Zenoh waits)
+HEALTH_S = 1.0           # [s wall] for the nodes' health answers at the end of a run
 
 
 class RunSequence:
@@ -42,12 +44,17 @@ class RunSequence:
 
     def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
                  pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
-                 stall_s: float = STALL_S, run_key: bytes | None = None):
+                 stall_s: float = STALL_S, run_key: bytes | None = None,
+                 run_id: bytes | None = None):
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
         self.stop, self.stall_s = stop, stall_s
         self.run_key = run_key               # goals signed, statuses verified (common.runauth)
+        # every put sealed, every sample of this run's processes only (common.intake)
+        self.trust = Trust(run_key, run_id) if run_key is not None else Trust(None, None)
+        self.run_id = run_id
         self.stamps = StampGuard(STAMP_ORDERED, restart_at_zero=False)
         self.dropped = 0                     # bad payloads, stamps and tags: not acted on
+        self._key_of: dict[str, str] = {}    # topic -> its key expression (the seal covers it)
         self._handlers = {"clock": monitor.on_clock, "planner/status": monitor.on_status,
                           "events": monitor.on_event, "battery": monitor.on_battery,
                           "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose,
@@ -60,6 +67,7 @@ class RunSequence:
                                                       monitor.on_time(msg.stamp_ns),
                                                       *(hook(msg) for hook in self._pose_hooks))
         self._pose_hooks: list[Callable] = []   # watch_poses
+        self.watchers: list[Callable[[RunMonitor], None]] = []   # called every CHECK_S of the run
         # Each topic's samples wait in Zenoh's own channel until the caller's thread drains
         # them (:meth:`drain`): no Python on Zenoh's thread, no wake per message — the
         # launcher watches 50 Hz streams to decide what changes at 10 Hz at most.
@@ -69,6 +77,7 @@ class RunSequence:
             self._listen(keys.key(topic), topic, TOPICS[topic])
 
     def _listen(self, key: str, topic: str, msg_type: type) -> None:
+        self._key_of[topic] = key
         sub = self.session.declare_subscriber(key, zenoh.handlers.FifoChannel(CHANNEL_CAPACITY))
         self._channels.append((topic, msg_type, sub))
         self._subs.append(sub)
@@ -84,12 +93,28 @@ class RunSequence:
         """Call ``hook(odometry)`` with every pose sample too (in sim; a fleet's separations)."""
         self._pose_hooks.append(hook)
 
-    def _accept(self, topic: str, msg_type: type, payload: bytes):
-        """The decoded message, or None (a bad payload, stamp or tag: counted, not acted on)."""
+    def put(self, key: str, msg) -> None:
+        """Put ``msg`` on ``key``, sealed with the run's key and id."""
+        payload = msg.to_bytes()
+        attachment = self.trust.seal(key, payload)
+        if attachment is None:
+            self.session.put(key, payload)
+        else:
+            self.session.put(key, payload, attachment=attachment)
+
+    def _accept(self, topic: str, msg_type: type, payload: bytes, attachment: bytes | None = None):
+        """The decoded message, or None (a bad payload, seal, stamp or tag: counted, not
+        acted on; refused seals also per topic and reason in ``trust.refused``)."""
         try:
             msg = msg_type.from_bytes(payload)
         except SchemaError:
             self.dropped += 1
+            return None
+        if self.trust.check(topic, self._key_of[topic], payload, attachment, msg) != "ok":
+            self.dropped += 1
+            if sum(self.trust.refused.values()) in (1, 10, 100, 1000):
+                log.warning("refused samples not sealed by this run's processes: %s",
+                            self.trust.counts())
             return None
         if self.stamps.check(topic, msg) or (
                 topic in ("planner/status", "goal") and not runauth.verify(msg, self.run_key)):
@@ -101,8 +126,8 @@ class RunSequence:
         """Every waiting sample, decoded and fed to the monitor; one per topic in turn, so
         streams published in step come out in step."""
         got = []
-        for topic, msg_type, payload in round_robin(self._channels):
-            msg = self._accept(topic, msg_type, payload)
+        for topic, msg_type, payload, attachment in round_robin(self._channels):
+            msg = self._accept(topic, msg_type, payload, attachment)
             if msg is not None:
                 self._handlers[topic](msg)
                 got.append((topic, msg))
@@ -124,7 +149,7 @@ class RunSequence:
         goal = runauth.sign(goal_message(world), self.run_key)
         deadline = time.monotonic() + GOAL_HANDSHAKE_S
         while time.monotonic() < deadline and not self.stop() and not self.sup.dead():
-            self.session.put(self.keys.goal, goal.to_bytes())
+            self.put(self.keys.goal, goal)   # sealed afresh each time: a new seq
             t_next = time.monotonic() + 0.5
             while time.monotonic() < t_next:
                 if any(t == "planner/status" and isinstance(m, PlannerStatus) and m.state == "ready"
@@ -135,8 +160,8 @@ class RunSequence:
         return False
 
     def start(self, detail: str) -> None:
-        self.session.put(self.keys.events, Event(stamp_ns=0, kind="run_started",
-                                                 source="launcher", detail=detail).to_bytes())
+        self.put(self.keys.events, Event(stamp_ns=0, kind="run_started", source="launcher",
+                                         detail=detail))
 
     def until_outcome(self, progress=None, goal_xy: tuple[float, float] | None = None) -> None:
         """Watch until the monitor has an outcome; a dead node, a stall or a stop is one too."""
@@ -152,6 +177,8 @@ class RunSequence:
             next_check = now + CHECK_S
             if m.clock_ns != last_clock:
                 last_clock, last_change = m.clock_ns, now
+            for watcher in self.watchers:
+                watcher(m)
             if progress is not None and goal_xy is not None:
                 progress.update(m.clock_ns / NS, m.distance_to(*goal_xy),
                                 m.batteries[-1].charge_used_mAh if m.batteries else 0.0,
@@ -199,7 +226,14 @@ class RunSequence:
         """``run_ended`` with the result as JSON; then, if a recorder runs, wait (at most
         :data:`RECORDER_ACK_S`) for its ``recording_closed``: its file is then complete.
         Stop listening. False if a recorder runs and did not acknowledge. Nothing is
-        published when this run's router died: what the session reaches then is not ours."""
+        published when this run's router died: what the session reaches then is not ours.
+
+        Before ``run_ended`` the nodes' health (:meth:`common.transport.Node.health`) goes
+        into ``result.refused``: what each process refused (unsealed, replayed, another
+        run's); after it, the recorder's own account into ``result.recording``. A recording
+        that stopped early — the recorder froze, died, or never confirmed its file — makes
+        the run ``failed`` (exit 6), its reason saying so and what the run itself was:
+        the user asked for a record of the run and has none."""
         if any(c.name == "router" for c in self.sup.dead()):
             for sub in self._subs:
                 sub.undeclare()
@@ -207,14 +241,61 @@ class RunSequence:
             return False
         if stamp_ns is None:   # a fleet's: every robot's run_ended at the fleet's end
             stamp_ns = self.monitor.t_end_ns or max(self.monitor.clock_ns, 0)
-        self.session.put(self.keys.events, Event(
-            stamp_ns=stamp_ns, kind="run_ended",
-            source="launcher", detail=json.dumps(result.to_json())).to_bytes())
+        result.run_id = self.run_id.hex() if self.run_id else ""
+        result.refused = self.refusals()
+        self.put(self.keys.events, Event(stamp_ns=stamp_ns, kind="run_ended", source="launcher",
+                                         detail=json.dumps(result.to_json())))
         closed = self._wait_for_recorder() if wait_recorder else True
+        if wait_recorder:
+            self._judge_recording(result, closed)
         for sub in self._subs:
             sub.undeclare()
         self._subs.clear()
         return closed
+
+    def refusals(self) -> dict:
+        """``{process: {topic: {reason: n}}}``: the launcher's and every node's refusals
+        (their health queryables, :data:`HEALTH_S` at most), those with any only."""
+        out = {"launcher": self.trust.counts()} if self.trust.refused else {}
+        for name, health in self.health().items():
+            if health.get("refused"):
+                out[name] = health["refused"]
+        return out
+
+    def health(self, node: str = "*") -> dict[str, dict]:
+        """The health answers of this namespace's nodes (``node``: one, or ``*``)."""
+        prefix = self.keys.key("health/")
+        out = {}
+        try:
+            for reply in self.session.get(self.keys.key(f"health/{node}"), timeout=HEALTH_S):
+                if reply.ok is None:
+                    continue
+                try:
+                    data = json.loads(reply.ok.payload.to_bytes())
+                except ValueError:
+                    continue
+                if isinstance(data, dict):
+                    out[str(reply.ok.key_expr)[len(prefix):]] = data
+        except Exception as exc:   # a closing session: no health, the run's figures stand
+            log.debug("health query failed: %s", exc)
+        return out
+
+    def _judge_recording(self, result: RunResult, closed: bool) -> None:
+        recorder = [c for c in self.sup.children if c.name == "recorder"]
+        if not recorder:
+            return
+        account = self.health("recorder").get("recorder", {}).get("recording") if closed else None
+        if closed and account:
+            result.recording = account
+            return
+        code = recorder[0].returncode
+        why = (f"the recorder exited with code {code}" if code is not None else
+               f"the recorder did not close its file within {RECORDER_ACK_S:g} s (frozen?)")
+        result.recording = {"complete": False, "reason": why}
+        ran = f"{result.outcome} at {result.sim_time_s:.2f} s"
+        result.outcome = "failed"
+        result.reason = (f"the recording stopped early: {why}; the run itself: {ran} "
+                         f"{result.reason}").strip()
 
     def _wait_for_recorder(self) -> bool:
         recorder = [c for c in self.sup.children if c.name == "recorder"]
