@@ -14,11 +14,14 @@ No maths here; algorithms never import this module.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import os
 import queue
+import select
 import signal
+import socket
 import sys
 import threading
 import time
@@ -202,9 +205,18 @@ class StopRequested:
     block for minutes; a node must not outlive its launcher that way (issue 30: a meter
     lived on for 5 minutes with its router gone, keeping its liveliness token). Every
     instance of a process hears the signal (a fleet driver has one node per robot).
+
+    A signal is seen even when Python does not run its handler: the interpreter's C-level
+    handler also writes the signal's number to a wakeup socket (``signal.set_wakeup_fd``),
+    which :meth:`__bool__` and :meth:`wait` read. On CPython 3.11 a signal that reaches the
+    process while a helper thread (a log pump, a Zenoh thread) holds the interpreter can have
+    its Python handler put off indefinitely — the main thread waiting in ``Event.wait(0.2)``
+    loops on, never told (issue 31: ``papf launch robot`` hung on Ctrl-C about 1 launch in
+    60; ``bench/ctrlc_loop.py`` reproduces it).
     """
 
     _instances: list[StopRequested] = []
+    _wakeup: socket.socket | None = None     # the read end of the process's wakeup socket
 
     def __init__(self, wake=None, bound_s: float | None = None) -> None:
         self.event = threading.Event()
@@ -215,11 +227,39 @@ class StopRequested:
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
                 signal.signal(sig, StopRequested._on_signal)
+            StopRequested._install_wakeup()
+
+    @classmethod
+    def _install_wakeup(cls) -> None:
+        if cls._wakeup is not None:
+            return
+        read, write = socket.socketpair()
+        read.setblocking(False)
+        write.setblocking(False)
+        try:
+            signal.set_wakeup_fd(write.fileno(), warn_on_full_buffer=False)
+        except ValueError:   # not the main thread of the main interpreter: handlers only
+            read.close()
+            write.close()
+            return
+        cls._wakeup, cls._wakeup_write = read, write   # both kept open for the process's life
 
     @staticmethod
     def _on_signal(*_) -> None:
         for stop in list(StopRequested._instances):
             stop.request()
+
+    @classmethod
+    def _poll_wakeup(cls) -> None:
+        """A SIGINT/SIGTERM the C handler noted: every instance stops."""
+        if cls._wakeup is None:
+            return
+        try:
+            data = cls._wakeup.recv(256)
+        except (BlockingIOError, InterruptedError, OSError):
+            return
+        if any(b in (signal.SIGINT, signal.SIGTERM) for b in data):
+            cls._on_signal()
 
     def request(self, why: str = "") -> None:
         """Stop (from a signal handler or any thread); arms the bound once."""
@@ -231,16 +271,30 @@ class StopRequested:
             self._timer.daemon = True
             self._timer.start()
 
+    def wait(self, timeout_s: float) -> bool:
+        """Sleep up to ``timeout_s`` or until stopped (a signal wakes it at once); stopped?"""
+        if not self:
+            read = StopRequested._wakeup
+            if read is not None and threading.current_thread() is threading.main_thread():
+                select.select([read], [], [], timeout_s)
+            else:
+                self.event.wait(timeout_s)
+        return bool(self)
+
     def __bool__(self) -> bool:
+        if not self.event.is_set():
+            StopRequested._poll_wakeup()
         return self.event.is_set()
 
 
 def _bounded_exit(bound_s: float, why: str) -> None:
-    """The stop took longer than its bound: say so and leave without closing anything."""
-    logging.getLogger("papf.node").warning(
-        "still running %g s after the stop request%s (a Zenoh close waiting for a router "
-        "that is gone?): exiting now", bound_s, f" ({why})" if why else "")
-    exit_fast(1)
+    """The stop took longer than its bound: say so and leave without closing anything. No
+    lock is taken here (not logging's: the thread that holds one may be the one stuck)."""
+    with contextlib.suppress(OSError):
+        os.write(2, (f"still running {bound_s:g} s after the stop request"
+                     f"{f' ({why})' if why else ''} (a Zenoh close waiting for a router that is "
+                     "gone?): exiting now\n").encode())
+    os._exit(1)
 
 
 def watch_parent(stop: StopRequested, poll_s: float = PARENT_POLL_S) -> threading.Thread:

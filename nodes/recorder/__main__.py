@@ -177,7 +177,7 @@ def _tail(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch) -> 
     deadline = time.monotonic() + TAIL_MAX_S
     while not watch.complete and not node.stop and time.monotonic() < deadline:
         if drain(intake, writer, BATCH, watch) == 0:
-            node.stop.event.wait(IDLE_WAIT_S)
+            node.stop.wait(IDLE_WAIT_S)
     if not watch.complete:
         node.log.warning("run_ended: closing without a sample of its instant on %s",
                          ", ".join(sorted(watch.waiting)))
@@ -206,7 +206,7 @@ def _loop(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch | No
     while not node.stop and not (watch and watch.seen):
         if drain(intake, writer, BATCH, watch) == 0:
             writer.maybe_flush()
-            node.stop.event.wait(IDLE_WAIT_S)
+            node.stop.wait(IDLE_WAIT_S)
         elif first:
             first = False
             node.log.info("first messages after %.1f s", time.monotonic() - started)
@@ -267,7 +267,8 @@ def main(args: argparse.Namespace) -> int:
             if close and not node.stop:   # the file is closed: say so, then wait to be stopped
                 node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=NAME,
                                              detail=str(args.out)))
-                node.stop.event.wait()
+                while not node.stop.wait(1.0):
+                    pass
     except PapfError as exc:
         log.error("%s", exc)
         return 2

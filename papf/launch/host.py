@@ -167,8 +167,8 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
             missing = wait_alive(session, keys, wanted, opt.startup_timeout_s,
                                  abort=lambda: bool(sup.dead()) or bool(stop))
             if missing or sup.dead():
-                reason = sup.death_reason() or f"not alive after {opt.startup_timeout_s:g} s: " \
-                                        f"{', '.join(sorted(missing))}"
+                reason = "interrupted" if stop else sup.death_reason() or \
+                    f"not alive after {opt.startup_timeout_s:g} s: {', '.join(sorted(missing))}"
                 return _failed(reason, opt, prof)
             print(f"papf launch {prof.name}: ready ({', '.join(wanted)} alive)", file=sys.stderr,
                   flush=True)
@@ -176,7 +176,7 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
                 return _drive_run(session, keys, sup, prof, opt, stop, bytes.fromhex(run_key),
                                   run_id, journal)
             while not stop and not sup.dead():   # a serving host: until Ctrl-C or a death
-                stop.event.wait(0.2)
+                stop.wait(0.2)
             return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
 
 

@@ -53,5 +53,5 @@ def replay_with_view(args: argparse.Namespace, replay_fn) -> int:
             print(f"papf replay: done; the view stays on ws://127.0.0.1:{args.view} until "
                   "Ctrl-C", file=sys.stderr)
             while not stop and not sup.dead():
-                stop.event.wait(0.2)
+                stop.wait(0.2)
         return 130 if stop else code

@@ -24,7 +24,7 @@ def main(listen: list[str], config_file: str | None = None, join: list[str] | No
                         scout_delay_ms=None if config_file else 0)
     with zenoh.open(conf) as session:
         log.info("Zenoh router %s listening on %s", session.zid(), ", ".join(listen))
-        while not stop.event.wait(0.2):
+        while not stop.wait(0.2):
             pass
     log.info("router stopped")
 
