@@ -562,7 +562,7 @@ class Node:
 
     def _answer_health(self, query) -> None:   # Zenoh's thread: a copy of counters, one reply
         try:
-            query.reply(query.key_expr, json.dumps(self.health()).encode())
+            query.reply(self.keys.key(f"health/{self.name}"), json.dumps(self.health()).encode())
         except Exception as exc:   # a closing session: nothing to answer with
             self.log.debug("health query not answered: %s", exc)
 

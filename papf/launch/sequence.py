@@ -255,11 +255,15 @@ class RunSequence:
 
     def refusals(self) -> dict:
         """``{process: {topic: {reason: n}}}``: the launcher's and every node's refusals
-        (their health queryables, :data:`HEALTH_S` at most), those with any only."""
+        (their health queryables, :data:`HEALTH_S` at most) — unsealed, replayed, another
+        run's, and ``malformed`` (undecodable or a bad stamp) — those with any only."""
         out = {"launcher": self.trust.counts()} if self.trust.refused else {}
         for name, health in self.health().items():
-            if health.get("refused"):
-                out[name] = health["refused"]
+            counts = {t: dict(why) for t, why in (health.get("refused") or {}).items()}
+            for topic, n in (health.get("bad") or {}).items():   # undecodable, bad stamps
+                counts.setdefault(topic, {})["malformed"] = n
+            if counts:
+                out[name] = counts
         return out
 
     def health(self, node: str = "*") -> dict[str, dict]:
