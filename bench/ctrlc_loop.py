@@ -29,6 +29,7 @@ from papf.launch.supervisor import free_port
 
 READY_S = 90.0     # [s wall] for `papf launch` to say ready (a loaded machine)
 RANDOM_S = 3.0     # [s wall] --when random: the SIGINT comes within this of the start
+EMULATOR_S = 2.0   # [s wall] --emulator: the robot emulator talks this long before the SIGINT
 
 
 def _pids_with(port: int) -> list[int]:
@@ -48,7 +49,7 @@ def _pids_with(port: int) -> list[int]:
 
 
 def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready",
-        rng: random.Random | None = None) -> dict:
+        rng: random.Random | None = None, emulator: bool = False) -> dict:
     """Launch once, interrupt once (``when``: once ready, or at a random moment of the first
     ``RANDOM_S`` seconds, start-up included); the row of the CSV."""
     port = free_port()
@@ -78,6 +79,12 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
             row["code"] = "not-ready"
             return row
         row["ready_s"] = round(time.monotonic() - t0, 3) if ready.is_set() else None
+        emu = None
+        if emulator and ready.is_set():   # the robot talking: the driver busy, samples flowing
+            emu = subprocess.Popen([sys.executable, "-m", "papf", "rosbot-emulator", "--connect",
+                                    f"tcp/127.0.0.1:{port}"], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+            time.sleep(EMULATOR_S)
         t1 = time.monotonic()
         proc.send_signal(signal.SIGINT)
         try:
@@ -92,6 +99,9 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
             proc.kill()
             proc.wait()
         t.join(2.0)
+        if emu is not None:
+            os.killpg(emu.pid, signal.SIGKILL)
+            emu.wait()
         deadline = time.monotonic() + 5.0   # the launcher's SIGKILL of its children is not instant
         while _pids_with(port) and time.monotonic() < deadline:
             time.sleep(0.1)
@@ -114,6 +124,9 @@ def main(argv=None) -> int:
     ap.add_argument("--when", choices=("ready", "random"), default="ready",
                     help="SIGINT once ready (default), or at a random moment of the first "
                          f"{RANDOM_S:g} s (start-up included; seeded)")
+    ap.add_argument("--emulator", action="store_true",
+                    help="once ready, start papf rosbot-emulator against the launch first (the "
+                         "driver busy with odometry, battery and commands), as on a robot")
     ap.add_argument("--csv", default="-", help="rows here (default stdout)")
     ap.add_argument("--dump-dir", default=".", help="where the stacks of hung launchers go")
     args = ap.parse_args(argv)
@@ -125,7 +138,7 @@ def main(argv=None) -> int:
     hangs = orphans = slow = 0
     rng = random.Random(31)
     for i in range(args.runs):
-        row = one(args.profile, args.hang_s, dump, i, args.when, rng)
+        row = one(args.profile, args.hang_s, dump, i, args.when, rng, args.emulator)
         writer.writerow(row)
         out.flush()
         hangs += row["hang"]

@@ -163,7 +163,8 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
             out(json.dumps(json_safe({"key": r.key, "type": r.type_name, "encoding": r.encoding,
                                       "messages": r.count, "hz": rate.hz,
                                       "stamp_hz": rate.stamp_hz})))
-        out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {})}))
+        out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {}),
+                        "refused": node_refusals(session, keys)}))
         return heard
     shown = {r.key: safe_text(r.key, MAX_KEY_CHARS) for r in rows.values()}   # a peer's key
     width = max(len(k) for k in shown.values())
@@ -177,7 +178,39 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
     out(f"alive ({safe_text(keys.alive())}): {_names(nodes)}")
     for ns, names in others.items():   # the fleet's other namespaces
         out(f"alive ({safe_text(Keys(ns).alive() if _plain(ns) else ns)}): {_names(names)}")
+    refused = node_refusals(session, keys)
+    for node, topics in sorted(refused.items()):
+        what = ", ".join(f"{safe_text(t, 80)} {safe_text(r, 20)} {n}"
+                         for t, reasons in sorted(topics.items()) for r, n in sorted(reasons.items()))
+        out(f"refused by {safe_text(node, 80)}: {what}")
+    if nodes and not refused:
+        out("refused: none (no node dropped a sample: unsealed, replayed, another run's, malformed)")
     return heard
+
+
+HEALTH_S = 1.0   # [s] for the nodes' health answers
+
+
+def node_refusals(session: zenoh.Session, keys: Keys) -> dict[str, dict[str, dict[str, int]]]:
+    """``{node: {topic: {reason: n}}}``: what each live node of ``keys``' namespace refused
+    (its health answer, :meth:`common.transport.Node.health`): samples without this run's
+    seal, replays, another run's, and ``malformed`` ones (undecodable, a bad stamp)."""
+    prefix = keys.key("health/")
+    out: dict[str, dict[str, dict[str, int]]] = {}
+    for reply in session.get(keys.key("health/*"), timeout=HEALTH_S):
+        if reply.ok is None:
+            continue
+        try:
+            data = json.loads(reply.ok.payload.to_bytes())
+            counts = {str(t): {str(r): int(n) for r, n in why.items()}
+                      for t, why in (data.get("refused") or {}).items()}
+            for topic, n in (data.get("bad") or {}).items():
+                counts.setdefault(str(topic), {})["malformed"] = int(n)
+        except (ValueError, AttributeError, TypeError):
+            continue   # not a node's answer: nothing to show
+        if counts:
+            out[str(reply.ok.key_expr)[len(prefix):]] = counts
+    return out
 
 
 MAX_KEY_CHARS = 120   # [chars] of a key shown in the table (a peer's 10 MB key stays one line)

@@ -13,16 +13,22 @@ Exit codes: 0 done / reached, 2 usage or configuration error (one line, no trace
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import logging
-import os
 import signal
-import sys
 
-from common import __version__
-from common.errors import PapfError
-from common.text import install_log_filter, safe_line
+# first (the `papf` script imports this module before anything else of ours): a SIGINT
+# inherited as ignored from a script's `papf … &` is taken again at once, not after the
+# imports below — one sent meanwhile would be discarded (papf/__main__.py says more)
+signal.signal(signal.SIGINT, signal.default_int_handler)
+
+import argparse  # noqa: E402
+import importlib  # noqa: E402
+import logging  # noqa: E402
+import os  # noqa: E402
+import sys  # noqa: E402
+
+from common import __version__  # noqa: E402
+from common.errors import PapfError  # noqa: E402
+from common.text import install_log_filter, safe_line  # noqa: E402
 
 # (command, module of papf.cli that registers it), in ``--help`` order. ``papf COMMAND``
 # imports that one module only (``papf run`` starts its processes ~0.2 s sooner than if

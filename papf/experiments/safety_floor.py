@@ -42,9 +42,12 @@ TIMEOUT_S = 200.0   # [s] sim time: energy-blocking takes ~100 s at the defaults
 # paper's four car-scale cases (``--car``). a_x, a_y < 0: towards 0 the field stops decaying
 # and its gradient (the avoiding force) vanishes, so their floor bounds them away from 0.
 CAR_SWEEP: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
-    "obstacle_gain": ((CAR,), (100.0, 30.0, 10.0, 3.0, 1.0, 0.3, 0.1, 0.01)),
-    "a_x": ((CAR,), (-0.01, -0.003, -0.001, -0.0003, -0.0001, -1e-05)),
-    "a_y": ((CAR,), (-0.2, -0.1, -0.05, -0.02, -0.01, -0.001)),
+    "obstacle_gain": ((CAR,), (100.0, 30.0, 10.0, 3.0, 1.0, 0.3, 0.1, 0.01,
+                               300.0, 1e3, 1e4, 1e5)),   # the strong side (caps), issue 31
+    "a_x": ((CAR,), (-0.01, -0.003, -0.001, -0.0003, -0.0001, -1e-05,
+                     -0.03, -0.1, -0.3, -1.0, -3.0)),     # ... a field narrowed to nothing
+    "a_y": ((CAR,), (-0.2, -0.1, -0.05, -0.02, -0.01, -0.001,
+                     -0.5, -1.0, -3.0, -10.0, -30.0)),
 }
 CAR_WORLDS = ("iapf-case-a", "iapf-case-b", "iapf-case-c", "iapf-case-d")
 

@@ -260,7 +260,8 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
     goal = journal.goal if journal is not None else (world.goal[0], world.goal[1], world.tolerance)
     monitor = RunMonitor(opt.timeout_s, goal=goal)
     if journal is not None:   # the same run: path and first motion go on from the journal
-        monitor.resume(journal.path_m, journal.motion_start_ns)
+        monitor.resume(journal.path_m, journal.motion_start_ns,
+                       None if journal.x is None else (journal.x, journal.y))
         world = dataclasses.replace(world, goal=goal[:2], tolerance=goal[2])
     if prof.pose_topic == "odom" and not _robot_talks(session, keys, prof, opt, sup, stop):
         monitor.fail("interrupted" if stop else sup.death_reason() or

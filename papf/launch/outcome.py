@@ -125,12 +125,19 @@ class RunMonitor:
         self.faults: list[str] = []
         self.more_faults = 0
         self._path0 = 0.0                     # [m] driven before this launcher (a resumed run)
+        self._resume_xy: tuple[float, float] | None = None
 
-    def resume(self, path_m: float, motion_start_ns: int | None) -> None:
+    def resume(self, path_m: float, motion_start_ns: int | None,
+               last_xy: tuple[float, float] | None = None) -> None:
         """Go on with a run another launcher began (:mod:`papf.launch.resume`): its path so
-        far and its first motion."""
+        far, its first motion, and where its last pose sample was — the way from there to
+        this launcher's first pose counts as a straight line (the robot drove it unseen)."""
         self._path0 = max(0.0, float(path_m))
         self._motion_start_ns = motion_start_ns
+        self._resume_xy = last_xy
+
+    def last_xy(self) -> tuple[float, float] | None:
+        return (self._poses[-1].x, self._poses[-1].y) if self._poses else None
 
     def path_so_far(self) -> float:
         """The path driven up to the newest pose sample [m]."""
@@ -175,8 +182,12 @@ class RunMonitor:
 
     def on_pose(self, msg: Odometry) -> None:
         last = self._poses[-1] if self._poses else None
-        path = self._path0 if last is None else last.path_m + math.hypot(msg.x - last.x,
-                                                                          msg.y - last.y)
+        if last is None:
+            gap = (0.0 if self._resume_xy is None else
+                   math.hypot(msg.x - self._resume_xy[0], msg.y - self._resume_xy[1]))
+            path = self._path0 + gap
+        else:
+            path = last.path_m + math.hypot(msg.x - last.x, msg.y - last.y)
         self._poses.append(_Pose(msg, path))
         if self._motion_start_ns is None and abs(msg.v) > MOVING_SPEED:
             self._motion_start_ns = msg.stamp_ns

@@ -33,7 +33,7 @@ from common.intake import Trust
 from schemas import Keys
 
 STATE_S = 3.0           # [s wall] for the robot's run state to answer
-JOURNAL_EVERY_S = 1.0   # [s wall] the journal is rewritten this often during a run
+JOURNAL_EVERY_S = 0.25  # [s wall] the journal is rewritten this often during a run
 AFTER_CRASH = ("refuse", "resume", "new")
 
 
@@ -97,6 +97,8 @@ class Journal:
     path_m: float = 0.0
     motion_start_ns: int | None = None
     t_ns: int = 0
+    x: float | None = None        # [m] the newest pose sample those figures are of
+    y: float | None = None
 
 
 def journal_path(namespace: str) -> Path:
@@ -150,6 +152,7 @@ class JournalWriter:
             j.charge_mAh, j.energy_J, j.soc, j.battery_ns = (b.charge_used_mAh, b.energy_J,
                                                              b.soc, b.stamp_ns)
         j.path_m = monitor.path_so_far()
+        j.x, j.y = monitor.last_xy() or (j.x, j.y)
         j.motion_start_ns = monitor.motion_start_ns()
         j.t_ns = max(monitor.clock_ns, 0)
         j.goal = monitor.goal or j.goal
