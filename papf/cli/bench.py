@@ -20,6 +20,7 @@ BENCHES = {
     "sim": "sim-time / wall-time of papf run (full stack, CPU per process); --loop: driver + LiDAR",
     "sweep": "full-stack runs per hour of a sweep at --workers 1 and 2 (Dask)",
     "recorder": "recorder node's sustained throughput without loss (messages/s)",
+    "recorder-flood": "recorder under a 512 KB byte flood: peak memory, real odometry kept",
     "latency": "command-to-wheel latency over the robot/laptop split (p50/p99)",
     "view": "Foxglove viewer: CPU share, added latency; lockstep run with/without --view",
     "face": "ROS 2 face: CPU per planner cycle, added latency; lockstep run with/without --ros-face",

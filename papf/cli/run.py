@@ -71,10 +71,12 @@ def run_config(args):
 
 
 def cmd_run(args) -> int:
-    from papf.launch.run import resolve_run, run
+    from papf.launch.run import preflight, resolve_run, run
 
-    if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447)
-        print(resolve_run(run_config(args)).to_json())
+    if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447), preflighted
+        cfg = run_config(args)
+        preflight(cfg)
+        print(resolve_run(cfg).to_json())
         return 0
     result = run(run_config(args))
     if args.json:

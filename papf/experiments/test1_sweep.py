@@ -9,11 +9,13 @@ and ``OUT/test1-sweep.md``; the reading and the rule: :func:`run_sweep`, :func:`
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 from common.outfiles import replace_text
 from nodes.planner.registry import one_with_role
+from papf.experiments.journal import Journal, run_key
 
 # the planners the papers' comparisons are about, by their declared roles (nodes/planner/registry.py)
 APF = one_with_role("papf-baseline")
@@ -119,6 +121,9 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
     constraint (decided on APF's figures, before PAPF ran on any candidate). Both picks are
     marked in the CSV (``chosen``: ``yes`` / ``path only``).
 
+    Each finished run is written to ``OUT/runs/`` as it ends (:mod:`papf.experiments.journal`):
+    after Ctrl-C the same command makes only the others.
+
     Writes ``OUT/test1-sweep-runs.csv`` (one row per run), ``OUT/test1-sweep.csv`` (one row per
     geometry: reached k/n, mean and range of path and duration) and ``OUT/test1-sweep.md``.
     """
@@ -131,18 +136,28 @@ def run_sweep(out: str | Path, sides=SIDES, alongs=ALONGS, offsets=OFFSETS, seed
     grid = [(s, a, o) for s in sides for a in alongs for o in offsets
             if box_clearance(s, a, o) >= FREE_M]
     runs, rows = [], []
+    journal = Journal(out)   # each finished run on disk as it ends; a re-run resumes
     with StepProgress("test1-sweep", len(grid) * len(seeds)) as bar:
         for side, along, offset in grid:
             these = []
             for seed in seeds:
-                r = simulate(sweep_world(side, along, offset), APF, seed=seed, max_time_s=timeout_s)
-                these.append({"side_m": side, "along_m": along, "offset_m": offset, "seed": seed,
-                              "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
-                              "path_m": round(r.length_m, 3)})
+                key = run_key("test1-sweep", side, along, offset, seed, timeout_s, APF)
+                row = journal.get(key)
+                if row is None:
+                    r = simulate(sweep_world(side, along, offset), APF, seed=seed,
+                                 max_time_s=timeout_s)
+                    row = {"side_m": side, "along_m": along, "offset_m": offset, "seed": seed,
+                           "outcome": r.outcome, "duration_s": round(r.duration_s, 1),
+                           "path_m": round(r.length_m, 3)}
+                    journal.put(key, row)
+                these.append(row)
                 bar.step(f"side {side} m, {along} m along, {offset} m right, seed {seed}: "
-                         f"{r.outcome} {r.length_m:.2f} m")
+                         f"{row['outcome']} {row['path_m']:.2f} m")
             runs += these
             rows.append(_summary(side, along, offset, these))
+    if journal.taken:
+        print(f"test1-sweep: {journal.taken} of {len(runs)} runs finished before, taken from "
+              f"{journal.dir} (delete it to make them again)", file=sys.stderr)
     chosen, path_only = choose(rows), choose(rows, duration_band_pct=None)
     for r in rows:
         r["chosen"] = "yes" if r is chosen else "path only" if r is path_only else ""

@@ -88,11 +88,19 @@ def _show_line(verbose: bool):
     return lambda name, line: verbose or any(k in line for k in keys)
 
 
-def run(cfg: RunConfig) -> RunResult:
-    """Run the whole stack once; always stops every process it started."""
+def preflight(cfg: RunConfig) -> World:
+    """The world, once every option passed the one preflight (exit 2 otherwise): what
+    ``papf run`` checks before it starts anything — and ``--dry-run`` too, so a dry run never
+    prints a process list that the real run would refuse."""
     world = load_world(cfg.world)  # WorldError before anything starts
     check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
-              cfg.planner_args, force=cfg.force, view=cfg.view)   # before anything starts
+              cfg.planner_args, force=cfg.force, view=cfg.view)
+    return world
+
+
+def run(cfg: RunConfig) -> RunResult:
+    """Run the whole stack once; always stops every process it started."""
+    world = preflight(cfg)   # before anything starts
     port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
     if cfg.port is None and port != DEFAULT_PORT:
         log.warning("port %d is in use; the embedded router listens on %d instead",
