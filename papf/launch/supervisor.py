@@ -79,7 +79,8 @@ class Supervisor:
         proc = subprocess.Popen(
             safe_argv(argv), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
             start_new_session=True, preexec_fn=_die_with_parent, text=True, bufsize=1,
-            env={**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONSAFEPATH": "1", **self.env,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONSAFEPATH": "1",
+                 "PAPF_NODE_PROCESS": "1", **self.env,   # a bounded stop (common.transport)
                  **(env or {})},
         )
         child = Child(name, proc)
