@@ -296,6 +296,10 @@ class RunSequence:
         why = (f"the recorder exited with code {code}" if code is not None else
                f"the recorder did not close its file within {RECORDER_ACK_S:g} s (frozen?)")
         result.recording = {"complete": False, "reason": why}
+        if result.outcome == "failed":   # already failed: by the recorder's death, or else
+            if not result.reason.startswith("recorder "):
+                result.reason += f"; the recording stopped early too: {why}"
+            return
         ran = f"{result.outcome} at {result.sim_time_s:.2f} s"
         result.outcome = "failed"
         result.reason = (f"the recording stopped early: {why}; the run itself: {ran} "
