@@ -97,8 +97,9 @@ def drain(intake: Intake, writer: RunWriter, max_samples: int, watch: RunEndWatc
 
     The hot loop of the recorder: locals only, one ``get_nowait`` per sample.
     """
-    get, write, written = intake.queue.get_nowait, writer.write, intake.budget.written
+    get, write = intake.queue.get_nowait, writer.write
     arrived = watch.arrived if watch is not None else None
+    taken: dict[str, int] = {}   # bytes per key, handed back to the budget once per batch
     n = 0
     while n < max_samples:
         try:
@@ -106,10 +107,12 @@ def drain(intake: Intake, writer: RunWriter, max_samples: int, watch: RunEndWatc
         except queue.Empty:
             break
         n += 1
-        written(key, len(payload))
+        taken[key] = taken.get(key, 0) + len(payload)
         write(key, payload, t)
         if arrived is not None:
             arrived(key, payload, t)
+    for key, nbytes in taken.items():
+        intake.budget.written(key, nbytes)
     return n
 
 

@@ -18,7 +18,6 @@ and ``papf info`` name them.
 
 from __future__ import annotations
 
-import threading
 import time
 from collections import Counter
 
@@ -32,13 +31,14 @@ OVER_RATE, OVER_BYTES, QUEUE_FULL = "rate", "bytes", "queue"
 class _Bucket:
     __slots__ = ("samples", "bytes", "t")
 
-    def __init__(self, now: float):
-        self.samples, self.bytes, self.t = RATE_HZ * BURST_S, BYTES_PER_S * BURST_S, now
+    def __init__(self, now: float, samples: float = RATE_HZ * BURST_S,
+                 nbytes: float = BYTES_PER_S * BURST_S):
+        self.samples, self.bytes, self.t = samples, nbytes, now
 
 
 class Budget:
-    """Admission of samples per key (module doc). Thread-safe: :meth:`admit` runs on Zenoh's
-    thread, :meth:`written` on the writer's."""
+    """Admission of samples per key (module doc): :meth:`admit` runs on Zenoh's thread,
+    :meth:`written` on the writer's (the interpreter's lock keeps each dictionary step whole)."""
 
     def __init__(self, rate_hz: float = RATE_HZ, bytes_per_s: float = BYTES_PER_S,
                  queued_max: int = QUEUED_BYTES_MAX, clock=time.monotonic):
@@ -48,53 +48,55 @@ class Budget:
         self._queued: Counter[str] = Counter()   # bytes per key waiting for the writer
         self.queued_bytes = 0
         self.dropped: Counter[tuple[str, str]] = Counter()
-        self._lock = threading.Lock()
+        self._max_samples, self._max_bytes = rate_hz * BURST_S, bytes_per_s * BURST_S
+        self._half = queued_max // 2
 
     def admit(self, key: str, nbytes: int) -> str:
-        """"" to queue the sample, else the reason it is dropped (counted)."""
+        """"" to queue the sample, else the reason it is dropped (counted). Hot: a few
+        look-ups, no lock (one Zenoh thread per link calls it; a rare race between two links
+        can only misplace a token, never let the queue grow without bound)."""
         now = self.clock()
-        with self._lock:
-            b = self._buckets.get(key)
-            if b is None:
-                b = self._buckets[key] = _Bucket(now)
-            dt = max(0.0, now - b.t)
+        b = self._buckets.get(key)
+        if b is None:
+            b = self._buckets[key] = _Bucket(now, self._max_samples, self._max_bytes)
+        dt = now - b.t
+        if dt > 0.0:
             b.t = now
-            b.samples = min(self.rate_hz * BURST_S, b.samples + dt * self.rate_hz)
-            b.bytes = min(self.bytes_per_s * BURST_S, b.bytes + dt * self.bytes_per_s)
-            why = self._why(key, b, nbytes)
-            if why:
-                self.dropped[(key, why)] += 1
-                return why
+            b.samples = min(self._max_samples, b.samples + dt * self.rate_hz)
+            b.bytes = min(self._max_bytes, b.bytes + dt * self.bytes_per_s)
+        if b.samples < 1:
+            why = OVER_RATE
+        elif b.bytes < nbytes:
+            why = OVER_BYTES
+        elif self.queued_bytes + nbytes > self._half and self._over_share(key, nbytes):
+            why = QUEUE_FULL
+        else:
             b.samples -= 1
             b.bytes -= nbytes
             self._queued[key] += nbytes
             self.queued_bytes += nbytes
             return ""
+        self.dropped[(key, why)] += 1
+        return why
 
-    def _why(self, key: str, b: _Bucket, nbytes: int) -> str:
-        if b.samples < 1:
-            return OVER_RATE
-        if b.bytes < nbytes:
-            return OVER_BYTES
-        if self.queued_bytes + nbytes > self.queued_max // 2:
-            active = sum(1 for v in self._queued.values() if v > 0) or 1
-            share = self.queued_max // (2 * active)
-            if self._queued[key] + nbytes > share or self.queued_bytes + nbytes > self.queued_max:
-                return QUEUE_FULL
-        return ""
+    def _over_share(self, key: str, nbytes: int) -> bool:
+        active = sum(1 for v in self._queued.values() if v > 0) or 1
+        return (self._queued[key] + nbytes > self.queued_max // (2 * active)
+                or self.queued_bytes + nbytes > self.queued_max)
 
     def written(self, key: str, nbytes: int) -> None:
-        """A queued sample left the queue (written, or refused by the writer)."""
-        with self._lock:
-            self._queued[key] -= nbytes
-            if self._queued[key] <= 0:
-                del self._queued[key]
-            self.queued_bytes -= nbytes
+        """Queued bytes of ``key`` left the queue (written, or refused by the writer); the
+        writer calls it once per key and batch."""
+        left = self._queued[key] - nbytes
+        if left <= 0:
+            self._queued.pop(key, None)
+        else:
+            self._queued[key] = left
+        self.queued_bytes -= nbytes
 
     def counts(self) -> dict[str, dict[str, int]]:
         """``{key: {reason: n}}`` of the dropped samples."""
-        with self._lock:
-            items = list(self.dropped.items())
+        items = list(self.dropped.copy().items())
         out: dict[str, dict[str, int]] = {}
         for (key, why), n in items:
             out.setdefault(key, {})[why] = n
