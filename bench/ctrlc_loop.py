@@ -49,12 +49,15 @@ def _pids_with(port: int) -> list[int]:
 
 
 def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready",
-        rng: random.Random | None = None, emulator: bool = False) -> dict:
+        rng: random.Random | None = None, emulator: bool = False, sig: int = signal.SIGINT,
+        code_dir: str | None = None) -> dict:
     """Launch once, interrupt once (``when``: once ready, or at a random moment of the first
     ``RANDOM_S`` seconds, start-up included); the row of the CSV."""
     port = free_port()
     with tempfile.TemporaryDirectory(prefix="papf-ctrlc-") as runtime:
         env = {**os.environ, "XDG_RUNTIME_DIR": runtime, "PYTHONFAULTHANDLER": "1"}
+        if code_dir:   # another checkout's code (--alternate)
+            env["PYTHONPATH"] = code_dir
         cmd = [sys.executable, "-m", "papf", "launch", profile, "--listen", f"tcp/127.0.0.1:{port}"]
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                                 env=env, start_new_session=True)
@@ -70,7 +73,8 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
         t = threading.Thread(target=pump, daemon=True)
         t.start()
         t0 = time.monotonic()
-        row = {"run": i, "ready_s": None, "exit_s": None, "code": None, "hang": 0, "orphans": 0}
+        row = {"run": i, "ready_s": None, "exit_s": None, "code": None, "hang": 0, "orphans": 0,
+               "code_dir": code_dir or "."}
         if when == "random":
             ready.wait((rng or random).uniform(0.0, RANDOM_S))
         elif not ready.wait(READY_S):
@@ -86,7 +90,7 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
                                    stderr=subprocess.DEVNULL, env=env, start_new_session=True)
             time.sleep(EMULATOR_S)
         t1 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
         try:
             row["code"] = proc.wait(timeout=hang_s)
             row["exit_s"] = round(time.monotonic() - t1, 3)
@@ -127,25 +131,39 @@ def main(argv=None) -> int:
     ap.add_argument("--emulator", action="store_true",
                     help="once ready, start papf rosbot-emulator against the launch first (the "
                          "driver busy with odometry, battery and commands), as on a robot")
+    ap.add_argument("--signal", choices=("INT", "TERM"), default="INT",
+                    help="the signal sent (default INT, what Ctrl-C sends)")
+    ap.add_argument("--alternate", metavar="DIR",
+                    help="every other launch runs the code in DIR (PYTHONPATH; e.g. a `git "
+                         "archive` of the commit before a fix): both under the same load")
     ap.add_argument("--csv", default="-", help="rows here (default stdout)")
     ap.add_argument("--dump-dir", default=".", help="where the stacks of hung launchers go")
     args = ap.parse_args(argv)
     dump = Path(args.dump_dir)
     dump.mkdir(parents=True, exist_ok=True)
     out = sys.stdout if args.csv == "-" else open(args.csv, "w", newline="")  # noqa: SIM115
-    writer = csv.DictWriter(out, ["run", "ready_s", "exit_s", "code", "hang", "orphans"])
+    writer = csv.DictWriter(out, ["run", "ready_s", "exit_s", "code", "hang", "orphans",
+                                  "code_dir"])
     writer.writeheader()
     hangs = orphans = slow = 0
+    by_dir: dict[str, list[int]] = {}
     rng = random.Random(31)
     for i in range(args.runs):
-        row = one(args.profile, args.hang_s, dump, i, args.when, rng, args.emulator)
+        code_dir = args.alternate if args.alternate and i % 2 else None
+        row = one(args.profile, args.hang_s, dump, i, args.when, rng, args.emulator,
+                  getattr(signal, "SIG" + args.signal), code_dir)
         writer.writerow(row)
         out.flush()
         hangs += row["hang"]
+        by_dir.setdefault(row["code_dir"], [0, 0])
+        by_dir[row["code_dir"]][0] += 1
+        by_dir[row["code_dir"]][1] += row["hang"]
         orphans += 1 if row["orphans"] else 0
         slow += 1 if row["exit_s"] is not None and row["exit_s"] > 5.0 else 0
         print(f"run {i + 1}/{args.runs}: hangs {hangs}, launches leaving orphans {orphans}, "
               f"exits over 5 s {slow}", file=sys.stderr, flush=True)
+    for d, (n, h) in by_dir.items():
+        print(f"code in {d}: {h} of {n} launches hung", file=sys.stderr)
     print(f"{args.runs} launches of {args.profile}: {hangs} hung (> {args.hang_s:g} s after "
           f"SIGINT), {orphans} left processes behind, {slow} took over 5 s", file=sys.stderr)
     return 1 if hangs or orphans else 0
