@@ -106,17 +106,22 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
         if emu is not None:
             os.killpg(emu.pid, signal.SIGKILL)
             emu.wait()
-        deadline = time.monotonic() + 5.0   # the launcher's SIGKILL of its children is not instant
-        while _pids_with(port) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        orphans = _pids_with(port)
-        row["orphans"] = len(orphans)
-        for pid in orphans:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+        row["orphans"] = _reap(port)
         return row
+
+
+def _reap(port: int) -> int:
+    """How many processes of the launch on ``port`` are still alive 5 s on (killed then)."""
+    deadline = time.monotonic() + 5.0   # the launcher's SIGKILL of its children is not instant
+    while _pids_with(port) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    orphans = _pids_with(port)
+    for pid in orphans:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    return len(orphans)
 
 
 def main(argv=None) -> int:
