@@ -50,6 +50,7 @@ def test_same_seed_identical_other_seed_differs():
     assert a is not None and b is not None and c is not None, [r[2][-2000:] for r in runs]
     for r in (a, b, c):
         r.pop("wall_time_s")
+        r.pop("run_id")   # a fresh id per run, by design (common.seal)
     assert a == b
     assert a != c
 
