@@ -163,8 +163,9 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
             out(json.dumps(json_safe({"key": r.key, "type": r.type_name, "encoding": r.encoding,
                                       "messages": r.count, "hz": rate.hz,
                                       "stamp_hz": rate.stamp_hz})))
+        refused = node_refusals(session, keys)
         out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {}),
-                        "refused": node_refusals(session, keys)}))
+                        **({"refused": refused} if refused else {})}))
         return heard
     shown = {r.key: safe_text(r.key, MAX_KEY_CHARS) for r in rows.values()}   # a peer's key
     width = max(len(k) for k in shown.values())

@@ -232,26 +232,50 @@ ROBOT_QUIET_S = 1.0   # [s wall] without the robot's odometry before the launche
 
 
 def _robot_talks(session, keys: Keys, prof: Profile, opt: LaunchOptions, sup: Supervisor,
-                 stop: StopRequested) -> bool:
+                 stop: StopRequested, key: bytes) -> str:
     """Wait (at most ``--startup-timeout``) until the base driver publishes the robot's
     odometry (it does, at 10 Hz between runs, once the robot's own reaches it): the run's
     clock and timeout must not start on a robot that is not talking yet. Says so on stderr
-    after :data:`ROBOT_QUIET_S`. False on a timeout, a stop or a death."""
-    heard = threading.Event()
-    sub = session.declare_subscriber(keys.odom, lambda _sample: heard.set())
+    after :data:`ROBOT_QUIET_S`. "" once it talks with this launch's seal; else why not (a
+    timeout, a stop, a death, or a robot side sealing with another key or none)."""
+    heard, sealed = threading.Event(), threading.Event()
+    opener = seal.Opener(key, None)
+
+    def on_odom(sample) -> None:   # Zenoh's thread: note it, and whether its seal is ours
+        att = sample.attachment
+        verdict, _ = opener.check(keys.odom, sample.payload.to_bytes(),
+                                  None if att is None else att.to_bytes())
+        (sealed if verdict == seal.OK else heard).set()
+
+    sub = session.declare_subscriber(keys.odom, on_odom)
     try:
-        if heard.wait(ROBOT_QUIET_S):
-            return True
-        print(f"papf launch {prof.name}: waiting for the robot's odometry on {keys.odom} (the "
-              "base driver has none from the robot yet: bringup and bridge up?)",
-              file=sys.stderr, flush=True)
+        if not (sealed.wait(ROBOT_QUIET_S) or heard.is_set()):
+            print(f"papf launch {prof.name}: waiting for the robot's odometry on {keys.odom} "
+                  "(the base driver has none from the robot yet: bringup and bridge up?)",
+                  file=sys.stderr, flush=True)
         deadline = time.monotonic() + opt.startup_timeout_s
-        while not heard.wait(0.2):
+        while not sealed.wait(0.2):
             if stop or sup.dead() or time.monotonic() > deadline:
-                return False
-        return True
+                return _silent_robot(opt, sup, stop)
+            if heard.is_set() and time.monotonic() > deadline - opt.startup_timeout_s + PAIR_S:
+                return (f"the robot side's odometry on {keys.odom} is not sealed with this "
+                        "launch's key: give both sides the same key file (papf launch robot "
+                        "--key F, then papf launch laptop --key F; docs/robot.md \"Pairing\")")
+        return ""
     finally:
         sub.undeclare()
+
+
+PAIR_S = 3.0   # [s wall] the robot's odometry heard but never with our seal: another key
+
+
+def _silent_robot(opt: LaunchOptions, sup: Supervisor, stop: StopRequested) -> str:
+    return "interrupted" if stop else sup.death_reason() or (
+        f"no odometry from the robot within {opt.startup_timeout_s:g} s: the base "
+        "driver gets none over its bridge (start the robot's bringup and "
+        "zenoh-bridge-ros2dds, or rmw_zenoh; docs/getting-started-robot.md)")
+
+
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
                stop: StopRequested, run_key: bytes, run_id: str,
                journal: Journal | None = None) -> RunResult:
@@ -263,11 +287,10 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
         monitor.resume(journal.path_m, journal.motion_start_ns,
                        None if journal.x is None else (journal.x, journal.y))
         world = dataclasses.replace(world, goal=goal[:2], tolerance=goal[2])
-    if prof.pose_topic == "odom" and not _robot_talks(session, keys, prof, opt, sup, stop):
-        monitor.fail("interrupted" if stop else sup.death_reason() or
-                     f"no odometry from the robot within {opt.startup_timeout_s:g} s: the base "
-                     "driver gets none over its bridge (start the robot's bringup and "
-                     "zenoh-bridge-ros2dds, or rmw_zenoh; docs/getting-started-robot.md)")
+    why = _robot_talks(session, keys, prof, opt, sup, stop, run_key) \
+        if prof.pose_topic == "odom" else ""
+    if why:
+        monitor.fail(why)
         return _result(monitor, opt, prof, time.monotonic() - wall0)
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
                       stall_s=opt.stall_s or STALL_S, run_key=run_key, run_id=bytes.fromhex(run_id))

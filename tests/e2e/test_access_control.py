@@ -11,6 +11,7 @@ import time
 import pytest
 import zenoh
 
+from common import runauth
 from common.transport import wait_alive, zenoh_config
 from nodes.base_driver.rosbot import BridgeTopics, cdr_to_robot_odom, twist_to_cdr
 from papf.launch.supervisor import free_port, wait_port
@@ -44,11 +45,19 @@ def secure_robot(tmp_path_factory):
         sup.start("emulator", [py, "-m", "papf", "rosbot-emulator", *robot, "--bridge-namespace", BRIDGE,
                                "--cmd-timeout", "0", "--trace", str(trace)])
         sup.start("base_driver", [py, "-m", "nodes.base_driver", "--driver", "rosbot", *robot,
-                                  "--bridge-namespace", BRIDGE])
+                                  "--bridge-namespace", BRIDGE],
+                  env={runauth.ENV: _pair_key().hex()})   # as papf launch hil-robot would
         with zenoh.open(zenoh_config("client", [tcp], config_file=str(bundle.robot))) as s:
             missing = wait_alive(s, Keys(NS), ["base_driver", "rosbot_emulator"], 30.0)
         assert not missing, [list(c.tail) for c in sup.children]
         yield bundle, tcp, tls, trace
+
+
+def _pair_key() -> bytes:
+    """This host's pairing key of NS (the laptop launch below takes it without --key)."""
+    path = runauth.pair_file(NS)
+    path.parent.mkdir(mode=0o700, exist_ok=True)
+    return runauth.load_pair_key(path, create=True)[0]
 
 
 def _commands(trace) -> list[dict]:
@@ -125,7 +134,8 @@ def test_the_planner_identity_moves_the_robot(secure_robot):
     with zenoh.open(zenoh_config("client", [tls], config_file=str(bundle.laptop))) as s:
         deadline = time.monotonic() + 30.0
         while time.monotonic() < deadline and not any(c["v"] > 0 for c in _commands(trace)):
-            s.put(keys.cmd_vel, Twist(stamp_ns=0, v=0.3, w=0.0).to_bytes())
+            runauth.sealed_put(s, keys.cmd_vel, Twist(stamp_ns=0, v=0.3, w=0.0).to_bytes(),
+                               _pair_key())   # the driver obeys the pairing key only
             time.sleep(0.1)
     assert any(c["v"] > 0 for c in _commands(trace))
 

@@ -51,7 +51,7 @@ def test_corridor_swap_head_on_both_reach_and_repeat(tmp_path):
         assert [r["name"] for r in res["robots"]] == ["r1", "r2"]
         assert all(r["outcome"] == "reached" and r["collisions"] == 0 for r in res["robots"])
         assert 0 < res["min_separation_m"] < 1.0   # they passed each other, apart
-    first, second = (dict(res, wall_time_s=None) for _, res, _ in runs)
+    first, second = (dict(res, wall_time_s=None, run_id=None) for _, res, _ in runs)
     assert first == second
 
 
