@@ -88,6 +88,8 @@ def _run_to_join(prof: Profile, opt: LaunchOptions, graph, keys: Keys, run_key: 
     except zenoh.ZError:
         robot = None   # no robot network yet: it has no run; the launch says why it waits
     run, journal = decide(robot, opt.after_crash, opt.namespace, new_run)
+    if robot is None or not robot.running:   # nothing left behind: an ordinary new run
+        opt.after_crash = "refuse"
     if journal is not None:
         print(f"papf launch {prof.name}: resuming run {run} at {robot.t_ns / 1e9:.1f} s "
               f"({journal.charge_mAh:.2f} mAh, {journal.path_m:.2f} m so far)",

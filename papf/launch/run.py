@@ -122,21 +122,21 @@ def run(cfg: RunConfig) -> RunResult:
         monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
         return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
     run_key = runauth.new_key()    # to the nodes through their environment only
+    run_id = seal.new_run_id()     # every sample of this run carries it (common.seal)
     if cfg.realtime:   # this user's `papf goal` may steer a real-time run (common.runauth);
-        runauth.publish_key(cfg.namespace, run_key)   # a lockstep run stays reproducible
+        runauth.publish_key(cfg.namespace, run_key, run_id)   # a lockstep run stays reproducible
     try:
-        return _run(cfg, world, graph, router, run_key, monitor, keys, wall0)
+        return _run(cfg, world, graph, router, run_key, run_id, monitor, keys, wall0)
     finally:
         if cfg.realtime:
             runauth.withdraw_key(cfg.namespace, run_key)
 
 
 def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
-         monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
+         run_id: str, monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
     """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
     if world.robots or world.people:
-        return _run_fleet(cfg, world, graph, router, run_key, wall0)
-    run_id = seal.new_run_id()    # every sample of this run carries it (common.seal)
+        return _run_fleet(cfg, world, graph, router, run_key, run_id, wall0)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
         seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key),
@@ -151,7 +151,7 @@ def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, r
 
 
 def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session,
-               run_key: str, wall0: float) -> RunResult:
+               run_key: str, run_id: str, wall0: float) -> RunResult:
     """:func:`_run` for a fleet (``[[robots]]``): a sequence per robot namespace, one result
     (:mod:`papf.launch.fleet`)."""
     robots = [replace(r, name=r.name or cfg.namespace) for r in world.fleet]
@@ -159,7 +159,6 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
     planners = {r.name: r.planner or cfg.planner for r in robots}
     goals = {r.name: tuple(r.goal) for r in robots}
     meter = FleetMeter(names, goals, bool(world.people))
-    run_id = seal.new_run_id()
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
         seqs = {}
