@@ -73,8 +73,8 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
         t = threading.Thread(target=pump, daemon=True)
         t.start()
         t0 = time.monotonic()
-        row = {"run": i, "ready_s": None, "exit_s": None, "code": None, "hang": 0, "orphans": 0,
-               "code_dir": code_dir or "."}
+        row = {"run": i, "sig_s": None, "ignored_at_send": None, "ready_s": None,
+               "exit_s": None, "code": None, "hang": 0, "orphans": 0, "code_dir": code_dir or "."}
         if when == "random":
             ready.wait((rng or random).uniform(0.0, RANDOM_S))
         elif not ready.wait(READY_S):
@@ -89,7 +89,9 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
                                     f"tcp/127.0.0.1:{port}"], stdout=subprocess.DEVNULL,
                                    stderr=subprocess.DEVNULL, env=env, start_new_session=True)
             time.sleep(EMULATOR_S)
+        row["ignored_at_send"] = int(_ignores(proc.pid, sig))
         t1 = time.monotonic()
+        row["sig_s"] = round(t1 - t0, 3)
         proc.send_signal(sig)
         try:
             row["code"] = proc.wait(timeout=hang_s)
@@ -110,9 +112,22 @@ def one(profile: str, hang_s: float, dump_dir: Path, i: int, when: str = "ready"
         return row
 
 
+def _ignores(pid: int, sig: int) -> bool:
+    """Whether process ``pid`` ignores ``sig`` right now (``SigIgn`` of /proc/PID/status): a
+    signal sent then is discarded by the kernel."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("SigIgn:"):
+                return bool(int(line.split()[1], 16) >> (sig - 1) & 1)
+    except OSError:
+        pass
+    return False
+
+
 def _reap(port: int) -> int:
-    """How many processes of the launch on ``port`` are still alive 5 s on (killed then)."""
-    deadline = time.monotonic() + 5.0   # the launcher's SIGKILL of its children is not instant
+    """How many processes of the launch on ``port`` are still alive 10 s on (killed then):
+    a node asked to stop exits within its bound (common.transport: 5 s, SIGALRM at 7 s)."""
+    deadline = time.monotonic() + 10.0
     while _pids_with(port) and time.monotonic() < deadline:
         time.sleep(0.1)
     orphans = _pids_with(port)
@@ -147,10 +162,10 @@ def main(argv=None) -> int:
     dump = Path(args.dump_dir)
     dump.mkdir(parents=True, exist_ok=True)
     out = sys.stdout if args.csv == "-" else open(args.csv, "w", newline="")  # noqa: SIM115
-    writer = csv.DictWriter(out, ["run", "ready_s", "exit_s", "code", "hang", "orphans",
-                                  "code_dir"])
+    writer = csv.DictWriter(out, ["run", "sig_s", "ignored_at_send", "ready_s", "exit_s",
+                                  "code", "hang", "orphans", "code_dir"])
     writer.writeheader()
-    hangs = orphans = slow = 0
+    hangs = orphans = slow = deaf = 0
     by_dir: dict[str, list[int]] = {}
     rng = random.Random(31)
     for i in range(args.runs):
@@ -160,6 +175,7 @@ def main(argv=None) -> int:
         writer.writerow(row)
         out.flush()
         hangs += row["hang"]
+        deaf += 1 if row["hang"] and row["ignored_at_send"] else 0
         by_dir.setdefault(row["code_dir"], [0, 0])
         by_dir[row["code_dir"]][0] += 1
         by_dir[row["code_dir"]][1] += row["hang"]
@@ -167,6 +183,8 @@ def main(argv=None) -> int:
         slow += 1 if row["exit_s"] is not None and row["exit_s"] > 5.0 else 0
         print(f"run {i + 1}/{args.runs}: hangs {hangs}, launches leaving orphans {orphans}, "
               f"exits over 5 s {slow}", file=sys.stderr, flush=True)
+    print(f"of the {hangs} hung, {deaf} ignored the signal when it was sent (inherited SIG_IGN, "
+          "before the process took it: the kernel discarded it)", file=sys.stderr)
     for d, (n, h) in by_dir.items():
         print(f"code in {d}: {h} of {n} launches hung", file=sys.stderr)
     print(f"{args.runs} launches of {args.profile}: {hangs} hung (> {args.hang_s:g} s after "
