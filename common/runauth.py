@@ -23,6 +23,7 @@ from pathlib import Path
 
 import msgpack
 
+from common import seal
 from common.errors import PapfError
 
 ENV = "PAPF_RUN_KEY"          # environment variable that carries the key (hex)
@@ -237,12 +238,19 @@ def _request_tag(request: dict, key: bytes) -> str:
     return hmac.new(key, body, hashlib.sha256).hexdigest()[:TAG_HEX]
 
 
-def sign_request(request: dict, key: bytes | None) -> dict:
-    """A parameter request (JSON object) with a fresh ``nonce`` and its ``auth`` tag
-    (unchanged without a key)."""
+_FROM_ENV = object()   # sign_request's default run: this process's (its launcher gave it)
+
+
+def sign_request(request: dict, key: bytes | None, run=_FROM_ENV) -> dict:
+    """A parameter request (JSON object) with a fresh ``nonce``, the run it is for (``run``:
+    bytes, None for none; default: this process's run, :data:`common.seal.RUN_ID_ENV`) and
+    its ``auth`` tag (unchanged without a key). The run id keeps a request captured in one run
+    from counting in the next, when both share a key (a split's pairing key)."""
     if key is None:
         return dict(request)
-    out = {**request, "nonce": secrets.token_hex(8)}
+    if run is _FROM_ENV:
+        run = seal.run_from_env()
+    out = {**request, "nonce": secrets.token_hex(8), **({"run": run.hex()} if run else {})}
     return {**out, "auth": _request_tag(out, key)}
 
 
@@ -255,8 +263,8 @@ class RequestCheck:
     and a nonce it has not seen.
     """
 
-    def __init__(self, key: bytes | None):
-        self.key = key
+    def __init__(self, key: bytes | None, run: bytes | None = None):
+        self.key, self.run = key, run   # run: a request must name this run (sign_request)
         self._seen: collections.OrderedDict[str, None] = collections.OrderedDict()
 
     def ok(self, request: dict) -> bool:
@@ -269,6 +277,8 @@ class RequestCheck:
             return False
         if not hmac.compare_digest(auth, _request_tag(request, self.key)) or nonce in self._seen:
             return False
+        if self.run is not None and request.get("run") != self.run.hex():
+            return False   # signed for another run (a capture put again later)
         self._seen[nonce] = None
         while len(self._seen) > NONCES_KEPT:
             self._seen.popitem(last=False)

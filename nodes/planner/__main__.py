@@ -17,7 +17,7 @@ import argparse
 import json
 import time
 
-from common import runauth
+from common import runauth, seal
 from common.errors import ConfigError
 from common.params import arg_type
 from common.ports import describe, plain
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         # when a scan wakes the loop (odom(t) nearly always came first), not one wake each
         node.subscribe("odom", batched=True)
         node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
-        params_check = runauth.RequestCheck(runauth.key_from_env())
+        params_check = runauth.RequestCheck(runauth.key_from_env(), seal.run_from_env())
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
             node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
         node.ready()

@@ -88,7 +88,8 @@ def cmd_param(args) -> int:
             table, _, short = name.rpartition(".")
             check_setting(planner, short, args.value, table)   # exit 2 before anything is sent
             request = runauth.sign_request({"set": [f"{name}={args.value}"]},
-                                           runauth.read_key(args.namespace))
+                                           runauth.read_key(args.namespace),
+                                           runauth.read_run(args.namespace))
             reply = _ask(session, key, request)
             if reply.get("error"):
                 raise ConfigError(f"{name}: refused by the {args.node}: {reply['error']}")

@@ -73,3 +73,20 @@ def test_a_tiny_sweep_writes_its_tables(tmp_path):
 def test_bad_seeds_are_a_usage_error(tmp_path, capsys):
     assert papf_main(["experiment", "test1-sweep", "--seeds", "a,b", "--out", str(tmp_path)]) == 2
     assert "--seeds" in capsys.readouterr().err
+
+
+def test_a_sweep_run_again_takes_its_finished_runs_from_the_journal(tmp_path, monkeypatch):
+    """Issue 31: the sweep is journalled like the other experiments (papf.experiments.journal)."""
+    import papf.offline.run as offline
+
+    grid = {"sides": (0.5,), "alongs": (1.62,), "offsets": (0.15,), "seeds": (0,),
+            "timeout_s": 3.0}
+    run_sweep(tmp_path, **grid)
+    assert len(list((tmp_path / "runs").glob("*.json"))) == 1
+
+    def no_simulation(*_a, **_k):
+        raise AssertionError("a finished run was made again")
+
+    monkeypatch.setattr(offline, "simulate", no_simulation)
+    rows, _ = run_sweep(tmp_path, **grid)
+    assert rows[0]["runs"] == 1

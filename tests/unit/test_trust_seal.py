@@ -126,3 +126,12 @@ def test_a_laptop_that_comes_back_must_say_what_it_wants(tmp_path, monkeypatch):
     assert decide(None, "refuse", "rosbot", RUN2.hex()) == (RUN2.hex(), None)
     with pytest.raises(ConfigError, match="no run"):
         decide(None, "resume", "rosbot", RUN2.hex())
+
+
+def test_a_parameter_request_of_another_run_is_refused():
+    from common import runauth
+
+    check = runauth.RequestCheck(KEY, RUN)
+    assert check.ok(runauth.sign_request({"set": ["apf.d_o=0.6"]}, KEY, RUN))
+    assert not check.ok(runauth.sign_request({"set": ["apf.d_o=0.6"]}, KEY, RUN2))
+    assert not check.ok(runauth.sign_request({"set": ["apf.d_o=0.6"]}, KEY, None))
