@@ -34,6 +34,7 @@ from papf.link.stats import LinkStats
 MAX_QUEUED = 16 * 1024 * 1024   # [bytes] held per direction and connection before reading stops
 READ_SIZE = 65536               # [bytes] one read from a socket
 CONNECT_TIMEOUT_S = 10.0        # [s] for the --to side to accept
+RESOLUTION_S = 0.0005         # [s] a chunk due this soon goes now: asyncio sleeps in whole ms
 SYN_RTO_S = 1.0                 # Linux's initial SYN retransmission timeout (TCP_TIMEOUT_INIT)
 NOT_YET = float("inf")          # an outage schedule waiting for SIGUSR1
 
@@ -102,10 +103,12 @@ class Pump:
                 self.wake.clear()
                 await self.wake.wait()
             wait = self.items[0][1] - self.emu.clock()
-            if wait > 0:
+            if wait > RESOLUTION_S:   # asyncio's timers are whole milliseconds (epoll)
                 await asyncio.sleep(wait)
+            if self.writer.transport.is_closing():   # the far side went (a reset, Zenoh's lease)
+                raise ConnectionResetError(f"{self.direction}: the receiving side closed")
             now = self.emu.clock()
-            while self.items and self.items[0][1] <= now:   # everything due: one drain
+            while self.items and self.items[0][1] <= now + RESOLUTION_S:   # all due: one drain
                 arrival, _, data = self.items.popleft()
                 if data is None:
                     if self.writer.can_write_eof():
@@ -114,8 +117,6 @@ class Pump:
                 self.writer.write(data)
                 self.queued -= len(data)
                 self.stats.add(len(data), now - arrival)
-            self.stats.lost, self.stats.dropped = self.sched.lost, max(self.stats.dropped,
-                                                                       self.sched.dropped)
             await self.writer.drain()
             if self.queued <= MAX_QUEUED // 2:
                 self.room.set()
@@ -183,6 +184,11 @@ class LinkEmulator:
         self.t0_set.set()
 
     async def accept(self, reader, writer) -> None:
+        """A connection from the listening side (asyncio's handler: a stop cancels it)."""
+        with contextlib.suppress(asyncio.CancelledError):
+            await self._accept(reader, writer)
+
+    async def _accept(self, reader, writer) -> None:
         self.stats.connections += 1
         _nodelay(writer)
         outage = self.outages.at(self.clock())
