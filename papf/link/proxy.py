@@ -170,6 +170,7 @@ class LinkEmulator:
         self.dirs = {d: Direction(spec, d, self.outages) for d in ("out", "back")}
         self.stats = LinkStats()
         self.conns: set[Connection] = set()
+        self.handlers: set[asyncio.Task] = set()   # one per accepted connection
         self.events: list[dict] = []      # outages as they happened (clock and wall ns)
         self.t0_set = asyncio.Event()
         self.started = (time.monotonic_ns(), time.time_ns())
@@ -185,8 +186,13 @@ class LinkEmulator:
 
     async def accept(self, reader, writer) -> None:
         """A connection from the listening side (asyncio's handler: a stop cancels it)."""
-        with contextlib.suppress(asyncio.CancelledError):
-            await self._accept(reader, writer)
+        task = asyncio.current_task()
+        self.handlers.add(task)
+        try:
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._accept(reader, writer)
+        finally:
+            self.handlers.discard(task)
 
     async def _accept(self, reader, writer) -> None:
         self.stats.connections += 1
@@ -256,6 +262,9 @@ class LinkEmulator:
             server.close()
             for conn in list(self.conns):
                 conn.close(reset=True)
+            for task in list(self.handlers):
+                task.cancel()
+            await asyncio.gather(watcher, *self.handlers, return_exceptions=True)
 
     def report(self) -> dict:
         """The stats as JSON (``--stats``, ``papf run --link``'s ``link_emulator``)."""
