@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import sys
 import tempfile
@@ -38,6 +39,34 @@ from worlds import load_world
 LOOPBACK = "127.0.0.1"
 STALL_S = 20.0          # [s wall] the laptop's default: no robot clock this long = stuck
 PORT_WAIT_S = 30.0      # [s wall] for a router or the link to listen
+
+
+class RobotSideLog:
+    """Which robot-side log lines reach stderr, and what the rosbot driver said about the
+    commands the link brought it (its watchdog stops as they happen, its late-command count
+    when it stops) — ``link_emulator.robot_side`` in the run's JSON. The driver's own link
+    figures (link-drive's ``link`` in the JSON) supersede these once it reports them."""
+
+    STOPPED = re.compile(r"stopped: (\d+) commands sent to the robot, (\d+) late ones dropped")
+
+    def __init__(self, verbose: bool):
+        self.verbose = verbose
+        self.watchdog_stops = 0
+        self.sent: int | None = None
+        self.late: int | None = None
+
+    def __call__(self, name: str, line: str) -> bool:
+        if name == "robot/base_driver":
+            if "watchdog: no command" in line:
+                self.watchdog_stops += 1
+            elif (m := self.STOPPED.search(line)) is not None:
+                self.sent, self.late = int(m.group(1)), int(m.group(2))
+        return self.verbose or any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:",
+                                                       "papf link:"))
+
+    def to_json(self) -> dict:
+        return {"watchdog_stops": self.watchdog_stops, "commands_sent": self.sent,
+                "late_commands": self.late}
 
 
 @dataclass(frozen=True)
@@ -152,12 +181,12 @@ def run_split(cfg: RunConfig) -> RunResult:
         stats_file = Path(tmp) / "link-stats.json"
         extra = {p.name: p for p in side_processes(cfg, ports, spec, str(stats_file),
                                                    cfg.robot_trace)}
-        show = (lambda n, line: True) if cfg.verbose else (
-            lambda n, line: any(k in line for k in ("WARNING", "ERROR", "Traceback", "rror:",
-                                                    "papf link:")))
-        with Claim(cfg.namespace, "robot", robot.nodes), Supervisor(show=show) as sup:
+        robot_log = RobotSideLog(cfg.verbose)
+        with Claim(cfg.namespace, "robot", robot.nodes), Supervisor(show=robot_log) as sup:
             result = _start_and_drive(cfg, ports, spec, robot, extra, sup)
         result.link_emulator = _read_stats(stats_file)
+        if result.link_emulator is not None:
+            result.link_emulator["robot_side"] = robot_log.to_json()
     result.wall_time_s = time.monotonic() - wall0
     return result
 
