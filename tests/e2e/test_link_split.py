@@ -21,7 +21,7 @@ import pytest
 
 from common.outcomes import OUTCOMES
 from tests.support.cli import stderr_until
-from tests.support.worlds import box_world, write_world
+from tests.support.worlds import SHORT, box_world, write_world
 
 PY = sys.executable
 CORRIDOR = box_world("corridor", "2.5 m ahead, a box beside the path", 2.5, (1.2, 0.7))
@@ -121,3 +121,17 @@ def test_ctrl_c_stops_every_process_of_both_sides(corridor):
             proc.wait()
     assert proc.returncode == 130, seen[-10:]
     assert not _leftovers(ns), "processes left after Ctrl-C"
+
+
+def test_the_link_experiment_makes_its_table_and_resumes(tmp_path):
+    world = write_world(tmp_path / "short.toml", SHORT)
+    out = tmp_path / "exp"
+    args = [PY, "-m", "papf", "experiment", "link", "--world", str(world), "--planners", "apf",
+            "--links", "lan", "--outage", "none", "--sweep", "none", "--out", str(out)]
+    first = subprocess.run(args, capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    assert first.returncode == 0, first.stderr[-3000:]
+    assert "| apf | lan | none | reached |" in (out / "link.md").read_text()
+    assert "link: 1/1" in first.stderr                       # progress, one line per run
+    again = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0 and "1 of 1 runs finished before" in again.stderr
+    assert (out / "link.png").is_file() and (out / "link.csv").read_text().count("\n") == 2
