@@ -202,3 +202,17 @@ def test_papf_link_refuses_a_bad_endpoint_and_an_existing_stats_file(tmp_path):
         assert out.returncode == 2 and says in out.stderr, out.stderr
         assert len(out.stderr.strip().splitlines()) == 1
     assert stats.read_text() == "mine"
+
+
+def test_papf_link_refuses_a_taken_port_with_one_line():
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        out = subprocess.run([sys.executable, "-m", "papf", "link", "--listen",
+                              f"tcp/127.0.0.1:{port}", "--to", "tcp/127.0.0.1:2"],
+                             capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "cannot listen there" in out.stderr, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
