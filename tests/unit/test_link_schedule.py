@@ -105,6 +105,15 @@ def test_nothing_is_delivered_during_a_stall_outage_and_tcp_resumes_at_its_next_
     assert held and min(held) == pytest.approx(resume + 0.05)
 
 
+def test_the_retransmission_timeout_is_what_tcp_settles_on_over_the_link():
+    from papf.link.schedule import rto_estimate
+
+    assert rto_estimate(PROFILES["lan"]) == RTO_MIN_S == rto_estimate(PROFILES["wifi"])
+    # 200 + U(0, 150) ms one way: srtt 550 ms, rttvar ~53 ms -> ~0.76 s
+    assert rto_estimate(parse_spec("delay=200,jitter=150")) == pytest.approx(0.762, abs=0.01)
+    assert rto_estimate(parse_spec("delay=500")) == pytest.approx(1.0)
+
+
 def test_the_retry_backoff_is_capped():
     assert resume_after(Outage(0.0, 1000.0), 0.2) < 1000.0 + 120.0 + 1e-9
 
