@@ -117,7 +117,10 @@ def run_link_experiment(out: str | Path, todo: Sequence[Case], seed: int = 0,
                 if mcap is not None:
                     mcap.parent.mkdir(parents=True, exist_ok=True)
                     mcap.unlink(missing_ok=True)   # this run's, made again
-                row = row_of(case, run_case(case, seed, timeout_s, mcap, world))
+                result = run_case(case, seed, timeout_s, mcap, world)
+                if result.reason == "interrupted":   # Ctrl-C reached the run's launcher:
+                    raise KeyboardInterrupt          # the experiment stops, finished runs kept
+                row = row_of(case, result)
                 journal.put(key, row)
             rows.append(row)
             bar.step(f"{case.planner} over {case.link}, outage {case.outage}: {row['outcome']} "
