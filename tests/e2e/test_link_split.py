@@ -165,3 +165,23 @@ def test_papf_link_alone_stops_on_ctrl_c_and_writes_its_stats(tmp_path):
     data = json.loads(stats.read_text())
     assert data["connections"] >= 1 and data["connect_failures"] >= 1   # (wait_port connects too)
     assert data["spec"]["name"] == "wifi"
+
+
+def test_ctrl_c_stops_the_link_experiment_and_keeps_no_half_run(tmp_path, corridor):
+    out = tmp_path / "exp"
+    proc = subprocess.Popen([PY, "-m", "papf", "experiment", "link", "--world", str(corridor),
+                             "--planners", "apf", "--links", "lan,wifi", "--outage", "none",
+                             "--sweep", "none", "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    seen: list[str] = []
+    try:
+        stderr_until(proc, r"t0: the outage schedule", seen, timeout_s=180)   # a run drives
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, seen[-10:]
+    assert list((out / "runs").glob("*.json")) == []        # the interrupted run: not kept
+    assert not _leftovers("linkexp")
