@@ -105,10 +105,10 @@ class Pump:
             wait = self.items[0][1] - self.emu.clock()
             if wait > RESOLUTION_S:   # asyncio's timers are whole milliseconds (epoll)
                 await asyncio.sleep(wait)
-            if self.writer.transport.is_closing():   # the far side went (a reset, Zenoh's lease)
-                raise ConnectionResetError(f"{self.direction}: the receiving side closed")
             now = self.emu.clock()
             while self.items and self.items[0][1] <= now + RESOLUTION_S:   # all due: one drain
+                if self.writer.transport.is_closing():   # the far side went (a reset, a lease)
+                    raise ConnectionResetError(f"{self.direction}: the receiving side closed")
                 arrival, _, data = self.items.popleft()
                 if data is None:
                     if self.writer.can_write_eof():
