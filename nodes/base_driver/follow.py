@@ -21,7 +21,9 @@ driver's watchdog ``W``, ``max_plan_age`` ``A``):
 - a plan: ``t <= min(plan end, s + A')``, ``A' = A`` while the robot's collision monitor has
   a fresh scan of its own, else ``A' = W`` — the robot drives on an old plan only when it
   can see for itself;
-- a plain command (no plan: teleop, a stop): ``r <= s + W`` when it arrives (as before);
+- a plain command (no plan: teleop): ``r <= s + W`` when it arrives (as before);
+- a stop (v = w = 0, no plan) is obeyed whenever it is not older than the command followed:
+  stopping is never too late;
 - a plan whose reference lies more than ``MAX_TRACKING_ERROR_M`` from the robot is not
   chased: the base stops.
 """
@@ -95,7 +97,9 @@ class PlanFollower:
 
     def take(self, cmd: Twist, now_ns: int, monitor_fresh: bool) -> tuple[str, str]:
         """A command arriving at ``now_ns``: ("obeyed" | "late" | "stale", why)."""
-        if self.cmd is not None and cmd.stamp_ns <= self.cmd.stamp_ns:
+        stop = cmd.v == 0.0 and cmd.w == 0.0 and not cmd.plan
+        if self.cmd is not None and (cmd.stamp_ns < self.cmd.stamp_ns
+                                     or (cmd.stamp_ns == self.cmd.stamp_ns and not stop)):
             return "stale", (f"answers the scan of {cmd.stamp_ns * 1e-9:.3f} s, not newer than "
                              f"the one followed ({self.cmd.stamp_ns * 1e-9:.3f} s)")
         why = plan_error(cmd)
@@ -104,7 +108,7 @@ class PlanFollower:
         if cmd.stamp_ns > now_ns:
             return "late", f"stamped {(cmd.stamp_ns - now_ns) * 1e-9:.3f} s in the future"
         end = self.valid_until(cmd, now_ns, monitor_fresh)
-        if now_ns > end:
+        if now_ns > end and not stop:   # a stop is never too late to obey
             return "late", (f"{(now_ns - cmd.stamp_ns) * 1e-9:.3f} s old on arrival, valid "
                             f"{(end - cmd.stamp_ns) * 1e-9:.3f} s")
         self.cmd, self.arrived_ns = cmd, now_ns
@@ -113,7 +117,7 @@ class PlanFollower:
     def valid_until(self, cmd: Twist, arrived_ns: int, monitor_fresh: bool) -> int:
         """Run time [ns] up to which ``cmd`` may be obeyed (the module doc's rules)."""
         if not cmd.plan:   # late when it comes after stamp + W; else held for W after arrival
-            late = arrived_ns > cmd.stamp_ns + self.watchdog_ns
+            late = arrived_ns > cmd.stamp_ns + self.watchdog_ns and (cmd.v, cmd.w) != (0.0, 0.0)
             return cmd.stamp_ns + self.watchdog_ns if late else arrived_ns + self.watchdog_ns
         end = cmd.stamp_ns + (len(cmd.plan) // 3 - 1) * cmd.plan_dt_ns
         age_ns = int(self.s.max_plan_age * 1e9) if monitor_fresh else self.watchdog_ns

@@ -112,8 +112,10 @@ class CollisionMonitor:
     def _time_to_collision(self, local: np.ndarray, v: float, w: float) -> float | None:
         """First time [s] the grown footprint, driving the arc (v, w), contains a return."""
         steps = int(math.ceil(self.s.time_before_collision / STEP_S))
-        near = local[np.hypot(local[:, 0], local[:, 1])
-                     < abs(v) * self.s.time_before_collision + robot.FOOTPRINT_RADIUS_M + self.s.stop_margin]
+        # returns already in the zone are the stop zone's (judged by side); reach = the arc's length
+        reach = abs(v) * self.s.time_before_collision + robot.FOOTPRINT_RADIUS_M + self.s.stop_margin
+        near = local[(np.hypot(local[:, 0], local[:, 1]) < reach)
+                     & ~_in_box(local, self.s.stop_margin)]
         if not near.shape[0]:
             return None
         for k in range(1, steps + 1):
