@@ -50,12 +50,16 @@ class LinkStats:
         self.last_heard = now_ns
         return out
 
-    def command(self, now_ns: int, stamp_ns: int, verdict: str) -> list[tuple[str, str]]:
-        """A command arrived at run time ``now_ns`` answering the scan of ``stamp_ns``."""
+    def command(self, now_ns: int, stamp_ns: int, verdict: str,
+                answers_scan: bool = True) -> list[tuple[str, str]]:
+        """A command arrived at run time ``now_ns`` answering the scan of ``stamp_ns``
+        (``answers_scan`` False: a stop or a teleop command, counted but no round trip)."""
         if verdict not in VERDICTS:
             raise ValueError(f"verdict {verdict!r} is not one of {VERDICTS}")
         self.commands += 1
         self.counts[verdict] += 1
+        if not answers_scan:
+            return self.heard(now_ns)
         self.last_rtt_ms = (now_ns - stamp_ns) * 1e-6
         if len(self.rtt_ms) >= MAX_SAMPLES:
             self.rtt_ms = self.rtt_ms[::2]

@@ -22,8 +22,8 @@ driver's watchdog ``W``, ``max_plan_age`` ``A``):
   a fresh scan of its own, else ``A' = W`` — the robot drives on an old plan only when it
   can see for itself;
 - a plain command (no plan: teleop): ``r <= s + W`` when it arrives (as before);
-- a stop (v = w = 0, no plan) is obeyed whenever it is not older than the command followed:
-  stopping is never too late;
+- a stop (v = w = 0, no plan) is obeyed whenever it is not older than the newest command
+  obeyed that was not a stop: stopping is never too late, and a later plan resumes;
 - a plan whose reference lies more than ``MAX_TRACKING_ERROR_M`` from the robot is not
   chased: the base stops.
 """
@@ -94,14 +94,15 @@ class PlanFollower:
         self.watchdog_ns = watchdog_ns
         self.cmd: Twist | None = None
         self.arrived_ns = 0
+        self.newest_ns: int | None = None   # stamp of the newest command that was not a stop
 
     def take(self, cmd: Twist, now_ns: int, monitor_fresh: bool) -> tuple[str, str]:
         """A command arriving at ``now_ns``: ("obeyed" | "late" | "stale", why)."""
         stop = cmd.v == 0.0 and cmd.w == 0.0 and not cmd.plan
-        if self.cmd is not None and (cmd.stamp_ns < self.cmd.stamp_ns
-                                     or (cmd.stamp_ns == self.cmd.stamp_ns and not stop)):
+        floor = self.newest_ns
+        if floor is not None and (cmd.stamp_ns < floor or (cmd.stamp_ns == floor and not stop)):
             return "stale", (f"answers the scan of {cmd.stamp_ns * 1e-9:.3f} s, not newer than "
-                             f"the one followed ({self.cmd.stamp_ns * 1e-9:.3f} s)")
+                             f"the command followed ({floor * 1e-9:.3f} s)")
         why = plan_error(cmd)
         if why:
             return "late", why
@@ -112,6 +113,8 @@ class PlanFollower:
             return "late", (f"{(now_ns - cmd.stamp_ns) * 1e-9:.3f} s old on arrival, valid "
                             f"{(end - cmd.stamp_ns) * 1e-9:.3f} s")
         self.cmd, self.arrived_ns = cmd, now_ns
+        if not stop:   # a stop halts the plan; the next plan newer than the last one resumes
+            self.newest_ns = cmd.stamp_ns
         return "obeyed", ""
 
     def valid_until(self, cmd: Twist, arrived_ns: int, monitor_fresh: bool) -> int:

@@ -44,7 +44,7 @@ class LinkDriving:
     def command(self, cmd: Twist, now_ns: int) -> list[tuple[str, str]]:
         """A command arriving at run time ``now_ns``: taken or refused (``command_refused``)."""
         verdict, why = self.follower.take(cmd, now_ns, self.monitor.fresh(now_ns))
-        events = self.stats.command(now_ns, cmd.stamp_ns, verdict)
+        events = self.stats.command(now_ns, cmd.stamp_ns, verdict, answers_scan=bool(cmd.plan))
         if verdict != "obeyed":
             self.refused += 1
             events.append(("command_refused", f"{verdict}: cmd_vel of {cmd.stamp_ns * 1e-9:.3f} s "

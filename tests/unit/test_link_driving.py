@@ -237,3 +237,48 @@ def test_lockstep_commands_carry_no_plan_and_realtime_ones_do():
         assert bool(cmd.plan) is has_plan
         if has_plan:
             assert cmd.plan[:3] == (0.0, 0.0, 0.0) and len(cmd.plan) == 3 * 16
+
+
+# -- the laptop's view: JSON, progress text, whom the reason blames --------------------------------
+def robot_report(**kw):
+    from schemas import LinkHealth
+
+    base = dict(stamp_ns=10 * 10**9, side="robot", rtt_last_ms=600.0, rtt_p50_ms=590.0,
+                rtt_p99_ms=700.0, commands=100, obeyed=95, late=5)
+    return LinkHealth(**{**base, **kw})
+
+
+def test_a_stagnation_while_the_commands_came_late_names_the_link_not_the_planner():
+    from papf.launch.linkwatch import LinkWatch
+
+    watch = LinkWatch()
+    watch.heard(0)
+    watch.on_health(robot_report(obeyed=20, late=80))
+    why = watch.blame("stagnated", "no progress > 0.1 m towards the goal in 20.0 s", 10**9, 25.0)
+    assert why.startswith("the link: 80 of 100 commands reached the robot too late")
+    assert "no progress" in why
+    assert watch.blame("reached", "within 0.1 m", 10**9, 25.0) is None
+
+
+def test_a_healthy_link_leaves_the_planners_reason_alone_and_an_outage_is_named():
+    from papf.launch.linkwatch import LinkWatch
+
+    watch = LinkWatch()
+    watch.heard(0)
+    watch.on_health(robot_report())
+    assert watch.blame("stagnated", "no progress", 10**9, 25.0) is None
+    watch.tick(2 * 10**9)                                  # the robot went silent
+    assert "an outage" in watch.blame("timeout", "no outcome within 30 s", 5 * 10**9, 30.0)
+    assert watch.text() == "link LOST"
+    out = watch.summary(5 * 10**9)
+    assert out["laptop_outages"] == 1 and out["laptop_outage_s"] == [5.0]
+    assert out["rtt_p50_ms"] == 590.0 and out["late_commands"] == 5
+
+
+def test_runs_on_one_host_have_no_link_in_their_json():
+    from papf.launch.outcome import RunMonitor
+
+    result = RunMonitor(10.0).result("papf", "energy", 0, 1.0)
+    assert "link" not in result.to_json()
+    result.link = {"rtt_p50_ms": 1.0}
+    assert result.to_json()["link"] == {"rtt_p50_ms": 1.0}
