@@ -272,7 +272,7 @@ class RosbotDriver:
         for kind, detail in events:
             if kind == "watchdog_stop":
                 self.watchdog_fired = True
-                self.log.warning("%s", detail)
+                self.log.warning("watchdog: %s", self.driving.stopped_why)
             self.event(kind, detail, rt)
         if self.driving.stopped_why is None:
             self.watchdog_fired = False
