@@ -32,11 +32,13 @@ from schemas import Keys
 from worlds import load_world
 
 
-def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult | None:
+def launch(opt: LaunchOptions, stop: StopRequested | None = None,
+           on_run_start=None) -> RunResult | None:
     """Start the profile's processes; drive a run if the profile says so; stop everything.
 
     Returns the run's result; for a serving profile (no run) None after SIGINT/SIGTERM, or
-    a ``failed`` result if one of its processes died.
+    a ``failed`` result if one of its processes died. ``on_run_start()``: called once the
+    run has started (``papf run --link`` starts its link's outage schedule then).
     """
     prof = load_profile(opt.profile)
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
@@ -65,7 +67,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
             except runauth.NamespaceTaken as exc:
                 raise ConfigError(str(exc)) from None
         try:
-            return _launch(opt, prof, graph, stop, show, keys, run_key)
+            return _launch(opt, prof, graph, stop, show, keys, run_key, on_run_start)
         finally:
             if run_key:
                 runauth.withdraw_key(opt.namespace, run_key)
@@ -89,7 +91,7 @@ def _joined_network(prof: Profile, opt: LaunchOptions, graph) -> zenoh.Config | 
 
 
 def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show, keys: Keys,
-            run_key: str | None) -> RunResult | None:
+            run_key: str | None, on_run_start=None) -> RunResult | None:
     """:func:`launch` once the graph is resolved: start, wait alive, drive or serve."""
     cmds, connect = graph.nodes, graph.connect
     with Supervisor(show=show, env={runauth.ENV: run_key} if run_key else None) as sup:
@@ -114,7 +116,7 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
                   flush=True)
             if prof.run:   # the goal is signed only for a planner this launcher started
                 key = bytes.fromhex(run_key) if "planner" in cmds else None
-                return _drive_run(session, keys, sup, prof, opt, stop, key)
+                return _drive_run(session, keys, sup, prof, opt, stop, key, on_run_start)
             while not stop and not sup.dead():   # a serving host: until Ctrl-C or a death
                 stop.event.wait(0.2)
             return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
@@ -193,7 +195,7 @@ def _robot_talks(session, keys: Keys, prof: Profile, opt: LaunchOptions, sup: Su
     finally:
         sub.undeclare()
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
-               stop: StopRequested, run_key: bytes | None = None) -> RunResult:
+               stop: StopRequested, run_key: bytes | None = None, on_run_start=None) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
     monitor = RunMonitor(opt.timeout_s, goal=(world.goal[0], world.goal[1], world.tolerance))
@@ -210,6 +212,8 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
     try:
         if seq.handshake(world):
             seq.start(f"profile={prof.name} world={world.name}")
+            if on_run_start is not None:
+                on_run_start()
             with RunProgress(None, opt.timeout_s, world.name, planner) as progress:
                 seq.until_outcome(progress, world.goal[:2])
     finally:

@@ -52,6 +52,7 @@ class RunResult:
     min_separation_m: float | None = None  # a fleet: closest footprint approach [m]
     discomfort_s: float | None = None    # a fleet: time people spent within 0.2 m of a robot [s]
     link: dict | None = None             # a split run: the link's health (papf.launch.linkwatch)
+    link_emulator: dict | None = None    # papf run --link: what the emulated link did (papf.link)
 
     @property
     def exit_code(self) -> int:
@@ -65,6 +66,8 @@ class RunResult:
             d[k] = round(d[k], 6) if math.isfinite(d[k]) else None
         if d["stop_latency_s"] is None:
             del d["stop_latency_s"]
+        if d["link_emulator"] is None:   # only a run over papf link has one
+            del d["link_emulator"]
         if d["faults"]:  # a fault (e.g. lockstep timeout) makes the run not bit-reproducible
             d["faults"] = list(d["faults"])
         else:

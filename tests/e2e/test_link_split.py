@@ -1,0 +1,137 @@
+"""`papf run --link`: the robot and the laptop on their own routers, joined through papf link.
+
+A LAN run reaches its goal; a 10 s outage mid-drive (stall: the link holds everything, TCP
+resumes at its next retry): the robot brakes within 0.75 s and stands within 1.2 s, obeys
+nothing while the link is down, drives on after it and the run ends with an outcome;
+Ctrl-C stops every process. The slow links (100 ms ± 50 ms, 200 ms + 0-150 ms) are in
+test_link_slow.py.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from common.outcomes import OUTCOMES
+from tests.support.cli import stderr_until
+from tests.support.worlds import SHORT, box_world, write_world
+
+PY = sys.executable
+CORRIDOR = box_world("corridor", "2.5 m ahead, a box beside the path", 2.5, (1.2, 0.7))
+SLOW = ["--set", "v_max=0.3"]      # the corridor takes ~9 s: an outage at 3 s hits a drive
+BRAKING_S = 0.75                   # [s] after the link went: the robot is told to slow down
+STANDSTILL_S = 1.2                 # [s] ... and to stand
+RUN_TIMEOUT_S = 300                # [s wall] one split run, start-up on a loaded machine included
+
+
+def _running(tag: str) -> list[str]:
+    found = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if tag in cmd and int(pid) != os.getpid():
+            found.append(cmd)
+    return found
+
+
+def _leftovers(tag: str, timeout_s: float = 30.0) -> list[str]:
+    deadline = time.monotonic() + timeout_s
+    while (found := _running(tag)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return found
+
+
+def split_run(world: Path, ns: str, link: str, *extra: str) -> tuple[int, dict, str]:
+    """``papf run --link LINK --json``: exit code, JSON, stderr."""
+    out = subprocess.run([PY, "-m", "papf", "run", "--world", str(world), "--planner", "apf",
+                          "--namespace", ns, "--link", link, "--json", "--timeout", "60", *extra],
+                         capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    assert out.stdout.strip(), out.stderr[-3000:]
+    return out.returncode, json.loads(out.stdout.strip().splitlines()[-1]), out.stderr
+
+
+@pytest.fixture
+def corridor(tmp_path) -> Path:
+    return write_world(tmp_path / "corridor.toml", CORRIDOR)
+
+
+def test_a_split_run_over_a_lan_reaches_its_goal(corridor):
+    ns = "t30lan"
+    code, result, err = split_run(corridor, ns, "lan", "--set", "v_max=0.5")
+    assert (code, result["outcome"]) == (0, "reached"), err[-3000:]
+    assert result["collisions"] == 0 and result["path_length_m"] > 2.0
+    link = result["link_emulator"]
+    assert link["spec"]["name"] == "lan" and link["connections"] >= 1
+    assert link["directions"]["back"]["bytes"] > 10_000     # scans and odometry came through
+    assert link["directions"]["out"]["chunks"] > 0          # commands went
+    assert not _leftovers(ns), "processes left after papf run --link"
+
+
+def _commands(trace: Path) -> list[dict]:
+    return [json.loads(line) for line in trace.read_text().splitlines() if line.endswith("}")]
+
+
+def test_a_10_s_outage_stops_the_robot_and_the_run_goes_on_after_it(corridor, tmp_path):
+    ns, trace = "t30out", tmp_path / "commands.jsonl"
+    code, result, err = split_run(corridor, ns, "lan,outage=10@3", *SLOW,
+                                  "--robot-trace", str(trace))
+    assert result["outcome"] in OUTCOMES, err[-3000:]            # the run ended with an outcome
+    assert (code, result["outcome"]) == (0, "reached"), err[-3000:]
+    outage = result["link_emulator"]["outages"][0]
+    down, up = outage["start_monotonic_ns"], outage["end_monotonic_ns"]
+    assert (up - down) / 1e9 == pytest.approx(10.0, abs=0.1)
+    cmds = _commands(trace)
+    before = [c for c in cmds if c["t_ns"] < down]
+    during = [c for c in cmds if down <= c["t_ns"] < up]
+    assert before and before[-1]["v"] > 0.2, "the outage did not hit a drive"
+    braking = next(c for c in during if c["v"] < before[-1]["v"] - 1e-9)
+    standstill = next(c for c in during if c["v"] == 0.0 and c["w"] == 0.0)
+    print(f"\noutage: braking after {(braking['t_ns'] - down) / 1e9:.3f} s, standstill after "
+          f"{(standstill['t_ns'] - down) / 1e9:.3f} s")
+    assert (braking["t_ns"] - down) / 1e9 <= BRAKING_S
+    assert (standstill["t_ns"] - down) / 1e9 <= STANDSTILL_S
+    obeyed = [c for c in during if c["t_ns"] >= standstill["t_ns"] and (c["v"] or c["w"])]
+    assert not obeyed, f"moved while the link was down: {obeyed[:3]}"
+    assert any(c["v"] > 0.0 for c in cmds if c["t_ns"] > up), "did not drive on after the outage"
+    assert not _leftovers(ns)
+
+
+def test_ctrl_c_stops_every_process_of_both_sides(corridor):
+    ns = "t30int"
+    proc = subprocess.Popen([PY, "-m", "papf", "run", "--world", str(corridor), "--namespace", ns,
+                             "--link", "wifi", "--json", *SLOW], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    seen: list[str] = []
+    try:
+        stderr_until(proc, r"t0: the outage schedule", seen, timeout_s=180)   # the run started
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, seen[-10:]
+    assert not _leftovers(ns), "processes left after Ctrl-C"
+
+
+def test_the_link_experiment_makes_its_table_and_resumes(tmp_path):
+    world = write_world(tmp_path / "short.toml", SHORT)
+    out = tmp_path / "exp"
+    args = [PY, "-m", "papf", "experiment", "link", "--world", str(world), "--planners", "apf",
+            "--links", "lan", "--outage", "none", "--sweep", "none", "--out", str(out)]
+    first = subprocess.run(args, capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    assert first.returncode == 0, first.stderr[-3000:]
+    assert "| apf | lan | none | reached |" in (out / "link.md").read_text()
+    assert "link: 1/1" in first.stderr                       # progress, one line per run
+    again = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0 and "1 of 1 runs finished before" in again.stderr
+    assert (out / "link.png").is_file() and (out / "link.csv").read_text().count("\n") == 2
