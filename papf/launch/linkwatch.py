@@ -21,6 +21,8 @@ LAPTOP_OUTAGE_S = 1.0
 LATE_SHARE = 0.25       # [-] this share of commands refused by the robot: the link's fault
 OUTAGE_SHARE = 0.1      # [-] outages this long a share of the run: the link's fault
 BLAMED = ("stagnated", "timeout", "failed")
+STALLED = "sim time stuck"   # the launcher's stall reason (papf.launch.sequence): the only failure
+                             # the link can cause
 
 
 class LinkWatch:
@@ -62,8 +64,8 @@ class LinkWatch:
 
     def blame(self, outcome: str, reason: str, wall_ns: int, run_s: float) -> str | None:
         """A ``reason`` naming the link when it, not the planner, ended the run (else None)."""
-        if outcome not in BLAMED:
-            return None
+        if outcome not in BLAMED or (outcome == "failed" and not reason.startswith(STALLED)):
+            return None   # a node's death, an interrupt: not the link's to explain
         why = self._fault(wall_ns, run_s)
         if not why:
             return None

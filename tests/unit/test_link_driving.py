@@ -270,6 +270,8 @@ def test_a_healthy_link_leaves_the_planners_reason_alone_and_an_outage_is_named(
     watch.tick(2 * 10**9)                                  # the robot went silent
     assert "an outage" in watch.blame("timeout", "no outcome within 30 s", 5 * 10**9, 30.0)
     assert watch.text() == "link LOST"
+    assert watch.blame("failed", "interrupted", 5 * 10**9, 30.0) is None     # Ctrl-C stays 130
+    assert watch.blame("failed", "sim time stuck at 3.00 s for 20 s", 5 * 10**9, 30.0)
     out = watch.summary(5 * 10**9)
     assert out["laptop_outages"] == 1 and out["laptop_outage_s"] == [5.0]
     assert out["rtt_p50_ms"] == 590.0 and out["late_commands"] == 5
