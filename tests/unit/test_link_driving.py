@@ -284,3 +284,13 @@ def test_runs_on_one_host_have_no_link_in_their_json():
     assert "link" not in result.to_json()
     result.link = {"rtt_p50_ms": 1.0}
     assert result.to_json()["link"] == {"rtt_p50_ms": 1.0}
+
+
+def test_papf_topic_list_says_what_the_link_did():
+    from papf.bus.decode import decode
+    from papf.bus.topics import link_line
+
+    d = decode("rosbot/link", robot_report(outages=1, outage_s=4.6).to_bytes())
+    line = link_line("rosbot/link", d.value)
+    assert line == ("link (rosbot/link, robot side): up, round trip p50 590 / p99 700 ms, "
+                    "5 of 100 commands refused, 1 outages (4.6 s)")
