@@ -107,11 +107,13 @@ def laptop_options(cfg: RunConfig, ports: SplitPorts, spec: LinkSpec) -> LaunchO
               "record_force": "1" if cfg.force and cfg.record else None,
               "objects": cfg.objects, "view": cfg.view,
               "ros_face": None if cfg.ros_face is None else "1", "ros_face_domain": cfg.ros_face}
+    extra = dict(cfg.extra_node_args)   # the recording says which link it was made over
+    extra["recorder"] = [*extra.get("recorder", ()), "--meta", f"link={spec.to_text()}"]
     return LaunchOptions("laptop", connect=[_ep(ports.laptop)], namespace=cfg.namespace,
                          values={k: v for k, v in values.items() if v is not None},
                          planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,
                          startup_timeout_s=cfg.startup_timeout_s, stall_s=laptop_stall_s(spec),
-                         verbose=cfg.verbose, extra_node_args=cfg.extra_node_args)
+                         verbose=cfg.verbose, extra_node_args=extra)
 
 
 def side_processes(cfg: RunConfig, ports: SplitPorts, spec: LinkSpec, stats: str,

@@ -10,7 +10,8 @@
   (queueing delay changes at the pace of the queue, not per packet; 0: once per chunk),
   seeded by (seed, direction, period index), so a delivery depends only on the arrival
   times and sizes;
-- **loss**: a lost chunk (``loss_pct``) waits one TCP retransmission timeout more;
+- **loss**: a lost chunk (``loss_pct``) waits one TCP retransmission timeout more
+  (:func:`rto_estimate`);
 - **one stream**: TCP delivers in order, so delivery times never fall: a chunk behind a
   slow one waits for it (head-of-line blocking, as TCP does);
 - **outages** (:class:`OutageSchedule`): nothing is delivered inside one. ``stall``: a
@@ -29,6 +30,7 @@ yet, no outage happens).
 from __future__ import annotations
 
 import bisect
+import math
 import random
 from dataclasses import dataclass
 from itertools import pairwise
@@ -131,6 +133,19 @@ def resume_after(outage: Outage, rto_s: float) -> float:
     return t
 
 
+def rto_estimate(spec: LinkSpec) -> float:
+    """The retransmission timeout [s] a Linux TCP sender settles on over this link (RFC 6298:
+    ``srtt + 4 rttvar``, at least :data:`RTO_MIN_S`): ``srtt`` the mean round trip (twice the
+    delay and the mean jitter), ``rttvar`` the mean deviation of the round trip (two
+    independent one-way jitters: about sqrt(2) times one's mean deviation)."""
+    us = [(k + 0.5) / 1000.0 for k in range(1000)]
+    js = [quantile(spec.jitter, u) for u in us]
+    mean = sum(js) / len(js)
+    dev = sum(abs(j - mean) for j in js) / len(js)
+    srtt_ms = 2.0 * (spec.delay_ms + mean)
+    return max(RTO_MIN_S, (srtt_ms + 4.0 * math.sqrt(2.0) * dev) / 1000.0)
+
+
 def quantile(points: Quantiles, u: float) -> float:
     """The value at probability ``u`` of a distribution given by quantile points
     (linear between them)."""
@@ -149,9 +164,7 @@ class Direction:
         self.byte_s = 0.0 if rate is None else 8.0 / (rate * 1000.0)   # [s per byte]
         self.delay_s = spec.delay_ms / 1000.0
         self.period_s = spec.jitter_period_ms / 1000.0
-        # a TCP sender's retransmission timeout on this link: about two worst one-way
-        # delays (srtt + 4 rttvar), never under Linux's minimum
-        self.rto_s = max(RTO_MIN_S, 2.0 * (spec.delay_ms + spec.jitter_max_ms) / 1000.0)
+        self.rto_s = rto_estimate(spec)
         self._chunk_rng = random.Random(f"{spec.seed}/{direction}/chunks")
         self._slot: tuple[int, float] | None = None
         # jitter periods count from here (the outages' origin may be unset: t0 on a signal)

@@ -135,3 +135,33 @@ def test_the_link_experiment_makes_its_table_and_resumes(tmp_path):
     again = subprocess.run(args, capture_output=True, text=True, timeout=120)
     assert again.returncode == 0 and "1 of 1 runs finished before" in again.stderr
     assert (out / "link.png").is_file() and (out / "link.csv").read_text().count("\n") == 2
+
+
+def test_papf_link_alone_stops_on_ctrl_c_and_writes_its_stats(tmp_path):
+    from papf.launch.supervisor import free_port, wait_port
+
+    port, stats = free_port(), tmp_path / "link.json"
+    proc = subprocess.Popen([PY, "-m", "papf", "link", "--listen", f"tcp/127.0.0.1:{port}", "--to",
+                             f"tcp/127.0.0.1:{free_port()}", "--profile", "wifi", "--stats",
+                             str(stats)], stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        assert wait_port(port, 60.0)
+        import socket
+
+        with socket.create_connection(("127.0.0.1", port)) as s:   # nothing at --to:
+            s.settimeout(30)                                        # reset, as a refused
+            try:                                                    # connection would be
+                assert s.recv(10) == b""
+            except ConnectionResetError:
+                pass
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 0 and "stopped;" in err and "Traceback" not in err, err
+    data = json.loads(stats.read_text())
+    assert data["connections"] >= 1 and data["connect_failures"] >= 1   # (wait_port connects too)
+    assert data["spec"]["name"] == "wifi"

@@ -105,6 +105,15 @@ def test_nothing_is_delivered_during_a_stall_outage_and_tcp_resumes_at_its_next_
     assert held and min(held) == pytest.approx(resume + 0.05)
 
 
+def test_the_retransmission_timeout_is_what_tcp_settles_on_over_the_link():
+    from papf.link.schedule import rto_estimate
+
+    assert rto_estimate(PROFILES["lan"]) == RTO_MIN_S == rto_estimate(PROFILES["wifi"])
+    # 200 + U(0, 150) ms one way: srtt 550 ms, rttvar ~53 ms -> ~0.76 s
+    assert rto_estimate(parse_spec("delay=200,jitter=150")) == pytest.approx(0.762, abs=0.01)
+    assert rto_estimate(parse_spec("delay=500")) == pytest.approx(1.0)
+
+
 def test_the_retry_backoff_is_capped():
     assert resume_after(Outage(0.0, 1000.0), 0.2) < 1000.0 + 120.0 + 1e-9
 
@@ -202,3 +211,17 @@ def test_papf_link_refuses_a_bad_endpoint_and_an_existing_stats_file(tmp_path):
         assert out.returncode == 2 and says in out.stderr, out.stderr
         assert len(out.stderr.strip().splitlines()) == 1
     assert stats.read_text() == "mine"
+
+
+def test_papf_link_refuses_a_taken_port_with_one_line():
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        out = subprocess.run([sys.executable, "-m", "papf", "link", "--listen",
+                              f"tcp/127.0.0.1:{port}", "--to", "tcp/127.0.0.1:2"],
+                             capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "cannot listen there" in out.stderr, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1

@@ -89,3 +89,11 @@ def test_the_dry_run_prints_the_graph_without_starting_anything(world, tmp_path)
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["profile"] == "split"
     assert [p.name for p in Path(tmp_path).iterdir()] == ["short.toml"]   # nothing written
+
+
+def test_the_laptops_recording_names_the_link(world, tmp_path):
+    graph = json.loads(resolve_split(RunConfig(world=world, record=str(tmp_path / "r.mcap"),
+                                               link="lte,outage=10@20")))
+    recorder = next(p["argv"] for p in graph["processes"] if p["name"] == "recorder")
+    meta = recorder[recorder.index(next(a for a in recorder if a.startswith("link="))) - 1:]
+    assert meta[0] == "--meta" and parse_spec(meta[1].removeprefix("link=")).name == "lte"
