@@ -24,6 +24,8 @@ driver's watchdog ``W``, ``max_plan_age`` ``A``):
 - a plain command (no plan: teleop): ``r <= s + W`` when it arrives (as before);
 - a stop (v = w = 0, no plan) is obeyed whenever it is not older than the newest command
   obeyed that was not a stop: stopping is never too late, and a later plan resumes;
+- a command stamped more than ``W`` ahead of the robot's clock is refused (a stamp a little
+  ahead comes from a tool whose clock started before the robot's: taken as fresh);
 - a plan whose reference lies more than ``MAX_TRACKING_ERROR_M`` from the robot is not
   chased: the base stops.
 """
@@ -106,7 +108,7 @@ class PlanFollower:
         why = plan_error(cmd)
         if why:
             return "late", why
-        if cmd.stamp_ns > now_ns:
+        if cmd.stamp_ns > now_ns + self.watchdog_ns:   # a clock not the robot's (a tool's)
             return "late", f"stamped {(cmd.stamp_ns - now_ns) * 1e-9:.3f} s in the future"
         end = self.valid_until(cmd, now_ns, monitor_fresh)
         if now_ns > end and not stop:   # a stop is never too late to obey

@@ -81,8 +81,11 @@ def test_a_malformed_plan_is_refused(plan, dt):
                                 100 * MS, True)[0] == "late"
 
 
-def test_a_command_stamped_in_the_future_is_refused():
+def test_a_command_stamped_in_the_future_is_refused_beyond_the_watchdog():
     assert PlanFollower(W).take(straight_plan(stamp_ns=2_000 * MS), 1_000 * MS, True)[0] == "late"
+    f = PlanFollower(W)      # a tool's clock a little ahead of the robot's: fresh
+    assert f.take(Twist(stamp_ns=1_050 * MS, v=0.4, w=0.2), 1_000 * MS, True)[0] == "obeyed"
+    assert f.target(1_400 * MS, None, True)[:2] == (0.4, 0.2)
 
 
 def test_the_follower_corrects_towards_the_plan_and_never_outruns_it():
