@@ -63,6 +63,9 @@ def add_link_args(p) -> None:
     p.add_argument("--robot-trace", metavar="FILE",
                    help="with --link: append a JSON line per command the emulated robot "
                         "received (monotonic time, v, w)")
+    p.add_argument("--robot-record", metavar="F.mcap",
+                   help="with --link: the robot side's own recording (its black box: every "
+                        "command it obeyed or refused, odometry, scans; docs/link-driving.md)")
 
 
 def run_config(args):
@@ -81,7 +84,8 @@ def run_config(args):
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      ros_face=face_domain(args), progress=None if not args.json else False,
-                     link=args.link, robot_trace=args.robot_trace)
+                     link=args.link, robot_trace=args.robot_trace,
+                     robot_record=args.robot_record)
 
 
 def cmd_run(args) -> int:
@@ -93,6 +97,10 @@ def cmd_run(args) -> int:
         from common.errors import ConfigError
 
         raise ConfigError("--robot-trace traces the emulated robot of a split run: add --link")
+    if args.robot_record:
+        from common.errors import ConfigError
+
+        raise ConfigError("--robot-record records the robot side of a split run: add --link")
     if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447)
         print(resolve_run(run_config(args)).to_json())
         return 0

@@ -22,6 +22,7 @@ from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.claim import Claim, check_network
+from papf.launch.linkwatch import LinkWatch
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
@@ -204,8 +205,9 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
                      "driver gets none over its bridge (start the robot's bringup and "
                      "zenoh-bridge-ros2dds, or rmw_zenoh; docs/getting-started-robot.md)")
         return _result(monitor, opt, prof, time.monotonic() - wall0)
+    link = LinkWatch() if prof.remote_nodes else None   # a split: the link is watched
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
-                      stall_s=opt.stall_s or STALL_S, run_key=run_key)
+                      stall_s=opt.stall_s or STALL_S, run_key=run_key, link=link)
     planner = str(opt.values.get("planner") or prof.defaults.get("planner", DEFAULT_PLANNER))
     try:
         if seq.handshake(world):
@@ -216,7 +218,18 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
                 seq.until_outcome(progress, world.goal[:2])
     finally:
         result = _result(monitor, opt, prof, time.monotonic() - wall0)
+        if link is not None:
+            _judge_link(result, link)
         seq.end(result)
     return result
+
+
+def _judge_link(result: RunResult, link: LinkWatch) -> None:
+    """The run's ``link`` figures, and its reason when the link ended it."""
+    now = time.monotonic_ns()
+    result.link = link.summary(now)
+    blamed = link.blame(result.outcome, result.reason, now, result.sim_time_s)
+    if blamed:
+        result.reason = blamed
 
 

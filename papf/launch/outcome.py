@@ -51,6 +51,7 @@ class RunResult:
     fleet: tuple[dict, ...] = ()         # a fleet's robots, one object each (papf.launch.fleet)
     min_separation_m: float | None = None  # a fleet: closest footprint approach [m]
     discomfort_s: float | None = None    # a fleet: time people spent within 0.2 m of a robot [s]
+    link: dict | None = None             # a split run: the link's health (papf.launch.linkwatch)
     link_emulator: dict | None = None    # papf run --link: what the emulated link did (papf.link)
 
     @property
@@ -71,6 +72,8 @@ class RunResult:
             d["faults"] = list(d["faults"])
         else:
             del d["faults"]
+        if d["link"] is None:   # runs on one host: no link to speak of
+            del d["link"]
         fleet = d.pop("fleet")
         if fleet:   # several robots: the fleet's figures and one object per robot
             d["min_separation_m"] = (round(self.min_separation_m, 6)

@@ -61,6 +61,7 @@ class RunConfig:
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
     link: str | None = None            # papf run --link PROFILE|SPEC (papf.launch.split)
     robot_trace: str | None = None     # --link: the emulated robot's command trace (JSON lines)
+    robot_record: str | None = None    # --link: the robot side's own recording (its black box)
 
 
 def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:

@@ -18,6 +18,7 @@ from common import runauth
 from common.errors import SchemaError
 from common.transport import round_robin
 from common.units import StampGuard
+from papf.launch.linkwatch import LinkWatch
 from papf.launch.outcome import NS, RunMonitor, RunResult
 from papf.launch.supervisor import Supervisor
 from schemas import Event, Keys, PlannerStatus
@@ -42,8 +43,10 @@ class RunSequence:
 
     def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
                  pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
-                 stall_s: float = STALL_S, run_key: bytes | None = None):
+                 stall_s: float = STALL_S, run_key: bytes | None = None,
+                 link: LinkWatch | None = None):
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
+        self.link = link                     # a split run: the link to the robot, watched
         self.stop, self.stall_s = stop, stall_s
         self.run_key = run_key               # goals signed, statuses verified (common.runauth)
         self.stamps = StampGuard(STAMP_ORDERED, restart_at_zero=False)
@@ -60,6 +63,9 @@ class RunSequence:
                                                       monitor.on_time(msg.stamp_ns),
                                                       *(hook(msg) for hook in self._pose_hooks))
         self._pose_hooks: list[Callable] = []   # watch_poses
+        if link is not None:   # the robot's clock is the laptop's ear; its reports its voice
+            self._handlers["clock"] = lambda msg: (monitor.on_clock(msg), self._heard())
+            self._handlers["link"] = link.on_health
         # Each topic's samples wait in Zenoh's own channel until the caller's thread drains
         # them (:meth:`drain`): no Python on Zenoh's thread, no wake per message — the
         # launcher watches 50 Hz streams to decide what changes at 10 Hz at most.
@@ -67,6 +73,16 @@ class RunSequence:
         self._subs: list[zenoh.Subscriber] = []
         for topic in self._handlers:
             self._listen(keys.key(topic), topic, TOPICS[topic])
+
+    def _heard(self) -> None:
+        for kind, detail in self.link.heard(time.monotonic_ns()):
+            self.event(kind, detail)
+
+    def event(self, kind: str, detail: str) -> None:
+        """An event of the launcher's on the run's clock (the link's, as the laptop sees it)."""
+        log.warning("%s", detail)
+        self.session.put(self.keys.events, Event(stamp_ns=max(self.monitor.clock_ns, 0), kind=kind,
+                                                 source="launcher", detail=detail).to_bytes())
 
     def _listen(self, key: str, topic: str, msg_type: type) -> None:
         sub = self.session.declare_subscriber(key, zenoh.handlers.FifoChannel(CHANNEL_CAPACITY))
@@ -152,10 +168,14 @@ class RunSequence:
             next_check = now + CHECK_S
             if m.clock_ns != last_clock:
                 last_clock, last_change = m.clock_ns, now
+            state = m.status.state if m.status else ""
+            if self.link is not None:
+                for kind, detail in self.link.tick(time.monotonic_ns()):
+                    self.event(kind, detail)
+                state = f"{state}  {self.link.text()}".rstrip()
             if progress is not None and goal_xy is not None:
                 progress.update(m.clock_ns / NS, m.distance_to(*goal_xy),
-                                m.batteries[-1].charge_used_mAh if m.batteries else 0.0,
-                                m.status.state if m.status else "")
+                                m.batteries[-1].charge_used_mAh if m.batteries else 0.0, state)
             if self.stop():
                 m.fail("interrupted")
             elif self.sup.dead():

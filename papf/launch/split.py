@@ -91,8 +91,10 @@ def laptop_stall_s(spec: LinkSpec) -> float:
 def robot_options(cfg: RunConfig, ports: SplitPorts) -> LaunchOptions:
     """The ``robot`` profile on its own router (as ``papf launch robot --listen``)."""
     values = {"world": cfg.world}
-    # the robot side's own recording (a black box) joins these values when the robot
-    # profile has a recorder: link-drive's branch
+    if cfg.robot_record:   # the robot side's own recording: its black box
+        values["record"] = cfg.robot_record
+        if cfg.force:
+            values["record_force"] = "1"
     return LaunchOptions("robot", listen=[_ep(ports.robot)], namespace=cfg.namespace,
                          values=values, startup_timeout_s=cfg.startup_timeout_s,
                          verbose=cfg.verbose)
