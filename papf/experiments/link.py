@@ -93,20 +93,22 @@ def row_of(case: Case, result) -> dict:
             "wall_time_s": num(result.wall_time_s, 1), "reason": result.reason}
 
 
-def run_case(case: Case, seed: int, timeout_s: float, record: Path | None, world: str = WORLD):
+def run_case(case: Case, seed: int, timeout_s: float, record: Path | None, world: str = WORLD,
+             namespace: str = NAMESPACE):
     """One split run over ``case``'s link; its RunResult."""
     from papf.launch.run import RunConfig  # zenoh: only when a run is made
     from papf.launch.split import run_split
 
     return run_split(RunConfig(world=world, planner=case.planner, seed=seed, timeout_s=timeout_s,
-                               record=str(record) if record else None, namespace=NAMESPACE,
+                               record=str(record) if record else None, namespace=namespace,
                                link=case.spec, progress=False))
 
 
 def run_link_experiment(out: str | Path, todo: Sequence[Case], seed: int = 0,
                         timeout_s: float = TIMEOUT_S, record: bool = False,
                         echo: Callable[[str], None] = print,
-                        progress: bool | None = None, world: str = WORLD) -> list[dict]:
+                        progress: bool | None = None, world: str = WORLD,
+                        namespace: str = NAMESPACE) -> list[dict]:
     """Run ``todo`` (:func:`cases`) on ``world`` one after the other (real time: no two at
     once, they would load each other's links); write the CSVs, the Markdown and the plot."""
     from papf.console.progress import StepProgress
@@ -126,7 +128,7 @@ def run_link_experiment(out: str | Path, todo: Sequence[Case], seed: int = 0,
                 if mcap is not None:
                     mcap.parent.mkdir(parents=True, exist_ok=True)
                     mcap.unlink(missing_ok=True)   # this run's, made again
-                result = run_case(case, seed, timeout_s, mcap, world)
+                result = run_case(case, seed, timeout_s, mcap, world, namespace)
                 if result.reason == "interrupted":   # Ctrl-C reached the run's launcher:
                     raise KeyboardInterrupt          # the experiment stops, finished runs kept
                 row = row_of(case, result)
