@@ -40,8 +40,9 @@ NOT_YET = float("inf")          # an outage schedule waiting for SIGUSR1
 
 
 def parse_endpoint(text: str, what: str) -> tuple[str, int]:
-    """``tcp/HOST:PORT`` (or ``HOST:PORT``; ``[::1]`` for IPv6) -> (host, port)."""
-    m = re.fullmatch(r"(?:tcp/)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})", text.strip())
+    """``tcp/HOST:PORT`` (or ``HOST:PORT``; ``[::1]`` for IPv6) -> (host, port). ``tls/`` is
+    taken too: the emulator forwards TCP bytes as they are, so TLS stays end to end."""
+    m = re.fullmatch(r"(?:tcp/|tls/)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})", text.strip())
     if m is None or int(m.group(2)) > 65535:
         raise ConfigError(f"{what} {text!r}: must be a TCP endpoint tcp/HOST:PORT, e.g. "
                           "tcp/127.0.0.1:7448")
