@@ -241,7 +241,8 @@ class LinkEmulator:
                 for conn in list(self.conns):
                     self.stats.resets += 1
                     conn.close(reset=True)
-            await asyncio.sleep(max(0.0, end - self.clock()))
+            while self.clock() < end:   # a timer may fire a hair early: not the same outage twice
+                await asyncio.sleep(max(0.001, end - self.clock()))
             event.update(end_monotonic_ns=time.monotonic_ns(), end_wall_ns=time.time_ns())
             self.say("outage over: the link is up")
 
