@@ -183,7 +183,7 @@ class RosbotDriver:
             self.send(now)
             return
         rt = self.run_time(now)
-        events = self.driving.command(msg, rt)
+        events = self.driving.command(msg, rt, self.pose())
         for kind, detail in events:
             if kind == "command_refused":
                 self.late += 1

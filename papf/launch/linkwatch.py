@@ -84,6 +84,10 @@ class LinkWatch:
         if r.commands and refused / r.commands >= LATE_SHARE:
             return (f"{refused} of {r.commands} commands reached the robot too late to obey "
                     f"(round trip p50 {r.rtt_p50_ms:.0f} ms, p99 {r.rtt_p99_ms:.0f} ms)")
+        if run_s > 0 and r.held_s >= LATE_SHARE * run_s:
+            return (f"the robot stood {r.held_s:.1f} s of {run_s:.1f} s for want of a command "
+                    f"fresh enough to follow (round trip p50 {r.rtt_p50_ms:.0f} ms, "
+                    f"p99 {r.rtt_p99_ms:.0f} ms)")
         if r.outages and r.outage_s >= OUTAGE_SHARE * run_s:
             return (f"{r.outages} outages, {r.outage_s:.1f} s without commands "
                     f"(longest {r.longest_outage_s:.1f} s)")

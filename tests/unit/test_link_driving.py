@@ -297,3 +297,31 @@ def test_papf_topic_list_says_what_the_link_did():
     line = link_line("rosbot/link", d.value)
     assert line == ("link (rosbot/link, robot side): up, round trip p50 590 / p99 700 ms, "
                     "5 of 100 commands refused, 1 outages (4.6 s)")
+
+
+def test_a_robot_that_stood_still_starts_an_old_plan_from_its_beginning():
+    """The first plan arrives 1.2 s old, the robot still where the plan starts: it follows
+    the plan from there (not stopping because the plan's point of 'now' is 0.6 m away)."""
+    f = PlanFollower(W)
+    cmd = straight_plan(stamp_ns=0, v=0.5)
+    f.take(cmd, 1_200 * MS, True, pose=(0.0, 0.0, 0.0))
+    target = f.target(1_220 * MS, (0.0, 0.0, 0.0), True)
+    assert not target.why and target.v > 0.0
+    kept_up = PlanFollower(W)                                  # where the plan says: no shift
+    kept_up.take(cmd, 1_200 * MS, True, pose=reference(cmd, 1_200 * MS)[:3])
+    assert kept_up.shift_ns == 0 and f.shift_ns == -1_200 * MS
+
+
+def test_the_time_the_link_held_the_robot_still_is_reported_and_blamed():
+    from papf.launch.linkwatch import LinkWatch
+
+    d = LinkDriving(W)
+    d.command(straight_plan(stamp_ns=0), 100 * MS, (0.0, 0.0, 0.0))
+    for t in range(100, 3100, 20):
+        d.control(t * MS, (0.0, 0.0, 0.0))
+    held = d.health(3_100 * MS).held_s
+    assert held == pytest.approx(2.58, abs=0.001)   # no scan of its own: valid 0.5 s from the stamp
+    watch = LinkWatch()
+    watch.heard(0)
+    watch.on_health(robot_report(held_s=12.0))
+    assert "stood 12.0 s of 30.0 s" in watch.blame("stagnated", "no progress", 10**9, 30.0)
