@@ -35,6 +35,9 @@ def add_link(exp) -> None:
     p.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="noise seed (0)")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=TIMEOUT_S,
                    metavar="S", help=f"run-time limit per run (default {TIMEOUT_S:g})")
+    p.add_argument("--namespace", default="linkexp",
+                   help="key namespace of the runs (default linkexp: a session in rosbot is "
+                        "not disturbed)")
     p.add_argument("--record", action="store_true",
                    help="record each run's laptop side to OUT/recordings/<run>.mcap")
     p.set_defaults(func=cmd_link)
@@ -76,12 +79,14 @@ def todo_of(args) -> list:
 def cmd_link(args) -> int:
     """``papf experiment link``: the runs, the tables, the plot; the exit code."""
     from papf.experiments.link import run_link_experiment  # zenoh: when run
+    from papf.launch.preflight import namespace
     from worlds import load_world
 
     todo = todo_of(args)
+    namespace(args.namespace)   # ConfigError before any run
     load_world(args.world)   # WorldError (exit 2, one line) before any run
     run_link_experiment(args.out, todo, seed=args.seed, timeout_s=args.timeout,
-                        record=args.record, world=args.world,
+                        record=args.record, world=args.world, namespace=args.namespace,
                         echo=lambda line: print(line, file=sys.stderr, flush=True))
     print((Path(args.out) / "link.md").read_text())
     return 0

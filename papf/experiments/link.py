@@ -18,6 +18,7 @@ same command after Ctrl-C makes only the others.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -62,16 +63,22 @@ def cases(planners: Sequence[str] = PLANNERS, links=LINKS, outages=OUTAGES,
 
 
 def row_of(case: Case, result) -> dict:
-    """The CSV row of one run (:class:`papf.launch.outcome.RunResult` over the link)."""
-    link = result.link_emulator or {}
-    dirs = link.get("directions", {})
-    side = link.get("robot_side", {})
+    """The CSV row of one run (:class:`papf.launch.outcome.RunResult` over the link): the
+    run's figures, what the emulator did (delays it applied, time down) and what the robot
+    side measured (the run JSON's ``link``: round trip, commands refused as too late or
+    stale; the driver's watchdog stops from ``link_emulator.robot_side``)."""
+    emu = result.link_emulator or {}
+    dirs = emu.get("directions", {})
+    side = emu.get("robot_side", {})
+    health = getattr(result, "link", None) or {}
 
     def delay(d: str, p: str):
         return (dirs.get(d, {}).get("delay_ms") or {}).get(p)
 
     def num(x, nd=3):
         return round(x, nd) if isinstance(x, float) and math.isfinite(x) else x
+    refused = (None if "late_commands" not in health else
+               health["late_commands"] + health.get("stale_commands", 0))
     return {"study": case.study, "planner": case.planner, "link": case.link, "spec": case.spec,
             "outage": case.outage, "outcome": result.outcome,
             "duration_s": num(result.duration_s, 2), "path_m": num(result.path_length_m),
@@ -79,25 +86,29 @@ def row_of(case: Case, result) -> dict:
             "collisions": result.collisions,
             "delay_out_p50_ms": delay("out", "p50"), "delay_out_p99_ms": delay("out", "p99"),
             "delay_back_p50_ms": delay("back", "p50"), "delay_back_p99_ms": delay("back", "p99"),
-            "outage_s": link.get("outage_s"), "watchdog_stops": side.get("watchdog_stops"),
+            "rtt_p50_ms": health.get("rtt_p50_ms"), "rtt_p99_ms": health.get("rtt_p99_ms"),
+            "commands": health.get("commands"), "refused_commands": refused,
+            "outage_s": emu.get("outage_s"), "watchdog_stops": side.get("watchdog_stops"),
             "late_commands": side.get("late_commands"),
             "wall_time_s": num(result.wall_time_s, 1), "reason": result.reason}
 
 
-def run_case(case: Case, seed: int, timeout_s: float, record: Path | None, world: str = WORLD):
+def run_case(case: Case, seed: int, timeout_s: float, record: Path | None, world: str = WORLD,
+             namespace: str = NAMESPACE):
     """One split run over ``case``'s link; its RunResult."""
     from papf.launch.run import RunConfig  # zenoh: only when a run is made
     from papf.launch.split import run_split
 
     return run_split(RunConfig(world=world, planner=case.planner, seed=seed, timeout_s=timeout_s,
-                               record=str(record) if record else None, namespace=NAMESPACE,
+                               record=str(record) if record else None, namespace=namespace,
                                link=case.spec, progress=False))
 
 
 def run_link_experiment(out: str | Path, todo: Sequence[Case], seed: int = 0,
                         timeout_s: float = TIMEOUT_S, record: bool = False,
                         echo: Callable[[str], None] = print,
-                        progress: bool | None = None, world: str = WORLD) -> list[dict]:
+                        progress: bool | None = None, world: str = WORLD,
+                        namespace: str = NAMESPACE) -> list[dict]:
     """Run ``todo`` (:func:`cases`) on ``world`` one after the other (real time: no two at
     once, they would load each other's links); write the CSVs, the Markdown and the plot."""
     from papf.console.progress import StepProgress
@@ -117,7 +128,11 @@ def run_link_experiment(out: str | Path, todo: Sequence[Case], seed: int = 0,
                 if mcap is not None:
                     mcap.parent.mkdir(parents=True, exist_ok=True)
                     mcap.unlink(missing_ok=True)   # this run's, made again
-                row = row_of(case, run_case(case, seed, timeout_s, mcap, world))
+                result = run_case(case, seed, timeout_s, mcap, world, namespace)
+                if result.reason == "interrupted":   # Ctrl-C reached the run's launcher:
+                    raise KeyboardInterrupt          # the experiment stops, finished runs kept
+                row = row_of(case, result)
+                row["load_avg"] = round(os.getloadavg()[0], 1)   # real time on a shared machine
                 journal.put(key, row)
             rows.append(row)
             bar.step(f"{case.planner} over {case.link}, outage {case.outage}: {row['outcome']} "
@@ -167,6 +182,13 @@ def reached_up_to(sweep: Sequence[dict]) -> dict[str, str]:
     return out
 
 
+def _refused(r: dict) -> str:
+    """``refused / commands`` as the robot counted them, else the driver log's late count."""
+    if r.get("refused_commands") not in (None, ""):
+        return f"{r['refused_commands']} / {r.get('commands')}"
+    return "" if r.get("late_commands") in (None, "") else f"{r['late_commands']} late"
+
+
 def markdown(profiles: Sequence[dict], sweep: Sequence[dict], world: str = WORLD) -> str:
     """The experiment's tables: the profiles (with charge vs LAN) and the sweep."""
     def num(x, nd=1):
@@ -179,18 +201,19 @@ def markdown(profiles: Sequence[dict], sweep: Sequence[dict], world: str = WORLD
         vs = charge_vs_lan(profiles)
         text += markdown_table(
             ["planner", "link", "outage", "outcome", "time [s]", "path [m]", "charge [mAh]",
-             "vs LAN [%]", "delay p50 [ms]", "outage [s]", "watchdog stops", "late commands"],
+             "vs LAN [%]", "delay p50 [ms]", "rtt p50 [ms]", "refused / commands",
+             "outage [s]", "watchdog stops"],
             [[r["planner"], r["link"], r["outage"], r["outcome"], num(r["duration_s"]),
               num(r["path_m"], 2), num(r["charge_mAh"], 2), num(vs[i]),
-              f"{num(r['delay_out_p50_ms'])} / {num(r['delay_back_p50_ms'])}", num(r["outage_s"]),
-              num(r["watchdog_stops"]), num(r["late_commands"])]
+              f"{num(r['delay_out_p50_ms'])} / {num(r['delay_back_p50_ms'])}",
+              num(r.get("rtt_p50_ms")), _refused(r), num(r["outage_s"]), num(r["watchdog_stops"])]
              for i, r in enumerate(profiles)]) + "\n"
     if sweep:
         text += "\nDelay sweep (fixed one-way delay, no jitter):\n\n" + markdown_table(
-            ["planner", "one-way delay", "outcome", "time [s]", "charge [mAh]", "late commands",
-             "reason"],
+            ["planner", "one-way delay", "outcome", "time [s]", "charge [mAh]",
+             "refused / commands", "reason"],
             [[r["planner"], r["link"], r["outcome"], num(r["duration_s"]), num(r["charge_mAh"], 2),
-              num(r["late_commands"]), r["reason"]] for r in sweep]) + "\n\n"
+              _refused(r), r["reason"]] for r in sweep]) + "\n\n"
         text += "Reaches its goal up to: " + ", ".join(
             f"{p} {d}" for p, d in reached_up_to(sweep).items()) + "\n"
     return text

@@ -40,8 +40,9 @@ NOT_YET = float("inf")          # an outage schedule waiting for SIGUSR1
 
 
 def parse_endpoint(text: str, what: str) -> tuple[str, int]:
-    """``tcp/HOST:PORT`` (or ``HOST:PORT``; ``[::1]`` for IPv6) -> (host, port)."""
-    m = re.fullmatch(r"(?:tcp/)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})", text.strip())
+    """``tcp/HOST:PORT`` (or ``HOST:PORT``; ``[::1]`` for IPv6) -> (host, port). ``tls/`` is
+    taken too: the emulator forwards TCP bytes as they are, so TLS stays end to end."""
+    m = re.fullmatch(r"(?:tcp/|tls/)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+):(\d{1,5})", text.strip())
     if m is None or int(m.group(2)) > 65535:
         raise ConfigError(f"{what} {text!r}: must be a TCP endpoint tcp/HOST:PORT, e.g. "
                           "tcp/127.0.0.1:7448")
@@ -105,10 +106,10 @@ class Pump:
             wait = self.items[0][1] - self.emu.clock()
             if wait > RESOLUTION_S:   # asyncio's timers are whole milliseconds (epoll)
                 await asyncio.sleep(wait)
-            if self.writer.transport.is_closing():   # the far side went (a reset, Zenoh's lease)
-                raise ConnectionResetError(f"{self.direction}: the receiving side closed")
             now = self.emu.clock()
             while self.items and self.items[0][1] <= now + RESOLUTION_S:   # all due: one drain
+                if self.writer.transport.is_closing():   # the far side went (a reset, a lease)
+                    raise ConnectionResetError(f"{self.direction}: the receiving side closed")
                 arrival, _, data = self.items.popleft()
                 if data is None:
                     if self.writer.can_write_eof():
@@ -240,7 +241,8 @@ class LinkEmulator:
                 for conn in list(self.conns):
                     self.stats.resets += 1
                     conn.close(reset=True)
-            await asyncio.sleep(max(0.0, end - self.clock()))
+            while self.clock() < end:   # a timer may fire a hair early: not the same outage twice
+                await asyncio.sleep(max(0.001, end - self.clock()))
             event.update(end_monotonic_ns=time.monotonic_ns(), end_wall_ns=time.time_ns())
             self.say("outage over: the link is up")
 

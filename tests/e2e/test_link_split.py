@@ -14,13 +14,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from common.outcomes import OUTCOMES
 from tests.support.cli import stderr_until
+from tests.support.e2e import leftovers as _leftovers
 from tests.support.worlds import SHORT, box_world, write_world
 
 PY = sys.executable
@@ -29,25 +29,6 @@ SLOW = ["--set", "v_max=0.3"]      # the corridor takes ~9 s: an outage at 3 s h
 BRAKING_S = 0.75                   # [s] after the link went: the robot is told to slow down
 STANDSTILL_S = 1.2                 # [s] ... and to stand
 RUN_TIMEOUT_S = 300                # [s wall] one split run, start-up on a loaded machine included
-
-
-def _running(tag: str) -> list[str]:
-    found = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-        except OSError:
-            continue
-        if tag in cmd and int(pid) != os.getpid():
-            found.append(cmd)
-    return found
-
-
-def _leftovers(tag: str, timeout_s: float = 30.0) -> list[str]:
-    deadline = time.monotonic() + timeout_s
-    while (found := _running(tag)) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    return found
 
 
 def split_run(world: Path, ns: str, link: str, *extra: str) -> tuple[int, dict, str]:
@@ -105,21 +86,29 @@ def test_a_10_s_outage_stops_the_robot_and_the_run_goes_on_after_it(corridor, tm
     assert not _leftovers(ns)
 
 
-def test_ctrl_c_stops_every_process_of_both_sides(corridor):
-    ns = "t30int"
-    proc = subprocess.Popen([PY, "-m", "papf", "run", "--world", str(corridor), "--namespace", ns,
-                             "--link", "wifi", "--json", *SLOW], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+def _interrupted_once_driving(argv: list[str]) -> tuple[int, list[str]]:
+    """Start ``argv`` (a papf command that makes split runs), SIGINT it once a run drives
+    (the link's t0 line); its exit code and the stderr lines read."""
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
     seen: list[str] = []
     try:
-        stderr_until(proc, r"t0: the outage schedule", seen, timeout_s=180)   # the run started
+        stderr_until(proc, r"t0: the outage schedule", seen, timeout_s=180)
         proc.send_signal(signal.SIGINT)
         proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-    assert proc.returncode == 130, seen[-10:]
+    return proc.returncode, seen
+
+
+def test_ctrl_c_stops_every_process_of_both_sides(corridor):
+    ns = "t30int"
+    code, seen = _interrupted_once_driving([PY, "-m", "papf", "run", "--world", str(corridor),
+                                            "--namespace", ns, "--link", "wifi", "--json",
+                                            *SLOW])
+    assert code == 130, seen[-10:]
     assert not _leftovers(ns), "processes left after Ctrl-C"
 
 
@@ -127,7 +116,8 @@ def test_the_link_experiment_makes_its_table_and_resumes(tmp_path):
     world = write_world(tmp_path / "short.toml", SHORT)
     out = tmp_path / "exp"
     args = [PY, "-m", "papf", "experiment", "link", "--world", str(world), "--planners", "apf",
-            "--links", "lan", "--outage", "none", "--sweep", "none", "--out", str(out)]
+            "--links", "lan", "--outage", "none", "--sweep", "none", "--out", str(out),
+            "--namespace", "t30exp"]
     first = subprocess.run(args, capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
     assert first.returncode == 0, first.stderr[-3000:]
     assert "| apf | lan | none | reached |" in (out / "link.md").read_text()
@@ -165,3 +155,14 @@ def test_papf_link_alone_stops_on_ctrl_c_and_writes_its_stats(tmp_path):
     data = json.loads(stats.read_text())
     assert data["connections"] >= 1 and data["connect_failures"] >= 1   # (wait_port connects too)
     assert data["spec"]["name"] == "wifi"
+
+
+def test_ctrl_c_stops_the_link_experiment_and_keeps_no_half_run(tmp_path, corridor):
+    out = tmp_path / "exp"
+    code, seen = _interrupted_once_driving([PY, "-m", "papf", "experiment", "link", "--world",
+                                            str(corridor), "--planners", "apf", "--links",
+                                            "lan,wifi", "--outage", "none", "--sweep", "none",
+                                            "--out", str(out), "--namespace", "t30expint"])
+    assert code == 130, seen[-10:]
+    assert list((out / "runs").glob("*.json")) == []        # the interrupted run: not kept
+    assert not _leftovers("t30expint")

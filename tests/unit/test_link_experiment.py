@@ -56,8 +56,11 @@ def _result(outcome: str, charge: float, late: int | None = 3) -> RunResult:
     stats = {"outage_s": 10.0, "robot_side": {"watchdog_stops": 2, "late_commands": late},
              "directions": {"out": {"delay_ms": {"p50": 210.0, "p99": 340.0}},
                             "back": {"delay_ms": {"p50": 220.0, "p99": 345.0}}}}
-    return RunResult(outcome, "apf", "energy", 0, 100.0, 10.0, charge, 1.0, 0, 100.0, 120.0,
-                     reason="why", link_emulator=stats)
+    result = RunResult(outcome, "apf", "energy", 0, 100.0, 10.0, charge, 1.0, 0, 100.0, 120.0,
+                       reason="why", link_emulator=stats)
+    result.link = {"rtt_p50_ms": 450.0, "rtt_p99_ms": 700.0, "commands": 900,
+                   "late_commands": 4, "stale_commands": 1}   # the robot side's count
+    return result
 
 
 def test_a_row_holds_the_run_and_what_the_link_did():
@@ -65,6 +68,7 @@ def test_a_row_holds_the_run_and_what_the_link_did():
                  _result("reached", 30.0))
     assert row["charge_mAh"] == 30.0 and row["delay_out_p50_ms"] == 210.0
     assert (row["outage_s"], row["watchdog_stops"], row["late_commands"]) == (10.0, 2, 3)
+    assert (row["rtt_p50_ms"], row["refused_commands"], row["commands"]) == (450.0, 5, 900)
 
 
 def _rows():
@@ -88,6 +92,7 @@ def test_charge_against_lan_and_the_delay_each_planner_reaches_up_to():
                                                                        "papf": "100ms"}
     text = markdown(profiles, [r for r in rows if r["study"] == "sweep"])
     assert "| apf | lte | none | reached |" in text and "Reaches its goal up to: apf 100ms" in text
+    assert "| 450.0 | 5 / 900 |" in text
 
 
 def test_the_outputs_are_written(tmp_path):
