@@ -325,3 +325,30 @@ def test_the_time_the_link_held_the_robot_still_is_reported_and_blamed():
     watch.heard(0)
     watch.on_health(robot_report(held_s=12.0))
     assert "stood 12.0 s of 30.0 s" in watch.blame("stagnated", "no progress", 10**9, 30.0)
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["run", "--world", "energy", "--robot-record", "r.mcap"], "add --link"),
+    (["run", "--world", "energy", "--link", "lan", "--robot-record", "/no/such/dir/r.mcap"],
+     "does not exist"),
+    (["launch", "robot", "--record", "/no/such/dir/r.mcap"], "does not exist"),
+])
+def test_the_robots_recording_is_checked_before_anything_starts(argv, says, tmp_path):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "papf", *argv], capture_output=True, text=True,
+                         timeout=60, cwd=tmp_path)
+    assert out.returncode == 2, out.stderr
+    assert says in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
+
+
+@pytest.mark.parametrize("option", ["--max-plan-age=0", "--max-plan-age=nan", "--stop-margin=0",
+                                    "--time-before-collision=inf", "--scan-timeout=5"])
+def test_the_drivers_link_settings_refuse_values_that_would_switch_safety_off(option):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "nodes.base_driver", "--driver", "rosbot",
+                          option], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and option.split("=")[0] in out.stderr, out.stderr
