@@ -76,8 +76,8 @@ class LinkWatch:
             return (f"nothing from the robot for {(wall_ns - self.ear.lost_since) * 1e-9:.1f} s "
                     "(an outage)")
         r = self.robot
-        if r is None:
-            return "no link report from the robot's driver"
+        if r is None:   # a driver that does not report: the link is not known to be at fault
+            return ""
         if r.state == "lost":
             return f"the robot heard no command for {r.outage_s:.1f} s in {r.outages} outages"
         refused = r.late + r.stale

@@ -261,6 +261,9 @@ def test_a_stagnation_while_the_commands_came_late_names_the_link_not_the_planne
     assert why.startswith("the link: 80 of 100 commands reached the robot too late")
     assert "no progress" in why
     assert watch.blame("reached", "within 0.1 m", 10**9, 25.0) is None
+    silent = LinkWatch()                          # a driver that sends no reports: no blame
+    silent.heard(0)
+    assert silent.blame("stagnated", "no progress", 10**9, 25.0) is None
 
 
 def test_a_healthy_link_leaves_the_planners_reason_alone_and_an_outage_is_named():
