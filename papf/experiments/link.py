@@ -150,6 +150,8 @@ def write_outputs(out: Path, rows: Sequence[dict], world: str = WORLD) -> None:
 
     profiles = [r for r in rows if r["study"] == "profiles"]
     sweep = [r for r in rows if r["study"] == "sweep"]
+    vs = charge_vs_lan(profiles)
+    profiles = [{**r, "charge_vs_lan_pct": vs[i]} for i, r in enumerate(profiles)]
     if profiles:
         write_csv(profiles, out / "link.csv")
     if sweep:

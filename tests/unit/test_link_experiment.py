@@ -100,3 +100,4 @@ def test_the_outputs_are_written(tmp_path):
     assert {p.name for p in tmp_path.iterdir()} == {"link.csv", "link-sweep.csv", "link.md",
                                                     "link.png"}
     assert (tmp_path / "link.png").read_bytes()[:4] == b"\x89PNG"
+    assert "charge_vs_lan_pct" in (tmp_path / "link.csv").read_text().splitlines()[0]
