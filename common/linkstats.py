@@ -91,7 +91,8 @@ class LinkStats:
         ordered = sorted(self.rtt_ms)
         return float(ordered[min(len(ordered) - 1, int(q / 100.0 * len(ordered)))])
 
-    def report(self, now_ns: int, speed_scale: float = 1.0, monitor_stops: int = 0) -> LinkHealth:
+    def report(self, now_ns: int, speed_scale: float = 1.0, monitor_stops: int = 0,
+               held_s: float = 0.0) -> LinkHealth:
         lengths = self.outage_lengths(now_ns)
         return LinkHealth(stamp_ns=now_ns, side=self.side,
                           state="up" if self.lost_since is None else "lost",
@@ -100,7 +101,7 @@ class LinkStats:
                           obeyed=self.counts["obeyed"], late=self.counts["late"],
                           stale=self.counts["stale"], outages=len(lengths),
                           outage_s=sum(lengths), longest_outage_s=max(lengths, default=0.0),
-                          speed_scale=speed_scale, monitor_stops=monitor_stops)
+                          speed_scale=speed_scale, monitor_stops=monitor_stops, held_s=held_s)
 
 
 def summary(health: LinkHealth | None) -> dict | None:
@@ -117,4 +118,5 @@ def summary(health: LinkHealth | None) -> dict | None:
             "stale_commands": health.stale, "outages": health.outages,
             "outage_s": round(health.outage_s, 3),
             "longest_outage_s": round(health.longest_outage_s, 3),
-            "monitor_stops": health.monitor_stops, "state": health.state}
+            "monitor_stops": health.monitor_stops, "held_s": round(health.held_s, 3),
+            "state": health.state}

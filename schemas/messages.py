@@ -215,6 +215,8 @@ class LinkHealth(Message):
     longest_outage_s: float = field(0.0, unit="s")
     speed_scale: float = field(1.0, doc="speed factor the plan's age allows now (1 = full)")
     monitor_stops: int = field(0, doc="control ticks the collision monitor stopped or slowed")
+    held_s: float = field(0.0, unit="s", doc="run time the base was held still for want of a "
+                                             "usable command (watchdog, a plan run out)")
 
 
 @message("ObjectTrack", 1)

@@ -47,6 +47,7 @@ FULL_SPEED_AGE_S = 0.25      # [s] a plan this fresh is driven at full speed (ou
 MIN_SPEED_SCALE = 0.25       # [-] the scale at max_plan_age (ours)
 MAX_TRACKING_ERROR_M = 0.5   # [m] farther from the reference than this: stop, don't chase (ours)
 K_X, K_Y, K_TH = 1.0, 4.0, 2.0   # [1/s], [1/m^2], [1/s] tracking gains (ours)
+HEADING_M_PER_RAD = 0.1      # [m/rad] heading's weight when joining a plan (ours)
 W_CORRECTION = 0.5           # [rad/s] turn rate the tracking may add to the plan's own (ours)
 PLAN_DT_NS = (10_000_000, 1_000_000_000)   # a plan's step must lie in [10 ms, 1 s]
 MAX_POSES = 201
@@ -97,9 +98,12 @@ class PlanFollower:
         self.cmd: Twist | None = None
         self.arrived_ns = 0
         self.newest_ns: int | None = None   # stamp of the newest command that was not a stop
+        self.shift_ns = 0                   # the plan is followed at t + shift (join)
 
-    def take(self, cmd: Twist, now_ns: int, monitor_fresh: bool) -> tuple[str, str]:
-        """A command arriving at ``now_ns``: ("obeyed" | "late" | "stale", why)."""
+    def take(self, cmd: Twist, now_ns: int, monitor_fresh: bool,
+             pose: tuple[float, float, float] | None = None) -> tuple[str, str]:
+        """A command arriving at ``now_ns``: ("obeyed" | "late" | "stale", why). ``pose``: the
+        robot's now, where the plan is joined (:func:`join`)."""
         stop = cmd.v == 0.0 and cmd.w == 0.0 and not cmd.plan
         floor = self.newest_ns
         if floor is not None and (cmd.stamp_ns < floor or (cmd.stamp_ns == floor and not stop)):
@@ -115,6 +119,7 @@ class PlanFollower:
             return "late", (f"{(now_ns - cmd.stamp_ns) * 1e-9:.3f} s old on arrival, valid "
                             f"{(end - cmd.stamp_ns) * 1e-9:.3f} s")
         self.cmd, self.arrived_ns = cmd, now_ns
+        self.shift_ns = join(cmd, now_ns, pose) if cmd.plan and pose is not None else 0
         if not stop:   # a stop halts the plan; the next plan newer than the last one resumes
             self.newest_ns = cmd.stamp_ns
         return "obeyed", ""
@@ -145,10 +150,33 @@ class PlanFollower:
         if pose is None:
             return Target(0.0, 0.0, "no odometry to follow the plan with", 1.0)
         scale = age_scale((now_ns - cmd.stamp_ns) * 1e-9, self.s.max_plan_age)
-        v, w, err = track(cmd, now_ns, pose)
+        v, w, err = track(cmd, now_ns + self.shift_ns, pose)
         if err > MAX_TRACKING_ERROR_M:
             return Target(0.0, 0.0, f"the plan's reference is {err:.2f} m away: not chased", scale)
         return Target(v * scale, w * scale, "", scale)
+
+
+def join(cmd: Twist, now_ns: int, pose: tuple[float, float, float]) -> int:
+    """Where along the plan the robot is when the plan arrives: the shift [ns, <= 0] from
+    the plan's time of ``now_ns`` to that of its pose nearest the robot (position, plus
+    HEADING_M_PER_RAD per radian of heading, so a turn in place is joined by its heading).
+
+    A robot that kept up with the plans before is where the plan says (shift 0); one that
+    stood still (the first plan, after a stop) starts the plan from its beginning instead
+    of chasing the point the plan reached meanwhile. Validity is still counted from the
+    stamp: joining never makes a plan live longer.
+    """
+    p, dt = cmd.plan, cmd.plan_dt_ns
+    x, y, yaw = pose
+    age_k = min(len(p) // 3 - 1, max(0, (now_ns - cmd.stamp_ns) // dt))
+    best, best_k = math.inf, age_k
+    for k in range(age_k + 1):
+        d = (math.hypot(p[3 * k] - x, p[3 * k + 1] - y)
+             + HEADING_M_PER_RAD * abs(math.atan2(math.sin(p[3 * k + 2] - yaw),
+                                                  math.cos(p[3 * k + 2] - yaw))))
+        if d < best - 1e-9:
+            best, best_k = d, k
+    return min(0, best_k * dt - (now_ns - cmd.stamp_ns))
 
 
 def reference(cmd: Twist, t_ns: int) -> tuple[float, ...]:

@@ -39,11 +39,14 @@ class LinkDriving:
         self.stopped_why: str | None = None     # the current stop episode's reason
         self.scale = 1.0
         self.refused = 0
+        self.stopped_ns = 0                     # run time the follower held the base still
+        self.last_control: int | None = None
 
     # -- inputs -------------------------------------------------------------------------------
-    def command(self, cmd: Twist, now_ns: int) -> list[tuple[str, str]]:
-        """A command arriving at run time ``now_ns``: taken or refused (``command_refused``)."""
-        verdict, why = self.follower.take(cmd, now_ns, self.monitor.fresh(now_ns))
+    def command(self, cmd: Twist, now_ns: int, pose: Pose | None = None) -> list[tuple[str, str]]:
+        """A command arriving at run time ``now_ns`` (the robot at ``pose``): taken or refused
+        (``command_refused``)."""
+        verdict, why = self.follower.take(cmd, now_ns, self.monitor.fresh(now_ns), pose)
         events = self.stats.command(now_ns, cmd.stamp_ns, verdict, answers_scan=bool(cmd.plan))
         if verdict != "obeyed":
             self.refused += 1
@@ -64,6 +67,9 @@ class LinkDriving:
         fresh = self.monitor.fresh(now_ns)
         target = self.follower.target(now_ns, pose, fresh)
         self.scale = target.scale
+        if target.why and self.follower.cmd is not None and self.last_control is not None:
+            self.stopped_ns += now_ns - self.last_control   # held still by the link
+        self.last_control = now_ns
         if target.why:
             if self.stopped_why is None and self.follower.cmd is not None:
                 events.append(("watchdog_stop", f"stopping the base: {target.why}"))
@@ -76,7 +82,7 @@ class LinkDriving:
         return v, w, events
 
     def health(self, now_ns: int) -> LinkHealth:
-        return self.stats.report(now_ns, self.scale, self.monitor.stops)
+        return self.stats.report(now_ns, self.scale, self.monitor.stops, self.stopped_ns * 1e-9)
 
     def should_log(self) -> bool:
         """Whether the latest refusal deserves a log line (the first 5, then 1 in LOG_EVERY)."""

@@ -128,11 +128,6 @@ def monitor_settings(args: argparse.Namespace) -> MonitorSettings:
     return MonitorSettings(*(getattr(args, n, getattr(d, n)) for n in MONITOR_SPECS))
 
 
-def kind_of(events: list[tuple[str, str]]) -> str:
-    """The kind of the last event of a list ('' for none)."""
-    return events[-1][0] if events else ""
-
-
 def bridge_topics(args: argparse.Namespace) -> BridgeTopics:
     d = BridgeTopics()
     topics = BridgeTopics(getattr(args, "bridge_namespace", d.namespace),
@@ -183,14 +178,14 @@ class RosbotDriver:
             self.send(now)
             return
         rt = self.run_time(now)
-        events = self.driving.command(msg, rt)
+        events = self.driving.command(msg, rt, self.pose())
         for kind, detail in events:
             if kind == "command_refused":
                 self.late += 1
                 if self.driving.should_log():
                     self.log.warning("refused command #%d: %s", self.late, detail)
             self.event(kind, detail, rt)
-        if kind_of(events) != "command_refused":
+        if not any(kind == "command_refused" for kind, _ in events):   # obeyed: out at once
             self.send(now)
 
     def on_scan(self, msg: Scan, now: int) -> None:

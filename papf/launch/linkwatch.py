@@ -76,14 +76,18 @@ class LinkWatch:
             return (f"nothing from the robot for {(wall_ns - self.ear.lost_since) * 1e-9:.1f} s "
                     "(an outage)")
         r = self.robot
-        if r is None:
-            return "no link report from the robot's driver"
+        if r is None:   # a driver that does not report: the link is not known to be at fault
+            return ""
         if r.state == "lost":
             return f"the robot heard no command for {r.outage_s:.1f} s in {r.outages} outages"
         refused = r.late + r.stale
         if r.commands and refused / r.commands >= LATE_SHARE:
             return (f"{refused} of {r.commands} commands reached the robot too late to obey "
                     f"(round trip p50 {r.rtt_p50_ms:.0f} ms, p99 {r.rtt_p99_ms:.0f} ms)")
+        if run_s > 0 and r.held_s >= LATE_SHARE * run_s:
+            return (f"the robot stood {r.held_s:.1f} s of {run_s:.1f} s for want of a command "
+                    f"fresh enough to follow (round trip p50 {r.rtt_p50_ms:.0f} ms, "
+                    f"p99 {r.rtt_p99_ms:.0f} ms)")
         if r.outages and r.outage_s >= OUTAGE_SHARE * run_s:
             return (f"{r.outages} outages, {r.outage_s:.1f} s without commands "
                     f"(longest {r.longest_outage_s:.1f} s)")

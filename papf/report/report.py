@@ -165,6 +165,11 @@ def with_robot_side(runs: list[RunMetrics], box: Path, files: dict, energy_model
     for seg in free:   # runs only the robot recorded (or a robot recording given alone)
         alone = run_metrics(box, energy_model, energy_params, window=seg)
         alone.file = box.name if len(segs) == 1 else f"{box.name}#{seg.index + 1}"
+        ran = sides.result_of(seg.ended)   # what the launcher said it ran (the robot's
+        if alone.planner == "unknown":     # recorder has no planner in its metadata)
+            alone.planner = str(ran.get("planner", alone.planner))
+        if alone.seed < 0 and isinstance(ran.get("seed"), int):
+            alone.seed = ran["seed"]
         out.append(alone)
     return out
 

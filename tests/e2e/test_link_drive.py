@@ -137,6 +137,11 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
     assert rows[0]["path_length_m"] == pytest.approx(sides["robot"]["path_length_m"])
     assert "Runs recorded on the laptop and on the robot" in (
         tmp_path / "report" / "report.md").read_text()
+    alone = subprocess.run([PY, "-m", "papf", "report", str(rob), "--json", "--out",
+                            str(tmp_path / "robot-report")], capture_output=True, text=True,
+                           timeout=300)
+    row = json.loads(alone.stdout.splitlines()[-1])          # the robot's recording alone
+    assert (row["planner"], row["outcome"]) == ("apf", "reached") and row["path_length_m"] > 2.0
     assert not _leftovers(ns)
 
 

@@ -261,6 +261,9 @@ def test_a_stagnation_while_the_commands_came_late_names_the_link_not_the_planne
     assert why.startswith("the link: 80 of 100 commands reached the robot too late")
     assert "no progress" in why
     assert watch.blame("reached", "within 0.1 m", 10**9, 25.0) is None
+    silent = LinkWatch()                          # a driver that sends no reports: no blame
+    silent.heard(0)
+    assert silent.blame("stagnated", "no progress", 10**9, 25.0) is None
 
 
 def test_a_healthy_link_leaves_the_planners_reason_alone_and_an_outage_is_named():
@@ -297,3 +300,58 @@ def test_papf_topic_list_says_what_the_link_did():
     line = link_line("rosbot/link", d.value)
     assert line == ("link (rosbot/link, robot side): up, round trip p50 590 / p99 700 ms, "
                     "5 of 100 commands refused, 1 outages (4.6 s)")
+
+
+def test_a_robot_that_stood_still_starts_an_old_plan_from_its_beginning():
+    """The first plan arrives 1.2 s old, the robot still where the plan starts: it follows
+    the plan from there (not stopping because the plan's point of 'now' is 0.6 m away)."""
+    f = PlanFollower(W)
+    cmd = straight_plan(stamp_ns=0, v=0.5)
+    f.take(cmd, 1_200 * MS, True, pose=(0.0, 0.0, 0.0))
+    target = f.target(1_220 * MS, (0.0, 0.0, 0.0), True)
+    assert not target.why and target.v > 0.0
+    kept_up = PlanFollower(W)                                  # where the plan says: no shift
+    kept_up.take(cmd, 1_200 * MS, True, pose=reference(cmd, 1_200 * MS)[:3])
+    assert kept_up.shift_ns == 0 and f.shift_ns == -1_200 * MS
+
+
+def test_the_time_the_link_held_the_robot_still_is_reported_and_blamed():
+    from papf.launch.linkwatch import LinkWatch
+
+    d = LinkDriving(W)
+    d.command(straight_plan(stamp_ns=0), 100 * MS, (0.0, 0.0, 0.0))
+    for t in range(100, 3100, 20):
+        d.control(t * MS, (0.0, 0.0, 0.0))
+    held = d.health(3_100 * MS).held_s
+    assert held == pytest.approx(2.58, abs=0.001)   # no scan of its own: valid 0.5 s from the stamp
+    watch = LinkWatch()
+    watch.heard(0)
+    watch.on_health(robot_report(held_s=12.0))
+    assert "stood 12.0 s of 30.0 s" in watch.blame("stagnated", "no progress", 10**9, 30.0)
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["run", "--world", "energy", "--robot-record", "r.mcap"], "add --link"),
+    (["run", "--world", "energy", "--link", "lan", "--robot-record", "/no/such/dir/r.mcap"],
+     "does not exist"),
+    (["launch", "robot", "--record", "/no/such/dir/r.mcap"], "does not exist"),
+])
+def test_the_robots_recording_is_checked_before_anything_starts(argv, says, tmp_path):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "papf", *argv], capture_output=True, text=True,
+                         timeout=60, cwd=tmp_path)
+    assert out.returncode == 2, out.stderr
+    assert says in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
+
+
+@pytest.mark.parametrize("option", ["--max-plan-age=0", "--max-plan-age=nan", "--stop-margin=0",
+                                    "--time-before-collision=inf", "--scan-timeout=5"])
+def test_the_drivers_link_settings_refuse_values_that_would_switch_safety_off(option):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "nodes.base_driver", "--driver", "rosbot",
+                          option], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and option.split("=")[0] in out.stderr, out.stderr
