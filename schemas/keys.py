@@ -11,6 +11,7 @@ from schemas.messages import (
     Clock,
     Event,
     Goal,
+    LinkHealth,
     Objects,
     Odometry,
     People,
@@ -38,6 +39,8 @@ TOPICS = {
     "objects": Objects,     # obstacle tracks: sim ground truth or the tracker node
     "sim/bodies": Bodies,   # the other robots and the people a robot's LiDAR sees (sim fleets)
     "sim/people": People,   # the world's people, every instant (sim driver)
+    "cmd_vel/applied": Twist,   # what the rosbot driver sent to the base (stamp = run time)
+    "link": LinkHealth,     # the link's health as the robot (or laptop) side measures it
 }
 
 # Topics with one publisher whose stamps never go back within a run (a new run restarts

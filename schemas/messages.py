@@ -52,11 +52,20 @@ class Twist(Message):
     """A velocity command (geometry_msgs/Twist: linear.x, angular.z).
 
     ``stamp_ns`` is the stamp of the scan the command answers (lockstep key).
+
+    On a real link the planner adds its short plan (docs/link-driving.md): ``plan`` holds
+    poses ``x0, y0, yaw0, x1, y1, yaw1, ...`` (world frame) the robot is meant to be at,
+    at ``stamp_ns + k * plan_dt_ns``; pose 0 is the one the command was computed for. The
+    robot side follows the plan with its own odometry while it is valid. Empty (the
+    default, and always in lockstep): a plain command.
     """
 
     stamp_ns: int = field(unit="ns")
     v: float = field(unit="m/s")
     w: float = field(unit="rad/s")
+    plan: Floats = field((), unit="m, m, rad", doc="poses (x, y, yaw) at stamp + k * plan_dt_ns; "
+                                                   "() = a plain command")
+    plan_dt_ns: int = field(0, unit="ns", doc="time between the plan's poses; 0 = no plan")
 
 
 @message("WheelStates", 1)
@@ -162,7 +171,8 @@ class Clock(Message):
 
 
 EVENT_KINDS = ("run_started", "run_ended", "goal_reached", "collision", "timeout",
-               "stagnated", "node_fault", "watchdog_stop", "info", "recording_closed")
+               "stagnated", "node_fault", "watchdog_stop", "info", "recording_closed",
+               "link_lost", "link_restored", "command_refused")
 
 
 @message("Event", 1)
@@ -175,6 +185,38 @@ class Event(Message):
     detail: str = field("")
     x: float = field(float("nan"), unit="m", nonfinite=True, doc="where, if known")
     y: float = field(float("nan"), unit="m", nonfinite=True)
+
+
+LINK_SIDES = ("robot", "laptop")
+
+
+@message("LinkHealth", 1)
+class LinkHealth(Message):
+    """How the robot-laptop link behaves, as one side measures it (docs/link-driving.md).
+
+    The robot side measures the round trip of its control loop with its own clock: a
+    command's age when it arrives (robot run time minus the stamp of the scan it answers).
+    Counts are since the run started; an outage is a silence longer than the watchdog.
+    """
+
+    stamp_ns: int = field(unit="ns", doc="run time of the report")
+    side: str = field(choices=LINK_SIDES)
+    state: str = field("up", choices=("up", "lost"))
+    rtt_last_ms: float = field(float("nan"), unit="ms", nonfinite=True,
+                               doc="age of the last command at arrival; nan = none yet")
+    rtt_p50_ms: float = field(float("nan"), unit="ms", nonfinite=True)
+    rtt_p99_ms: float = field(float("nan"), unit="ms", nonfinite=True)
+    commands: int = field(0, doc="commands received")
+    obeyed: int = field(0, doc="commands taken as the plan to follow")
+    late: int = field(0, doc="commands refused: older than their validity when they came")
+    stale: int = field(0, doc="commands refused: older than the plan already followed")
+    outages: int = field(0, doc="silences longer than the watchdog")
+    outage_s: float = field(0.0, unit="s", doc="total length of the outages (the current one too)")
+    longest_outage_s: float = field(0.0, unit="s")
+    speed_scale: float = field(1.0, doc="speed factor the plan's age allows now (1 = full)")
+    monitor_stops: int = field(0, doc="control ticks the collision monitor stopped or slowed")
+    held_s: float = field(0.0, unit="s", doc="run time the base was held still for want of a "
+                                             "usable command (watchdog, a plan run out)")
 
 
 @message("ObjectTrack", 1)
@@ -243,10 +285,10 @@ class People(Message):
 
 ALL_MESSAGES: tuple[type[Message], ...] = (
     Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
-    PlannerStatus, Clock, Event, Objects, Bodies, People,
+    PlannerStatus, Clock, Event, Objects, Bodies, People, LinkHealth,
 )
 BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
 
 __all__ = [m.__name__ for m in ALL_MESSAGES] + [
-    "ObjectTrack", "OBJECT_SOURCES", "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "PLANNER_STATES", "WHEEL_NAMES", "Points",
+    "ObjectTrack", "OBJECT_SOURCES", "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "LINK_SIDES", "PLANNER_STATES", "WHEEL_NAMES", "Points",
 ]

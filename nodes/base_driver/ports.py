@@ -14,6 +14,7 @@ SIM = (
 ROSBOT = (
     ("in", "cmd_vel", "Twist"),
     ("in", "events", "Event"),           # run_started starts the run clock, run_ended stops it
+    ("in?", "scan", "Scan"),             # the robot's own scan: the collision monitor's view
     ("in", "bridge:odometry/filtered", "nav_msgs/Odometry"),   # the robot's EKF
     ("in", "bridge:battery", "sensor_msgs/BatteryState"),      # pack voltage
     ("out", "bridge:cmd_vel", "geometry_msgs/Twist"),          # the gated command
@@ -21,7 +22,9 @@ ROSBOT = (
     ("out", "wheels", "WheelStates"),    # derived from odometry
     ("out", "clock", "Clock"),           # wall time since run_started
     ("out", "battery/measured", "BatteryVoltage"),
-    ("out", "events", "Event"),          # watchdog_stop, node_fault
+    ("out", "events", "Event"),          # watchdog_stop, node_fault, link_lost/_restored, command_refused
+    ("out", "link", "LinkHealth"),       # the link as the robot measures it, every second of a run
+    ("out", "cmd_vel/applied", "Twist"), # what went to the base (stamp = run time)
 )
 PORTS = SIM
 VARIANTS = {("--driver", "rosbot"): ROSBOT}

@@ -55,6 +55,7 @@ from collections import Counter
 import schemas.messages as messages
 from common import ros2
 from common.errors import SchemaError
+from common.params import arg_type
 from common.ros_link import (
     BridgeLink,
     RosLink,
@@ -64,7 +65,12 @@ from common.ros_link import (
     ros_domain,
 )
 from common.transport import Node, open_node, setup_logging
+from nodes.base_driver.follow import SPECS as FOLLOW_SPECS
+from nodes.base_driver.follow import FollowSettings
 from nodes.base_driver.limits import CommandGate, RosbotLimits
+from nodes.base_driver.link_drive import LinkDriving, world_pose
+from nodes.base_driver.monitor import SPECS as MONITOR_SPECS
+from nodes.base_driver.monitor import MonitorSettings
 from nodes.base_driver.rosbot import (
     BridgeTopics,
     OdomFrame,
@@ -74,7 +80,7 @@ from nodes.base_driver.rosbot import (
     twist_to_cdr,
     wheel_states,
 )
-from schemas import Clock, Event, Odometry, Twist
+from schemas import Clock, Event, Odometry, Scan, Twist
 from worlds import load_world
 
 NAME = "base_driver"
@@ -83,6 +89,8 @@ ZERO_HOLD_NS = 1_000_000_000     # [ns] zeros keep going out this long after a s
 ODOM_TIMEOUT_NS = 500_000_000    # [ns] robot odometry older than this is not republished
 IDLE_ODOM_HZ = 10.0              # [Hz] odom between runs (teleop's pose line)
 EXIT_ZEROS = 3                   # zero commands sent when the node stops
+HEALTH_EVERY_NS = 1_000_000_000  # [ns] of run time between `link` reports
+APPLIED_EVERY_NS = 200_000_000   # [ns] an unchanged applied command is repeated this often
 BatteryVoltage = getattr(messages, "BatteryVoltage", None)   # schemas change requested (issue 5)
 
 
@@ -97,7 +105,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--bridge-odom", default=d.odometry, metavar="TOPIC",
                    help="odometry topic (odometry/filtered)")
     g.add_argument("--bridge-battery", default=d.battery, metavar="TOPIC", help="(battery)")
+    s = parser.add_argument_group("driving over a slow link (docs/link-driving.md)")
+    for name, spec in {**FOLLOW_SPECS, **MONITOR_SPECS}.items():
+        default = getattr(FollowSettings() if name in FOLLOW_SPECS else MonitorSettings(), name)
+        s.add_argument("--" + name.replace("_", "-"), type=arg_type("--" + name.replace("_", "-"), spec),
+                       default=default, metavar="X",
+                       help=f"{spec.describe()} (default {default:g}){HELP.get(name, '')}")
     add_ros_args(parser)
+
+
+HELP = {"max_plan_age": "; the oldest plan the robot drives on while its own scan is fresh",
+        "stop_margin": "; the collision monitor's stop zone around the footprint",
+        "time_before_collision": "; the monitor slows the robot to keep a return this far ahead",
+        "scan_timeout": "; an older scan does not count as the robot's own view"}
+
+
+def driving_settings(args: argparse.Namespace) -> FollowSettings:
+    return FollowSettings(getattr(args, "max_plan_age", FollowSettings.max_plan_age))
+
+
+def monitor_settings(args: argparse.Namespace) -> MonitorSettings:
+    d = MonitorSettings()
+    return MonitorSettings(*(getattr(args, n, getattr(d, n)) for n in MONITOR_SPECS))
 
 
 def bridge_topics(args: argparse.Namespace) -> BridgeTopics:
@@ -114,9 +143,13 @@ class RosbotDriver:
     """Gate our commands to the robot and republish its odometry on the run's clock."""
 
     def __init__(self, node: Node, topics: BridgeTopics, limits: RosbotLimits, period_ns: int,
-                 frame: OdomFrame, link: RosLink | None = None, cmd_type: str = ros2.TWIST):
+                 frame: OdomFrame, link: RosLink | None = None, cmd_type: str = ros2.TWIST,
+                 driving: LinkDriving | None = None):
         self.node, self.log, self.topics = node, node.log, topics
         self.gate = CommandGate(limits)
+        self.driving = driving or LinkDriving(limits.watchdog_ns)   # commands during a run
+        self.health_due = 0                  # run time [ns] of the next `link` report
+        self.applied: tuple[float, float, int] | None = None   # last cmd_vel/applied (v, w, t)
         self.period_ns, self.frame = period_ns, frame
         self.link = link or BridgeLink(node.session, topics.namespace)
         self.cmd_type = cmd_type
@@ -140,19 +173,39 @@ class RosbotDriver:
 
     # -- inputs ---------------------------------------------------------------------------
     def on_command(self, msg: Twist, now: int) -> None:
-        if self.t0 is not None and msg.stamp_ns + self.gate.limits.watchdog_ns < self.run_time(now):
-            self.late += 1   # answers a scan older than the watchdog: delayed in the network
-            if self.late <= 5 or self.late % 100 == 0:
-                self.log.warning("dropped late command #%d: stamp %.3f s, run time %.3f s",
-                                 self.late, msg.stamp_ns * 1e-9, self.run_time(now) * 1e-9)
+        if self.t0 is None:                  # between runs (teleop): limits and watchdog only
+            self.gate.command(msg.v, msg.w, now)
+            self.watchdog_fired = False
+            self.send(now)
             return
-        self.gate.command(msg.v, msg.w, now)
-        self.watchdog_fired = False
-        self.send(now)
+        rt = self.run_time(now)
+        events = self.driving.command(msg, rt, self.pose())
+        for kind, detail in events:
+            if kind == "command_refused":
+                self.late += 1
+                if self.driving.should_log():
+                    self.log.warning("refused command #%d: %s", self.late, detail)
+            self.event(kind, detail, rt)
+        if not any(kind == "command_refused" for kind, _ in events):   # obeyed: out at once
+            self.send(now)
+
+    def on_scan(self, msg: Scan, now: int) -> None:
+        """The robot's own scan: the collision monitor's view (during a run)."""
+        if self.t0 is not None:
+            self.driving.scan(msg, self.run_time(now), self.pose())
+
+    def pose(self):
+        """The robot's latest world pose (x, y, yaw), None without fresh odometry."""
+        if self.robot is None or time.monotonic_ns() - self.robot_rx_ns > ODOM_TIMEOUT_NS:
+            return None
+        odom = self.frame.to_world(self.robot, 0)
+        return world_pose(odom.x, odom.y, odom.yaw)
 
     def on_event(self, msg: Event, now: int) -> None:
         if msg.kind == "run_started":
             self.t0, self.tick, self.prev_odom, self.last_run_ns = now, 0, None, 0
+            self.driving.start()
+            self.health_due, self.applied = 0, None
             # "frame=keep": a new run after a laptop crash starts where the robot stands, in
             # the world frame it had (papf.launch.resume): no re-anchoring at the world's start
             keep = "frame=keep" in msg.detail.split() and self.frame.anchored
@@ -188,6 +241,8 @@ class RosbotDriver:
 
     def send(self, now: int) -> None:
         """Put the gated command on the bridge (silence once stopped for ZERO_HOLD)."""
+        if self.t0 is not None and self.driving.follower.cmd is not None:
+            self.follow(now)
         if self.gate.last_command_ns is None:
             return                               # never commanded: leave the robot alone
         dt = 0.0 if self.last_out_ns is None else (now - self.last_out_ns) * 1e-9
@@ -199,6 +254,7 @@ class RosbotDriver:
             self.log.warning("watchdog: no command for %.3f s: stopping the robot", age)
             self.event("watchdog_stop", f"no cmd_vel for {age:.3f} s (limit "
                        f"{self.gate.limits.watchdog_ns * 1e-9:g} s); commanding zero velocity")
+        self.applied_out(v, w, now)
         if v == 0.0 and w == 0.0:
             self.zero_since = self.zero_since or now
             if now - self.zero_since > ZERO_HOLD_NS:
@@ -208,6 +264,30 @@ class RosbotDriver:
         self.cmd_pub.put(twist_to_cdr(v, w, self.cmd_type, time.time_ns()))
         self.sent += 1
 
+    def follow(self, now: int) -> None:
+        """During a run: the follower's target (plan, collision monitor) becomes the gate's."""
+        rt = self.run_time(now)
+        v, w, events = self.driving.control(rt, self.pose())
+        for kind, detail in events:
+            if kind == "watchdog_stop":
+                self.watchdog_fired = True
+                self.log.warning("watchdog: %s", self.driving.stopped_why)
+            self.event(kind, detail, rt)
+        if self.driving.stopped_why is None:
+            self.watchdog_fired = False
+        self.gate.command(v, w, now)
+
+    def applied_out(self, v: float, w: float, now: int) -> None:
+        """``cmd_vel/applied`` during a run: on a change, else every APPLIED_EVERY_NS."""
+        if self.t0 is None:
+            return
+        rt = self.run_time(now)
+        last = self.applied
+        if last is not None and (last[0], last[1]) == (v, w) and rt - last[2] < APPLIED_EVERY_NS:
+            return
+        self.applied = (v, w, rt)
+        self.node.publish("cmd_vel/applied", Twist(stamp_ns=rt, v=v, w=w))
+
     def on_tick(self, now: int) -> None:
         self.send(now)
         fresh = self.robot is not None and now - self.robot_rx_ns <= ODOM_TIMEOUT_NS
@@ -215,6 +295,9 @@ class RosbotDriver:
             self.idle_odom(now, fresh)
             return
         stamp = self.last_stamp_ns = self.tick * self.period_ns
+        if self.run_time(now) >= self.health_due:
+            self.health_due = self.run_time(now) + HEALTH_EVERY_NS
+            self.node.publish("link", self.driving.health(self.run_time(now)))
         if fresh:
             odom = self.frame.to_world(self.robot, stamp)
             self.node.publish("odom", odom)
@@ -246,9 +329,9 @@ class RosbotDriver:
         self.tick = max(self.tick, behind)
         return self.t0 + self.tick * self.period_ns
 
-    def event(self, kind: str, detail: str) -> None:
-        self.node.publish("events", Event(stamp_ns=self.run_time(time.monotonic_ns()), kind=kind,
-                                          source=NAME, detail=detail))
+    def event(self, kind: str, detail: str, stamp_ns: int | None = None) -> None:
+        stamp = self.run_time(time.monotonic_ns()) if stamp_ns is None else stamp_ns
+        self.node.publish("events", Event(stamp_ns=stamp, kind=kind, source=NAME, detail=detail))
 
     def publish_voltage(self, voltage: float) -> None:
         stamp = self.run_time(time.monotonic_ns())
@@ -318,6 +401,8 @@ class RosbotDriver:
                 continue
             if topic == "cmd_vel":
                 self.on_command(msg, now)
+            elif topic == "scan":
+                self.on_scan(msg, now)
             elif topic == "events":
                 self.on_event(msg, now)
                 due = min(due, self.next_tick_at(now))
@@ -337,12 +422,15 @@ def main(args: argparse.Namespace) -> int:
     with open_node(NAME, args, log) as node:
         node.subscribe("cmd_vel")
         node.subscribe("events")
+        node.subscribe("scan")     # the robot's own LiDAR: the collision monitor's view
         link = open_link(args, node.session, ROS_NODE, topics.namespace)
         for what, typename in (("odometry", ros2.ODOMETRY), ("battery", ros2.BATTERY_STATE)):
             link.subscribe(getattr(topics, what), typename,
                            lambda data, w=what: node.inbox.put((w, data)))
-        node.declare_publishers("odom", "wheels", "clock", "events")
-        driver = RosbotDriver(node, topics, limits, period_ns, OdomFrame(start), link, cmd_type)
+        node.declare_publishers("odom", "wheels", "clock", "events", "link", "cmd_vel/applied")
+        driving = LinkDriving(limits.watchdog_ns, driving_settings(args), monitor_settings(args))
+        driver = RosbotDriver(node, topics, limits, period_ns, OdomFrame(start), link, cmd_type,
+                              driving)
         log.info("rosbot driver over %s: cmd_vel %s (%s), odometry %s; limits %s",
                  link.middleware, driver.cmd_key, cmd_type,
                  link.key(topics.odometry, ros2.ODOMETRY), limits)

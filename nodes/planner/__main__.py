@@ -24,7 +24,7 @@ from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner import lazy
-from nodes.planner.loop import PlannerLoop
+from nodes.planner.loop import PLAN_HORIZON_S, PlannerLoop
 from nodes.planner.params import answer
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
@@ -54,6 +54,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                     default=LOCKSTEP_PAIR_TIMEOUT_S, metavar="S",
                     help="lockstep: wall time a scan waits for its odometry [s] (default "
                          f"{LOCKSTEP_PAIR_TIMEOUT_S:g}, longer than the driver's --lockstep-timeout)")
+    ap.add_argument("--plan-horizon", type=arg_type("--plan-horizon", NODE["plan_horizon"]),
+                    default=PLAN_HORIZON_S, metavar="S",
+                    help="realtime: the short plan each command carries for the robot to follow "
+                         f"on a slow link [s] (default {PLAN_HORIZON_S:g}; docs/link-driving.md)")
     ap.add_argument("--objects", action="store_true",
                     help="subscribe to <ns>/objects and pair each scan with its obstacle tracks")
     ap.add_argument("--log-level", default="INFO")
@@ -75,7 +79,8 @@ def run(args: argparse.Namespace) -> int:
         loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
                            runauth.key_from_env(), objects=args.objects,
                            send_command=lambda cmd: node.publish("cmd_vel", cmd),
-                           want_state=lambda: node.listened("planner/state"))
+                           want_state=lambda: node.listened("planner/state"),
+                           plan_horizon_s=args.plan_horizon)
         for topic in ("scan", "goal") + (("objects",) if args.objects else ()):
             node.subscribe(topic)
         # odometry comes at 50 Hz, scans at 10 Hz: it waits in Zenoh's channel and is taken

@@ -22,6 +22,7 @@ from common.robot import GOAL_TOLERANCE_MIN_M
 from common.units import NS_PER_S
 from nodes.planner.field import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
 from nodes.planner.road import Lanes, Track
+from nodes.planner.rollout import rollout, stop_plan
 from nodes.planner.scan_kernel import scan_points
 from nodes.planner.stagnation import StagnationWatch
 from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatus, Scan, Twist
@@ -182,6 +183,10 @@ class Planner:
         self._apf_for_l: dict[int, APFParams] = {}
         self.objects: tuple = ()        # latest obstacle tracks (strategies that use them)
         self.road = None                # the road of the run, once announced
+        # the short plan each command carries on a real link (nodes/planner/rollout.py);
+        # 0 steps (lockstep, offline) = plain commands, as before
+        self.plan_steps = 0
+        self.plan_dt_ns = 100_000_000
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
@@ -239,22 +244,23 @@ class Planner:
         t0 = time.perf_counter_ns()
         t = scan.stamp_ns
         if self.goal is None:
-            return self._stop(t, "idle", "no goal", math.nan, t0)
+            return self._stop(t, "idle", "no goal", math.nan, t0, odom=odom)
         pos = np.array([odom.x, odom.y])
         goal = np.array([self.goal.x, self.goal.y])
         dist = float(np.hypot(self.goal.x - odom.x, self.goal.y - odom.y))
         if self.state in ("reached", "stagnated", "failed"):
-            return self._stop(t, self.state, self.reason, dist, t0)
+            return self._stop(t, self.state, self.reason, dist, t0, odom=odom)
         tolerance = max(self.goal.tolerance, GOAL_TOLERANCE_MIN_M)   # a peer's 0 is never reached
         if dist <= tolerance:
-            return self._stop(t, "reached", f"within {tolerance} m of the goal", dist, t0)
+            return self._stop(t, "reached", f"within {tolerance} m of the goal", dist, t0,
+                              odom=odom)
         apf = self._params_for(len(scan.ranges))
         view = scan_view(scan, odom, self.jit_scan)
         self.strategy.observe(self.objects, self.road, t / NS_PER_S, odom.v)
         plan = self.strategy.plan(pos, odom.yaw, goal, view, apf)
         why = plan.stagnated or self.watch.check(t, dist, apf, pos, plan.searching)
         if why:
-            return self._stop(t, "stagnated", why, dist, t0, plan, view)
+            return self._stop(t, "stagnated", why, dist, t0, plan, view, odom)
         theta_ref = heading_ref(plan.force) if plan.heading is None else plan.heading
         err = wrap_angle(theta_ref - odom.yaw)
         if plan.v_ref is None:
@@ -264,7 +270,7 @@ class Planner:
         w = turn_rate(theta_ref, odom.yaw, apf)
         self.state, self.reason = "driving", ""
         compute_ns = time.perf_counter_ns() - t0
-        return Twist(stamp_ns=t, v=v, w=w), lambda debug=True: (
+        return self._twist(t, v, w, odom, theta_ref, plan, apf), lambda debug=True: (
             self._state(t, plan, view, theta_ref, v, w, compute_ns) if debug else None,
             PlannerStatus(stamp_ns=t, state="driving", distance_to_goal=dist))
 
@@ -285,14 +291,29 @@ class Planner:
             self._apf_for_l[beams] = dataclasses.replace(self.apf, lidar_points=beams)
         return self._apf_for_l[beams]
 
+    def _twist(self, t: int, v: float, w: float, odom: Odometry | None, theta_ref: float = 0.0,
+               plan: Plan | None = None, apf: APFParams | None = None) -> Twist:
+        """The cycle's command, with its short plan when :attr:`plan_steps` asks for one."""
+        if self.plan_steps <= 0 or odom is None:
+            return Twist(stamp_ns=t, v=v, w=w)
+        if plan is None:
+            poses = stop_plan(odom.x, odom.y, odom.yaw, self.plan_steps)
+        else:
+            norm = _norm(plan.force)
+            speed = ((lambda err: speed_ref(norm, err, apf)) if plan.v_ref is None else
+                     (lambda err, vr=plan.v_ref: max(0.0, vr * math.cos(err))))
+            poses = rollout(odom.x, odom.y, odom.yaw, theta_ref, speed, apf,
+                            self.plan_dt_ns / NS_PER_S, self.plan_steps)
+        return Twist(stamp_ns=t, v=v, w=w, plan=poses, plan_dt_ns=self.plan_dt_ns)
+
     def _stop(self, t, state, reason, dist, t0, plan: Plan | None = None,
-              view: ScanView | None = None):
+              view: ScanView | None = None, odom: Odometry | None = None):
         if state != "idle":
             self.state, self.reason = state, reason
         plan = plan or Plan(force=np.zeros(2), mode="stop")
         plan.mode = "stop" if state != "idle" else "idle"
         compute_ns = time.perf_counter_ns() - t0
-        return Twist(stamp_ns=t, v=0.0, w=0.0), lambda debug=True: (
+        return self._twist(t, 0.0, 0.0, odom), lambda debug=True: (
             self._state(t, plan, view, 0.0, 0.0, 0.0, compute_ns) if debug else None,
             PlannerStatus(stamp_ns=t, state=state, reason=reason, distance_to_goal=dist))
 

@@ -20,6 +20,7 @@ from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatu
 ODOM_BUFFER = 64          # odometry messages kept for pairing (1.28 s at 50 Hz)
 OBJECTS_BUFFER = 16       # object lists kept for pairing (1.6 s at 10 Hz)
 STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are stale (realtime)
+PLAN_HORIZON_S = 1.5      # [s] the realtime commands' plan (docs/link-driving.md, "The choice")
 
 
 class PlannerLoop:
@@ -48,8 +49,11 @@ class PlannerLoop:
     def __init__(self, planner: Planner, realtime: bool = False, stale_timeout_s: float = 0.5,
                  pair_timeout_s: float = LOCKSTEP_PAIR_TIMEOUT_S, log=None, run_key: bytes | None = None,
                  objects: bool = False, send_command: Callable[[Twist], None] | None = None,
-                 want_state: Callable[[], bool] = lambda: True):
+                 want_state: Callable[[], bool] = lambda: True, plan_horizon_s: float = PLAN_HORIZON_S):
         check_value("stale_timeout", stale_timeout_s, NODE["stale_timeout"])
+        check_value("plan_horizon", plan_horizon_s, NODE["plan_horizon"])
+        if realtime:   # a real link: each command carries its short plan (lockstep: plain ones)
+            planner.plan_steps = max(1, round(plan_horizon_s * NS_PER_S / planner.plan_dt_ns))
         check_value("pair_timeout", pair_timeout_s, NODE["pair_timeout"])
         self.planner, self.realtime, self.use_objects = planner, realtime, objects
         self.send_command, self.want_state = send_command, want_state

@@ -61,6 +61,9 @@ APF: dict[str, Spec] = {
 NODE: dict[str, Spec] = {
     "stale_timeout": pos(2.0, "s", safety=True),
     "pair_timeout": pos(10.0, "s"),
+    # the short plan each realtime command carries (docs/link-driving.md): the robot follows
+    # it at most this far; 0.2 s is two scan periods, 2 s the watchdog's own ceiling
+    "plan_horizon": num(0.2, 2.0, "s"),
 }
 
 

@@ -189,7 +189,7 @@ def _tail(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch) -> 
 def _announce(node: Node, metadata: dict[str, str]) -> None:
     """What a recording started by hand will hold: the namespace's nodes alive now (or none
     yet: it waits for the stack), and what its report will not know without ``--meta``."""
-    alive = sorted(alive_nodes(node.session, node.keys) - {NAME})
+    alive = sorted(alive_nodes(node.session, node.keys) - {NAME, node.name})
     if alive:
         node.log.info("namespace %r: %s alive; recording from now (a run already going is "
                       "recorded from its middle)", node.keys.ns, ", ".join(alive))
@@ -241,6 +241,9 @@ def add_recorder_args(parser: argparse.ArgumentParser, out_flag: bool = True) ->
         parser.add_argument("--close-on-run-ended", action="store_true",
                             help="close the file at the launcher's run_ended, then publish a "
                                  "recording_closed event (the launcher waits for it)")
+        parser.add_argument("--name", default=NAME,
+                            help=f"node name (liveliness <ns>/alive/NAME; default {NAME}): the "
+                                 "robot's black box is robot_recorder, beside the laptop's")
     parser.add_argument("--force", action="store_true",
                         help="replace the recording if it exists (default: refuse)")
     parser.add_argument("--keys", metavar="EXPR",
@@ -256,11 +259,12 @@ def add_recorder_args(parser: argparse.ArgumentParser, out_flag: bool = True) ->
 
 def main(args: argparse.Namespace) -> int:
     """Run the recorder until SIGINT/SIGTERM; 0 on a clean stop, 2 on a bad setting."""
-    log = setup_logging(NAME, args.log_level)
+    name = getattr(args, "name", NAME)
+    log = setup_logging(name, args.log_level)
     try:
         meta = parse_meta(args.meta)
         check_output(args.out, force=args.force)   # before the bus: refuse at once
-        with open_node(NAME, args, log) as node:
+        with open_node(name, args, log) as node:
             close = getattr(args, "close_on_run_ended", False)
             if close:
                 node.declare_publishers("events")   # up front: the one put must not be late
@@ -268,7 +272,7 @@ def main(args: argparse.Namespace) -> int:
                    args.compression, args.flush_interval, close_on_run_ended=close,
                    force=args.force, announce=not close)
             if close and not node.stop:   # the file is closed: say so, then wait to be stopped
-                node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=NAME,
+                node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=name,
                                              detail=str(args.out)))
                 while not node.stop.wait(1.0):
                     pass

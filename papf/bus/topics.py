@@ -15,13 +15,14 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import zenoh
 
 from common.transport import alive_nodes
 from papf.bus.decode import MAX_TEXT_CHARS, Decoded, as_text, decode, json_safe, safe_text, stamp_of
 from papf.bus.stats import HzStats
-from schemas import Keys
+from schemas import Keys, LinkHealth
 from schemas.keys import TOPICS
 
 Out = Callable[[str], None]
@@ -107,6 +108,7 @@ class TopicRow:
     type_name: str = ""
     encoding: str = ""
     stats: HzStats = field(default_factory=HzStats)
+    last: Any = None         # the last decoded value of a link report (LinkHealth)
 
     @property
     def count(self) -> int:
@@ -131,6 +133,8 @@ def listen(session: zenoh.Session, expr: str, duration_s: float, stop: Stop = la
             row.type_name = row.type_name or d.type_name
             row.encoding = row.encoding or d.encoding
             row.stats.add(arrival, d.stamp_ns)
+            if d.type_name == LinkHealth.TYPE and isinstance(d.value, dict):
+                row.last = d.value
     finally:
         inbox.close()
     return rows
@@ -163,6 +167,8 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
             out(json.dumps(json_safe({"key": r.key, "type": r.type_name, "encoding": r.encoding,
                                       "messages": r.count, "hz": rate.hz,
                                       "stamp_hz": rate.stamp_hz})))
+        for r in _link_rows(rows):
+            out(json.dumps(json_safe({"link": r.key, **r.last})))
         refused = node_refusals(session, keys)
         out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {}),
                         **({"refused": refused} if refused else {})}))
@@ -176,6 +182,8 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
         rate = "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
         out(f"{shown[r.key]:<{width}}  {safe_text(r.type_name or '?', 60):<28} "
             f"{safe_text(r.encoding, 20):<8} {rate:>10}  {r.count}")
+    for r in _link_rows(rows):
+        out(link_line(shown[r.key], r.last))
     out(f"alive ({safe_text(keys.alive())}): {_names(nodes)}")
     for ns, names in others.items():   # the fleet's other namespaces
         out(f"alive ({safe_text(Keys(ns).alive() if _plain(ns) else ns)}): {_names(names)}")
@@ -212,6 +220,22 @@ def node_refusals(session: zenoh.Session, keys: Keys) -> dict[str, dict[str, dic
         if counts:
             out[str(reply.ok.key_expr)[len(prefix):]] = counts
     return out
+
+
+def _link_rows(rows: dict[str, TopicRow]) -> list[TopicRow]:
+    return [r for r in sorted(rows.values(), key=lambda r: r.key) if r.last is not None]
+
+
+def link_line(key: str, h: dict) -> str:
+    """The link as its last report says (docs/link-driving.md), one line."""
+    def ms(name: str) -> str:
+        v = h.get(name)
+        return "?" if not isinstance(v, (int, float)) or v != v else f"{v:.0f}"
+    refused = int(h.get("late", 0) or 0) + int(h.get("stale", 0) or 0)
+    return (f"link ({key}, {safe_text(str(h.get('side', '?')), 20)} side): "
+            f"{safe_text(str(h.get('state', '?')), 20)}, round trip p50 {ms('rtt_p50_ms')} / "
+            f"p99 {ms('rtt_p99_ms')} ms, {refused} of {h.get('commands', 0)} commands refused, "
+            f"{h.get('outages', 0)} outages ({float(h.get('outage_s', 0.0) or 0.0):.1f} s)")
 
 
 MAX_KEY_CHARS = 120   # [chars] of a key shown in the table (a peer's 10 MB key stays one line)

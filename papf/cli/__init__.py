@@ -38,7 +38,7 @@ COMMANDS = (("run", "run"), ("worlds", "worlds"), ("launch", "launch"), ("topic"
             ("plan", "plan"), ("experiment", "experiment"), ("report", "report"),
             ("record", "record"), ("replay", "replay"), ("recover", "recover"), ("info", "info"),
             ("view", "view"), ("export", "export"), ("animate", "animate"), ("bench", "bench"),
-            ("rosbot-emulator", "emulator"), ("make-certs", "certs"), ("new", "new"))
+            ("rosbot-emulator", "emulator"), ("link", "link"), ("make-certs", "certs"), ("new", "new"))
 
 
 class _Parser(argparse.ArgumentParser):

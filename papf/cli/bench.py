@@ -27,6 +27,9 @@ BENCHES = {
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
     "fleet": "papf run with 1-8 robots and 0-50 people: x real time, CPU per robot-cycle",
     "maps": "PAPF on the packaged map worlds, offline and through the stack (outcome, x real time)",
+    "link-drive": "papf run --link over slow links: outcome, time, round trip, refused commands "
+                  "(this code or --checkout DIR's)",
+    "link": "papf link's own cost: added one-way latency (p50/p99) at delay 0, throughput (MB/s)",
     "world-scale": "driver + LiDAR against world size: N obstacles, W x W m maps (x real time, "
                    "start-up, CPU per cycle, memory)",
 }

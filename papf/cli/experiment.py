@@ -16,6 +16,7 @@ from common.errors import ConfigError
 from common.params import SEED, TIMEOUT, arg_type, integer
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS, car_variants, declared, with_role
+from papf.cli.experiment_link import add_link
 from papf.cli.experiment_paper import add_paper_studies, preset_list
 from papf.experiments.energy import PAPER_PAIR, TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
@@ -35,6 +36,7 @@ def register(sub) -> None:
     _add_traffic(exp)
     _add_crowd(exp)
     add_paper_studies(exp)
+    add_link(exp)
     for name, parser in exp.choices.items():   # every experiment that writes into --out DIR
         if name != "safety-floor":
             parser.set_defaults(func=_out_dir_checked(parser.get_default("func")))

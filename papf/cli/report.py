@@ -64,15 +64,16 @@ def cmd_report(args) -> int:
         report = build_report(args.inputs, args.out, args.energy_model, topics=topics,
                               progress=progress, force=args.force)
     if args.json:
-        for m in report.runs:
-            print(json.dumps(finite(m.row()), allow_nan=False))   # NaN -> null (JSON has no NaN)
+        for m in report.runs:   # NaN -> null (JSON has no NaN)
+            row = {**m.row(), **({"sides": m.sides} if m.sides else {})}
+            print(json.dumps(finite(row), allow_nan=False))
         return 0
     def say(text: str) -> None:   # a recording's world, reason, notes: shown, never run
         print(safe_text(text, None, keep_newlines=True))
 
     say(f"{report.model_note}; {report.pose_note}")
     for m in report.runs:
-        for line in [*metadata_notes(m), live_difference(m)]:
+        for line in [*metadata_notes(m), live_difference(m), sides_note(m)]:
             if line:
                 say(line)
     bags = [r for r in report.runs if r.outcome == BAG]
@@ -85,6 +86,18 @@ def cmd_report(args) -> int:
         say(summary_markdown([s for s in report.summaries if s.world == world], report.model))
     say(f"\nwrote {', '.join(str(f) for f in report.files)}")
     return 0
+
+
+def sides_note(m) -> str:
+    """One line on a run recorded on both sides: where the figures came from, what the
+    laptop missed."""
+    if not m.sides:
+        return ""
+    s = m.sides
+    holes = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in s["laptop_missed_s"])
+    return (f"{m.file}: path, duration, charge and energy from the robot's recording "
+            f"{s['robot_file']}; the laptop's recording missed "
+            + (f"{s['laptop_missed_total_s']:.2f} s of odometry ({holes})" if holes else "nothing"))
 
 
 def finite(obj):

@@ -49,7 +49,23 @@ def register(sub) -> None:
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
     add_view_flag(p)
     add_face_args(p)
+    add_link_args(p)
     p.set_defaults(func=cmd_run)
+
+
+def add_link_args(p) -> None:
+    """``--link``: the split stack over an emulated link (papf.launch.split, docs/link.md)."""
+    p.add_argument("--link", metavar="PROFILE|SPEC",
+                   help="run the robot side and the laptop side on their own routers, joined "
+                        "through papf link: a profile (lan, wifi, wifi-bad, lte) and/or "
+                        "key=value items, e.g. wifi,outage=10@20 or delay=200,jitter=150 "
+                        "(real time; outages count from the run's start; docs/link.md)")
+    p.add_argument("--robot-trace", metavar="FILE",
+                   help="with --link: append a JSON line per command the emulated robot "
+                        "received (monotonic time, v, w)")
+    p.add_argument("--robot-record", metavar="F.mcap",
+                   help="with --link: the robot side's own recording (its black box: every "
+                        "command it obeyed or refused, odometry, scans; docs/link-driving.md)")
 
 
 def run_config(args):
@@ -67,12 +83,24 @@ def run_config(args):
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
-                     ros_face=face_domain(args), progress=None if not args.json else False)
+                     ros_face=face_domain(args), progress=None if not args.json else False,
+                     link=args.link, robot_trace=args.robot_trace,
+                     robot_record=args.robot_record)
 
 
 def cmd_run(args) -> int:
     from papf.launch.run import preflight, resolve_run, run
 
+    if args.link is not None:
+        return cmd_run_link(args)
+    if args.robot_trace:
+        from common.errors import ConfigError
+
+        raise ConfigError("--robot-trace traces the emulated robot of a split run: add --link")
+    if args.robot_record:
+        from common.errors import ConfigError
+
+        raise ConfigError("--robot-record records the robot side of a split run: add --link")
     if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447), preflighted
         cfg = run_config(args)
         preflight(cfg)
@@ -84,6 +112,34 @@ def cmd_run(args) -> int:
     else:
         print_summary(result, args.energy_model)
     return result.exit_code
+
+
+def cmd_run_link(args) -> int:
+    """``papf run --link``: the split stack over papf link (:mod:`papf.launch.split`)."""
+    from papf.launch.split import resolve_split, run_split
+
+    cfg = run_config(args)
+    if args.dry_run:
+        print(resolve_split(cfg))
+        return 0
+    result = run_split(cfg)
+    if args.json:
+        print(json.dumps(result.to_json()))
+    else:
+        print_summary(result, args.energy_model)
+        if result.link_emulator:
+            print(link_line(result.link_emulator))
+    return 130 if result.reason == "interrupted" else result.exit_code
+
+
+def link_line(stats: dict) -> str:
+    """One line on what the emulated link did (``papf run --link``'s summary)."""
+    out, back = stats["directions"]["out"], stats["directions"]["back"]
+    p50 = (out["delay_ms"]["p50"] or 0.0, back["delay_ms"]["p50"] or 0.0)
+    p99 = (out["delay_ms"]["p99"] or 0.0, back["delay_ms"]["p99"] or 0.0)
+    return (f"link: {stats['description']}; one-way delay p50 {p50[0]:.0f}/{p50[1]:.0f} ms, "
+            f"p99 {p99[0]:.0f}/{p99[1]:.0f} ms (laptop->robot/robot->laptop); "
+            f"{len(stats['outages'])} outage(s), {stats['outage_s']:.1f} s down")
 
 
 def print_summary(result, energy_model: str | None = None) -> None:

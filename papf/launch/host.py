@@ -22,6 +22,7 @@ from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.claim import Claim, check_network
+from papf.launch.linkwatch import LinkWatch
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Profile, load_profile, local_endpoint, resolve
@@ -32,11 +33,13 @@ from schemas import Keys
 from worlds import load_world
 
 
-def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult | None:
+def launch(opt: LaunchOptions, stop: StopRequested | None = None,
+           on_run_start=None) -> RunResult | None:
     """Start the profile's processes; drive a run if the profile says so; stop everything.
 
     Returns the run's result; for a serving profile (no run) None after SIGINT/SIGTERM, or
-    a ``failed`` result if one of its processes died.
+    a ``failed`` result if one of its processes died. ``on_run_start()``: called once the
+    run has started (``papf run --link`` starts its link's outage schedule then).
     """
     prof = load_profile(opt.profile)
     if prof.run and "world" not in opt.values and "world" not in prof.defaults:
@@ -72,7 +75,8 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
             except runauth.NamespaceTaken as exc:
                 raise ConfigError(str(exc)) from None
         try:
-            return _launch(opt, prof, graph, stop, show, keys, run_key, run_id, journal)
+            return _launch(opt, prof, graph, stop, show, keys, run_key, run_id, journal,
+                           on_run_start)
         finally:
             if prof.run:
                 runauth.withdraw_key(opt.namespace, run_key)
@@ -150,7 +154,8 @@ def _joined_network(prof: Profile, opt: LaunchOptions, graph) -> zenoh.Config | 
 
 
 def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show, keys: Keys,
-            run_key: str, run_id: str | None, journal: Journal | None = None) -> RunResult | None:
+            run_key: str, run_id: str | None, journal: Journal | None = None,
+            on_run_start=None) -> RunResult | None:
     """:func:`launch` once the graph is resolved: start, wait alive, drive or serve."""
     cmds, connect = graph.nodes, graph.connect
     env = {runauth.ENV: run_key, **({seal.RUN_ID_ENV: run_id} if run_id else {})}
@@ -176,7 +181,7 @@ def _launch(opt: LaunchOptions, prof: Profile, graph, stop: StopRequested, show,
                   flush=True)
             if prof.run:
                 return _drive_run(session, keys, sup, prof, opt, stop, bytes.fromhex(run_key),
-                                  run_id, journal)
+                                  run_id, journal, on_run_start)
             while not stop and not sup.dead():   # a serving host: until Ctrl-C or a death
                 stop.wait(0.2)
             return _failed(sup.death_reason(), opt, prof) if sup.dead() else None
@@ -280,7 +285,7 @@ def _silent_robot(opt: LaunchOptions, sup: Supervisor, stop: StopRequested) -> s
 
 def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchOptions,
                stop: StopRequested, run_key: bytes, run_id: str,
-               journal: Journal | None = None) -> RunResult:
+               journal: Journal | None = None, on_run_start=None) -> RunResult:
     wall0 = time.monotonic()
     world = load_world(opt.values.get("world") or prof.defaults["world"])
     goal = journal.goal if journal is not None else (world.goal[0], world.goal[1], world.tolerance)
@@ -294,8 +299,10 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
     if why:
         monitor.fail(why)
         return _result(monitor, opt, prof, time.monotonic() - wall0)
+    link = LinkWatch() if prof.remote_nodes else None   # a split: the link is watched
     seq = RunSequence(session, keys, sup, monitor, prof.pose_topic, stop=lambda: bool(stop),
-                      stall_s=opt.stall_s or STALL_S, run_key=run_key, run_id=bytes.fromhex(run_id))
+                      stall_s=opt.stall_s or STALL_S, run_key=run_key, run_id=bytes.fromhex(run_id),
+                      link=link)
     if prof.host == "laptop":   # a crash of this laptop can be resumed from it
         writer = JournalWriter(opt.namespace, journal or Journal(run_id, world.name, goal))
         seq.watchers.append(writer.update)
@@ -305,10 +312,25 @@ def _drive_run(session, keys: Keys, sup: Supervisor, prof: Profile, opt: LaunchO
             if journal is None:   # resumed: the robot's clock goes on, no new start
                 seq.start(f"profile={prof.name} world={world.name}"
                           + (" frame=keep" if opt.after_crash == "new" else ""))
+            if on_run_start is not None:
+                on_run_start()
             with RunProgress(None, opt.timeout_s, world.name, planner) as progress:
                 seq.until_outcome(progress, world.goal[:2])
     finally:
         result = _result(monitor, opt, prof, time.monotonic() - wall0)
+        if link is not None:
+            _judge_link(result, link)
         seq.end(result)
         drop_journal(opt.namespace, run_id)
     return result
+
+
+def _judge_link(result: RunResult, link: LinkWatch) -> None:
+    """The run's ``link`` figures, and its reason when the link ended it."""
+    now = time.monotonic_ns()
+    result.link = link.summary(now)
+    blamed = link.blame(result.outcome, result.reason, now, result.sim_time_s)
+    if blamed:
+        result.reason = blamed
+
+

@@ -55,6 +55,8 @@ class RunResult:
     refused: dict = field(default_factory=dict)   # {process: {topic: {reason: n}}}: samples
     # not sealed by this run's processes (foreign, replayed, another run's), dropped
     recording: dict | None = None        # --record: file, complete, messages, dropped per key
+    link: dict | None = None             # a split run: the link's health (papf.launch.linkwatch)
+    link_emulator: dict | None = None    # papf run --link: what the emulated link did (papf.link)
 
     @property
     def exit_code(self) -> int:
@@ -68,12 +70,16 @@ class RunResult:
             d[k] = round(d[k], 6) if math.isfinite(d[k]) else None
         if d["stop_latency_s"] is None:
             del d["stop_latency_s"]
+        if d["link_emulator"] is None:   # only a run over papf link has one
+            del d["link_emulator"]
         if d["faults"]:  # a fault (e.g. lockstep timeout) makes the run not bit-reproducible
             d["faults"] = list(d["faults"])
         else:
             del d["faults"]
         if d["recording"] is None:
             del d["recording"]
+        if d["link"] is None:   # runs on one host: no link to speak of
+            del d["link"]
         fleet = d.pop("fleet")
         if fleet:   # several robots: the fleet's figures and one object per robot
             d["min_separation_m"] = (round(self.min_separation_m, 6)

@@ -59,6 +59,9 @@ class RunConfig:
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     ros_face: int | None = None        # the ROS 2 face's domain (nodes.ros_face); None: off
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
+    link: str | None = None            # papf run --link PROFILE|SPEC (papf.launch.split)
+    robot_trace: str | None = None     # --link: the emulated robot's command trace (JSON lines)
+    robot_record: str | None = None    # --link: the robot side's own recording (its black box)
 
 
 def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:

@@ -19,6 +19,7 @@ from common.errors import SchemaError
 from common.intake import Trust
 from common.transport import round_robin
 from common.units import StampGuard
+from papf.launch.linkwatch import LinkWatch
 from papf.launch.outcome import NS, RunMonitor, RunResult
 from papf.launch.supervisor import Supervisor
 from schemas import Event, Keys, PlannerStatus
@@ -45,8 +46,9 @@ class RunSequence:
     def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
                  pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
                  stall_s: float = STALL_S, run_key: bytes | None = None,
-                 run_id: bytes | None = None):
+                 run_id: bytes | None = None, link: LinkWatch | None = None):
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
+        self.link = link                     # a split run: the link to the robot, watched
         self.stop, self.stall_s = stop, stall_s
         self.run_key = run_key               # goals signed, statuses verified (common.runauth)
         # every put sealed, every sample of this run's processes only (common.intake)
@@ -68,6 +70,9 @@ class RunSequence:
                                                       *(hook(msg) for hook in self._pose_hooks))
         self._pose_hooks: list[Callable] = []   # watch_poses
         self.watchers: list[Callable[[RunMonitor], None]] = []   # called every CHECK_S of the run
+        if link is not None:   # the robot's clock is the laptop's ear; its reports its voice
+            self._handlers["clock"] = lambda msg: (monitor.on_clock(msg), self._heard())
+            self._handlers["link"] = link.on_health
         # Each topic's samples wait in Zenoh's own channel until the caller's thread drains
         # them (:meth:`drain`): no Python on Zenoh's thread, no wake per message — the
         # launcher watches 50 Hz streams to decide what changes at 10 Hz at most.
@@ -75,6 +80,16 @@ class RunSequence:
         self._subs: list[zenoh.Subscriber] = []
         for topic in self._handlers:
             self._listen(keys.key(topic), topic, TOPICS[topic])
+
+    def _heard(self) -> None:
+        for kind, detail in self.link.heard(time.monotonic_ns()):
+            self.event(kind, detail)
+
+    def event(self, kind: str, detail: str) -> None:
+        """An event of the launcher's on the run's clock (the link's, as the laptop sees it)."""
+        log.warning("%s", detail)
+        self.put(self.keys.events, Event(stamp_ns=max(self.monitor.clock_ns, 0), kind=kind,
+                                         source="launcher", detail=detail))
 
     def _listen(self, key: str, topic: str, msg_type: type) -> None:
         self._key_of[topic] = key
@@ -179,10 +194,14 @@ class RunSequence:
                 last_clock, last_change = m.clock_ns, now
             for watcher in self.watchers:
                 watcher(m)
+            state = m.status.state if m.status else ""
+            if self.link is not None:
+                for kind, detail in self.link.tick(time.monotonic_ns()):
+                    self.event(kind, detail)
+                state = f"{state}  {self.link.text()}".rstrip()
             if progress is not None and goal_xy is not None:
                 progress.update(m.clock_ns / NS, m.distance_to(*goal_xy),
-                                m.batteries[-1].charge_used_mAh if m.batteries else 0.0,
-                                m.status.state if m.status else "")
+                                m.batteries[-1].charge_used_mAh if m.batteries else 0.0, state)
             if self.stop():
                 m.fail("interrupted")
             elif self.sup.dead():

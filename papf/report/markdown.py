@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from papf.report import tables
 from papf.report.metrics import BAG, OSCILLATION_W_RAD_S
+from papf.report.sides import sides_markdown
 
 DEFINITIONS = (
     "duration: first motion (|v| > 0.01 m/s) to the outcome; path: the pose source's path up "
@@ -110,8 +111,25 @@ def _bags_section(report, bags: list) -> list[str]:
     return lines
 
 
+def _sides_section(runs: list) -> list[str]:
+    return [
+        "## Runs recorded on the laptop and on the robot",
+        "",
+        "The robot's own recording (`papf launch robot --record`) holds its odometry and wheels "
+        "whatever the link did: path, duration, charge and energy come from it; outcome and "
+        "reason from the laptop, where the run was judged. \"laptop missed\": intervals of the "
+        "robot's odometry (run clock) that the laptop's recording does not hold.",
+        "",
+        sides_markdown(runs),
+        "",
+    ]
+
+
 def markdown(report) -> str:
     lines = _intro(report)
+    both = [r for r in report.runs if r.sides]
+    if both:
+        lines += _sides_section(both)
     bags = [r for r in report.runs if r.outcome == BAG]
     if bags:
         lines += _bags_section(report, bags)

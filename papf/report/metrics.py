@@ -20,7 +20,7 @@ import numpy as np
 from common.errors import PapfError, RecordingError
 from nodes.energy_meter.models import DEFAULT_MODEL
 from papf.launch.outcome import MOVING_SPEED, NS, RunMonitor
-from papf.recording.reader import Recording
+from papf.recording.reader import Recording, decode
 from papf.recording.rosbag import (
     BagRecording,
     TopicMap,
@@ -29,6 +29,7 @@ from papf.recording.rosbag import (
     open_run,
 )
 from papf.report.remeter import Remeter, battery_at
+from papf.report.sides import Segment, in_window
 from schemas import (
     BatteryState,
     BatteryVoltage,
@@ -101,11 +102,13 @@ class RunMetrics:
     robot: str = field(default="", compare=False)   # a fleet's robot (namespace); "" alone
     recorded_from_s: float = field(default=0.0, compare=False)   # [s] first message of a
                                     # recording begun mid-run (0: it holds the run's start)
+    sides: dict | None = field(default=None, compare=False)   # recorded on the laptop and on
+                                    # the robot: where each figure came from (papf.report.sides)
 
     def row(self) -> dict:
         """Flat dict of the scalar figures (CSV row; a fleet's robot is in ``file``)."""
         d = asdict(self)
-        for name in ("series", "robot", "recorded_from_s"):
+        for name in ("series", "robot", "recorded_from_s", "sides"):
             d.pop(name)
         return d
 
@@ -227,13 +230,15 @@ def fleet_namespaces(path: str | Path, topics: TopicMap | None = None) -> list[s
 
 def run_metrics(path: str | Path, energy_model: str | None = None,
                 energy_params: dict | None = None, with_series: bool = True,
-                topics: TopicMap | None = None, robot: str | None = None) -> RunMetrics:
+                topics: TopicMap | None = None, robot: str | None = None,
+                window: Segment | None = None) -> RunMetrics:
     """Figures of the run recorded in ``path`` (see the module doc), or of a rosbag2
     (:func:`papf.recording.rosbag.open_run`, its topics mapped by ``topics``); of a fleet's
     recording, robot ``robot``'s (its planner: the world's ``[[robots]]`` entry's, if any).
 
     ``energy_model``: ``paper`` | ``motor`` | None (the model the live meter ran, from the
-    run metadata). Raises RecordingError for a truncated or foreign file.
+    run metadata). ``window``: one run of a robot's black box (:mod:`papf.report.sides`).
+    Raises RecordingError for a truncated or foreign file.
     """
     with open_run(path, topics) as rec:
         meta = rec.run_metadata
@@ -243,7 +248,7 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
         model = energy_model or meta.get("energy_model") or _recorded_model(rec, ns) or DEFAULT_MODEL
         timeout_s = float(meta.get("timeout_s") or NO_TIMEOUT_S)
         col = _Collector(ns, timeout_s, Remeter(model, energy_params))
-        for key, msg, _t in rec.messages(list(col.handlers)):
+        for key, msg, _t in _messages(rec, list(col.handlers), window):
             col.feed(key, msg)
         bag = _bag_figures(rec, col) if isinstance(rec, BagRecording) else None
     col.finish()
@@ -254,6 +259,16 @@ def run_metrics(path: str | Path, energy_model: str | None = None,
         m.outcome, m.reason = BAG, "a rosbag2 recorded on the robot: figures over its odometry"
         m.duration_s, m.measured_charge_mAh = bag
     return m
+
+
+def _messages(rec, keys: list[str], window: Segment | None):
+    """The recording's messages on ``keys``; within ``window`` (wall receive time) if given."""
+    if window is None:
+        yield from rec.messages(keys)
+        return
+    for raw in rec.raw(keys):
+        if in_window(raw.publish_time_ns, window):
+            yield raw.key, decode(raw.schema_name, raw.data), raw.log_time_ns
 
 
 def _robot_planner(meta: dict, robot: str) -> str:

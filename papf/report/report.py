@@ -34,9 +34,9 @@ from common.errors import ConfigError, PapfError, RecordingError
 from common.outfiles import check_output
 from papf.plots.moment import MomentPanel, moment_png
 from papf.recording.rosbag import TopicMap, is_rosbag
-from papf.report import figures, tables
+from papf.report import figures, sides, tables
 from papf.report.markdown import markdown
-from papf.report.metrics import RunMetrics, fleet_namespaces, run_metrics, seed_text
+from papf.report.metrics import BAG, RunMetrics, fleet_namespaces, run_metrics, seed_text
 from worlds import World, load_world
 
 MODELS = ("paper", "motor")
@@ -124,16 +124,62 @@ def collect(paths: Sequence[Path], energy_model: str | None = None,
             progress=None) -> list[RunMetrics]:
     """Per-run figures, ordered by world, planner (apf, papf, ...), seed, file name.
     ``progress``: a :class:`papf.console.progress.StepProgress` told of each file, or None."""
-    runs = []
+    runs, robot_sides = [], []
     for p in paths:
         if progress is not None:
             progress.doing(f"reading {Path(p).name}")
-        runs += [run_metrics(p, energy_model, energy_params, topics=topics, robot=robot)
-                 for robot in (fleet_namespaces(p, topics) or [None])]   # a fleet: each robot
+        if sides.is_robot_side(Path(p), topics):   # a robot's black box: after the laptops'
+            robot_sides.append(Path(p))
+        else:
+            runs += [run_metrics(p, energy_model, energy_params, topics=topics, robot=robot)
+                     for robot in (fleet_namespaces(p, topics) or [None])]   # a fleet: each robot
         if progress is not None:
             progress.step(f"read {Path(p).name}")
+    by_name = {Path(p).name: Path(p) for p in paths}
+    for box in robot_sides:
+        runs = with_robot_side(runs, box, by_name, energy_model, energy_params)
     order = tables.planner_order([r.planner for r in runs])
     return sorted(runs, key=lambda r: (r.world, order.index(r.planner), r.seed, r.file))
+
+
+def with_robot_side(runs: list[RunMetrics], box: Path, files: dict, energy_model: str | None,
+                    energy_params: dict | None) -> list[RunMetrics]:
+    """``runs`` with each laptop run the robot's black box ``box`` also holds paired with it
+    (:func:`papf.report.sides.pair`), and the box's other runs added on their own."""
+    segs = sides.segments(box)
+    free = list(segs)
+    out = []
+    for m in runs:
+        path = files.get(m.file)
+        seg = (sides.match(sides.run_ended_detail(path), free)
+               if path is not None and not m.robot and m.outcome != BAG and m.sides is None else None)
+        if seg is None:
+            out.append(m)
+            continue
+        free.remove(seg)
+        robot = run_metrics(box, energy_model or m.energy_model, energy_params, window=seg)
+        ns = f"{robot_namespace(box)}"
+        gaps = sides.missed(sides.odom_stamps(path, ns), sides.odom_stamps(box, ns, seg),
+                            int(round(m.t_end_s * 1e9)))
+        out.append(sides.pair(m, robot, gaps, box.name))
+    for seg in free:   # runs only the robot recorded (or a robot recording given alone)
+        alone = run_metrics(box, energy_model, energy_params, window=seg)
+        alone.file = box.name if len(segs) == 1 else f"{box.name}#{seg.index + 1}"
+        ran = sides.result_of(seg.ended)   # what the launcher said it ran (the robot's
+        if alone.planner == "unknown":     # recorder has no planner in its metadata)
+            alone.planner = str(ran.get("planner", alone.planner))
+        if alone.seed < 0 and isinstance(ran.get("seed"), int):
+            alone.seed = ran["seed"]
+        out.append(alone)
+    return out
+
+
+def robot_namespace(path: Path) -> str:
+    from papf.recording.reader import Recording
+
+    with Recording(path) as rec:
+        odom = [k for k in rec.keys() if k.endswith("/odom")]
+        return rec.run_metadata.get("namespace") or (odom[0][: -len("/odom")] if odom else "rosbot")
 
 
 def suffix_for(runs: Sequence[RunMetrics], energy_model: str | None) -> str:

@@ -23,6 +23,7 @@ from common.ros_link import cmd_vel_type, open_link, ros_domain
 from common.transport import open_node, setup_logging
 from nodes.base_driver.limits import CommandGate, RosbotLimits, unicycle
 from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
+from schemas.messages import Event
 from worlds import load_world
 
 NAME = "rosbot_emulator"
@@ -31,6 +32,7 @@ PUBLISHED = {"odometry": ros2.ODOMETRY, "battery": ros2.BATTERY_STATE, "scan": r
 BATTERY_PERIOD_NS = 1_000_000_000   # [ns] /battery rate of the emulation: 1 Hz
 SCAN_PERIOD_NS = 100_000_000        # [ns] RPLIDAR A3 at 10 Hz (docs/architecture.md "The robot")
 NO_TIMEOUT_NS = 10**18              # "never": --cmd-timeout 0
+CONTACT_GAP_NS = 200_000_000        # [ns] contact-free time that ends a contact episode (as the sim's)
 
 
 class EmulatedRosbot:
@@ -46,6 +48,9 @@ class EmulatedRosbot:
     Header stamps are wall-clock time, as ROS time is. ``--trace FILE`` appends one JSON line
     per command received (``{"t_ns": monotonic ns, "v": .., "w": ..}``) for latency benches.
     Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
+    With ``--world`` the body also touches the world's obstacles: each contact during a run
+    (``run_started`` .. ``run_ended`` on our ``<ns>/events``) is a ``collision`` event there,
+    stamped on the run's clock, as the sim driver reports one (:class:`BodyContacts`).
     """
 
     def __init__(self, cmd_timeout_s: float = 0.5, start: Pose2D = ORIGIN):
@@ -76,6 +81,54 @@ class EmulatedRosbot:
         """The odometry at ``stamp_ns`` [ns] as CDR nav_msgs/Odometry."""
         x, y, yaw = self.pose
         return ros2.encode(ros2.odometry(stamp_ns, x, y, yaw, self.v, self.w), ros2.ODOMETRY)
+
+
+class BodyContacts:
+    """The emulated body against the world's obstacles (what the sim driver's physics reports
+    as ``collision`` events): the ROSbot's footprint box (:mod:`common.robot`), sampled at
+    its corners and edge midpoints, inside an obstacle's footprint = contact. One event per
+    contact episode per obstacle; an episode ends after :data:`CONTACT_GAP_NS` without
+    contact. Obstacles at their t = 0 pose (the emulator moves none)."""
+
+    def __init__(self, world):
+        from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
+
+        self.obstacles = world.obstacles_at(0.0)
+        hx, hy = BODY_LENGTH_M / 2.0, BODY_WIDTH_M / 2.0
+        self.corners = [(sx * hx, sy * hy) for sx in (-1, 0, 1) for sy in (-1, 0, 1)
+                        if (sx, sy) != (0, 0)]
+        self.last_contact: dict[int, int] = {}      # obstacle index -> t_ns of its last contact
+
+    def check(self, pose: Pose2D, t_ns: int) -> list[str]:
+        """Obstacles whose contact episode begins at ``t_ns`` (their descriptions)."""
+        import numpy as np
+
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        pts = np.array([(pose.x + c * dx - s * dy, pose.y + s * dx + c * dy)
+                        for dx, dy in self.corners])
+        new = []
+        for i, ob in enumerate(self.obstacles):
+            if float(np.min(ob.model.distance(ob, pts))) >= 0.0:
+                continue
+            last = self.last_contact.get(i)
+            if last is None or t_ns - last > CONTACT_GAP_NS:
+                new.append(f"obstacle {i} ({ob.kind})")
+            self.last_contact[i] = t_ns
+        return new
+
+
+class RunClock:
+    """The run's clock as the robot side keeps it: 0 at ``run_started`` (as the rosbot
+    driver's), None between runs; set from Zenoh's thread."""
+
+    def __init__(self):
+        self.t0: int | None = None
+
+    def on_event(self, msg) -> None:
+        if msg.kind == "run_started":
+            self.t0 = time.monotonic_ns()
+        elif msg.kind == "run_ended":
+            self.t0 = None
 
 
 def _lidar(args):
@@ -113,6 +166,7 @@ def run(args: argparse.Namespace) -> int:
     start = Pose2D(*load_world(args.world).start) if args.world else ORIGIN
     robot = EmulatedRosbot(args.cmd_timeout, start)
     lidar = _lidar(args)
+    contacts = BodyContacts(load_world(args.world)) if args.world else None
     # line-buffered: the trace can be read while the emulator runs (tests, a live tail -f)
     trace = append_jsonl(args.trace) if args.trace else None   # JSON lines only, never a link
     with open_node(NAME, args, log) as node:
@@ -120,6 +174,10 @@ def run(args: argparse.Namespace) -> int:
         link.subscribe(topics.cmd_vel, cmd_type,
                        lambda data: node.inbox.put((time.monotonic_ns(), data)))
         pubs = {t: link.publisher(getattr(topics, t), typename) for t, typename in PUBLISHED.items()}
+        clock = RunClock()
+        if contacts is not None:   # collisions go on our bus, stamped on the run's clock
+            node.subscribe("events", handler=clock.on_event)
+            node.declare_publishers("events")
         admin = _bridge_admin(node.session, topics, cmd_type, lidar) if link.middleware == "bridge" \
             else None
         node.ready()
@@ -128,7 +186,8 @@ def run(args: argparse.Namespace) -> int:
                  {t: link.key(getattr(topics, t), ty) for t, ty in PUBLISHED.items()},
                  "yes" if lidar else "no")
         try:
-            _loop(node, robot, pubs, lidar, trace, args, cmd_type, log)
+            _loop(node, robot, pubs, lidar, trace, args, cmd_type, log,
+                  lambda now: _report_contacts(node, contacts, clock, robot, now, log))
         finally:
             link.close()
             if admin is not None:
@@ -141,7 +200,21 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, log) -> None:
+def _report_contacts(node, contacts: BodyContacts | None, clock: RunClock, robot: EmulatedRosbot,
+                     now_ns: int, log) -> None:
+    """A ``collision`` event per new contact episode during a run (none between runs)."""
+    t0 = clock.t0
+    if contacts is None or t0 is None:
+        return
+    pose = robot.world_pose
+    for what in contacts.check(pose, now_ns):
+        log.warning("collision with %s at (%.2f, %.2f)", what, pose.x, pose.y)
+        node.publish("events", Event(stamp_ns=max(0, now_ns - t0), kind="collision", source=NAME,
+                                     detail=what, x=pose.x, y=pose.y))
+
+
+def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, log,
+          after_step=lambda now: None) -> None:
     """Take commands, step the body at ``--rate`` Hz, publish odometry, battery and scan."""
     period = int(round(1e9 / args.rate))
     now = last = time.monotonic_ns()
@@ -165,6 +238,7 @@ def _loop(node, robot: EmulatedRosbot, pubs, lidar, trace, args, cmd_type: str, 
         if now - last < period:
             continue
         robot.step(now, (now - last) * 1e-9)
+        after_step(now)
         last, wall = now, time.time_ns()
         pubs["odometry"].put(robot.odometry_cdr(wall))
         if now >= next_battery:

@@ -68,6 +68,7 @@ HELP: dict[tuple[str, ...], str] = {
     ("experiment", "deviations"): WHY_MINUTES,
     ("experiment", "test1-sweep"): WHY_MINUTES,
     ("experiment", "cases"): "takes an hour (docs/data/README.md)",
+    ("experiment", "link"): "real-time runs for an hour (tests/e2e/test_link_split.py runs one)",
 }
 HELP_IF = (("/opt/papf/certs", "needs the robot's certificates under /opt/papf"),
            ("laptop.json5", "connects by TLS to the robot's address in the certificate"),
@@ -94,10 +95,12 @@ class Session:
         self.log: list[str] = []
         self.needs_robot = False      # start the emulator once a router listens
         self.dask_port = free_port()  # docs/sweeps.md's scheduler (8786 in the docs)
+        self.link_port = free_port()  # docs/link.md's emulator (7448 in the docs)
 
     def argv(self, ex: Example) -> list[str] | None:
         """The command to run for ``ex`` (None: not a program this test runs)."""
         text = ex.text.replace("7447", str(self.port)).replace("8786", str(self.dask_port))
+        text = text.replace("7448", str(self.link_port))
         text = text.replace("10.0.0.5", "127.0.0.1")   # the sweep's scheduler host: this one
         argv = concrete(Example(ex.file, ex.line, text, ex.block, ex.background))
         name = Path(argv[0]).name

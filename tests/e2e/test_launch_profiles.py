@@ -16,6 +16,7 @@ import zenoh
 from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Keys
+from tests.support.e2e import leftovers as _leftovers
 from tests.support.worlds import FAST, SHORT, write_world
 
 PY = sys.executable
@@ -27,27 +28,6 @@ def world(tmp_path) -> str:
 
 
 # -- processes ----------------------------------------------------------------------------------
-def _running(tag: str) -> list[str]:
-    found = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-        except OSError:
-            continue
-        if tag in cmd and int(pid) != os.getpid():
-            found.append(cmd)
-    return found
-
-
-def _leftovers(tag: str, timeout_s: float = 30.0) -> list[str]:
-    """Processes whose command line contains ``tag`` (our unique namespace) still running
-    after ``timeout_s`` (a process being stopped may take a moment to go)."""
-    deadline = time.monotonic() + timeout_s
-    while (found := _running(tag)) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    return found
-
-
 def split_run(robot_profile: str, laptop_profile: str, world: str, ns: str, emulator_args: list,
               laptop_extra: list | None = None) -> dict:
     """Robot launcher + emulator + laptop launcher; the laptop's JSON summary."""

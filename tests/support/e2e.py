@@ -105,3 +105,25 @@ def metered_bus(spawn, ns: str):
             yield s, got
         finally:
             sub.undeclare()
+
+
+def running(tag: str) -> list[str]:
+    """Command lines of this host's processes (not this one) that contain ``tag``."""
+    found = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if tag in cmd and int(pid) != os.getpid():
+            found.append(cmd)
+    return found
+
+
+def leftovers(tag: str, timeout_s: float = 30.0) -> list[str]:
+    """Processes whose command line contains ``tag`` (a test's unique namespace) still
+    running after ``timeout_s`` (a process being stopped may take a moment to go)."""
+    deadline = time.monotonic() + timeout_s
+    while (found := running(tag)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return found

@@ -130,7 +130,7 @@ def test_the_graph_sees_function_local_imports():
 # never imports the launcher). ``papf`` itself (__init__: the version) is read by anyone.
 PAPF_ROOMS = {"papf.__main__": 7, "papf.cli": 6, "papf.doctools": 6, "papf.experiments": 5,
               "papf.report": 4, "papf.launch": 3, "papf.offline": 3, "papf.recording": 2,
-              "papf.bus": 2, "papf.robot": 2, "papf.plots": 1, "papf.console": 0, "papf": -1}
+              "papf.bus": 2, "papf.robot": 2, "papf.link": 2, "papf.plots": 1, "papf.console": 0, "papf": -1}
 
 
 def papf_room(module: str) -> str:

@@ -36,6 +36,10 @@ def samples() -> list[Message]:
                  person_x=(3.0,), person_y=(4.0,), person_radius=(0.3,)),
         s.People(stamp_ns=12, x=(1.0, 2.0), y=(0.0, 1.0), vx=(0.5, 0.0), vy=(0.0, -0.5),
                  radius=(0.3, 0.25)),
+        s.Twist(stamp_ns=3, v=0.2, w=0.0, plan=(0.0, 0.0, 0.0, 0.02, 0.0, 0.0),
+                plan_dt_ns=100_000_000),
+        s.LinkHealth(stamp_ns=13, side="robot", rtt_p50_ms=420.0, rtt_p99_ms=690.5, commands=20,
+                     obeyed=18, late=2, outages=1, outage_s=2.5, longest_outage_s=2.5),
     ]
 
 
@@ -96,6 +100,12 @@ def test_fast_checks_still_refuse_what_the_full_checks_refuse():
     with pytest.raises(SchemaError):
         s.WheelStates.from_wire({**wheels, "speed": [1.0, math.inf]})
     assert s.WheelStates.from_wire({**wheels, "speed": [1, 2.0]}).speed == (1.0, 2.0)
+
+
+def test_a_twist_recorded_before_plans_decodes_as_a_plain_command():
+    wire = msgpack.packb({"_type": s.Twist.TYPE, "stamp_ns": 5, "v": 0.1, "w": 0.2})
+    cmd = s.Twist.from_bytes(wire)
+    assert (cmd.plan, cmd.plan_dt_ns) == ((), 0)
 
 
 def test_every_message_type_is_sampled():
