@@ -25,9 +25,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from common import runauth
 from common.errors import ConfigError
 from papf.launch.claim import Claim
-from papf.launch.host import launch
+from papf.launch.host import launch, launch_key
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_launch
 from papf.launch.profile import LaunchOptions, Process, load_profile, resolve
@@ -186,7 +187,10 @@ def run_split(cfg: RunConfig) -> RunResult:
         extra = {p.name: p for p in side_processes(cfg, ports, spec, str(stats_file),
                                                    cfg.robot_trace)}
         robot_log = RobotSideLog(cfg.verbose)
-        with Claim(cfg.namespace, "robot", robot.nodes), Supervisor(show=robot_log) as sup:
+        # both sides seal with this host's pairing key, as two launches on one host would
+        key = launch_key(load_profile("robot"), robot_options(cfg, ports))
+        with Claim(cfg.namespace, "robot", robot.nodes), \
+                Supervisor(show=robot_log, env={runauth.ENV: key}) as sup:
             result = _start_and_drive(cfg, ports, spec, robot, extra, sup)
         result.link_emulator = _read_stats(stats_file)
         if result.link_emulator is not None:
