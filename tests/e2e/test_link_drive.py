@@ -24,6 +24,7 @@ from pathlib import Path
 import pytest
 import zenoh
 
+from common import runauth, seal
 from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from papf.recording.reader import open_recording
@@ -180,14 +181,20 @@ def test_an_old_plan_into_a_wall_is_stopped_by_the_robots_own_scan(tmp_path):
                 Clock.from_bytes(smp.payload.to_bytes()).stamp_ns))
             s.declare_subscriber(keys.odom, lambda smp: poses.append(
                 Odometry.from_bytes(smp.payload.to_bytes())))
-            s.put(keys.events, Event(stamp_ns=0, kind="run_started", source="test").to_bytes())
+            # the robot side obeys this host's pairing key only (common.intake): the test is
+            # the laptop, so it seals as one — its run_started, then its run's commands
+            key = runauth.load_pair_key(runauth.pair_file(ns))[0]
+            run = bytes.fromhex(seal.new_run_id())
+            runauth.sealed_put(s, keys.events, Event(stamp_ns=0, kind="run_started",
+                                                     source="test").to_bytes(), key, run)
             deadline = time.monotonic() + 20.0
             while time.monotonic() < deadline and not (clock and clock[-1] > 600_000_000):
                 time.sleep(0.02)
             end = time.monotonic() + 8.0
             while time.monotonic() < end:   # 10 Hz, each plan from 0.6 s ago, where it was
                 x = poses[-1].x if poses else 0.0
-                s.put(keys.cmd_vel, _straight_plan(clock[-1] - 600_000_000, x, 0.5).to_bytes())
+                runauth.sealed_put(s, keys.cmd_vel, _straight_plan(
+                    clock[-1] - 600_000_000, x, 0.5).to_bytes(), key, run)
                 time.sleep(0.1)
     finally:
         _kill(procs[::-1])
