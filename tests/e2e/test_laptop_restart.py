@@ -1,5 +1,5 @@
 """Issue 30 item 4: a laptop SIGKILLed mid-run and started again, over two routers (the robot's
-and the laptop's, joined on loopback), against the ROSbot emulator.
+and the laptop's, joined through ``papf link --profile wifi``), against the ROSbot emulator.
 
 No node of the killed laptop outlives it; the next launch refuses to guess (exit 2, one line)
 and then does what it is told: ``--new-run`` drives from where the robot stands with a fresh
@@ -58,14 +58,19 @@ class Split:
                                                                     (1.5, 1.0))))
         self.robot_ep = f"tcp/127.0.0.1:{free_port()}"
         self.laptop_ep = f"tcp/127.0.0.1:{free_port()}"
+        self.link_ep = f"tcp/127.0.0.1:{free_port()}"
         self.procs: list[subprocess.Popen] = []
 
     def start(self) -> None:
         self._spawn(["launch", "robot", "--listen", self.robot_ep, "--namespace", self.ns,
                      "--world", self.world], "robot")
         assert wait_port(int(self.robot_ep.rsplit(":", 1)[1]), 30.0)
+        # the laptop's router joins the robot's through the link emulator (a Wi-Fi's figures)
+        self._spawn(["link", "--listen", self.link_ep, "--to", self.robot_ep, "--profile",
+                     "wifi"], "link")
+        assert wait_port(int(self.link_ep.rsplit(":", 1)[1]), 30.0)
         self.procs.append(subprocess.Popen(
-            [PY, "-m", "papf.launch.router", "--listen", self.laptop_ep, "--join", self.robot_ep],
+            [PY, "-m", "papf.launch.router", "--listen", self.laptop_ep, "--join", self.link_ep],
             start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         self._spawn(["rosbot-emulator", "--connect", self.robot_ep, "--namespace", self.ns,
                      "--world", self.world], "emulator")
