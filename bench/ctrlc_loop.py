@@ -133,6 +133,11 @@ def _reap(port: int) -> int:
     orphans = _pids_with(port)
     for pid in orphans:
         try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+            print(f"left behind: {pid} {cmd}", file=sys.stderr, flush=True)
+        except OSError:
+            pass
+        try:
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass

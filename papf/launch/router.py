@@ -12,12 +12,20 @@ import argparse
 
 import zenoh
 
-from common.transport import DEFAULT_ENDPOINT, StopRequested, setup_logging, zenoh_config
+from common.transport import (
+    DEFAULT_ENDPOINT,
+    STOP_BOUND_S,
+    StopRequested,
+    setup_logging,
+    watch_parent,
+    zenoh_config,
+)
 
 
 def main(listen: list[str], config_file: str | None = None, join: list[str] | None = None) -> None:
     log = setup_logging("router")
-    stop = StopRequested()
+    stop = StopRequested(bound_s=STOP_BOUND_S)   # started by a launcher: a bounded stop,
+    watch_parent(stop)                           # and none after the launcher is gone
     # without a config file (no multicast, no connect): no one to scout for, no 0.5 s delay;
     # ``join``: the routers of a fleet's other hosts, so they make one network
     conf = zenoh_config("router", connect=join or (), listen=listen, config_file=config_file,
