@@ -37,6 +37,8 @@ class LinkDriving:
         self.monitor = CollisionMonitor(self.monitor_settings)
         self.stats = LinkStats("robot", self.watchdog_ns)
         self.stopped_why: str | None = None     # the current stop episode's reason
+        self.stopped_at: int | None = None      # ... when it began, and why then
+        self.stop_reason = ""
         self.scale = 1.0
         self.refused = 0
         self.stopped_ns = 0                     # run time the follower held the base still
@@ -47,12 +49,21 @@ class LinkDriving:
         """A command arriving at run time ``now_ns`` (the robot at ``pose``): taken or refused
         (``command_refused``)."""
         verdict, why = self.follower.take(cmd, now_ns, self.monitor.fresh(now_ns), pose)
-        events = self.stats.command(now_ns, cmd.stamp_ns, verdict, answers_scan=bool(cmd.plan))
+        events = [self._told(kind, detail) for kind, detail in
+                  self.stats.command(now_ns, cmd.stamp_ns, verdict, answers_scan=bool(cmd.plan))]
         if verdict != "obeyed":
             self.refused += 1
             events.append(("command_refused", f"{verdict}: cmd_vel of {cmd.stamp_ns * 1e-9:.3f} s "
                            f"({cmd.v:.3f} m/s, {cmd.w:.3f} rad/s): {why}"))
         return events
+
+    def _told(self, kind: str, detail: str) -> tuple[str, str]:
+        """``link_restored`` also says what the robot did meanwhile: the other side's
+        recording missed the robot's own events of the outage."""
+        if kind == "link_restored" and self.stopped_at is not None:
+            detail += (f"; the robot stopped the base at {self.stopped_at * 1e-9:.2f} s "
+                       f"({self.stop_reason})")
+        return kind, detail
 
     def scan(self, scan: Scan, now_ns: int, pose: Pose | None) -> None:
         """The robot's own scan (taken at ``scan.stamp_ns``), the robot at world ``pose``."""
@@ -73,9 +84,10 @@ class LinkDriving:
         if target.why:
             if self.stopped_why is None and self.follower.cmd is not None:
                 events.append(("watchdog_stop", f"stopping the base: {target.why}"))
+                self.stopped_at, self.stop_reason = now_ns, target.why
             self.stopped_why = target.why
             return 0.0, 0.0, events
-        self.stopped_why = None
+        self.stopped_why, self.stopped_at = None, None
         v, w = target.v, target.w
         if fresh and pose is not None:
             v, w, _, _ = self.monitor.check(v, w, pose)

@@ -101,20 +101,28 @@ def _events(path: Path, ns: str) -> list[Event]:
 
 
 def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_path):
+    """A 4 s outage that resets the link's connections (what the laptop's side sent and got
+    meanwhile is lost, as over a Wi-Fi that dropped): the laptop's recording has a hole, the
+    robot's none, and each names the outage."""
     world = write_world(tmp_path / "corridor.toml", CORRIDOR)
     ns, lap, rob = "t30ld2", tmp_path / "laptop.mcap", tmp_path / "robot.mcap"
-    code, result, err = split_run(world, ns, "lan,outage=4@3", "--set", "v_max=0.3",
-                                  "--record", str(lap), "--robot-record", str(rob))
+    code, result, err = split_run(world, ns, "lan,outage=4@3,outage_mode=reset",
+                                  "--set", "v_max=0.3", "--record", str(lap),
+                                  "--robot-record", str(rob))
     assert (code, result["outcome"]) == (0, "reached"), err[-3000:]
     assert result["link"]["outages"] == 1 and result["link"]["laptop_outages"] == 1
-    # the silence: the 4 s outage, from the last command before it to TCP's next retry after it
-    assert 3.5 <= result["link"]["longest_outage_s"] <= 9.0, result["link"]
-    for path in (lap, rob):
+    # the silence: the 4 s outage, from the last command before it to the reconnection after
+    assert 3.5 <= result["link"]["longest_outage_s"] <= 12.0, result["link"]
+    for path, wanted in ((lap, [("link_lost", "launcher"), ("link_restored", "launcher"),
+                                ("link_restored", "base_driver")]),
+                         (rob, [("link_lost", "base_driver"), ("watchdog_stop", "base_driver"),
+                                ("link_restored", "base_driver"), ("link_restored", "launcher")])):
         kinds = [(e.kind, e.source) for e in _events(path, ns)]
-        for want in (("link_lost", "base_driver"), ("link_restored", "base_driver"),
-                     ("watchdog_stop", "base_driver"), ("link_lost", "launcher"),
-                     ("link_restored", "launcher")):
+        for want in wanted:
             assert want in kinds, (path.name, want, kinds)
+    told = next(e.detail for e in _events(lap, ns)
+                if e.kind == "link_restored" and e.source == "base_driver")
+    assert "the robot stopped the base at" in told          # what the laptop could not see
     events = _events(rob, ns)
     lost = next(e.stamp_ns for e in events if e.kind == "link_lost" and e.source == "base_driver")
     back = next(e.stamp_ns for e in events if e.kind == "link_restored"
@@ -135,6 +143,9 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
     assert len(rows) == 1, rows                                # one run, seen from both sides
     sides = rows[0]["sides"]
     assert sides["robot_file"] == rob.name and "path_length_m" in sides["taken_from_robot"]
+    assert 3.0 <= sides["laptop_missed_total_s"] <= 12.0, sides      # the laptop's hole
+    (a, b), = sides["laptop_missed_s"]
+    assert a <= lost * 1e-9 <= b                                      # ... is the outage
     assert rows[0]["path_length_m"] == pytest.approx(sides["robot"]["path_length_m"])
     assert "Runs recorded on the laptop and on the robot" in (
         tmp_path / "report" / "report.md").read_text()

@@ -215,7 +215,9 @@ def test_a_run_over_a_dead_link_stops_once_and_says_why():
         if t > 900:
             assert (v, w) == (0.0, 0.0)
     assert kinds.count("watchdog_stop") == 1 and kinds.count("link_lost") == 1
-    assert d.command(straight_plan(stamp_ns=100 * MS), 2_500 * MS)[-1][0] == "command_refused"
+    back = d.command(straight_plan(stamp_ns=100 * MS), 2_500 * MS)
+    assert [k for k, _ in back] == ["link_restored", "command_refused"]
+    assert "the robot stopped the base at 0.92 s (no command for 0.520 s" in back[0][1]
 
 
 def test_scan_points_drop_invalid_returns_and_apply_the_sensor_offset():
