@@ -192,8 +192,8 @@ def main(argv=None) -> int:
           "before the process took it: the kernel discarded it)", file=sys.stderr)
     for d, (n, h) in by_dir.items():
         print(f"code in {d}: {h} of {n} launches hung", file=sys.stderr)
-    print(f"{args.runs} launches of {args.profile}: {hangs} hung (> {args.hang_s:g} s after "
-          f"SIGINT), {orphans} left processes behind, {slow} took over 5 s", file=sys.stderr)
+    print(f"{args.runs} launches of {args.profile}: {hangs} hung (> {args.hang_s:g} s after SIG{args.signal}, "
+          f"{orphans} left processes behind, {slow} took over 5 s", file=sys.stderr)
     return 1 if hangs or orphans else 0
 
 
