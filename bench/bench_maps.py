@@ -17,13 +17,14 @@ rows labelled ``L`` (other labels kept), with the 1-minute load average of each.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+from common.cliparse import ArgumentParser
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -67,7 +68,7 @@ def one(world: str, mode: str, planner: str, timeout_s: float) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(prog="papf bench maps", description=__doc__.splitlines()[0])
+    ap = ArgumentParser(prog="papf bench maps", description=__doc__.splitlines()[0])
     ap.add_argument("--worlds", default=",".join(packaged_maps()), help="map worlds (every map-*)")
     ap.add_argument("--planner", default=one_with_role("papf-proposed"))
     ap.add_argument("--timeout", type=float, default=900.0, help="sim seconds at most (900)")

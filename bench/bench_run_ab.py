@@ -16,7 +16,6 @@ summaries with ``--csv``. Speed is reported, never asserted.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import resource
@@ -28,6 +27,7 @@ from pathlib import Path
 
 from bench.csvrows import write_rows
 from bench.proc_cpu import TreeCPU
+from common.cliparse import ArgumentParser
 from common.outfiles import append_jsonl
 
 HERE = Path(__file__).resolve().parent
@@ -107,7 +107,7 @@ def _short(name: str) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench run_ab", description=__doc__.splitlines()[0])
+    parser = ArgumentParser(prog="papf bench run_ab", description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, required=True, help="the other checkout (its root)")
     parser.add_argument("--after", type=Path, default=HERE.parent,
                         help="the checkout measured as 'after' (default: this one)")

@@ -30,7 +30,6 @@ trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import os
@@ -38,6 +37,8 @@ import sys
 import threading
 import time
 from pathlib import Path
+
+from common.cliparse import ArgumentParser
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -198,7 +199,7 @@ def floor(planners: list[str], world: str, seed: int, csv_path: Path | None,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
+    parser = ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--loop", action="store_true", help="the driver + LiDAR loop alone")
     parser.add_argument("--floor", action="store_true",
                         help="the lockstep chain in one process, no bus (CPU per cycle per part)")

@@ -24,6 +24,8 @@ import sys
 import time
 from pathlib import Path
 
+from common.cliparse import ArgumentParser
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.csvrows import write_rows  # noqa: E402
@@ -75,7 +77,7 @@ def _workers(text: str) -> list[int]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(prog="papf bench sweep", description=__doc__.splitlines()[0])
+    ap = ArgumentParser(prog="papf bench sweep", description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=8, help="runs per sweep (8)")
     ap.add_argument("--timeout", type=float, default=300.0,
                     help="sim seconds at most per run (300: every run ends at the goal)")

@@ -16,7 +16,6 @@ load average of each row is written with it.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -24,6 +23,8 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+
+from common.cliparse import ArgumentParser
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -140,7 +141,7 @@ def _drive(session, keys: Keys, sim_s: float) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench world-scale",
+    parser = ArgumentParser(prog="papf bench world-scale",
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--obstacles", default="0,500,2000,10000", help="cylinder counts")
     parser.add_argument("--maps", default="10,100", help="hall widths [m] at 5 cm")

@@ -16,6 +16,7 @@ from pathlib import Path
 from common.errors import WorldError
 from common.optional import tomllib
 from common.robot import GOAL_TOLERANCE_MIN_M
+from common.text import suggest
 from worlds.fleet import PersonSpec, RobotSpec, parse_people, parse_robots
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
@@ -85,8 +86,11 @@ def world_path(name_or_path: str | Path) -> Path:
         return p
     packaged = resources.files(__name__) / f"{name_or_path}.toml"
     if not packaged.is_file():
-        raise WorldError(f"no packaged world named {str(name_or_path)!r}; packaged worlds: "
-                         f"{', '.join(packaged_worlds())} (or pass a path to a .toml file)")
+        names = packaged_worlds()   # a misspelt name: the nearest packaged ones first
+        near = suggest(str(name_or_path), names, quote=True)
+        raise WorldError(f"no packaged world named {str(name_or_path)!r}{near or ';'} "
+                         f"{'P' if near else 'p'}ackaged worlds: {', '.join(names)} (or pass "
+                         "a path to a .toml file)")
     return Path(str(packaged))
 
 

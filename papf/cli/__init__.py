@@ -13,7 +13,6 @@ Exit codes: 0 done / reached, 2 usage or configuration error (one line, no trace
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import logging
 import os
@@ -21,8 +20,9 @@ import signal
 import sys
 
 from common import __version__
+from common.cliparse import ArgumentParser
 from common.errors import PapfError
-from common.text import install_log_filter, safe_line
+from common.text import install_log_filter, print_error
 
 # (command, module of papf.cli that registers it), in ``--help`` order. ``papf COMMAND``
 # imports that one module only (``papf run`` starts its processes ~0.2 s sooner than if
@@ -35,17 +35,12 @@ COMMANDS = (("run", "run"), ("worlds", "worlds"), ("launch", "launch"), ("topic"
             ("rosbot-emulator", "emulator"), ("make-certs", "certs"), ("new", "new"))
 
 
-class _Parser(argparse.ArgumentParser):
-    """A usage error is one line (what was wrong and what is valid) and exit 2."""
-
-    def error(self, message: str):   # the message quotes the user's text: shown, never run
-        self.exit(2, f"{self.prog}: {safe_line(message)} (see {self.prog} --help)\n")
-
-
-def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> ArgumentParser:
     """The ``papf`` parser: the command modules of :data:`COMMANDS` register their
-    subcommands — only ``command``'s when it names one, else every one."""
-    parser = _Parser(prog="papf", description=__doc__.split("\n\n")[0])
+    subcommands — only ``command``'s when it names one, else every one. A usage error is
+    one line, whole, with did-you-mean from the parser's own options and choices
+    (:class:`common.cliparse.ArgumentParser`), and exit 2."""
+    parser = ArgumentParser(prog="papf", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"papf-stack {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     wanted = [m for name, m in COMMANDS if name == command] or [m for _, m in COMMANDS]
@@ -71,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except PapfError as exc:
-        print(f"papf {args.command}: {safe_line(str(exc))}", file=sys.stderr)
+        print_error(f"papf {args.command}", str(exc))   # whole: the fix hint is at its end
         return 2
     except KeyboardInterrupt:
         print(f"papf {args.command}: interrupted; every process was stopped", file=sys.stderr)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from common.errors import ConfigError, PapfError
-from common.text import safe_line
+from common.text import print_error, safe_line
 from common.transport import (
     DEFAULT_ENDPOINT,
     StopRequested,
@@ -70,7 +70,7 @@ def _replay(args, stop: StopRequested) -> int:
                            progress=_progress_printer(bar), stop=lambda: bool(stop),
                            topics=topics)
     except PapfError as exc:
-        print(f"papf replay: {safe_line(str(exc))}", file=sys.stderr)
+        print_error("papf replay", str(exc))
         return 2
     print(f"replayed {stats.messages} messages ({stats.log_span_s:.2f} s of recorded time) "
           f"in {stats.wall_s:.2f} s", file=sys.stderr)

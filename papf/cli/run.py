@@ -110,7 +110,7 @@ def print_summary(result, energy_model: str | None = None) -> None:
     if result.reason:
         rows.append(("reason", result.reason))
     for k, v in rows:   # a reason may quote a node's output: no markup, no ESC (common.text)
-        t.add_row(k, escape(safe_text(v, 400)))
+        t.add_row(k, escape(safe_text(v, None)))
     Console().print(t)
     if result.fleet:
         Console().print(fleet_table(result.fleet))

@@ -1,0 +1,102 @@
+"""Issue #35, the rough edges a new user hit: each line typed as the issue writes it, then
+what a user expects of it."""
+
+from __future__ import annotations
+
+import io
+import subprocess
+import sys
+
+import pytest
+
+from common.cliparse import ArgumentParser
+from common.text import error_text
+from tests.support.cli import papf
+
+
+# -- did-you-mean for flags, commands and world names ---------------------------------------
+def test_a_misspelt_required_flag_is_named_with_the_flag_meant():
+    res = papf("run", "--wrld", "energy")
+    assert res.returncode == 2 and res.stdout == ""
+    assert res.stderr.strip() == ("papf run: unrecognized option --wrld; did you mean --world? "
+                                  "(see papf run --help)")
+
+
+def test_a_misspelt_command_and_subcommand_get_a_did_you_mean():
+    res = papf("rnu")
+    assert res.returncode == 2 and "did you mean run?" in res.stderr
+    res = papf("topic", "eco", "scan")
+    assert res.returncode == 2 and "did you mean echo?" in res.stderr
+
+
+def test_a_misspelt_world_name_names_the_world_meant():
+    res = papf("run", "--world", "enrgy")
+    assert res.returncode == 2
+    assert "no packaged world named 'enrgy'; did you mean 'energy'?" in res.stderr
+
+
+@pytest.mark.parametrize("node,typo,meant", [("planner", "--planer", "--planner"),
+                                             ("base_driver", "--drivr", "--driver"),
+                                             ("lidar_sim", "--wrld", "--world"),
+                                             ("energy_meter", "--modl", "--model"),
+                                             ("recorder", "--otu", "--out")])
+def test_every_node_suggests_its_own_options(node, typo, meant):
+    res = subprocess.run([sys.executable, "-m", f"nodes.{node}", typo, "x"], capture_output=True,
+                         text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert res.returncode == 2
+    assert f"unrecognized option {typo}; did you mean {meant}" in res.stderr
+    assert res.stderr.count("\n") == 1   # one line, no usage block
+
+
+def _parser() -> ArgumentParser:
+    p = ArgumentParser(prog="t")
+    p.add_argument("--world", required=True)
+    p.add_argument("--count", "-n", type=int)
+    p.add_argument("--verbose", "-v", action="store_true")
+    p.add_argument("--start")
+    p.add_argument("rest", nargs="*")
+    return p
+
+
+@pytest.mark.parametrize("argv", [["--world", "w"], ["--wor", "w"], ["--world=w", "-n5", "-v"],
+                                  ["--world", "w", "--start=-1,2"], ["--world", "w", "-n", "-3"],
+                                  ["--world", "w", "--", "--anything"], ["--world", "w", "a", "-1"]])
+def test_what_argparse_accepts_is_still_accepted(argv):
+    assert _parser().parse_args(argv).world == "w"
+
+
+def test_an_unknown_option_is_found_before_the_missing_required_one(capsys):
+    with pytest.raises(SystemExit) as exc:
+        _parser().parse_args(["--wrld=w"])
+    assert exc.value.code == 2
+    assert "unrecognized option --wrld; did you mean --world?" in capsys.readouterr().err
+
+
+def test_a_misspelt_choice_gets_the_nearest_choice(capsys):
+    p = ArgumentParser(prog="t")
+    p.add_argument("--mode", choices=("client", "peer", "router"))
+    with pytest.raises(SystemExit):
+        p.parse_args(["--mode", "clinet"])
+    assert "invalid choice clinet; did you mean client?" in capsys.readouterr().err
+
+
+# -- error lines whole, wrapped for a terminal --------------------------------------------
+def test_a_long_error_line_is_whole_when_piped():
+    res = papf("run", "--world", "papf-tst-1")
+    assert res.returncode == 2 and "(or pass a path to a .toml file)" in res.stderr
+    assert "chars)" not in res.stderr and res.stderr.count("\n") == 1
+
+
+class _Tty(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_a_long_error_is_wrapped_at_words_for_a_terminal(monkeypatch):
+    monkeypatch.setenv("COLUMNS", "60")
+    message = "no packaged world named 'x'; packaged worlds: " + ", ".join(f"w{i}" for i in range(80))
+    text = error_text("papf run", message, _Tty())
+    lines = text.split("\n")
+    assert len(lines) > 3 and all(len(line) <= 60 for line in lines)
+    assert " ".join(line.strip() for line in lines) == f"papf run: {message}"
+    assert error_text("papf run", message, io.StringIO()) == f"papf run: {message}"
