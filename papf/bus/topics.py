@@ -199,8 +199,10 @@ def _plain(ns: str) -> bool:
 # -- echo ---------------------------------------------------------------------------------------
 def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout_s: float = 0.0,
          ros_type: str | None = None, max_items: int | None = 8, as_json: bool = False,
-         stop: Stop = lambda: False, note: Out = lambda _line: None) -> int:
-    """Print each message on ``expr`` until ``count`` (0: forever) or stop; returns how many.
+         stop: Stop = lambda: False, note: Out = lambda _line: None,
+         duration_s: float = 0.0) -> int:
+    """Print each message on ``expr`` until ``count`` (0: forever), ``duration_s`` (0:
+    forever) or stop; returns how many.
 
     ``timeout_s`` > 0: give up when the first message has not come within that long.
     Messages that came faster than they could be printed are dropped, oldest first
@@ -208,7 +210,9 @@ def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout
     """
     inbox = Inbox(session, expr)
     try:
-        return _echo(inbox, out, count, timeout_s, ros_type, max_items, as_json, stop, note)
+        end = time.monotonic() + duration_s if duration_s > 0 else math.inf
+        return _echo(inbox, out, count, timeout_s, ros_type, max_items, as_json,
+                     lambda: stop() or time.monotonic() >= end, note)
     finally:
         inbox.close()
         if inbox.dropped:
@@ -252,23 +256,30 @@ def format_sample(key: str, d: Decoded, max_items: int | None, as_json: bool) ->
 # -- hz -----------------------------------------------------------------------------------------
 def hz(session: zenoh.Session, expr: str, out: Out, *, window: int = 1000,
        period_s: float = 1.0, duration_s: float = 0.0, stop: Stop = lambda: False,
-       ros_type: str | None = None) -> dict[str, HzStats]:
-    """Print each key's rate every ``period_s`` until ``duration_s`` (0: forever) or stop."""
+       ros_type: str | None = None, count: int = 0,
+       reports: int = 0) -> dict[str, HzStats]:
+    """Print each key's rate every ``period_s`` until ``duration_s`` (0: forever), ``count``
+    messages (0: any number), ``reports`` printed reports (0: any number) or stop; then the
+    rates once more (unless the last report was just that)."""
     stats: dict[str, HzStats] = {}
     inbox = Inbox(session, expr)
     t0 = time.monotonic()
-    next_print = t0 + period_s
+    next_print, printed, heard = t0 + period_s, 0, 0
     try:
-        while not stop():
+        while not stop() and not (count and heard >= count):
             now = time.monotonic()
             if duration_s > 0 and now - t0 >= duration_s:
                 break
             if now >= next_print:
                 next_print += period_s
                 _print_rates(stats, expr, out)
+                printed += 1
+                if reports and printed >= reports:
+                    return stats
             item = inbox.get(min(next_print - now, 0.1))
             if item is not None:
                 key, data, arrival = item
+                heard += 1
                 stats.setdefault(key, HzStats(window)).add(arrival, stamp_of(key, data, ros_type))
     finally:
         inbox.close()
