@@ -15,9 +15,11 @@ PROGRESS_AFTER_S = 3.0   # [s wall] a report done sooner prints no progress
 def register(sub) -> None:
     """Add ``papf report`` and its options to the subcommands ``sub``."""
     p = sub.add_parser(
-        "report", help="energy report of recorded runs (report.md, report.csv, PNGs)",
+        "report", help="energy report of recorded runs (report.html, .md, .csv, PNGs)",
         description="Read MCAP recordings and rosbag2s recorded on the ROSbot only; write "
-                    "report.md, report.csv, trajectories.png, charge.png and motion.png. Charge "
+                    "report.md, report.csv, trajectories.png, charge.png, motion.png, mind.png and "
+                    "report.html (all of it in one file a browser opens: figures embedded); an "
+                    "existing report is refused before anything is computed (--force). Charge "
                     "and energy are re-metered from the recorded odometry and wheel states (a "
                     "bag's: from its odometry); a bag's /battery current gives the measured "
                     "charge beside them.")
@@ -84,6 +86,9 @@ def cmd_report(args) -> int:
         say(f"\nworld {world}:")
         say(summary_markdown([s for s in report.summaries if s.world == world], report.model))
     say(f"\nwrote {', '.join(str(f) for f in report.files)}")
+    page = next((f for f in report.files if f.suffix == ".html"), None)
+    if page is not None:   # one file, figures inside: what a user opens first
+        say(f"open {page.resolve().as_uri()} in a browser (one file, figures embedded)")
     return 0
 
 

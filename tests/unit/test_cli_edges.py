@@ -100,3 +100,55 @@ def test_a_long_error_is_wrapped_at_words_for_a_terminal(monkeypatch):
     assert len(lines) > 3 and all(len(line) <= 60 for line in lines)
     assert " ".join(line.strip() for line in lines) == f"papf run: {message}"
     assert error_text("papf run", message, io.StringIO()) == f"papf run: {message}"
+
+
+# -- papf report: the output checked before the work; one HTML file ------------------------
+def _runs(tmp_path):
+    from tests.support.recordings import write_synthetic
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    for planner in ("apf", "papf"):
+        write_synthetic(runs / f"{planner}-1.mcap", planner, seed=1)
+    return runs
+
+
+def test_report_refuses_an_existing_report_before_computing_anything(tmp_path, monkeypatch, capsys):
+    from papf.cli import main
+    from papf.report import report as report_module
+
+    runs = _runs(tmp_path)
+    (runs / "report.md").write_text("the user's own notes\n")
+
+    def no_work(*_a, **_k):
+        raise AssertionError("computed before the output check")
+
+    monkeypatch.setattr(report_module, "collect", no_work)
+    assert main(["report", str(runs)]) == 2
+    err = capsys.readouterr().err
+    assert f"{runs} already holds a report (report.md); use --force" in err
+    assert (runs / "report.md").read_text() == "the user's own notes\n"
+    assert sorted(p.name for p in runs.iterdir()) == ["apf-1.mcap", "papf-1.mcap", "report.md"]
+
+
+def test_report_writes_one_self_contained_html_file(tmp_path):
+    import re
+
+    from papf.report import build_report
+
+    runs = _runs(tmp_path)
+    report = build_report([runs], tmp_path / "out")
+    page = (tmp_path / "out" / "report.html")
+    assert page in report.files
+    text = page.read_text(encoding="utf-8")
+    assert text.startswith("<!DOCTYPE html>") and "<table>" in text and "PAPF vs APF" in text
+    sources = re.findall(r'<img src="([^"]*)"', text)
+    assert len(sources) == 4 and all(s.startswith("data:image/png;base64,") for s in sources)
+    assert "<script" not in text
+
+
+def test_report_html_shows_a_recorded_text_as_text(tmp_path):
+    from papf.report.html import report_html
+
+    page = report_html("# r\n\nworld <script>alert(1)</script>\n", {}, "t<b>")
+    assert "<script>" not in page and "&lt;script&gt;" in page and "<title>t&lt;b&gt;</title>" in page
