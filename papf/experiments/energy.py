@@ -246,10 +246,11 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     out.mkdir(parents=True, exist_ok=True)
     specs = plan(exp)
     _warn_foreign_files(out, specs, console)
+    own = _report_is_ours(out, exp.world)   # before any run: not after the last one
     wall0 = time.monotonic()
     if exp.sweep.distributed:
         results = _run_spread(exp, specs, console)
-        report = build_report([s.path for s, _r in results], out)
+        report = build_report([s.path for s, _r in results], out, force=own)
         return ExperimentResult(results, report, time.monotonic() - wall0,
                                 _mismatches(results, report))
     results: list[tuple[RunSpec, RunResult]] = []
@@ -272,7 +273,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
                 console.print(_result_line(spec, result), highlight=False, soft_wrap=True)
     finally:
         run_log.setLevel(level)
-    report = build_report([s.path for s, _r in results], out)
+    report = build_report([s.path for s, _r in results], out, force=own)
     wall = time.monotonic() - wall0
     return ExperimentResult(results, report, wall, _mismatches(results, report))
 
@@ -335,6 +336,23 @@ def _resumed(journal: Journal, exp: EnergyExperiment, spec: RunSpec) -> RunResul
         return RunResult(**kw)
     except (TypeError, ValueError):
         return None
+
+
+def _report_is_ours(out: Path, world: str) -> bool:
+    """Whether a report already in ``out`` is this experiment's (its journal ``out/runs/`` is
+    there: an earlier run of it wrote the report, which the new one replaces); a report in
+    ``out`` without the journal is someone's own: refused (OutputError) before any run."""
+    from common.outfiles import OutputError
+    from papf.report.report import report_files
+    from worlds import load_world
+
+    if (out / "runs").is_dir():
+        return True
+    there = [n for n in report_files([load_world(world).name], "") if (out / n).exists()]
+    if there:
+        raise OutputError(f"{out} already holds a report ({', '.join(there)}) that this "
+                          "experiment did not make; give another --out, or move those files")
+    return False
 
 
 def _warn_foreign_files(out: Path, specs: Sequence[RunSpec], console: Console) -> None:
