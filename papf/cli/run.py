@@ -7,7 +7,13 @@ import json
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from common.ros_link import add_face_args, face_domain
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
-from papf.cli.options import add_planner_settings, add_world_and_planner, resolve_world
+from papf.cli.options import (
+    add_planner_settings,
+    add_port_range,
+    add_world_and_planner,
+    resolve_world,
+    use_ports,
+)
 from papf.cli.view import add_view_flag
 
 
@@ -29,6 +35,7 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument("--port", type=arg_type("--port", PORT),
                    help="embedded router port (default 7447, or a free one)")
+    add_port_range(p)
     p.add_argument("--namespace", default="rosbot", help="robot key namespace")
     p.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
                    help="nodes' Zenoh mode: peer (direct loopback links, the launcher's router "
@@ -72,6 +79,8 @@ def run_config(args):
 
 def cmd_run(args) -> int:
     from papf.launch.run import resolve_run, run
+
+    use_ports(args)   # --port-range: for every process of the run, before any starts
 
     if args.dry_run:  # the `sim` profile's processes (port: --port, else 7447)
         print(resolve_run(run_config(args)).to_json())

@@ -186,9 +186,9 @@ def _decoding(msg_type, store):
 
 def _one_run(exp: EnergyExperiment, spec: RunSpec, progress: Progress, task,
              goal: tuple[float, float], run_fn: Callable[[RunConfig], RunResult]) -> RunResult:
-    from papf.launch.supervisor import free_port
+    from papf.launch.supervisor import run_port
 
-    port = free_port()
+    port = run_port()
     box: dict[str, object] = {}
 
     def target() -> None:
@@ -302,12 +302,12 @@ def energy_job(job: tuple[EnergyExperiment, RunSpec, int]) -> tuple[RunResult, b
 
     from papf.experiments.sweep import run_namespace
     from papf.launch.run import run
-    from papf.launch.supervisor import free_port
+    from papf.launch.supervisor import run_port
 
     exp, spec, index = job
     with tempfile.TemporaryDirectory(prefix="papf-energy-") as tmp:
         local = dataclasses.replace(spec, path=Path(tmp) / spec.path.name)
-        cfg = dataclasses.replace(run_config(exp, local, free_port()),
+        cfg = dataclasses.replace(run_config(exp, local, run_port()),
                                   namespace=run_namespace(index))
         result = run(cfg)
         return result, (local.path.read_bytes() if local.path.exists() else None)

@@ -22,6 +22,7 @@ from common.errors import ConfigError
 from common.optional import tomllib
 from common.ports import Port, select
 from nodes.planner.registry import declared
+from papf.launch.portrange import node_listen_port
 from schemas.keys import TOPICS
 from worlds import load_world, world_path
 
@@ -214,12 +215,15 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
             raise ConfigError(f"profile {prof.name} runs no router: give --connect "
                               "tcp/<robot>:7447 (or a --zenoh-config that has connect endpoints)")
 
+    taken = {int(m) for ep in listen for m in re.findall(r":(\d+)(?:#.*)?$", ep)}   # the router's
+
     def common(namespace: str) -> list[str]:
         args = [a for ep in connect for a in ("--connect", ep)] + ["--namespace", namespace]
         if opt.zenoh_config:
             args += ["--zenoh-config", opt.zenoh_config]
         if (opt.zenoh_mode or prof.zenoh_mode) == "peer":  # peers also talk directly: one loopback hop, not two
-            args += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
+            port = node_listen_port(taken)   # the OS's pick (0), or one of --port-range
+            args += ["--mode", "peer", "--listen", f"tcp/127.0.0.1:{port}"]
         return args
     procs = []
     if prof.router:

@@ -125,6 +125,6 @@ def test_a_report_the_experiment_did_not_make_is_refused_before_any_run(tmp_path
     out = tmp_path / "again"
     for _ in range(2):   # the second time: the runs come from the journal, the report is redone
         (out / "report.md").unlink(missing_ok=True)   # replaced, not refused, the second time
-        res = run_experiment(EnergyExperiment(out=out, runs=1, planners=("apf",)),
-                             Console(file=io.StringIO()), run_fn=FakeRuns())
+        run_experiment(EnergyExperiment(out=out, runs=1, planners=("apf",)),
+                       Console(file=io.StringIO()), run_fn=FakeRuns())
         assert (out / "report.html").is_file() and (out / "report.md").is_file()
