@@ -80,16 +80,32 @@ def cmd_report(args) -> int:
     bags = [r for r in report.runs if r.outcome == BAG]
     if bags:
         say("\nbags recorded on the robot:")
-        say(bags_markdown(bags, report.model))
+        show_table(bags_markdown(bags, report.model), say)
     bag_worlds = {r.world for r in bags}
     for world in sorted({s.world for s in report.summaries} - bag_worlds):
         say(f"\nworld {world}:")
-        say(summary_markdown([s for s in report.summaries if s.world == world], report.model))
+        show_table(summary_markdown([s for s in report.summaries if s.world == world],
+                                    report.model), say)
     say(f"\nwrote {', '.join(str(f) for f in report.files)}")
     page = next((f for f in report.files if f.suffix == ".html"), None)
     if page is not None:   # one file, figures inside: what a user opens first
         say(f"open {page.resolve().as_uri()} in a browser (one file, figures embedded)")
     return 0
+
+
+def show_table(text: str, say) -> None:
+    """A Markdown table of the report: on a terminal as a table that fits it
+    (:func:`papf.console.tables.print_table`); piped, the Markdown lines as they are."""
+    from rich.console import Console
+
+    from papf.console.tables import markdown_table, print_table
+
+    console = Console()
+    table = markdown_table(text) if console.is_terminal else None
+    if table is None:
+        say(text)
+    else:
+        print_table(table, console)
 
 
 def finite(obj):

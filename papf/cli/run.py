@@ -96,11 +96,11 @@ def cmd_run(args) -> int:
 def print_summary(result, energy_model: str | None = None) -> None:
     """The run's table (and a fleet's, one row per robot); ``energy_model`` named beside the
     charge (the meter's model: its figures differ from the paper's model's)."""
-    from rich.console import Console  # rich: only to print a table
     from rich.markup import escape  # values are text: a "[...]" in them is no style tag
     from rich.table import Table
 
     from common.text import safe_text
+    from papf.console.tables import print_table  # rich: only to print a table
 
     colour = "green" if result.outcome == "reached" else "red"
     t = Table(title=f"papf run: [{colour}]{result.outcome}[/]", show_header=False)
@@ -120,9 +120,9 @@ def print_summary(result, energy_model: str | None = None) -> None:
         rows.append(("reason", result.reason))
     for k, v in rows:   # a reason may quote a node's output: no markup, no ESC (common.text)
         t.add_row(k, escape(safe_text(v, None)))
-    Console().print(t)
+    print_table(t)   # fits: whole cells on a narrow terminal, one line a row when piped
     if result.fleet:
-        Console().print(fleet_table(result.fleet))
+        print_table(fleet_table(result.fleet))
 
 
 def fleet_table(robots: tuple[dict, ...]):

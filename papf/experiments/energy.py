@@ -396,6 +396,7 @@ def print_summary(res, console=None) -> None:
     from rich.markup import escape  # "[mAh]" is text, not a style tag
     from rich.table import Table
 
+    from papf.console.tables import print_table
     from papf.report.tables import PAPER, change_pct
 
     console = console or Console()
@@ -411,7 +412,7 @@ def print_summary(res, console=None) -> None:
         t.add_row(escape(s.planner), f"{s.reached}/{s.runs}", st["charge_mAh"].text(".2f"),
                   st["energy_J"].text(".1f"), st["duration_s"].text(".2f"),
                   st["path_length_m"].text(".3f"))
-    console.print(t)
+    print_table(t, console)   # fits the terminal; piped: one line a row
     apf, papf = (res.report.summary(name) for name in PAPER_PAIR)
     if apf and papf:
         for attr, label in (("charge_mAh", "charge"), ("duration_s", "duration"),
