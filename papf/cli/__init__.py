@@ -53,6 +53,16 @@ def _sigterm_as_interrupt(*_) -> None:
     raise KeyboardInterrupt  # same clean stop as Ctrl-C: every child process is stopped
 
 
+SUBCOMMAND_DEST = {"topic": "topic_command", "node": "node_command", "experiment": "experiment",
+                   "export": "format", "new": "kind"}   # the commands that have subcommands
+
+
+def _prog(args) -> str:
+    """``papf COMMAND [SUBCOMMAND]`` as the user typed it (``papf topic pub``)."""
+    sub = getattr(args, SUBCOMMAND_DEST.get(args.command, ""), None)
+    return f"papf {args.command}" + (f" {sub}" if isinstance(sub, str) else "")
+
+
 def main(argv: list[str] | None = None) -> int:
     """``papf``: parse ``argv``, run the command; its exit code (2 on a user's mistake)."""
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
@@ -66,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except PapfError as exc:
-        print_error(f"papf {args.command}", str(exc))   # whole: the fix hint is at its end
+        print_error(_prog(args), str(exc))   # whole: the fix hint is at its end
         return 2
     except KeyboardInterrupt:
         print(f"papf {args.command}: interrupted; every process was stopped", file=sys.stderr)

@@ -21,6 +21,7 @@ from pathlib import Path
 from common.errors import ConfigError
 from common.optional import tomllib
 from common.ports import Port, select
+from common.syntax import toml_problem
 from nodes.planner.registry import declared
 from papf.launch.portrange import node_listen_port
 from schemas.keys import TOPICS
@@ -130,7 +131,8 @@ def load_profile(name_or_path: str) -> Profile:
         if path.stat().st_size > MAX_PROFILE_BYTES:
             raise ConfigError(f"launch profile {str(path)!r}: {path.stat().st_size:,} bytes; a "
                               f"profile has at most {MAX_PROFILE_BYTES:,}")
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
         nodes = tuple(NodeSpec(n["name"], n["module"], tuple(n.get("args", ())), n.get("needs"),
                                dict(n.get("if_set", {}))) for n in data.get("nodes", ()))
         prof = Profile(data.get("name", path.stem), data.get("description", ""), nodes,
@@ -149,7 +151,11 @@ def load_profile(name_or_path: str) -> Profile:
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"launch profile {str(path)!r}: cannot read it as UTF-8 text "
                           f"({type(exc).__name__})") from None
-    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError, ValueError) as exc:
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"launch profile {str(path)!r} is not valid TOML: "
+                          f"{toml_problem(exc, text)} (see docs/architecture.md for the "
+                          "format)") from None
+    except (KeyError, TypeError, AttributeError, ValueError) as exc:
         raise ConfigError(f"launch profile {str(path)!r} is invalid: {type(exc).__name__}: "
                           f"{str(exc)[:200]} (see docs/architecture.md for the format)") from None
     if prof.pose_topic not in TOPICS:

@@ -277,3 +277,45 @@ def test_the_reports_markdown_table_becomes_a_table_that_fits():
     assert [c.header.plain for c in t.columns] == ["planner", "charge [mAh, motor model]"]
     assert [c._cells[0].plain for c in t.columns] == ["pa|pf", "23.95"]
     assert markdown_table("no table here") is None
+
+
+# -- YAML and TOML errors with line and column ----------------------------------------------
+def test_a_broken_world_file_names_line_and_column(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[goal]\nposition = [1, 2]\nname = "x\n')
+    res = papf("plan", "--world", str(bad))
+    assert res.returncode == 2
+    assert "is not valid TOML: line 3, column 10: Illegal character" in res.stderr
+    assert "(in 'name = \"x')" in res.stderr
+    bad.write_text("[goal]\nposition = [1, 2\n")
+    res = papf("plan", "--world", str(bad))
+    assert "line 2, at the end of the file: Unclosed array" in res.stderr
+
+
+def test_a_broken_map_yaml_names_line_and_column(tmp_path):
+    bad = tmp_path / "map.yaml"
+    bad.write_text("image: x.pgm\nresolution: [0.05\norigin: [0, 0, 0]\n")
+    res = papf("plan", "--world", str(bad), "--start", "0,0", "--goal", "1,1")
+    assert res.returncode == 2
+    assert ("is not valid YAML: line 3, column 7: expected ',' or ']', but got ':' (while "
+            "parsing a flow sequence started at line 2, column 13)") in res.stderr
+
+
+def test_a_broken_topic_pub_value_names_its_column():
+    res = papf("topic", "pub", "cmd_vel", "{v: 0.1, w: 0.0", "--once")
+    assert res.returncode == 2
+    assert res.stderr.startswith("papf topic pub: VALUE '{v: 0.1, w: 0.0' is not YAML/JSON: "
+                                 "column 16: expected ',' or '}'")
+
+
+@pytest.mark.parametrize("kind", ["params", "profile"])
+def test_broken_settings_and_profiles_name_line_and_column(tmp_path, kind):
+    if kind == "params":
+        f = tmp_path / "p.toml"
+        f.write_text("v_max = 0.3\nd_o = \n")
+        res = papf("plan", "--world", "energy", "--params", str(f))
+    else:
+        f = tmp_path / "prof.toml"
+        f.write_text('name = "x"\nrouter = tru\n')
+        res = papf("launch", str(f))
+    assert res.returncode == 2 and "is not valid TOML: line 2, column" in res.stderr
