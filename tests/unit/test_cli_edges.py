@@ -319,3 +319,18 @@ def test_broken_settings_and_profiles_name_line_and_column(tmp_path, kind):
         f.write_text('name = "x"\nrouter = tru\n')
         res = papf("launch", str(f))
     assert res.returncode == 2 and "is not valid TOML: line 2, column" in res.stderr
+
+
+# -- the fix hint of a bag whose topic names are not the ROSbot's ----------------------------
+def test_a_bag_with_other_names_gets_the_exact_topics_option(tmp_path):
+    from tests.support.bags import write_bag
+
+    bag = tmp_path / "bag"
+    write_bag(bag, names={"odom": "/odom"})   # as `papf export ros2` names it
+    res = papf("report", str(bag))
+    assert res.returncode == 2 and res.stderr.strip().endswith("Read it with --topics odom=/odom")
+    assert "chars)" not in res.stderr
+    res = papf("report", str(bag), "--topics", "odom=/odom")
+    assert res.returncode == 0, res.stderr
+    res = papf("info", str(bag))   # info still lists what the bag holds
+    assert res.returncode == 0 and "/odom" in res.stdout and "--topics odom=/odom" in res.stderr
