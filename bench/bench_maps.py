@@ -29,7 +29,7 @@ from common.cliparse import ArgumentParser
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import check_csv, replace_label  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
 from worlds import load_world  # noqa: E402
 
@@ -75,6 +75,8 @@ def main() -> None:
     ap.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     ap.add_argument("--label", default="run")
     a = ap.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FIELDS)
     if not 0 < a.timeout <= 3600:
         ap.error(f"--timeout {a.timeout}: give 0 < seconds <= 3600")
     rows = []

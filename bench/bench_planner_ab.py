@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.csvrows import write_rows
+from bench.csvrows import check_csv, write_rows
 from common.cliparse import ArgumentParser
 
 HERE = Path(__file__).resolve().parent
@@ -114,6 +114,8 @@ def main() -> None:
     ap.add_argument("--csv", type=Path, help="write the two rows to this CSV")
     ap.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.csv:   # a foreign file: refused before the work, not after
+        check_csv(args.csv, FIELDS)
     if args.set is None:
         args.set = ["persist_quarks=false"] if args.planner == proposed else []
     if args.serve:

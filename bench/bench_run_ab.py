@@ -25,7 +25,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench.csvrows import write_rows
+from bench.csvrows import check_csv, write_rows
 from bench.proc_cpu import TreeCPU
 from common.cliparse import ArgumentParser
 from common.outfiles import append_jsonl
@@ -124,6 +124,10 @@ def main() -> None:
                         help="append each process's median CPU (per side and planner) to this CSV")
     parser.add_argument("--jsonl", type=Path, help="append every run's JSON line to this file")
     a = parser.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FIELDS)
+    if a.procs_csv:
+        check_csv(a.procs_csv, PROC_FIELDS)
     labels = a.labels.split(",")
     trees = (a.before, a.after)
     if not all((t / "papf" / "__main__.py").is_file() for t in trees) or len(labels) != 2 \

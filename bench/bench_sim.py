@@ -45,7 +45,7 @@ sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import check_csv, replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
@@ -219,6 +219,8 @@ def main() -> None:
     parser.add_argument("--summarize", type=Path, metavar="RUNS",
                         help="full stack: minima of the run lines in RUNS (JSON lines) instead of running")
     a = parser.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FLOOR_FIELDS if a.floor else CSV_FIELDS)
     if a.loop:
         print(json.dumps(bench(a.sim_s, a.world, a.beams)))
         return

@@ -28,7 +28,7 @@ from common.cliparse import ArgumentParser
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.csvrows import write_rows  # noqa: E402
+from bench.csvrows import check_csv, write_rows  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
 from papf.experiments.sweep import SweepOptions, map_runs  # noqa: E402
@@ -86,6 +86,8 @@ def main() -> None:
     ap.add_argument("--csv", type=Path, help="write one row per sweep to this CSV")
     ap.add_argument("--append", action="store_true", help="add the rows to --csv instead of replacing it")
     a = ap.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FIELDS)
     if a.runs < 1 or a.timeout <= 0:
         ap.error("--runs must be >= 1 and --timeout > 0")
     quiet_runner_logs()

@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 import zenoh  # noqa: E402
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import check_csv, replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
@@ -149,6 +149,8 @@ def main() -> None:
     parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     parser.add_argument("--label", help="the rows' label in --csv (e.g. after)")
     args = parser.parse_args()
+    if args.csv:   # a foreign file: refused before the work, not after
+        check_csv(args.csv, FIELDS)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")
     counts = [int(v) for v in args.obstacles.split(",") if v]

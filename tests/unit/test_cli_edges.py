@@ -334,3 +334,17 @@ def test_a_bag_with_other_names_gets_the_exact_topics_option(tmp_path):
     assert res.returncode == 0, res.stderr
     res = papf("info", str(bag))   # info still lists what the bag holds
     assert res.returncode == 0 and "/odom" in res.stdout and "--topics odom=/odom" in res.stderr
+
+
+def test_a_benchmark_refuses_a_foreign_csv_before_measuring(tmp_path, capsys):
+    """Issue #35, output checks before work: every command that writes files checks them
+    first (papf bench planner takes seconds to minutes before it writes its CSV)."""
+    from papf.cli import main
+
+    mine = tmp_path / "mine.csv"
+    mine.write_text("the user's own table\n")
+    assert main(["bench", "planner", "--csv", str(mine), "--cycles", "10"]) == 2
+    out, err = capsys.readouterr()
+    assert "is not this benchmark's CSV" in err
+    assert out == ""   # no case measured (each prints its JSON line as it ends)
+    assert mine.read_text() == "the user's own table\n"
