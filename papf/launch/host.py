@@ -44,7 +44,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None) -> RunResult |
     check_launch(opt, prof)   # ConfigError/WorldError before anything starts (one preflight)
     graph = resolve(prof, opt)
     if opt.dry_run:   # the router's port as a launch would take it (--port-range, taken)
-        graph = resolve(prof, free_listen(prof, opt)) if prof.router else graph
+        graph = resolve(prof, free_listen(prof, opt)) if prof.router and not opt.listen else graph
         print(graph.to_json())
         return None
     keys = Keys(opt.namespace)
