@@ -116,7 +116,8 @@ def check_outputs(paths: Sequence[Path], out: Path, energy_model: str | None,
         check_output(out / name, paths, force=True)   # an input, a directory: refused anyway
     there = [n for n in names if os.path.lexists(out / n)]
     if there and not force:
-        raise OutputError(f"{out} already holds a report ({', '.join(there)}); use --force to "
+        where = "this directory" if str(out) == "." else str(out)
+        raise OutputError(f"{where} already holds a report ({', '.join(there)}); use --force to "
                           "replace it, or --out DIR to write it elsewhere")
 
 
