@@ -255,7 +255,7 @@ def test_report_refuses_to_replace_an_earlier_report_unless_forced(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "report.md").write_text("the user's notes")
-    with pytest.raises(OutputError, match="report.md: a file already exists"):
+    with pytest.raises(OutputError, match=r"already holds a report \(report.md\); use --force"):
         build_report([runs], out)
     assert sorted(p.name for p in out.iterdir()) == ["report.md"]     # nothing moved
     assert (out / "report.md").read_text() == "the user's notes"
