@@ -147,10 +147,13 @@ def fleet_alive(session: zenoh.Session, timeout_s: float = 1.0) -> dict[str, lis
 
 
 def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
-               stop: Stop = lambda: False, as_json: bool = False, only: bool = False) -> int:
+               stop: Stop = lambda: False, as_json: bool = False, only: bool = False,
+               table: Callable | None = None) -> int:
     """Print what the bus carries (see the module doc); returns how many keys were heard.
     Every key of the network and every namespace's live nodes (a fleet); ``only``: the
-    keys and nodes of ``keys``' namespace alone (one robot of a fleet)."""
+    keys and nodes of ``keys``' namespace alone (one robot of a fleet). ``table``: given a
+    rich ``Table`` of the keys, prints it (a terminal: :func:`papf.console.tables.print_table`,
+    which fits it); without, one line per key (piped: whole lines a script reads)."""
     rows = listen(session, keys.key("**") if only else "**", duration_s, stop)
     for suffix, msg_type in TOPICS.items():   # the stack's topics that stayed silent
         rows.setdefault(keys.key(suffix), TopicRow(keys.key(suffix), msg_type.TYPE, "msgpack"))
@@ -166,14 +169,17 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
         out(json.dumps({"alive": nodes, **({"alive_elsewhere": others} if others else {})}))
         return heard
     shown = {r.key: safe_text(r.key, MAX_KEY_CHARS) for r in rows.values()}   # a peer's key
-    width = max(len(k) for k in shown.values())
-    out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
-        f"(heard for {duration_s:g} s)")
-    for r in sorted(rows.values(), key=lambda r: (r.count == 0, r.key)):
-        hz = r.stats.rate().hz
-        rate = "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
-        out(f"{shown[r.key]:<{width}}  {safe_text(r.type_name or '?', 60):<28} "
-            f"{safe_text(r.encoding, 20):<8} {rate:>10}  {r.count}")
+    lines = [(shown[r.key], safe_text(r.type_name or "?", 60), safe_text(r.encoding, 20),
+              _rate_text(r), str(r.count))
+             for r in sorted(rows.values(), key=lambda r: (r.count == 0, r.key))]
+    if table is not None:
+        table(_keys_table(lines, duration_s))
+    else:
+        width = max(len(k) for k in shown.values())
+        out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
+            f"(heard for {duration_s:g} s)")
+        for key, type_name, encoding, rate, count in lines:
+            out(f"{key:<{width}}  {type_name:<28} {encoding:<8} {rate:>10}  {count}")
     out(f"alive ({safe_text(keys.alive())}): {_names(nodes)}")
     for ns, names in others.items():   # the fleet's other namespaces
         out(f"alive ({safe_text(Keys(ns).alive() if _plain(ns) else ns)}): {_names(names)}")
@@ -181,6 +187,24 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
 
 
 MAX_KEY_CHARS = 120   # [chars] of a key shown in the table (a peer's 10 MB key stays one line)
+
+
+def _rate_text(r: TopicRow) -> str:
+    hz = r.stats.rate().hz
+    return "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
+
+
+def _keys_table(lines: list[tuple[str, ...]], duration_s: float):
+    """The keys as a rich ``Table`` (cells are text: a peer's "[...]" is no style tag)."""
+    from rich.table import Table
+    from rich.text import Text
+
+    t = Table(title=f"heard for {duration_s:g} s", title_justify="left", box=None)
+    for col in ("KEY", "TYPE", "ENCODING", "RATE", "MESSAGES"):
+        t.add_column(col, justify="right" if col in ("RATE", "MESSAGES") else "left")
+    for line in lines:
+        t.add_row(*(Text(c) for c in line))
+    return t
 
 
 def _names(names) -> str:

@@ -137,9 +137,14 @@ def cmd_topic_list(args) -> int:
     domain = ros_domain(args)
     stop = StopRequested()
     only = args.namespace is not None   # --namespace NS: that robot alone; else the fleet
+    table = None
+    if sys.stdout.isatty() and not args.json:   # a terminal: a table that fits it
+        from papf.console.tables import print_table
+
+        table = print_table
     with _session(args) as s:
         topic_list(s, Keys(args.namespace or "rosbot"), args.duration, _out, lambda: bool(stop),
-                   args.json, only)
+                   args.json, only, table=table)
         if args.ros == "rmw_zenoh":   # the ROS 2 graph of the domain, from rmw_zenoh's tokens
             _ros_graph(s, domain, args.json)
     return 130 if stop else 0

@@ -75,3 +75,21 @@ def test_every_tool_has_the_three_stops(tool):
     for flag in ("--once", "--count", "--duration"):
         r = subprocess.run([*CMD, *tool, "--help"], capture_output=True, text=True, timeout=60)
         assert flag in r.stdout, (tool, flag)
+
+
+def test_topic_list_on_a_narrow_terminal_keeps_every_cell_whole(scans, session):
+    """Issue #35, tables that fit: `papf topic list` on a terminal is a table that fits it."""
+    import io
+
+    from rich.console import Console
+
+    from papf.bus.topics import topic_list
+    from papf.console.tables import print_table
+
+    out = io.StringIO()
+    console = Console(file=out, force_terminal=True, width=60, color_system=None)
+    topic_list(session, KEYS, 1.0, lambda line: out.write(line + "\n"),
+               table=lambda t: print_table(t, console))
+    text = out.getvalue()
+    assert all(len(line) <= 60 for line in text.splitlines())
+    assert "KEY: rosbot/scan" in text and "TYPE:     papf/Scan/v1" in text
