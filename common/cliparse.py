@@ -78,8 +78,8 @@ class ArgumentParser(argparse.ArgumentParser):
                 takes_value = False
                 continue
             action = self._known(token)
-            if action is None:
-                return token
+            if action is None:   # right after an option that wants a value: argparse says
+                return None if takes_value else token   # "expected one argument" better
             takes_value = action.nargs != 0 and "=" not in token and not (
                 len(token) > 2 and not token.startswith("--"))   # -n5: the value is attached
         return None
