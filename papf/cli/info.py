@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError, PapfError
-from common.text import print_error, safe_line, safe_text
+from common.text import print_error, safe_text
 
 
 def register(sub) -> None:
@@ -65,7 +65,8 @@ def _print_info(file, info: dict, channels: dict, first: int, last: int) -> None
     print(f"{safe_text(str(file))}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
     for name, meta in info["metadata"].items():
         print(f"  metadata {safe_text(name, 80)}: "
-              + safe_line(", ".join(f"{k}={v}" for k, v in meta.items())))   # whole: a flood cut
+              + ", ".join(f"{safe_text(k, 80)}={safe_text(v)}" for k, v in meta.items()))
+    # every field shown (each value as a value: a peer's 5 KB note is cut, the line is not)
     shown = {k: safe_text(k, 120) for k in channels}
     width = max((len(k) for k in shown.values()), default=10)
     print(f"  {'KEY':<{width}} {'MESSAGES':>8}  {'SCHEMA':<24} ENCODING (message / schema)")
