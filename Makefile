@@ -20,15 +20,20 @@ $(VENV)/.installed: pyproject.toml
 	touch $@
 
 VIEW   ?=
+PORT   ?=
+PORT_RANGE ?=
+# PORT=7500: the embedded router's port; PORT_RANGE=7500-7510: every port the stack listens
+# on inside it (router and nodes; docs/robot.md "Ports and firewalls") — papf run's options
+DEMO_PORTS = $(if $(PORT),--port $(PORT)) $(if $(PORT_RANGE),--port-range $(PORT_RANGE))
 demo: setup   # VIEW=1: at the wall clock's pace, with a live Foxglove view on ws://127.0.0.1:8765
 	@echo "papf run --world $(WORLD) --planner $(PLANNER): the whole stack, as separate processes"
 ifeq ($(VIEW),)
 	@echo "watch it live: make demo VIEW=1, then open ws://127.0.0.1:8765 in Foxglove with the layout docs/foxglove-layout.json"
-	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER)
+	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER) $(DEMO_PORTS)
 else
 	@echo "watch it live: open ws://127.0.0.1:8765 in Foxglove (layout: docs/foxglove-layout.json);"
 	@echo "  or in another terminal: .venv/bin/papf topic list | topic echo planner/status | topic hz scan"
-	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime --view
+	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime --view $(DEMO_PORTS)
 endif
 
 test: setup

@@ -18,7 +18,6 @@ Not a test: numbers depend on the machine and its load.
 
 from __future__ import annotations
 
-import argparse
 import json
 import statistics
 import subprocess
@@ -32,6 +31,7 @@ from bench.bench_view import TICK_NS, cpu_s, percentiles, traffic
 from bench.csvrows import check_csv, write_rows
 from common import rmw_zenoh as rz
 from common import ros2_convert as rc
+from common.cliparse import ArgumentParser
 from common.transport import wait_alive, zenoh_config
 from nodes.planner.registry import one_with_role
 from papf.launch.supervisor import Supervisor, free_port, wait_port
@@ -129,7 +129,7 @@ def rows(out: dict) -> list[tuple[str, float, str]]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0, help="node benchmark length [s]")
     ap.add_argument("--runs", type=int, default=3, help="lockstep runs per case (0: skip)")
     ap.add_argument("--world", default="papf-test-4")

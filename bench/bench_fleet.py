@@ -22,7 +22,6 @@ is watched on its own bus from the bench: between the first robot's ``sim/pose``
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
@@ -30,6 +29,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from common.cliparse import ArgumentParser
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -137,7 +138,7 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench fleet",
+    parser = ArgumentParser(prog="papf bench fleet",
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
     parser.add_argument("--people", default="0,10,50", help="people counts")

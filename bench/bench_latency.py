@@ -27,6 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from common.cliparse import ArgumentParser
 from common.ports import plain
 
 PY = sys.executable
@@ -108,7 +109,7 @@ def latencies(steps: list[dict], wheel: list[dict]) -> list[float]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(prog="papf bench latency", description=plain(__doc__.splitlines()[0]))
+    ap = ArgumentParser(prog="papf bench latency", description=plain(__doc__.splitlines()[0]))
     ap.add_argument("--probes", type=int, default=40, help="steps up (and as many down)")
     ap.add_argument("--split", choices=("auto", "netns", "loopback"), default="auto")
     ap.add_argument("--probe", metavar="OUT", help=argparse.SUPPRESS)

@@ -17,7 +17,6 @@ rows labelled ``L`` (other labels kept), with the 1-minute load average of each.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
@@ -25,10 +24,12 @@ import sys
 import time
 from pathlib import Path
 
+from common.cliparse import ArgumentParser
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import check_csv, replace_label  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
 from worlds import load_world  # noqa: E402
 
@@ -67,13 +68,15 @@ def one(world: str, mode: str, planner: str, timeout_s: float) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(prog="papf bench maps", description=__doc__.splitlines()[0])
+    ap = ArgumentParser(prog="papf bench maps", description=__doc__.splitlines()[0])
     ap.add_argument("--worlds", default=",".join(packaged_maps()), help="map worlds (every map-*)")
     ap.add_argument("--planner", default=one_with_role("papf-proposed"))
     ap.add_argument("--timeout", type=float, default=900.0, help="sim seconds at most (900)")
     ap.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     ap.add_argument("--label", default="run")
     a = ap.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FIELDS)
     if not 0 < a.timeout <= 3600:
         ap.error(f"--timeout {a.timeout}: give 0 < seconds <= 3600")
     rows = []

@@ -40,7 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.csvrows import write_rows
+from bench.csvrows import check_csv, write_rows
+from common.cliparse import ArgumentParser
 from common.ports import plain
 from nodes.planner.registry import PLANNERS, declared, make_planner, one_with_role
 from nodes.planner.road import Track
@@ -123,7 +124,7 @@ def _r(x) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(prog="papf bench planner", description=plain(__doc__.split("\n")[0]))
+    ap = ArgumentParser(prog="papf bench planner", description=plain(__doc__.split("\n")[0]))
     ap.add_argument("--cycles", type=int, default=300, help="cycles per row (300; numpy rows a tenth)")
     ap.add_argument("--cases", help="comma-separated case labels to keep (default: all): "
                     + ", ".join(label for label, _n, _s in CASES))
@@ -133,6 +134,8 @@ def main() -> None:
     ap.add_argument("--label", default=None,
                     help="the 'code' column (default: the git commit of this tree, if any)")
     args = ap.parse_args()
+    if args.csv:   # a foreign file: refused before the work, not after
+        check_csv(args.csv, CSV_FIELDS)
     cases = _pick(ap, "--cases", args.cases, [label for label, _n, _s in CASES])
     scenes = _pick(ap, "--scenes", args.scenes, list(SCENES))
     if args.cycles < 1:

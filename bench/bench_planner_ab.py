@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.csvrows import write_rows
+from bench.csvrows import check_csv, write_rows
+from common.cliparse import ArgumentParser
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ("date", "code", "planner", "settings", "scene", "cycles", "cmd_cpu_p50_us",
@@ -100,7 +101,7 @@ def main() -> None:
     from nodes.planner.registry import one_with_role  # this checkout's registry, not --before's
 
     proposed = one_with_role("papf-proposed")
-    ap = argparse.ArgumentParser(prog="papf bench planner_ab", description=__doc__.splitlines()[0])
+    ap = ArgumentParser(prog="papf bench planner_ab", description=__doc__.splitlines()[0])
     ap.add_argument("--before", type=Path, help="root of the other checkout (the 'before' code)")
     ap.add_argument("--labels", default="before,after", help="names of the two sides (before,after)")
     ap.add_argument("--planner", default=proposed)
@@ -113,6 +114,8 @@ def main() -> None:
     ap.add_argument("--csv", type=Path, help="write the two rows to this CSV")
     ap.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.csv:   # a foreign file: refused before the work, not after
+        check_csv(args.csv, FIELDS)
     if args.set is None:
         args.set = ["persist_quarks=false"] if args.planner == proposed else []
     if args.serve:

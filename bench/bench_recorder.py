@@ -17,7 +17,6 @@ queue, counts payloads, writes nothing): losses it shows too come from the pipel
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import signal
@@ -29,6 +28,7 @@ from pathlib import Path
 
 import zenoh
 
+from common.cliparse import ArgumentParser
 from common.ports import plain
 from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
@@ -157,7 +157,7 @@ def main(rates: list[float], duration: float, baseline: bool = False) -> dict:
 
 
 if __name__ == "__main__":
-    p = argparse.ArgumentParser(prog="papf bench recorder", description=plain(__doc__.splitlines()[0]))
+    p = ArgumentParser(prog="papf bench recorder", description=plain(__doc__.splitlines()[0]))
     p.add_argument("--rates", type=float, nargs="+", default=[20_000, 50_000, 80_000, 120_000],
                    help="target publish rates [msgs/s]")
     p.add_argument("--duration", type=float, default=3.0, help="publishing time per rate [s]")

@@ -16,7 +16,6 @@ summaries with ``--csv``. Speed is reported, never asserted.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import resource
@@ -26,8 +25,9 @@ import sys
 import time
 from pathlib import Path
 
-from bench.csvrows import write_rows
+from bench.csvrows import check_csv, write_rows
 from bench.proc_cpu import TreeCPU
+from common.cliparse import ArgumentParser
 from common.outfiles import append_jsonl
 
 HERE = Path(__file__).resolve().parent
@@ -107,7 +107,7 @@ def _short(name: str) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench run_ab", description=__doc__.splitlines()[0])
+    parser = ArgumentParser(prog="papf bench run_ab", description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, required=True, help="the other checkout (its root)")
     parser.add_argument("--after", type=Path, default=HERE.parent,
                         help="the checkout measured as 'after' (default: this one)")
@@ -124,6 +124,10 @@ def main() -> None:
                         help="append each process's median CPU (per side and planner) to this CSV")
     parser.add_argument("--jsonl", type=Path, help="append every run's JSON line to this file")
     a = parser.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FIELDS)
+    if a.procs_csv:
+        check_csv(a.procs_csv, PROC_FIELDS)
     labels = a.labels.split(",")
     trees = (a.before, a.after)
     if not all((t / "papf" / "__main__.py").is_file() for t in trees) or len(labels) != 2 \

@@ -30,7 +30,6 @@ trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import os
@@ -39,12 +38,14 @@ import threading
 import time
 from pathlib import Path
 
+from common.cliparse import ArgumentParser
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import check_csv, replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
@@ -198,7 +199,7 @@ def floor(planners: list[str], world: str, seed: int, csv_path: Path | None,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
+    parser = ArgumentParser(prog="papf bench sim", description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--loop", action="store_true", help="the driver + LiDAR loop alone")
     parser.add_argument("--floor", action="store_true",
                         help="the lockstep chain in one process, no bus (CPU per cycle per part)")
@@ -218,6 +219,8 @@ def main() -> None:
     parser.add_argument("--summarize", type=Path, metavar="RUNS",
                         help="full stack: minima of the run lines in RUNS (JSON lines) instead of running")
     a = parser.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FLOOR_FIELDS if a.floor else CSV_FIELDS)
     if a.loop:
         print(json.dumps(bench(a.sim_s, a.world, a.beams)))
         return

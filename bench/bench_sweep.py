@@ -24,9 +24,11 @@ import sys
 import time
 from pathlib import Path
 
+from common.cliparse import ArgumentParser
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.csvrows import write_rows  # noqa: E402
+from bench.csvrows import check_csv, write_rows  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
 from papf.experiments.sweep import SweepOptions, map_runs  # noqa: E402
@@ -75,7 +77,7 @@ def _workers(text: str) -> list[int]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(prog="papf bench sweep", description=__doc__.splitlines()[0])
+    ap = ArgumentParser(prog="papf bench sweep", description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=8, help="runs per sweep (8)")
     ap.add_argument("--timeout", type=float, default=300.0,
                     help="sim seconds at most per run (300: every run ends at the goal)")
@@ -84,6 +86,8 @@ def main() -> None:
     ap.add_argument("--csv", type=Path, help="write one row per sweep to this CSV")
     ap.add_argument("--append", action="store_true", help="add the rows to --csv instead of replacing it")
     a = ap.parse_args()
+    if a.csv:   # a foreign file: refused before the work, not after
+        check_csv(a.csv, FIELDS)
     if a.runs < 1 or a.timeout <= 0:
         ap.error("--runs must be >= 1 and --timeout > 0")
     quiet_runner_logs()

@@ -28,7 +28,6 @@ time anything).
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -39,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.csvrows import write_rows
+from common.cliparse import ArgumentParser
 from common.ports import plain
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.tracker.core import Tracker, TrackerParams
@@ -111,7 +111,7 @@ def _r3(x) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(prog="papf bench tracker", description=plain(__doc__.split("\n")[0]))
+    ap = ArgumentParser(prog="papf bench tracker", description=plain(__doc__.split("\n")[0]))
     ap.add_argument("--world", action="append", help="world (repeatable; default: every road-*)")
     ap.add_argument("--seconds", type=float, default=30.0, help="sim time per world (30)")
     ap.add_argument("--match", type=float, default=1.0, help="track-to-truth match radius [m]")

@@ -20,7 +20,6 @@ Prints one JSON object. Not a test: numbers depend on the machine and its load.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -34,6 +33,7 @@ import numpy as np
 import zenoh
 
 from bench.foxglove_ws import FoxgloveClient
+from common.cliparse import ArgumentParser
 from common.transport import wait_alive, zenoh_config
 from nodes.planner.registry import one_with_role
 from nodes.viewer.core import CHANNELS
@@ -174,7 +174,7 @@ def bench_runs(world: str, planner: str, runs: int) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0, help="node benchmark length [s]")
     ap.add_argument("--runs", type=int, default=3, help="lockstep runs per case (0: skip)")
     ap.add_argument("--world", default="papf-test-4")

@@ -16,7 +16,6 @@ load average of each row is written with it.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -25,13 +24,15 @@ import threading
 import time
 from pathlib import Path
 
+from common.cliparse import ArgumentParser
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 import zenoh  # noqa: E402
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import check_csv, replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
@@ -140,7 +141,7 @@ def _drive(session, keys: Keys, sim_s: float) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="papf bench world-scale",
+    parser = ArgumentParser(prog="papf bench world-scale",
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--obstacles", default="0,500,2000,10000", help="cylinder counts")
     parser.add_argument("--maps", default="10,100", help="hall widths [m] at 5 cm")
@@ -148,6 +149,8 @@ def main() -> None:
     parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     parser.add_argument("--label", help="the rows' label in --csv (e.g. after)")
     args = parser.parse_args()
+    if args.csv:   # a foreign file: refused before the work, not after
+        check_csv(args.csv, FIELDS)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")
     counts = [int(v) for v in args.obstacles.split(",") if v]

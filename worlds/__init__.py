@@ -16,6 +16,8 @@ from pathlib import Path
 from common.errors import WorldError
 from common.optional import tomllib
 from common.robot import GOAL_TOLERANCE_MIN_M
+from common.syntax import toml_problem
+from common.text import suggest
 from worlds.fleet import PersonSpec, RobotSpec, parse_people, parse_robots
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
@@ -85,8 +87,11 @@ def world_path(name_or_path: str | Path) -> Path:
         return p
     packaged = resources.files(__name__) / f"{name_or_path}.toml"
     if not packaged.is_file():
-        raise WorldError(f"no packaged world named {str(name_or_path)!r}; packaged worlds: "
-                         f"{', '.join(packaged_worlds())} (or pass a path to a .toml file)")
+        names = packaged_worlds()   # a misspelt name: the nearest packaged ones first
+        near = suggest(str(name_or_path), names, quote=True)
+        raise WorldError(f"no packaged world named {str(name_or_path)!r}{near or ';'} "
+                         f"{'P' if near else 'p'}ackaged worlds: {', '.join(names)} (or pass "
+                         "a path to a .toml file)")
     return Path(str(packaged))
 
 
@@ -103,11 +108,13 @@ def world_data(name_or_path: str | Path) -> dict:
         with path.open("rb") as fh:   # at most one byte past the limit is read
             raw = fh.read(MAX_FILE_BYTES + 1)
         check_text_size(len(raw) if len(raw) <= MAX_FILE_BYTES else path.stat().st_size, str(path))
-        return tomllib.loads(raw.decode("utf-8"))
+        text = raw.decode("utf-8")
+        return tomllib.loads(text)
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"cannot read world file {str(path)!r}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
-        raise WorldError(f"world file {str(path)!r} is not valid TOML: {exc}") from None
+        raise WorldError(f"world file {str(path)!r} is not valid TOML: "
+                         f"{toml_problem(exc, text)}") from None
     except RecursionError:
         raise WorldError(f"world file {str(path)!r}: tables or arrays nested too deeply") from None
 

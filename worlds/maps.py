@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import WorldError
+from common.syntax import yaml_problem
 
 MAX_YAML_BYTES = 1024 * 1024   # [bytes] a map's YAML (a few lines; as a world file)
 
@@ -182,14 +183,15 @@ def _read_yaml(path: Path) -> dict:
         if path.stat().st_size > MAX_YAML_BYTES:   # a map's YAML is a few lines
             raise WorldError(f"map {str(path)!r}: {path.stat().st_size:,} bytes; a map's YAML "
                              f"has at most {MAX_YAML_BYTES:,}")
-        meta = yaml.safe_load(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        meta = yaml.safe_load(text)
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"cannot read map {str(path)!r}: {exc}") from None
     except RecursionError:   # thousands of nested brackets
         raise WorldError(f"map {str(path)!r}: nested too deeply to be a map's YAML") from None
     except yaml.YAMLError as exc:
         raise WorldError(f"map {str(path)!r} is not valid YAML: "
-                         f"{str(exc).splitlines()[0]}") from None
+                         f"{yaml_problem(exc, text)}") from None
     if not isinstance(meta, dict):
         _fail(path, "(top)", "must be a mapping with image, resolution, origin, negate, "
               "occupied_thresh, free_thresh")

@@ -21,6 +21,7 @@ import queue
 import sys
 import time
 
+from common.cliparse import ArgumentParser
 from common.errors import PapfError
 from common.params import arg_type
 from common.ports import describe, plain
@@ -141,7 +142,7 @@ def _opt(name: str):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m nodes.base_driver",
+    parser = ArgumentParser(prog="python -m nodes.base_driver",
                                      description=plain(__doc__.split("\n\n")[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 
+from common.cliparse import ArgumentParser
 from common.errors import ConfigError, PapfError
 from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
@@ -82,7 +83,7 @@ def run(meter: EnergyMeter, args: argparse.Namespace, log) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m nodes.energy_meter",
+    parser = ArgumentParser(prog="python -m nodes.energy_meter",
                                      description=plain(__doc__.splitlines()[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=describe(PORTS, VARIANTS))

@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from common.cliparse import ArgumentParser
 from common.errors import PapfError
 from common.params import arg_type
 from common.ports import describe, plain
@@ -134,7 +135,7 @@ def _opt(name: str):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m nodes.lidar_sim",
+    parser = ArgumentParser(prog="python -m nodes.lidar_sim",
                                      description=plain(__doc__.split("\n\n")[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"

@@ -18,6 +18,7 @@ import json
 import time
 
 from common import runauth, seal
+from common.cliparse import ArgumentParser
 from common.errors import ConfigError
 from common.params import arg_type
 from common.ports import describe, plain
@@ -36,7 +37,7 @@ NODE_NAME = "planner"
 
 def parse_args(argv=None) -> argparse.Namespace:
     """The node's command line (``python -m nodes.planner --help``)."""
-    ap = argparse.ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
+    ap = ArgumentParser(prog="python -m nodes.planner", description=plain(__doc__.split("\n")[0]),
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS, EXTRAS))
     ap.add_argument("--planner", default=DEFAULT_PLANNER, choices=sorted(PLANNERS), help="algorithm")

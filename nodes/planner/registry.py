@@ -19,6 +19,7 @@ import nodes.planner as planner_package
 from common.errors import ConfigError
 from common.optional import tomllib
 from common.params import Spec, check_all, check_value, unknown_name
+from common.syntax import toml_problem
 from nodes.planner.core import NoParams, Planner, Strategy
 from nodes.planner.field import APFParams
 from nodes.planner.settings import APF as APF_SPECS
@@ -223,11 +224,15 @@ def _read_toml(file: str | Path) -> dict:
         if size > MAX_PARAMS_BYTES:   # a settings file is a few hundred bytes
             raise ConfigError(f"planner params {str(file)!r}: {size:,} bytes; a settings file "
                               f"has at most {MAX_PARAMS_BYTES:,}")
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"planner params {str(file)!r} is not valid TOML: "
+                          f"{toml_problem(exc, text)}") from None
     except RecursionError:   # tomllib on thousands of nested arrays or tables
         raise ConfigError(f"planner params {str(file)!r}: nested too deeply to be "
                           "settings") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+    except (OSError, UnicodeDecodeError) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ConfigError(f"planner params {str(file)!r} is not a readable TOML file: "
                           f"{msg}") from None

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import zenoh
 
+from common.cliparse import ArgumentParser
 from common.errors import ConfigError, PapfError, RecordingError
 from common.outfiles import check_output
 from common.ports import describe, plain
@@ -283,7 +284,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(prog="python -m nodes.recorder",
+    parser = ArgumentParser(prog="python -m nodes.recorder",
                                      description=plain(__doc__.splitlines()[0]),
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=describe(PORTS, VARIANTS))

@@ -27,6 +27,7 @@ from collections import Counter
 
 from common import rmw_zenoh as rz
 from common import runauth
+from common.cliparse import ArgumentParser
 from common.errors import ConfigError, PapfError, SchemaError
 from common.ports import describe
 from common.ros_link import RmwZenohLink, ros_domain
@@ -41,7 +42,7 @@ GUARDED = "cmd_vel"                  # a foreign subscriber of this face topic: 
 
 def parse_args(argv=None) -> argparse.Namespace:
     """The face's command line: ROS domain, namespace and the bus options."""
-    ap = argparse.ArgumentParser(prog="python -m nodes.ros_face", description=__doc__.split("\n")[0],
+    ap = ArgumentParser(prog="python -m nodes.ros_face", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS))
     ap.add_argument("--ros-domain", type=int, default=None, metavar="N",

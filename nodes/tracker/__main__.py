@@ -19,6 +19,7 @@ import dataclasses
 import sys
 import time
 
+from common.cliparse import ArgumentParser
 from common.errors import ConfigError
 from common.params import arg_type, pos
 from common.ports import describe
@@ -76,7 +77,7 @@ def run(args: argparse.Namespace, params: TrackerParams) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m nodes.tracker``: run the node; the exit code (2 on a bad setting)."""
-    parser = argparse.ArgumentParser(prog="python -m nodes.tracker",
+    parser = ArgumentParser(prog="python -m nodes.tracker",
                                      description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
                                      epilog=__doc__.split("\n\n", 1)[1] + "\n\n"

@@ -26,6 +26,7 @@ import zenoh
 from foxglove.websocket import Capability, Parameter, ParameterType
 
 from common import runauth
+from common.cliparse import ArgumentParser
 from common.errors import ConfigError, PapfError
 from common.params import PORT, arg_type
 from common.ports import describe
@@ -108,7 +109,7 @@ def _parameter(name: str, value) -> Parameter:
 
 def parse_args(argv=None) -> argparse.Namespace:
     """The viewer's command line: world, WebSocket host and port, bus options."""
-    ap = argparse.ArgumentParser(prog="python -m nodes.viewer", description=__doc__.split("\n")[0],
+    ap = ArgumentParser(prog="python -m nodes.viewer", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
                                  epilog=describe(PORTS, VARIANTS))
     add_view_args(ap)

@@ -15,6 +15,7 @@ import numpy as np
 import yaml
 
 from common.errors import ConfigError, SchemaError
+from common.syntax import yaml_problem
 
 _NUMPY = {"float32": np.float32, "float64": np.float64, "int8": np.int8, "uint8": np.uint8,
           "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
@@ -30,7 +31,7 @@ def parse_value(text: str) -> dict:
     except RecursionError:   # thousands of nested brackets
         raise ConfigError("VALUE is nested too deeply to be a message") from None
     except yaml.YAMLError as exc:
-        raise ConfigError(f"VALUE {text!r} is not YAML/JSON: {str(exc).splitlines()[0]}") from None
+        raise ConfigError(f"VALUE {text!r} is not YAML/JSON: {yaml_problem(exc, text)}") from None
     if value is None:
         value = {}
     if not isinstance(value, dict):

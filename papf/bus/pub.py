@@ -8,6 +8,7 @@ with rmw_zenoh's key, tokens and attachments. Fields: :mod:`papf.bus.fields`.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 
@@ -49,8 +50,9 @@ def prepare(name: str, value: dict, keys: Keys, ros_type: str | None = None) -> 
 
 
 def publish(session, p: Prepared, ros: str, domain: int, times: int, rate_hz: float,
-            out: Callable[[str], None], stop: Callable[[], bool]) -> int:
-    """Put ``p`` ``times`` times (0: until stopped) at ``rate_hz``; returns how many went out."""
+            out: Callable[[str], None], stop: Callable[[], bool], duration_s: float = 0.0) -> int:
+    """Put ``p`` ``times`` times (0: until stopped) at ``rate_hz``, for at most ``duration_s``
+    (0: no limit); returns how many went out."""
     link = None
     if p.ros_topic is None:
         pub, key = session.declare_publisher(p.key_name), p.key_name
@@ -62,11 +64,12 @@ def publish(session, p: Prepared, ros: str, domain: int, times: int, rate_hz: fl
     sent = 0
     try:
         time.sleep(0.3)        # let the subscribers' interest reach us before the first put
-        while not stop() and (times <= 0 or sent < times):
+        end = time.monotonic() + duration_s if duration_s > 0 else math.inf
+        while not stop() and (times <= 0 or sent < times) and time.monotonic() < end:
             pub.put(p.payload)
             sent += 1
             if times <= 0 or sent < times:
-                time.sleep(1.0 / rate_hz)
+                time.sleep(min(1.0 / rate_hz, max(end - time.monotonic(), 0.0)))
         time.sleep(0.2)        # flush before the session closes
     finally:
         if link is not None:

@@ -151,10 +151,13 @@ def fleet_alive(session: zenoh.Session, timeout_s: float = 1.0) -> dict[str, lis
 
 
 def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
-               stop: Stop = lambda: False, as_json: bool = False, only: bool = False) -> int:
+               stop: Stop = lambda: False, as_json: bool = False, only: bool = False,
+               table: Callable | None = None) -> int:
     """Print what the bus carries (see the module doc); returns how many keys were heard.
     Every key of the network and every namespace's live nodes (a fleet); ``only``: the
-    keys and nodes of ``keys``' namespace alone (one robot of a fleet)."""
+    keys and nodes of ``keys``' namespace alone (one robot of a fleet). ``table``: given a
+    rich ``Table`` of the keys, prints it (a terminal: :func:`papf.console.tables.print_table`,
+    which fits it); without, one line per key (piped: whole lines a script reads)."""
     rows = listen(session, keys.key("**") if only else "**", duration_s, stop)
     for suffix, msg_type in TOPICS.items():   # the stack's topics that stayed silent
         rows.setdefault(keys.key(suffix), TopicRow(keys.key(suffix), msg_type.TYPE, "msgpack"))
@@ -174,14 +177,17 @@ def topic_list(session: zenoh.Session, keys: Keys, duration_s: float, out: Out,
                         **({"refused": refused} if refused else {})}))
         return heard
     shown = {r.key: safe_text(r.key, MAX_KEY_CHARS) for r in rows.values()}   # a peer's key
-    width = max(len(k) for k in shown.values())
-    out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
-        f"(heard for {duration_s:g} s)")
-    for r in sorted(rows.values(), key=lambda r: (r.count == 0, r.key)):
-        hz = r.stats.rate().hz
-        rate = "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
-        out(f"{shown[r.key]:<{width}}  {safe_text(r.type_name or '?', 60):<28} "
-            f"{safe_text(r.encoding, 20):<8} {rate:>10}  {r.count}")
+    lines = [(shown[r.key], safe_text(r.type_name or "?", 60), safe_text(r.encoding, 20),
+              _rate_text(r), str(r.count))
+             for r in sorted(rows.values(), key=lambda r: (r.count == 0, r.key))]
+    if table is not None:
+        table(_keys_table(lines, duration_s))
+    else:
+        width = max(len(k) for k in shown.values())
+        out(f"{'KEY':<{width}}  {'TYPE':<28} {'ENCODING':<8} {'RATE':>10}  MESSAGES "
+            f"(heard for {duration_s:g} s)")
+        for key, type_name, encoding, rate, count in lines:
+            out(f"{key:<{width}}  {type_name:<28} {encoding:<8} {rate:>10}  {count}")
     for r in _link_rows(rows):
         out(link_line(shown[r.key], r.last))
     out(f"alive ({safe_text(keys.alive())}): {_names(nodes)}")
@@ -241,6 +247,24 @@ def link_line(key: str, h: dict) -> str:
 MAX_KEY_CHARS = 120   # [chars] of a key shown in the table (a peer's 10 MB key stays one line)
 
 
+def _rate_text(r: TopicRow) -> str:
+    hz = r.stats.rate().hz
+    return "silent" if not r.count else ("once" if math.isnan(hz) else f"{hz:.1f} Hz")
+
+
+def _keys_table(lines: list[tuple[str, ...]], duration_s: float):
+    """The keys as a rich ``Table`` (cells are text: a peer's "[...]" is no style tag)."""
+    from rich.table import Table
+    from rich.text import Text
+
+    t = Table(title=f"heard for {duration_s:g} s", title_justify="left", box=None)
+    for col in ("KEY", "TYPE", "ENCODING", "RATE", "MESSAGES"):
+        t.add_column(col, justify="right" if col in ("RATE", "MESSAGES") else "left")
+    for line in lines:
+        t.add_row(*(Text(c) for c in line))
+    return t
+
+
 def _names(names) -> str:
     """Node names as a peer announced them, terminal-safe."""
     return ", ".join(safe_text(n, 80) for n in names) if names else "none"
@@ -257,8 +281,10 @@ def _plain(ns: str) -> bool:
 # -- echo ---------------------------------------------------------------------------------------
 def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout_s: float = 0.0,
          ros_type: str | None = None, max_items: int | None = 8, as_json: bool = False,
-         stop: Stop = lambda: False, note: Out = lambda _line: None) -> int:
-    """Print each message on ``expr`` until ``count`` (0: forever) or stop; returns how many.
+         stop: Stop = lambda: False, note: Out = lambda _line: None,
+         duration_s: float = 0.0) -> int:
+    """Print each message on ``expr`` until ``count`` (0: forever), ``duration_s`` (0:
+    forever) or stop; returns how many.
 
     ``timeout_s`` > 0: give up when the first message has not come within that long.
     Messages that came faster than they could be printed are dropped, oldest first
@@ -266,7 +292,9 @@ def echo(session: zenoh.Session, expr: str, out: Out, *, count: int = 0, timeout
     """
     inbox = Inbox(session, expr)
     try:
-        return _echo(inbox, out, count, timeout_s, ros_type, max_items, as_json, stop, note)
+        end = time.monotonic() + duration_s if duration_s > 0 else math.inf
+        return _echo(inbox, out, count, timeout_s, ros_type, max_items, as_json,
+                     lambda: stop() or time.monotonic() >= end, note)
     finally:
         inbox.close()
         if inbox.dropped:
@@ -310,23 +338,30 @@ def format_sample(key: str, d: Decoded, max_items: int | None, as_json: bool) ->
 # -- hz -----------------------------------------------------------------------------------------
 def hz(session: zenoh.Session, expr: str, out: Out, *, window: int = 1000,
        period_s: float = 1.0, duration_s: float = 0.0, stop: Stop = lambda: False,
-       ros_type: str | None = None) -> dict[str, HzStats]:
-    """Print each key's rate every ``period_s`` until ``duration_s`` (0: forever) or stop."""
+       ros_type: str | None = None, count: int = 0,
+       reports: int = 0) -> dict[str, HzStats]:
+    """Print each key's rate every ``period_s`` until ``duration_s`` (0: forever), ``count``
+    messages (0: any number), ``reports`` printed reports (0: any number) or stop; then the
+    rates once more (unless the last report was just that)."""
     stats: dict[str, HzStats] = {}
     inbox = Inbox(session, expr)
     t0 = time.monotonic()
-    next_print = t0 + period_s
+    next_print, printed, heard = t0 + period_s, 0, 0
     try:
-        while not stop():
+        while not stop() and not (count and heard >= count):
             now = time.monotonic()
             if duration_s > 0 and now - t0 >= duration_s:
                 break
             if now >= next_print:
                 next_print += period_s
                 _print_rates(stats, expr, out)
+                printed += 1
+                if reports and printed >= reports:
+                    return stats
             item = inbox.get(min(next_print - now, 0.1))
             if item is not None:
                 key, data, arrival = item
+                heard += 1
                 stats.setdefault(key, HzStats(window)).add(arrival, stamp_of(key, data, ros_type))
     finally:
         inbox.close()

@@ -20,15 +20,15 @@ import signal
 # imports below — one sent meanwhile would be discarded (papf/__main__.py says more)
 signal.signal(signal.SIGINT, signal.default_int_handler)
 
-import argparse  # noqa: E402
 import importlib  # noqa: E402
 import logging  # noqa: E402
 import os  # noqa: E402
 import sys  # noqa: E402
 
 from common import __version__  # noqa: E402
+from common.cliparse import ArgumentParser  # noqa: E402
 from common.errors import PapfError  # noqa: E402
-from common.text import install_log_filter, safe_line  # noqa: E402
+from common.text import install_log_filter, print_error  # noqa: E402
 
 # (command, module of papf.cli that registers it), in ``--help`` order. ``papf COMMAND``
 # imports that one module only (``papf run`` starts its processes ~0.2 s sooner than if
@@ -41,17 +41,12 @@ COMMANDS = (("run", "run"), ("worlds", "worlds"), ("launch", "launch"), ("topic"
             ("rosbot-emulator", "emulator"), ("link", "link"), ("make-certs", "certs"), ("new", "new"))
 
 
-class _Parser(argparse.ArgumentParser):
-    """A usage error is one line (what was wrong and what is valid) and exit 2."""
-
-    def error(self, message: str):   # the message quotes the user's text: shown, never run
-        self.exit(2, f"{self.prog}: {safe_line(message)} (see {self.prog} --help)\n")
-
-
-def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> ArgumentParser:
     """The ``papf`` parser: the command modules of :data:`COMMANDS` register their
-    subcommands — only ``command``'s when it names one, else every one."""
-    parser = _Parser(prog="papf", description=__doc__.split("\n\n")[0])
+    subcommands — only ``command``'s when it names one, else every one. A usage error is
+    one line, whole, with did-you-mean from the parser's own options and choices
+    (:class:`common.cliparse.ArgumentParser`), and exit 2."""
+    parser = ArgumentParser(prog="papf", description=__doc__.split("\n\n")[0])
     parser.add_argument("--version", action="version", version=f"papf-stack {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     wanted = [m for name, m in COMMANDS if name == command] or [m for _, m in COMMANDS]
@@ -62,6 +57,16 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def _sigterm_as_interrupt(*_) -> None:
     raise KeyboardInterrupt  # same clean stop as Ctrl-C: every child process is stopped
+
+
+SUBCOMMAND_DEST = {"topic": "topic_command", "node": "node_command", "experiment": "experiment",
+                   "export": "format", "new": "kind"}   # the commands that have subcommands
+
+
+def _prog(args) -> str:
+    """``papf COMMAND [SUBCOMMAND]`` as the user typed it (``papf topic pub``)."""
+    sub = getattr(args, SUBCOMMAND_DEST.get(args.command, ""), None)
+    return f"papf {args.command}" + (f" {sub}" if isinstance(sub, str) else "")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -77,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except PapfError as exc:
-        print(f"papf {args.command}: {safe_line(str(exc))}", file=sys.stderr)
+        print_error(_prog(args), str(exc))   # whole: the fix hint is at its end
         return 2
     except KeyboardInterrupt:
         print(f"papf {args.command}: interrupted; every process was stopped", file=sys.stderr)

@@ -13,11 +13,12 @@ import sys
 from pathlib import Path
 
 from common.errors import ConfigError
-from common.params import SEED, TIMEOUT, arg_type, integer
+from common.params import PORT, SEED, TIMEOUT, arg_type, integer
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS, car_variants, declared, with_role
 from papf.cli.experiment_link import add_link
 from papf.cli.experiment_paper import add_paper_studies, preset_list
+from papf.cli.options import add_port_range, use_ports
 from papf.experiments.energy import PAPER_PAIR, TIMEOUT_S, WORLD
 from papf.experiments.paper_tests import PAPER_WORLDS
 from papf.experiments.sweep import MAX_WORKERS
@@ -46,6 +47,7 @@ def _out_dir_checked(func):
     """``func`` after a check of ``--out DIR``: a directory, or nothing yet, whose parent
     exists (ConfigError, exit 2, before any run: a file there was a traceback after them)."""
     def checked(args):
+        use_ports(args, experiment=True)   # a bad --port/--port-range: before any run
         out = Path(args.out)
         if out.exists() and not out.is_dir():
             raise ConfigError(f"--out {str(out)!r} is a file; an experiment writes into a "
@@ -98,6 +100,11 @@ def _add_sweep(p) -> None:
                         "(default 1: one after the other, no Dask)")
     g.add_argument("--scheduler", metavar="tcp://HOST:8786",
                    help="run on an existing Dask cluster; results are gathered here")
+    g = p.add_argument_group("ports (docs/robot.md \"Ports and firewalls\")")
+    g.add_argument("--port", type=arg_type("--port", PORT), metavar="PORT",
+                   help="every run's router on this port, one run at a time (default: a free "
+                        "port per run)")
+    add_port_range(g)
 
 
 def sweep_options(args):

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
-from common.errors import PapfError
-from common.text import safe_line, safe_text
+from common.errors import ConfigError, PapfError
+from common.text import print_error, safe_text
 
 
 def register(sub) -> None:
@@ -40,7 +41,7 @@ def cmd_info(args) -> int:
                     "first_log_ns": first, "last_log_ns": last}
         scan, intact = scan_file(args.file)
     except PapfError as exc:
-        print(f"papf info: {safe_line(str(exc))}", file=sys.stderr)
+        print_error("papf info", str(exc))
         return 2
     info.update(intact_messages=intact, damaged_chunks=scan.bad_chunks,
                 damaged_bytes=scan.damaged_bytes)
@@ -64,7 +65,8 @@ def _print_info(file, info: dict, channels: dict, first: int, last: int) -> None
     print(f"{safe_text(str(file))}: log time {first / 1e9:.3f} .. {last / 1e9:.3f} s")
     for name, meta in info["metadata"].items():
         print(f"  metadata {safe_text(name, 80)}: "
-              + safe_text(", ".join(f"{k}={v}" for k, v in meta.items()), 400))
+              + ", ".join(f"{safe_text(k, 80)}={safe_text(v)}" for k, v in meta.items()))
+    # every field shown (each value as a value: a peer's 5 KB note is cut, the line is not)
     shown = {k: safe_text(k, 120) for k in channels}
     width = max((len(k) for k in shown.values()), default=10)
     print(f"  {'KEY':<{width}} {'MESSAGES':>8}  {'SCHEMA':<24} ENCODING (message / schema)")
@@ -83,11 +85,16 @@ def _bag_info(args) -> int:
     from papf.recording.rosbag import BagRecording
 
     topics = topic_map(args)
-    with BagRecording(args.file, topics) as bag:
-        first, last = bag.time_span_ns()
-        info = {"file": args.file, "rosbag2": True, "duration_s": (last - first) / 1e9,
-                "topics": {t: {"type": m, "messages": n} for t, (m, n) in bag.bag_topics().items()},
-                "roles": asdict(topics), "as_our_keys": bag.counts()}
+    try:
+        with BagRecording(args.file, topics) as bag:
+            first, last = bag.time_span_ns()
+            info = {"file": args.file, "rosbag2": True, "duration_s": (last - first) / 1e9,
+                    "topics": {t: {"type": m, "messages": n}
+                               for t, (m, n) in bag.bag_topics().items()},
+                    "roles": asdict(topics), "as_our_keys": bag.counts()}
+    except ConfigError as exc:   # topics not the ROSbot's: still say what the bag holds
+        info = _plain_bag(args.file)
+        print_error("papf info", f"{exc} (papf report and replay need that)")
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -95,8 +102,28 @@ def _bag_info(args) -> int:
     role_of = {t: r for r, t in info["roles"].items()}
     shown = {t: safe_text(t, 120) for t in info["topics"]}   # a bag's names: shown, never run
     width = max((len(t) for t in shown.values()), default=10)
-    print(f"  {'TOPIC':<{width}} {'MESSAGES':>8}  {'TYPE':<32} READ AS")
+    types = {t: safe_text(d["type"], 80) for t, d in info["topics"].items()}
+    tw = max((len(v) for v in types.values()), default=4)
+    print(f"  {'TOPIC':<{width}} {'MESSAGES':>8}  {'TYPE':<{tw}} READ AS")
     for t, d in sorted(info["topics"].items()):
-        print(f"  {shown[t]:<{width}} {d['messages']:>8}  {safe_text(d['type'], 80):<32} "
-              f"{role_of.get(t, '-')}")
+        print(f"  {shown[t]:<{width}} {d['messages']:>8}  {types[t]:<{tw}} {role_of.get(t, '-')}")
     return 0
+
+
+def _plain_bag(path: str) -> dict:
+    """A rosbag2's topics, types, counts and span as rosbags reads them, no role read."""
+    from rosbags.highlevel import AnyReader
+
+    from common.errors import RecordingError
+
+    try:
+        with AnyReader([Path(path)]) as reader:
+            topics: dict[str, dict] = {}
+            for c in reader.connections:
+                d = topics.setdefault(c.topic, {"type": c.msgtype, "messages": 0})
+                d["messages"] += c.msgcount
+            span = (reader.end_time - reader.start_time) / 1e9 if reader.connections else 0.0
+    except Exception as exc:   # rosbags raises its own errors for unreadable bags
+        raise RecordingError(f"{path}: not a readable rosbag2 ({exc})") from None
+    return {"file": path, "rosbag2": True, "duration_s": span, "topics": topics, "roles": {},
+            "as_our_keys": {}}

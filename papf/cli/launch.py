@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import json
 
+from common.params import PORT, arg_type
 from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS
+from papf.cli.options import add_port_range, use_ports
 from papf.cli.view import add_view_flag
 
 
@@ -20,7 +22,12 @@ def register(sub) -> None:
     p.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                    help="where this host's nodes connect, e.g. tcp/192.168.1.10:7447")
     p.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
-                   help="the router's endpoints (profiles with a router)")
+                   help="the router's endpoints (profiles with a router), e.g. "
+                        "tcp/0.0.0.0:7447 (every interface: the other host reaches it)")
+    p.add_argument("--port", type=arg_type("--port", PORT),
+                   help="the router's port on the profile's interface (robot: tcp/0.0.0.0:PORT, "
+                        "sim: tcp/127.0.0.1:PORT); default 7447, or a free one")
+    add_port_range(p)
     p.add_argument("--namespace", default="rosbot", help="robot key namespace (rosbot)")
     p.add_argument("--join", action="append", default=[], metavar="ENDPOINT",
                    help="connect this host's router to another's (a fleet across hosts: one "
@@ -73,6 +80,10 @@ def cmd_launch(args) -> int:
     from papf.launch.host import launch  # zenoh: only when launching
     from papf.launch.profile import LaunchOptions
 
+    use_ports(args)   # --port-range for every process of this host, before any starts
+    if args.port is not None:
+        args.listen = router_listen(args.profile, args.port, args.listen)
+
     cmd_vel_type(args)
     domain = ros_domain(args) if args.ros == "rmw_zenoh" else None   # checked before any process
     values = {"world": args.world, "planner": args.planner, "seed": args.seed,
@@ -98,3 +109,23 @@ def cmd_launch(args) -> int:
         print(f"papf launch {args.profile}: {result.outcome} after {result.sim_time_s:.2f} s "
               f"({result.path_length_m:.2f} m, {result.charge_mAh:.2f} mAh) {result.reason}")
     return 130 if result.reason == "interrupted" else result.exit_code
+
+
+def router_listen(profile: str, port: int, listen: list[str]) -> list[str]:
+    """``--port P``: the profile's router endpoints with port P (ConfigError, exit 2, for a
+    profile without a router, or beside ``--listen``, which says it all)."""
+    import re
+
+    from common.errors import ConfigError
+    from papf.launch import portrange
+    from papf.launch.profile import load_profile
+
+    if listen:
+        raise ConfigError("--port and --listen both set the router's endpoint: give one "
+                          "(--listen tcp/HOST:PORT, or --port PORT on the profile's interface)")
+    prof = load_profile(profile)
+    if not prof.router:
+        raise ConfigError(f"profile {prof.name} runs no router, so --port has nothing to set; "
+                          "reach the other host's with --connect tcp/<host>:PORT")
+    portrange.check_port(port)
+    return [re.sub(r":\d+$", f":{port}", ep) for ep in prof.listen]

@@ -46,8 +46,10 @@ def cmd_new_planner(args) -> int:
 
     root = repo_root()
     check_checkout(root)
+    here = Path.cwd().resolve() == root.resolve()   # elsewhere: say where the checkout is
     for path in new_planner(args.name, args.source, root):
-        print(path.relative_to(root))
+        print(path.relative_to(root) if here else path)
     print(f"planner {args.name!r} from {args.source!r}: try `papf plan --world open --planner "
-          f"{args.name}`, then edit nodes/planner/{args.name}/", file=sys.stderr)
+          f"{args.name}`, then edit {'' if here else f'{root}/'}nodes/planner/{args.name}/",
+          file=sys.stderr)
     return 0

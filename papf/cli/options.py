@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from common.errors import ConfigError
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS
 
 
@@ -34,6 +35,35 @@ def resolve_world(args) -> str:
         raise WorldError("--start/--goal go with a map .yaml as --world; a world file "
                          "gives its own [robot] start and [goal]")
     return args.world
+
+
+PORT_RANGE_HELP = ("every port the stack listens on inside LO-HI (e.g. 7447-7460): the router's "
+                   "(unless --port) and each peer node's; for a lab firewall (docs/robot.md "
+                   "\"Ports and firewalls\")")
+
+
+def add_port_range(p) -> None:
+    """``--port-range LO-HI`` (:mod:`papf.launch.portrange`): checked and applied by
+    :func:`use_ports` before anything starts."""
+    p.add_argument("--port-range", metavar="LO-HI", help=PORT_RANGE_HELP)
+
+
+def use_ports(args, experiment: bool = False) -> None:
+    """Apply ``--port-range`` (and an experiment's ``--port``) to this process and its
+    children; ConfigError (exit 2, one line) before anything starts on a bad range, a
+    ``--port`` outside it, or (``experiment``) a ``--port`` that runs at once would share."""
+    from papf.launch import portrange
+
+    rng = portrange.parse(args.port_range) if getattr(args, "port_range", None) else None
+    port = getattr(args, "port", None)
+    if rng is not None and port is not None and port not in rng:
+        raise ConfigError(f"--port {port} is outside --port-range {rng}; give a port inside "
+                          "it, or leave --port out")
+    if experiment and port is not None and (getattr(args, "workers", 1) > 1
+                                            or getattr(args, "scheduler", None)):
+        raise ConfigError(f"--port {port} with --workers/--scheduler: runs at once need a "
+                          "router port each; give --port-range LO-HI instead")
+    portrange.use(rng, port if experiment else None)
 
 
 def add_planner_settings(p) -> None:

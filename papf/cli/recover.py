@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 from common.errors import PapfError
-from common.text import safe_line
+from common.text import print_error
 
 
 def register(sub) -> None:
@@ -32,7 +31,7 @@ def cmd_recover(args) -> int:
     try:
         stats = recover(broken, fixed, force=args.force)
     except PapfError as exc:
-        print(f"papf recover: {safe_line(str(exc))}", file=sys.stderr)
+        print_error("papf recover", str(exc))
         return 2
     if args.json:
         print(json.dumps(stats.to_json(str(fixed))))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from common.errors import ConfigError, PapfError
-from common.text import safe_line
+from common.text import print_error, safe_line
 from common.transport import (
     DEFAULT_ENDPOINT,
     StopRequested,
@@ -62,15 +62,23 @@ def _replay(args, stop: StopRequested) -> int:
             namespaces = target_namespaces(rec, args.keys, args.namespace)
         where = ", ".join(args.connect) or ("the --zenoh-config endpoints" if args.zenoh_config
                                              else DEFAULT_ENDPOINT)
+        own = own_router(args)
+        if own:   # as papf run does: nothing to connect to, so this process is the router
+            args.mode, where = "router", ", ".join(own)
+            args.listen = own
+            print(f"papf replay: replaying through its own router on {where} (no router to "
+                  "join; papf topic echo, papf view, papf record reach it there)",
+                  file=sys.stderr)
         with open_session(args, where) as session, DecileProgress("replay") as bar:
-            _refuse_live(session, namespaces, args.into_live)
+            if not own:   # a router of our own has no one else on it
+                _refuse_live(session, namespaces, args.into_live)
             print(f"papf replay: publishing {args.file} into the Zenoh router at {where}, "
                   f"namespace {', '.join(sorted(namespaces)) or '(none)'}", file=sys.stderr)
             stats = replay(args.file, session, args.rate or None, args.keys, args.namespace,
                            progress=_progress_printer(bar), stop=lambda: bool(stop),
                            topics=topics)
     except PapfError as exc:
-        print(f"papf replay: {safe_line(str(exc))}", file=sys.stderr)
+        print_error("papf replay", str(exc))
         return 2
     print(f"replayed {stats.messages} messages ({stats.log_span_s:.2f} s of recorded time) "
           f"in {stats.wall_s:.2f} s", file=sys.stderr)
@@ -81,19 +89,54 @@ def _replay(args, stop: StopRequested) -> int:
     return 130 if stop else 0
 
 
-PASSIVE = {"viewer"}   # nodes that only watch (replay --view starts one itself)
+def own_router(args) -> list[str]:
+    """The endpoints ``papf replay`` listens on as its own router (no ``--connect``, no
+    ``--zenoh-config``, client mode): ``--listen``'s when given, else the default endpoint
+    when nothing listens there; [] otherwise (it joins the router it reaches)."""
+    from common.reach import accepts
+
+    if args.mode != "client" or args.connect or args.zenoh_config:
+        return []
+    if args.listen:   # asked for: this replay is the router there
+        return list(args.listen)
+    return [] if accepts(DEFAULT_ENDPOINT) else [DEFAULT_ENDPOINT]
+
+
+def passive_nodes() -> set[str]:
+    """Nodes a replay cannot make act: those whose declared outputs (``nodes/<node>/ports.py``,
+    every variant) are events alone — the recorder writes what it hears, it steers nothing —
+    and the viewer (its goals come from a user; ``replay --view`` starts it refusing them)."""
+    import importlib
+    import pkgutil
+
+    import nodes
+
+    passive = {"viewer"}
+    for info in pkgutil.iter_modules(nodes.__path__):
+        try:
+            ports = importlib.import_module(f"nodes.{info.name}.ports")
+        except ImportError:
+            continue
+        declared = [*ports.PORTS, *(p for v in getattr(ports, "VARIANTS", {}).values()
+                                    for p in (v if isinstance(v, tuple) else ()))]
+        outs = {key for direction, key, *_ in declared if direction == "out"}
+        if outs <= {"events"}:
+            passive.add(info.name)
+    return passive
 
 
 def _refuse_live(session, namespaces: set[str], into_live: bool) -> None:
-    """A live stack in a target namespace would act on recorded messages: refuse. One
+    """A live stack in a target namespace would act on recorded messages: refuse. Nodes that
+    act on nothing (:func:`passive_nodes`: a lone recorder) are no live stack. One
     liveliness query for every namespace (a recording may name thousands)."""
     alive: dict[str, set[str]] = {}
     for reply in session.liveliness().get("**/alive/*", timeout=1.0):
         if reply.ok is not None:
             ns, _, name = str(reply.ok.key_expr).rpartition("/alive/")
             alive.setdefault(ns, set()).add(name)
+    passive = passive_nodes()
     for ns in sorted(namespaces & set(alive)):
-        live = alive[ns] - PASSIVE
+        live = alive[ns] - passive
         if live and not into_live:
             raise ConfigError(f"a live stack runs in namespace {ns!r} (alive: "
                               f"{', '.join(sorted(live))}); replaying would feed it recorded "

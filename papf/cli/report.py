@@ -15,9 +15,11 @@ PROGRESS_AFTER_S = 3.0   # [s wall] a report done sooner prints no progress
 def register(sub) -> None:
     """Add ``papf report`` and its options to the subcommands ``sub``."""
     p = sub.add_parser(
-        "report", help="energy report of recorded runs (report.md, report.csv, PNGs)",
+        "report", help="energy report of recorded runs (report.html, .md, .csv, PNGs)",
         description="Read MCAP recordings and rosbag2s recorded on the ROSbot only; write "
-                    "report.md, report.csv, trajectories.png, charge.png and motion.png. Charge "
+                    "report.md, report.csv, trajectories.png, charge.png, motion.png, mind.png and "
+                    "report.html (all of it in one file a browser opens: figures embedded); an "
+                    "existing report is refused before anything is computed (--force). Charge "
                     "and energy are re-metered from the recorded odometry and wheel states (a "
                     "bag's: from its odometry); a bag's /battery current gives the measured "
                     "charge beside them.")
@@ -79,12 +81,16 @@ def cmd_report(args) -> int:
     bags = [r for r in report.runs if r.outcome == BAG]
     if bags:
         say("\nbags recorded on the robot:")
-        say(bags_markdown(bags, report.model))
+        show_table(bags_markdown(bags, report.model), say)
     bag_worlds = {r.world for r in bags}
     for world in sorted({s.world for s in report.summaries} - bag_worlds):
         say(f"\nworld {world}:")
-        say(summary_markdown([s for s in report.summaries if s.world == world], report.model))
+        show_table(summary_markdown([s for s in report.summaries if s.world == world],
+                                    report.model), say)
     say(f"\nwrote {', '.join(str(f) for f in report.files)}")
+    page = next((f for f in report.files if f.suffix == ".html"), None)
+    if page is not None:   # one file, figures inside: what a user opens first
+        say(f"open {page.resolve().as_uri()} in a browser (one file, figures embedded)")
     return 0
 
 
@@ -98,6 +104,21 @@ def sides_note(m) -> str:
     return (f"{m.file}: path, duration, charge and energy from the robot's recording "
             f"{s['robot_file']}; the laptop's recording missed "
             + (f"{s['laptop_missed_total_s']:.2f} s of odometry ({holes})" if holes else "nothing"))
+
+
+def show_table(text: str, say) -> None:
+    """A Markdown table of the report: on a terminal as a table that fits it
+    (:func:`papf.console.tables.print_table`); piped, the Markdown lines as they are."""
+    from rich.console import Console
+
+    from papf.console.tables import markdown_table, print_table
+
+    console = Console()
+    table = markdown_table(text) if console.is_terminal else None
+    if table is None:
+        say(text)
+    else:
+        print_table(table, console)
 
 
 def finite(obj):

@@ -7,7 +7,13 @@ import json
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from common.ros_link import add_face_args, face_domain
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
-from papf.cli.options import add_planner_settings, add_world_and_planner, resolve_world
+from papf.cli.options import (
+    add_planner_settings,
+    add_port_range,
+    add_world_and_planner,
+    resolve_world,
+    use_ports,
+)
 from papf.cli.view import add_view_flag
 
 
@@ -29,6 +35,7 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument("--port", type=arg_type("--port", PORT),
                    help="embedded router port (default 7447, or a free one)")
+    add_port_range(p)
     p.add_argument("--namespace", default="rosbot", help="robot key namespace")
     p.add_argument("--zenoh-mode", choices=("client", "peer"), default="peer",
                    help="nodes' Zenoh mode: peer (direct loopback links, the launcher's router "
@@ -91,6 +98,8 @@ def run_config(args):
 def cmd_run(args) -> int:
     from papf.launch.run import preflight, resolve_run, run
 
+    use_ports(args)   # --port-range: for every process of the run, before any starts
+
     if args.link is not None:
         return cmd_run_link(args)
     if args.robot_trace:
@@ -145,11 +154,11 @@ def link_line(stats: dict) -> str:
 def print_summary(result, energy_model: str | None = None) -> None:
     """The run's table (and a fleet's, one row per robot); ``energy_model`` named beside the
     charge (the meter's model: its figures differ from the paper's model's)."""
-    from rich.console import Console  # rich: only to print a table
     from rich.markup import escape  # values are text: a "[...]" in them is no style tag
     from rich.table import Table
 
     from common.text import safe_text
+    from papf.console.tables import print_table  # rich: only to print a table
 
     colour = "green" if result.outcome == "reached" else "red"
     t = Table(title=f"papf run: [{colour}]{result.outcome}[/]", show_header=False)
@@ -168,10 +177,10 @@ def print_summary(result, energy_model: str | None = None) -> None:
     if result.reason:
         rows.append(("reason", result.reason))
     for k, v in rows:   # a reason may quote a node's output: no markup, no ESC (common.text)
-        t.add_row(k, escape(safe_text(v, 400)))
-    Console().print(t)
+        t.add_row(k, escape(safe_text(v, None)))
+    print_table(t)   # fits: whole cells on a narrow terminal, one line a row when piped
     if result.fleet:
-        Console().print(fleet_table(result.fleet))
+        print_table(fleet_table(result.fleet))
 
 
 def fleet_table(robots: tuple[dict, ...]):

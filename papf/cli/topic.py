@@ -45,8 +45,7 @@ def register(sub) -> None:
                         formatter_class=argparse.RawDescriptionHelpFormatter,
                         description="Print each message on KEY, decoded (until Ctrl-C or --count).")
     q.add_argument("key", metavar="KEY")
-    q.add_argument("--count", "-n", type=arg_type("--count", integer(0, None)), default=0, help="stop after N messages")
-    q.add_argument("--once", action="store_true", help="the same as --count 1")
+    add_stop_options(q, "messages printed")
     q.add_argument("--timeout", type=arg_type("--timeout", num(0.0, 1e6, "s")), default=0.0, metavar="S",
                    help="exit 5 if no message came within S seconds (default: wait forever)")
     q.add_argument("--full", action="store_true", help="print whole arrays (default: first 8)")
@@ -63,8 +62,7 @@ def register(sub) -> None:
                                     "(sim time in a lockstep simulation).")
     q.add_argument("key", metavar="KEY")
     q.add_argument("--window", type=arg_type("--window", integer(2, 1_000_000)), default=1000, help="messages in the statistics (1000)")
-    q.add_argument("--duration", type=arg_type("--duration", num(0.0, 1e6, "s")), default=0.0, metavar="S",
-                   help="stop after S seconds (default: until Ctrl-C)")
+    add_stop_options(q, "messages heard", once="print one report (after 1 s) and exit")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of CDR payloads (stamps)")
     add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
@@ -76,9 +74,7 @@ def register(sub) -> None:
                                     "fields not given take their defaults.")
     q.add_argument("key", metavar="KEY")
     q.add_argument("value", metavar="VALUE", nargs="?", default="{}")
-    q.add_argument("--once", "-1", action="store_true", help="publish once and exit")
-    q.add_argument("--times", "-t", type=arg_type("--times", integer(0, None)), default=0, metavar="N",
-                   help="publish N times and exit (default: until Ctrl-C)")
+    add_stop_options(q, "messages published", times=True)
     q.add_argument("--rate", "-r", type=arg_type("--rate", RATE_HZ), default=1.0, metavar="HZ", help="rate (1 Hz)")
     q.add_argument("--ros-type", metavar="TYPE", help="ROS 2 type of a /topic (default: the "
                    "ROSbot's type of that topic)")
@@ -96,6 +92,19 @@ def register(sub) -> None:
     add_ros_args(q, cmd_vel=False)
     add_zenoh_args(q)
     q.set_defaults(func=cmd_topic_info)
+
+
+def add_stop_options(q, what: str, once: str = "", times: bool = False) -> None:
+    """``--once``, ``--count N``, ``--duration S``: how every topic tool that would run until
+    Ctrl-C stops, alike (the first of them reached ends it). ``times``: ``--times``/``-t``
+    is ``--count`` too (ros2 topic pub's name)."""
+    names = ("--count", "-n", "--times", "-t") if times else ("--count", "-n")
+    q.add_argument("--once", "-1", action="store_true", help=once or "the same as --count 1")
+    q.add_argument(*names, dest="count", type=arg_type("--count", integer(0, None)), default=0,
+                   metavar="N", help=f"stop after N {what} (default: no limit)")
+    q.add_argument("--duration", type=arg_type("--duration", num(0.0, 1e6, "s")), default=0.0,
+                   metavar="S", help="stop after S seconds (default: no limit; with none of "
+                                     "--once, --count, --duration: until Ctrl-C)")
 
 
 def _session(args):
@@ -128,9 +137,14 @@ def cmd_topic_list(args) -> int:
     domain = ros_domain(args)
     stop = StopRequested()
     only = args.namespace is not None   # --namespace NS: that robot alone; else the fleet
+    table = None
+    if sys.stdout.isatty() and not args.json:   # a terminal: a table that fits it
+        from papf.console.tables import print_table
+
+        table = print_table
     with _session(args) as s:
         topic_list(s, Keys(args.namespace or "rosbot"), args.duration, _out, lambda: bool(stop),
-                   args.json, only)
+                   args.json, only, table=table)
         if args.ros == "rmw_zenoh":   # the ROS 2 graph of the domain, from rmw_zenoh's tokens
             _ros_graph(s, domain, args.json)
     return 130 if stop else 0
@@ -164,11 +178,13 @@ def cmd_topic_echo(args) -> int:
     with _session(args) as s:
         n = echo(s, key, _out, count=count, timeout_s=args.timeout, ros_type=args.ros_type,
                  max_items=None if args.full else 8, as_json=args.json, stop=lambda: bool(stop),
-                 note=lambda line: print(f"papf topic echo: {line}", file=sys.stderr, flush=True))
+                 note=lambda line: print(f"papf topic echo: {line}", file=sys.stderr, flush=True),
+                 duration_s=args.duration)
     if stop:
         return 130 if n == 0 else 0
     if n == 0:
-        print(f"papf topic echo: no message on {key} within {args.timeout:g} s "
+        waited = min((t for t in (args.timeout, args.duration) if t > 0), default=0.0)
+        print(f"papf topic echo: no message on {key} within {waited:g} s "
               "(papf topic list shows what is published)", file=sys.stderr)
         return 5
     return 0
@@ -185,8 +201,8 @@ def cmd_topic_hz(args) -> int:
     key = _key(args)
     with _session(args) as s:
         hz(s, key, _out, window=args.window, duration_s=args.duration, ros_type=args.ros_type,
-           stop=lambda: bool(stop))
-    return 0
+           stop=lambda: bool(stop), count=args.count, reports=1 if args.once else 0)
+    return 130 if stop else 0
 
 
 def cmd_topic_pub(args) -> int:
@@ -194,15 +210,16 @@ def cmd_topic_pub(args) -> int:
     from papf.bus.fields import parse_value
     from papf.bus.pub import prepare, publish
 
-    times = 1 if args.once else args.times
+    times = 1 if args.once else args.count
     if times < 0 or not (args.rate > 0 and args.rate <= 1000):
-        print("papf topic pub: --times must be >= 0 and --rate in (0, 1000] Hz", file=sys.stderr)
+        print("papf topic pub: --count must be >= 0 and --rate in (0, 1000] Hz", file=sys.stderr)
         return 2
     prepared = prepare(args.key, parse_value(args.value), Keys(args.namespace), args.ros_type)
     domain = ros_domain(args)
     stop = StopRequested()
     with _session(args) as s:
-        publish(s, prepared, args.ros, domain, times, args.rate, _out, lambda: bool(stop))
+        publish(s, prepared, args.ros, domain, times, args.rate, _out, lambda: bool(stop),
+                duration_s=args.duration)
     return 130 if stop and times != 1 else 0
 
 

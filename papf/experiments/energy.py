@@ -186,9 +186,9 @@ def _decoding(msg_type, store):
 
 def _one_run(exp: EnergyExperiment, spec: RunSpec, progress: Progress, task,
              goal: tuple[float, float], run_fn: Callable[[RunConfig], RunResult]) -> RunResult:
-    from papf.launch.supervisor import free_port
+    from papf.launch.supervisor import run_port
 
-    port = free_port()
+    port = run_port()
     box: dict[str, object] = {}
 
     def target() -> None:
@@ -246,10 +246,11 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
     out.mkdir(parents=True, exist_ok=True)
     specs = plan(exp)
     _warn_foreign_files(out, specs, console)
+    own = _report_is_ours(out, exp.world)   # before any run: not after the last one
     wall0 = time.monotonic()
     if exp.sweep.distributed:
         results = _run_spread(exp, specs, console)
-        report = build_report([s.path for s, _r in results], out)
+        report = build_report([s.path for s, _r in results], out, force=own)
         return ExperimentResult(results, report, time.monotonic() - wall0,
                                 _mismatches(results, report))
     results: list[tuple[RunSpec, RunResult]] = []
@@ -272,7 +273,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
                 console.print(_result_line(spec, result), highlight=False, soft_wrap=True)
     finally:
         run_log.setLevel(level)
-    report = build_report([s.path for s, _r in results], out)
+    report = build_report([s.path for s, _r in results], out, force=own)
     wall = time.monotonic() - wall0
     return ExperimentResult(results, report, wall, _mismatches(results, report))
 
@@ -301,12 +302,12 @@ def energy_job(job: tuple[EnergyExperiment, RunSpec, int]) -> tuple[RunResult, b
 
     from papf.experiments.sweep import run_namespace
     from papf.launch.run import run
-    from papf.launch.supervisor import free_port
+    from papf.launch.supervisor import run_port
 
     exp, spec, index = job
     with tempfile.TemporaryDirectory(prefix="papf-energy-") as tmp:
         local = dataclasses.replace(spec, path=Path(tmp) / spec.path.name)
-        cfg = dataclasses.replace(run_config(exp, local, free_port()),
+        cfg = dataclasses.replace(run_config(exp, local, run_port()),
                                   namespace=run_namespace(index))
         result = run(cfg)
         return result, (local.path.read_bytes() if local.path.exists() else None)
@@ -335,6 +336,23 @@ def _resumed(journal: Journal, exp: EnergyExperiment, spec: RunSpec) -> RunResul
         return RunResult(**kw)
     except (TypeError, ValueError):
         return None
+
+
+def _report_is_ours(out: Path, world: str) -> bool:
+    """Whether a report already in ``out`` is this experiment's (its journal ``out/runs/`` is
+    there: an earlier run of it wrote the report, which the new one replaces); a report in
+    ``out`` without the journal is someone's own: refused (OutputError) before any run."""
+    from common.outfiles import OutputError
+    from papf.report.report import report_files
+    from worlds import load_world
+
+    if (out / "runs").is_dir():
+        return True
+    there = [n for n in report_files([load_world(world).name], "") if (out / n).exists()]
+    if there:
+        raise OutputError(f"{out} already holds a report ({', '.join(there)}) that this "
+                          "experiment did not make; give another --out, or move those files")
+    return False
 
 
 def _warn_foreign_files(out: Path, specs: Sequence[RunSpec], console: Console) -> None:
@@ -378,6 +396,7 @@ def print_summary(res, console=None) -> None:
     from rich.markup import escape  # "[mAh]" is text, not a style tag
     from rich.table import Table
 
+    from papf.console.tables import print_table
     from papf.report.tables import PAPER, change_pct
 
     console = console or Console()
@@ -393,7 +412,7 @@ def print_summary(res, console=None) -> None:
         t.add_row(escape(s.planner), f"{s.reached}/{s.runs}", st["charge_mAh"].text(".2f"),
                   st["energy_J"].text(".1f"), st["duration_s"].text(".2f"),
                   st["path_length_m"].text(".3f"))
-    console.print(t)
+    print_table(t, console)   # fits the terminal; piped: one line a row
     apf, papf = (res.report.summary(name) for name in PAPER_PAIR)
     if apf and papf:
         for attr, label in (("charge_mAh", "charge"), ("duration_s", "duration"),

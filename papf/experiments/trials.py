@@ -26,7 +26,7 @@ from common.errors import RecordingError
 from common.outfiles import output, replace_text
 from papf.experiments.journal import Journal, run_key
 from papf.experiments.sweep import SweepOptions, map_runs
-from papf.launch.supervisor import free_port
+from papf.launch.supervisor import run_port
 from worlds import World, load_world
 
 MODES = ("offline", "stack")
@@ -120,7 +120,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
         Path(record).parent.mkdir(parents=True, exist_ok=True)
         Path(record).unlink(missing_ok=True)
     cfg = RunConfig(world=str(world_file), planner=planner, seed=seed, timeout_s=timeout_s,
-                    record=str(record) if record else None, port=free_port(), progress=False,
+                    record=str(record) if record else None, port=run_port(), progress=False,
                     planner_args=list(planner_args), objects=objects, namespace=namespace,
                     startup_timeout_s=startup_timeout_s)
     res = run(cfg)

@@ -21,6 +21,7 @@ from common.errors import ConfigError, PapfError
 from common.transport import StopRequested, wait_alive, zenoh_config
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
+from papf.launch import portrange
 from papf.launch.claim import Claim, check_network
 from papf.launch.linkwatch import LinkWatch
 from papf.launch.outcome import RunMonitor, RunResult
@@ -46,7 +47,8 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None,
         raise ConfigError(f"profile {prof.name} drives a run: give --world W")
     check_launch(opt, prof)   # ConfigError/WorldError before anything starts (one preflight)
     graph = resolve(prof, opt)
-    if opt.dry_run:
+    if opt.dry_run:   # the router's port as a launch would take it (--port-range, taken)
+        graph = resolve(prof, free_listen(prof, opt)) if prof.router and not opt.listen else graph
         print(graph.to_json())
         return None
     keys = Keys(opt.namespace)
@@ -208,6 +210,7 @@ def free_listen(prof: Profile, opt: LaunchOptions) -> LaunchOptions:
         return opt
     listen = []
     for ep in prof.listen:
+        ep = _into_range(ep)   # --port-range: the profile's port, if outside, becomes one of it
         port = _taken(ep)
         if port is not None:
             new = re.sub(r":\d+$", f":{free_port()}", ep)
@@ -218,6 +221,16 @@ def free_listen(prof: Profile, opt: LaunchOptions) -> LaunchOptions:
             ep = new
         listen.append(ep)
     return dataclasses.replace(opt, listen=listen) if listen != list(prof.listen) else opt
+
+
+def _into_range(endpoint: str) -> str:
+    """A ``tcp/HOST:PORT`` endpoint with its port moved into ``--port-range`` when outside
+    it (:mod:`papf.launch.portrange`); as it is without a range."""
+    rng = portrange.current()
+    m = re.match(r"^(tcp/.+):(\d+)$", endpoint)
+    if rng is None or m is None or int(m.group(2)) in rng:
+        return endpoint
+    return f"{m.group(1)}:{portrange.free_in_range(rng, lowest=True)}"
 
 
 def _failed(reason: str, opt: LaunchOptions, prof: Profile) -> RunResult:

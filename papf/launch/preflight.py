@@ -22,6 +22,7 @@ from common.errors import ConfigError
 from common.outfiles import OutputError, check_output
 from common.params import PORT, SEED, TIMEOUT, Spec, check_value
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, load_params
+from papf.launch import portrange
 from papf.launch.supervisor import port_in_use
 from schemas import Keys
 from worlds import World
@@ -75,6 +76,7 @@ def port_free(port: int | None) -> None:
     if port is None:
         return
     check_value("--port", port, PORT)
+    portrange.check_port(port)
     if port_in_use(port):
         raise ConfigError(f"--port {port}: something already listens on 127.0.0.1:{port} "
                           "(another stack's Zenoh router, or another program); publishing "

@@ -21,7 +21,9 @@ from pathlib import Path
 from common.errors import ConfigError
 from common.optional import tomllib
 from common.ports import Port, select
+from common.syntax import toml_problem
 from nodes.planner.registry import declared
+from papf.launch.portrange import node_listen_port
 from schemas.keys import TOPICS
 from worlds import load_world, world_path
 
@@ -129,7 +131,8 @@ def load_profile(name_or_path: str) -> Profile:
         if path.stat().st_size > MAX_PROFILE_BYTES:
             raise ConfigError(f"launch profile {str(path)!r}: {path.stat().st_size:,} bytes; a "
                               f"profile has at most {MAX_PROFILE_BYTES:,}")
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
         nodes = tuple(NodeSpec(n["name"], n["module"], tuple(n.get("args", ())), n.get("needs"),
                                dict(n.get("if_set", {}))) for n in data.get("nodes", ()))
         prof = Profile(data.get("name", path.stem), data.get("description", ""), nodes,
@@ -148,7 +151,11 @@ def load_profile(name_or_path: str) -> Profile:
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"launch profile {str(path)!r}: cannot read it as UTF-8 text "
                           f"({type(exc).__name__})") from None
-    except (tomllib.TOMLDecodeError, KeyError, TypeError, AttributeError, ValueError) as exc:
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"launch profile {str(path)!r} is not valid TOML: "
+                          f"{toml_problem(exc, text)} (see docs/architecture.md for the "
+                          "format)") from None
+    except (KeyError, TypeError, AttributeError, ValueError) as exc:
         raise ConfigError(f"launch profile {str(path)!r} is invalid: {type(exc).__name__}: "
                           f"{str(exc)[:200]} (see docs/architecture.md for the format)") from None
     if prof.pose_topic not in TOPICS:
@@ -216,12 +223,15 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
             raise ConfigError(f"profile {prof.name} runs no router: give --connect "
                               "tcp/<robot>:7447 (or a --zenoh-config that has connect endpoints)")
 
+    taken = {int(m) for ep in listen for m in re.findall(r":(\d+)(?:#.*)?$", ep)}   # the router's
+
     def common(namespace: str) -> list[str]:
         args = [a for ep in connect for a in ("--connect", ep)] + ["--namespace", namespace]
         if opt.zenoh_config:
             args += ["--zenoh-config", opt.zenoh_config]
         if (opt.zenoh_mode or prof.zenoh_mode) == "peer":  # peers also talk directly: one loopback hop, not two
-            args += ["--mode", "peer", "--listen", "tcp/127.0.0.1:0"]
+            port = node_listen_port(taken)   # the OS's pick (0), or one of --port-range
+            args += ["--mode", "peer", "--listen", f"tcp/127.0.0.1:{port}"]
         return args
     procs = []
     if prof.router:

@@ -8,10 +8,9 @@ one Zenoh network (``papf launch robot --namespace r2 --join tcp/<r1>:7447``).
 
 from __future__ import annotations
 
-import argparse
-
 import zenoh
 
+from common.cliparse import ArgumentParser
 from common.transport import (
     DEFAULT_ENDPOINT,
     STOP_BOUND_S,
@@ -38,7 +37,7 @@ def main(listen: list[str], config_file: str | None = None, join: list[str] | No
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = ArgumentParser(prog="python -m papf.launch.router", description=__doc__.splitlines()[0])
     parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
                         help=f"endpoint to listen on (default {DEFAULT_ENDPOINT})")
     parser.add_argument("--zenoh-config", metavar="FILE", help="Zenoh JSON5 config (TLS, ACL)")

@@ -21,6 +21,7 @@ from common.transport import wait_alive, zenoh_config
 from nodes.energy_meter.models import DEFAULT_MODEL
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
+from papf.launch import portrange
 from papf.launch.fleet import FleetMeter, fleet_result, progress_figures
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import check_run
@@ -83,7 +84,18 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
 
 def resolve_run(cfg: RunConfig, port: int | None = None) -> Resolved:
     """The processes of this run: the ``sim`` profile resolved with its options."""
-    return resolve(load_profile(PROFILE), launch_options(cfg, port or cfg.port or DEFAULT_PORT))
+    return resolve(load_profile(PROFILE), launch_options(cfg, port or router_port(cfg.port)))
+
+
+def router_port(port: int | None) -> int:
+    """``--port``; else 7447 when it is free and inside ``--port-range`` (if one is set),
+    else a free port (of the range: :mod:`papf.launch.portrange`)."""
+    if port:
+        return port
+    rng = portrange.current()
+    if (rng is None or DEFAULT_PORT in rng) and not port_in_use(DEFAULT_PORT):
+        return DEFAULT_PORT
+    return free_port() if rng is None else portrange.free_in_range(rng, lowest=True)
 
 
 def _show_line(verbose: bool):
@@ -104,8 +116,8 @@ def preflight(cfg: RunConfig) -> World:
 def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = preflight(cfg)   # before anything starts
-    port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
-    if cfg.port is None and port != DEFAULT_PORT:
+    port = router_port(cfg.port)
+    if cfg.port is None and port != DEFAULT_PORT and port_in_use(DEFAULT_PORT):
         log.warning("port %d is in use; the embedded router listens on %d instead",
                     DEFAULT_PORT, port)
     graph = resolve_run(cfg, port)

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import TextIO
 
 from common.text import safe_line
+from papf.launch import portrange
 
 _PR_SET_PDEATHSIG = 1
 PUMP_JOIN_S = 5.0   # [s wall] at most, after stop(), for the children's last output lines
@@ -173,10 +174,14 @@ def _ephemeral_low() -> int:
 def free_port() -> int:
     """A TCP port on 127.0.0.1 that is free right now, for a router to listen on.
 
-    Picked at random below the kernel's ephemeral range when there is room: a port of that
-    range can be taken as the local end of any outgoing connection (every Zenoh session
-    makes some) between this check and the router's bind, which then fails.
+    Inside ``--port-range`` when one is set (:mod:`papf.launch.portrange`); else picked at
+    random below the kernel's ephemeral range when there is room: a port of that range can
+    be taken as the local end of any outgoing connection (every Zenoh session makes some)
+    between this check and the router's bind, which then fails.
     """
+    rng = portrange.current()
+    if rng is not None:
+        return portrange.free_in_range(rng)
     low = _ephemeral_low()
     if low - FREE_PORT_SPAN >= 1024:
         for _ in range(100):
@@ -191,6 +196,12 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def run_port() -> int:
+    """The router port of one run of an experiment: its ``--port`` when given (the runs go
+    one at a time), else :func:`free_port`."""
+    return portrange.fixed_port() or free_port()
 
 
 def port_in_use(port: int, host: str = "127.0.0.1") -> bool:

@@ -90,6 +90,22 @@ def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | Ba
     return BagRecording(path, topics) if is_rosbag(path, topics) else Recording(path)
 
 
+def topics_hint(topics: TopicMap, have: dict[str, tuple[str, int]]) -> str:
+    """The fix of a bag whose topic names are not the ROSbot's: the ``--topics`` that reads
+    it when each role's type is on one topic of the bag (a ``papf export ros2`` bag: ``odom
+    =/odom``), else how to write one."""
+    fits = {}
+    for role in REQUIRED:
+        if have.get(getattr(topics, role), ("",))[0] == ROLE_TYPES[role]:
+            continue
+        of_type = [t for t, (m, _n) in sorted(have.items()) if m == ROLE_TYPES[role]]
+        if len(of_type) != 1:
+            return ("Map its topic names with --topics odom=/...,battery=/...,cmd_vel=/...,"
+                    "scan=/... (papf info BAG lists them)")
+        fits[role] = of_type[0]
+    return "Read it with --topics " + ",".join(f"{r}={t}" for r, t in fits.items())
+
+
 class BagRecording:
     """A rosbag2 as a read-only recording of our messages on ``rosbot/...`` keys.
 
@@ -163,8 +179,8 @@ class BagRecording:
         if missing or wrong:
             listed = ", ".join(f"{t} ({m})" for t, (m, _n) in sorted(have.items())) or "none"
             what = "; ".join(([f"no {', '.join(missing)}"] if missing else []) + wrong)
-            raise ConfigError(f"{self.path}: {what} in the bag; it has {listed}. Map its topic "
-                              "names with --topics odom=/...,battery=/...,cmd_vel=/...,scan=/...")
+            raise ConfigError(f"{self.path}: {what} in the bag; it has {listed}. "
+                              + topics_hint(self.topics, have))
         return {r: [c for c in self._reader.connections if c.topic == getattr(self.topics, r)]
                 for r in ROLE_TYPES if getattr(self.topics, r) in have}
 

@@ -228,6 +228,28 @@ def fleet_namespaces(path: str | Path, topics: TopicMap | None = None) -> list[s
     return names if len(names) > 1 else []
 
 
+def run_facts(path: str | Path, topics: TopicMap | None = None) -> tuple[str, str]:
+    """A recording's (world, live meter's model) as :func:`run_metrics` will find them, read
+    from its metadata (else its first battery message) alone: the names of a report's files
+    are known before any figure is computed (``papf report`` refuses an existing one first)."""
+    with open_run(path, topics) as rec:
+        meta = rec.run_metadata
+        world = meta.get("world", UNKNOWN_WORLD)
+        if isinstance(rec, BagRecording):
+            return world, ""
+        ns = meta.get("namespace") or _guess_namespace(rec)
+        return world, _live_model(rec, ns, fleet_namespaces(path, topics))
+
+
+def _live_model(rec: Recording, ns: str, robots: list[str]) -> str:
+    """The model of the last battery message of the run (the live meter's: what
+    :class:`RunMetrics` ``live_model`` holds); a fleet's: its first robot's."""
+    for _key, msg, _t in rec.messages([f"{robots[0] if robots else ns}/battery"]):
+        if isinstance(msg, BatteryState):
+            return msg.model   # one meter per run: its first message names its model
+    return ""
+
+
 def run_metrics(path: str | Path, energy_model: str | None = None,
                 energy_params: dict | None = None, with_series: bool = True,
                 topics: TopicMap | None = None, robot: str | None = None,

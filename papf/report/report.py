@@ -2,7 +2,8 @@
 
 ``build_report(["DIR"], out="DIR")`` reads every ``*.mcap`` (per-run figures:
 :mod:`papf.report.metrics`), then writes ``report.md`` (tables with the figures beside
-them), ``report.csv`` (runs, then per world and planner mean and sd) and the PNGs.
+them), ``report.csv`` (runs, then per world and planner mean and sd), the PNGs and
+``report.html`` (report.md with the PNGs embedded: one file a browser opens).
 
 - **Energy model**: charge and energy come from the model the live meter ran (the run
   metadata, else the recorded battery messages), unless ``energy_model`` says otherwise;
@@ -31,12 +32,13 @@ from pathlib import Path
 import numpy as np
 
 from common.errors import ConfigError, PapfError, RecordingError
-from common.outfiles import check_output
+from common.outfiles import OutputError, check_output
 from papf.plots.moment import MomentPanel, moment_png
 from papf.recording.rosbag import TopicMap, is_rosbag
 from papf.report import figures, sides, tables
+from papf.report.html import report_html
 from papf.report.markdown import markdown
-from papf.report.metrics import BAG, RunMetrics, fleet_namespaces, run_metrics, seed_text
+from papf.report.metrics import BAG, RunMetrics, fleet_namespaces, run_facts, run_metrics, seed_text
 from worlds import World, load_world
 
 MODELS = ("paper", "motor")
@@ -81,9 +83,42 @@ class Report:
 
     def name(self, stem: str, world: str | None = None, ext: str = ".png") -> str:
         """``stem[-world][-model]ext``: the world only when the report covers several."""
-        several = len(tables.worlds_of(self.runs)) > 1
-        w = f"-{re.sub(r'[^A-Za-z0-9_.-]+', '_', Path(world).stem)}" if world and several else ""
-        return f"{stem}{w}{self.suffix}{ext}"
+        return file_name(stem, world, ext, len(tables.worlds_of(self.runs)) > 1, self.suffix)
+
+
+def file_name(stem: str, world: str | None, ext: str, several: bool, suffix: str) -> str:
+    """A report file's name: ``stem[-world][-model]ext``, the world only when ``several``."""
+    w = f"-{re.sub(r'[^A-Za-z0-9_.-]+', '_', Path(world).stem)}" if world and several else ""
+    return f"{stem}{w}{suffix}{ext}"
+
+
+def report_files(worlds: Sequence[str], suffix: str) -> list[str]:
+    """Every file a report of runs of ``worlds`` writes (the order :func:`_write` makes them)."""
+    several = len(set(worlds)) > 1
+    names = [file_name("charge", None, ".png", several, suffix)]
+    for world in sorted(set(worlds)):
+        names += [file_name(stem, world, ".png", several, suffix)
+                  for stem in ("trajectories", "motion", "mind")]
+    return names + [file_name("report", None, ext, several, suffix)
+                    for ext in (".csv", ".md", ".html")]
+
+
+def check_outputs(paths: Sequence[Path], out: Path, energy_model: str | None,
+                  topics: TopicMap | None, force: bool) -> None:
+    """Refuse an existing report file (without ``force``) or an input as output before
+    anything is computed: the names come from the recordings' metadata alone
+    (:func:`papf.report.metrics.run_facts`)."""
+    facts = [run_facts(p, topics) for p in paths]
+    live = {model for _w, model in facts if model}
+    suffix = "" if energy_model is None or live == {energy_model} else f"-{energy_model}"
+    names = report_files([w for w, _m in facts], suffix)
+    for name in names:
+        check_output(out / name, paths, force=True)   # an input, a directory: refused anyway
+    there = [n for n in names if os.path.lexists(out / n)]
+    if there and not force:
+        where = "this directory" if str(out) == "." else str(out)
+        raise OutputError(f"{where} already holds a report ({', '.join(there)}); use --force to "
+                          "replace it, or --out DIR to write it elsewhere")
 
 
 def find_recordings(inputs: Iterable[str | Path]) -> list[Path]:
@@ -212,6 +247,7 @@ def build_report(inputs: Sequence[str | Path], out_dir: str | Path | None = None
     except OSError as exc:
         raise RecordingError(f"cannot create the report directory {str(out)!r}: "
                              f"{exc.strerror}") from None
+    check_outputs(paths, out, energy_model, topics, force)   # before the work, not after it
     if progress is not None:
         progress.total = len(paths) + 2   # + the charge figure and the tables (worlds: later)
     runs = collect(paths, energy_model, energy_params, topics, progress)
@@ -279,10 +315,15 @@ def _write(report: Report, runs: list, files: dict, out: Path,
         done(f"drew {mind}")
     doing("writing the tables")
     csv_path, md_path = out / report.name("report", ext=".csv"), out / report.name("report", ext=".md")
+    html_path = out / report.name("report", ext=".html")
     tables.write_csv(csv_path, runs, report.summaries)
-    md_path.write_text(markdown(report))
-    report.files += [csv_path, md_path]
-    done(f"wrote {md_path.name}, {csv_path.name}")
+    text = markdown(report)
+    md_path.write_text(text)
+    pngs = {name: out / name for name in report.pngs.values()}   # embedded: one file to open
+    html_path.write_text(report_html(text, pngs, f"papf report: {', '.join(worlds)}"),
+                         encoding="utf-8")
+    report.files += [csv_path, md_path, html_path]
+    done(f"wrote {md_path.name}, {csv_path.name}, {html_path.name}")
 
 
 def mind_figure(runs: Sequence[RunMetrics], files: dict, world: World | None, out: Path,

@@ -109,3 +109,22 @@ def test_the_table_shows_its_units_piped_and_on_a_terminal(tmp_path):
         for header in (f"charge [mAh, {model}]", f"energy [J, {model}]", "duration [s]",
                        "path [m]"):
             assert header in shown, (terminal, shown)
+
+
+def test_a_report_the_experiment_did_not_make_is_refused_before_any_run(tmp_path):
+    """Issue #35: output checks before work. The user's report.md in --out stops the
+    experiment before its first run; the experiment's own report (its journal is there)
+    is replaced when it runs again."""
+    from common.outfiles import OutputError
+
+    (tmp_path / "report.md").write_text("mine\n")
+    with pytest.raises(OutputError, match="did not make"):
+        run_experiment(EnergyExperiment(out=tmp_path, runs=1, planners=("apf",)),
+                       Console(file=io.StringIO()), run_fn=pytest.fail)
+    assert (tmp_path / "report.md").read_text() == "mine\n"
+    out = tmp_path / "again"
+    for _ in range(2):   # the second time: the runs come from the journal, the report is redone
+        (out / "report.md").unlink(missing_ok=True)   # replaced, not refused, the second time
+        run_experiment(EnergyExperiment(out=out, runs=1, planners=("apf",)),
+                       Console(file=io.StringIO()), run_fn=FakeRuns())
+        assert (out / "report.html").is_file() and (out / "report.md").is_file()

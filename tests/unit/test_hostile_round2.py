@@ -89,8 +89,9 @@ def test_log_lines_show_escape_sequences_never_run_them():
     assert len(line) < MAX_LINE_CHARS + 40
 
 
-def test_safe_line_cuts_and_says_how_long():
-    assert safe_line("a" * 10_000).endswith("(10,000 chars)")
+def test_safe_line_cuts_a_flood_and_says_how_long():
+    assert safe_line("a" * 100_000).endswith("(100,000 chars)")   # a flood is cut
+    assert safe_line("a" * 10_000) == "a" * 10_000                  # a message never
 
 
 # -- goal tolerance floor ------------------------------------------------------------------------
@@ -254,7 +255,7 @@ def test_report_refuses_to_replace_an_earlier_report_unless_forced(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "report.md").write_text("the user's notes")
-    with pytest.raises(OutputError, match="report.md: a file already exists"):
+    with pytest.raises(OutputError, match=r"already holds a report \(report.md\); use --force"):
         build_report([runs], out)
     assert sorted(p.name for p in out.iterdir()) == ["report.md"]     # nothing moved
     assert (out / "report.md").read_text() == "the user's notes"

@@ -120,8 +120,8 @@ def test_report_files(tmp_path):
             write_synthetic(runs / f"{planner}-{k}.mcap", planner, seed=k, speed=speed + 0.01 * k)
     report = build_report([runs], tmp_path / "out")
     out = tmp_path / "out"
-    names = {"report.md", "report.csv", "trajectories.png", "charge.png", "motion.png",
-             "mind.png"}
+    names = {"report.md", "report.csv", "report.html", "trajectories.png", "charge.png",
+             "motion.png", "mind.png"}
     assert {p.name for p in report.files} == names
     for png in ("trajectories.png", "charge.png", "motion.png"):
         assert (out / png).read_bytes()[:8] == PNG_MAGIC
@@ -184,7 +184,7 @@ def test_report_groups_worlds_and_names_model_and_pose_source(tmp_path):
     names = {p.name for p in report.files}
     assert {"trajectories-energy.png", "trajectories-open.png", "motion-energy.png",
             "motion-open.png", "mind-energy.png", "mind-open.png", "charge.png", "report.md",
-            "report.csv"} == names
+            "report.csv", "report.html"} == names
     md = (tmp_path / "out" / "report.md").read_text()
     assert md.count("## World `") == 2 and "never averaged together" in md
     assert "energy model: paper (as the live meter ran)" in md
