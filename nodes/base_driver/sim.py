@@ -349,11 +349,13 @@ class SimBase:
             self._person_index[body] = len(self.people)
             self.people.append(body)
 
-    def place_people(self, xy) -> None:
-        """Put each person's body at its (x, y) [m]."""
-        for body, (x, y) in zip(self.people, xy, strict=True):
-            p.resetBasePositionAndOrientation(body, [float(x), float(y), PERSON_HEIGHT_M / 2],
-                                              [0, 0, 0, 1], physicsClientId=self.cid)
+    def place_people(self, xy, present=None) -> None:
+        """Put each person's body at its (x, y) [m]; one not ``present`` (a replayed person
+        outside their recording's rows) far below the floor, where nothing touches it."""
+        present = [True] * len(self.people) if present is None else present
+        for body, (x, y), here in zip(self.people, xy, present, strict=True):
+            pos = [float(x), float(y), PERSON_HEIGHT_M / 2] if here else [0.0, 0.0, -100.0]
+            p.resetBasePositionAndOrientation(body, pos, [0, 0, 0, 1], physicsClientId=self.cid)
 
     def close(self) -> None:
         if self.cid is not None and p.isConnected(self.cid):

@@ -126,7 +126,7 @@ def run(cfg: RunConfig) -> RunResult:
 def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
          monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
     """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
-    if world.robots or world.people:
+    if world.robots or world.has_people:
         return _run_fleet(cfg, world, graph, router, run_key, wall0)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key}) as sup:
@@ -148,7 +148,7 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
     names = [r.name for r in robots]
     planners = {r.name: r.planner or cfg.planner for r in robots}
     goals = {r.name: tuple(r.goal) for r in robots}
-    meter = FleetMeter(names, goals, bool(world.people))
+    meter = FleetMeter(names, goals, world.has_people)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key}) as sup:
         seqs = {}
@@ -158,7 +158,7 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
             seqs[r.name] = seq = RunSequence(session, Keys(r.name), sup, monitor,
                                              run_key=bytes.fromhex(run_key))
             seq.watch_poses(lambda msg, n=r.name: meter.on_pose(n, msg))
-        if world.people:   # on the driver's namespace, the run's
+        if world.has_people:   # on the driver's namespace, the run's
             seqs[names[0]].watch_key(Keys(cfg.namespace).key("sim/people"), People,
                                      meter.on_people)
         try:
