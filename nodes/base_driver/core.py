@@ -239,9 +239,17 @@ class DriverCore:
             if key in new:
                 self.collision_counts[i] += 1
                 what = (f"robot {self.names[c.robot]}" if c.robot >= 0 else
-                        f"person {c.person}" if c.person >= 0 else
+                        f"person {c.person}, {self._cause(i, c.person)}" if c.person >= 0 else
                         f"obstacle {c.obstacle} ({self.world.obstacles[c.obstacle].kind})")
                 self._event(i, t, "collision", what, c.x, c.y)
+
+    def _cause(self, i: int, k: int) -> str:
+        """Who caused robot ``i``'s contact with person ``k`` (common/crowd_social.py)."""
+        from common.crowd_social import collision_cause
+
+        by = collision_cause(self.sim.pose(i)[:2], self.sim.velocity(i),
+                             self.crowd.positions[k], self.crowd.velocities[k])
+        return f"caused by the {by}"
 
     def _event(self, i: int, t_ns: int, kind: str, detail: str, x: float = float("nan"),
                y: float = float("nan")) -> None:
