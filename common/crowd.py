@@ -369,6 +369,11 @@ def _sample_edge(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.column_stack([np.linspace(a[0], b[0], k), np.linspace(a[1], b[1], k)])
 
 
+def load_pysocialforce():
+    """pysocialforce, imported once without its side effects (:func:`_pysocialforce`)."""
+    return _pysocialforce()
+
+
 def _pysocialforce():
     """Import pysocialforce without its side effects: at import it sets the root logger to
     DEBUG, adds a console handler and opens ``file.log`` in the working directory."""
