@@ -203,7 +203,7 @@ def _people(ctx: _Ctx, data: dict, source: str) -> tuple:
     """``[[people]]``, ``[[groups]]`` (of those people), ``[[people_replay]]`` (files read)."""
     people = parse_people(ctx, data["people"]) if "people" in data else ()
     groups = parse_groups(ctx, data["groups"], people) if "groups" in data else ()
-    replays = parse_replays(ctx, data["people_replay"], source) if "people_replay" in data else ()
+    replays = parse_replays(ctx, data["people_replay"], source, MAX_COORD_M) if "people_replay" in data else ()
     return people, groups, replays
 
 

@@ -84,9 +84,9 @@ def replay_state(track: ReplayTrack, t_s: float) -> tuple[float, float, float, f
     return x0 + a * (x1 - x0), y0 + a * (y1 - y0), (x1 - x0) / dt, (y1 - y0) / dt
 
 
-def parse_replays(ctx, raw, source: str) -> tuple[ReplaySpec, ...]:
+def parse_replays(ctx, raw, source: str, max_coord_m: float) -> tuple[ReplaySpec, ...]:
     """``[[people_replay]]`` -> specs, each file read (``ctx``: the world parser's field
-    reader; paths relative to the world file ``source``)."""
+    reader; paths relative to the world file ``source``; positions within ``max_coord_m``)."""
     if not isinstance(raw, list) or not raw:
         ctx.fail("people_replay", "must be a non-empty array of tables ([[people_replay]])")
     if len(raw) > MAX_REPLAY_FILES:
@@ -96,7 +96,7 @@ def parse_replays(ctx, raw, source: str) -> tuple[ReplaySpec, ...]:
         where = f"people_replay[{i}]"
         if not isinstance(t, dict):
             ctx.fail(where, "must be a table")
-        spec = _parse_one(ctx, t, where, source)
+        spec = _parse_one(ctx, t, where, source, max_coord_m)
         total += len(spec.tracks)
         if total > MAX_REPLAY_PEOPLE:
             ctx.fail(where, f"{total} replayed people, more than {MAX_REPLAY_PEOPLE}")
@@ -104,7 +104,7 @@ def parse_replays(ctx, raw, source: str) -> tuple[ReplaySpec, ...]:
     return tuple(out)
 
 
-def _parse_one(ctx, t: dict, where: str, source: str) -> ReplaySpec:
+def _parse_one(ctx, t: dict, where: str, source: str, max_coord_m: float) -> ReplaySpec:
     fmt = ctx.str(t, "format", f"{where}.format", default="eth-ucy")
     if fmt not in REPLAY_FORMATS:
         ctx.fail(f"{where}.format", f"{fmt!r} is not a known track format (known: "
@@ -126,7 +126,7 @@ def _parse_one(ctx, t: dict, where: str, source: str) -> ReplaySpec:
                  f"(valid: (0, {MAX_PERSON_RADIUS_M:g}] m)")
     path = _resolve(file, source)
     rows = read_eth_ucy(ctx, path, f"{where}.file")
-    tracks = _tracks(ctx, rows, fps, from_s, offset, path)
+    tracks = _tracks(ctx, rows, fps, from_s, offset, path, max_coord_m)
     return ReplaySpec(file=file, path=str(path), format=fmt, fps=fps, from_s=from_s,
                       offset=offset, radius=radius, tracks=tracks)
 
@@ -181,10 +181,9 @@ def _row(ctx, fields: list[str], shown: str, n: int, where: str):
     return frame, fields[1], x, y
 
 
-def _tracks(ctx, rows, fps: float, from_s: float, offset, path: Path) -> tuple[ReplayTrack, ...]:
+def _tracks(ctx, rows, fps: float, from_s: float, offset, path: Path,
+            max_coord_m: float) -> tuple[ReplayTrack, ...]:
     """Rows -> one track per id in run time (module doc), frames strictly increasing per id."""
-    from worlds import MAX_COORD_M
-
     frame0 = min(r[1] for r in rows)
     by_id: dict[str, list] = {}
     for n, frame, pid, x, y in rows:
@@ -194,9 +193,9 @@ def _tracks(ctx, rows, fps: float, from_s: float, offset, path: Path) -> tuple[R
             ctx.fail("people_replay", f"{path}:{n}: person {pid} at frame {frame:g} after frame "
                      f"{mine[-1][1]:g} (each person's frames must increase)")
         wx, wy = x + offset[0], y + offset[1]
-        if abs(wx) > MAX_COORD_M or abs(wy) > MAX_COORD_M:
+        if abs(wx) > max_coord_m or abs(wy) > max_coord_m:
             ctx.fail("people_replay", f"{path}:{n}: ({wx:g}, {wy:g}) is beyond the "
-                     f"{MAX_COORD_M:g} m a world may span")
+                     f"{max_coord_m:g} m a world may span")
         mine.append((n, frame, wx, wy))
     tracks = []
     for key, mine in by_id.items():
