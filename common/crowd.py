@@ -213,11 +213,12 @@ class Crowd:
         from worlds.people_replay import replay_state
 
         n = len(self._people)
+        t = round(self._t, 9)           # the sum of steps, to the ns: 200 x 0.02 s is 4 s
         for k, track in enumerate(self._replay):
-            state = replay_state(track, self._t)
+            state = replay_state(track, t)
             self._present[n + k] = state is not None
             if state is None:       # held at the nearest row, not moving (radius 0 says gone)
-                self._pos[n + k] = track.xy[0] if self._t < track.first_s else track.xy[-1]
+                self._pos[n + k] = track.xy[0] if t < track.first_s else track.xy[-1]
                 self._vel[n + k] = 0.0
             else:
                 self._pos[n + k], self._vel[n + k] = state[:2], state[2:]
