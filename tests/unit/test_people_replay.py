@@ -122,7 +122,7 @@ def test_the_crowd_places_replayed_people_as_recorded(tmp_path):
     w = load_world(write_world(tmp_path))
     crowd = Crowd(w.people, w, seed=0)
     seen = []
-    for k in range(250):                                 # 5 s at the driver's 20 ms
+    for _ in range(250):                                 # 5 s at the driver's 20 ms
         seen.append((round(crowd.time_s, 9), crowd.positions.copy(), crowd.radii.copy()))
         crowd.step(0.02, [(0.0, 3.0, 0.0, 0.0)])
     for t, xy, r in seen:

@@ -10,9 +10,9 @@ import pytest
 from common.errors import ConfigError
 from nodes.planner.core import scan_view
 from nodes.planner.field import APFParams
-from nodes.planner.social_force.strategy import SocialForceParams, SocialForceStrategy
 from nodes.planner.registry import PLANNERS, check_setting, make_planner, settings_of, with_role
 from nodes.planner.road import Track
+from nodes.planner.social_force.strategy import SocialForceParams, SocialForceStrategy
 from papf.offline.run import simulate as plan_offline
 from schemas.messages import Odometry, Scan
 from tests.support.toysim import simulate, toy_world
