@@ -148,7 +148,8 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
     names = [r.name for r in robots]
     planners = {r.name: r.planner or cfg.planner for r in robots}
     goals = {r.name: tuple(r.goal) for r in robots}
-    meter = FleetMeter(names, goals, world.has_people)
+    meter = FleetMeter(names, goals, world.has_people,
+                       groups=tuple(g.members for g in world.groups))
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key}) as sup:
         seqs = {}

@@ -53,6 +53,8 @@ def test_a_replayed_scene_runs_the_whole_stack_as_recorded(tmp_path):
                               "--timeout", "120", "--record", str(rec))
     assert res is not None, err
     assert (code, res["outcome"], res["collisions"]) == (0, "reached", 0), res
+    (robot,) = res["robots"]
+    assert robot["group_intrusions"] == 0 and robot["social_n"] >= 3   # passed beside them
     w = load_world(world)
     tracks = w.replayed
     seen = 0
