@@ -125,6 +125,8 @@ class Crowd:
         self._rvo = None
         self._sim = None
         self._n_ext = None
+        self._spans = None                    # (m, 2) [s] each replayed person's first, last row
+        self._present[n:] = True              # every replayed person placed on the first call
         self._place_replayed()
 
     # -- read-outs ------------------------------------------------------------------------
@@ -214,7 +216,13 @@ class Crowd:
 
         n = len(self._people)
         t = round(self._t, 9)           # the sum of steps, to the ns: 200 x 0.02 s is 4 s
-        for k, track in enumerate(self._replay):
+        if self._spans is None:
+            self._spans = np.array([(tr.first_s, tr.last_s) for tr in self._replay],
+                                   float).reshape(-1, 2)
+        due = (self._spans[:, 0] <= t) & (t <= self._spans[:, 1])
+        # the people in the scene now, and those who were a step ago (to leave it)
+        for k in np.flatnonzero(due | self._present[n:]):
+            track = self._replay[k]
             state = replay_state(track, t)
             self._present[n + k] = state is not None
             if state is None:       # held at the nearest row, not moving (radius 0 says gone)

@@ -15,7 +15,8 @@ inputs the planner node has, and turn them into their libraries' terms here:
 - **static surroundings** from the scan (:func:`scan_segments`): the points within
   ``range_m`` that no track explains (farther than its radius + :data:`TRACK_MARGIN_M`),
   chained into polylines where consecutive beams' points are within ``SEGMENT_GAP_M`` - the
-  walls and boxes the tracks do not cover.
+  walls and boxes the tracks do not cover - keeping a point only ``SEGMENT_MIN_M`` past the
+  last one kept (a wall needs no vertex per beam; RVO2's obstacle tree costs per vertex).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from common.robot import FOOTPRINT_RADIUS_M
 
 TRACK_MARGIN_M = 0.15     # [m] scan points this close to a track's disc are that track's
 SEGMENT_GAP_M = 0.3       # [m] consecutive scan points farther apart start a new polyline
+SEGMENT_MIN_M = 0.15      # [m] a polyline's vertices at least this far apart (its ends kept)
 GROUP_SPEED_M_S = 0.3     # [m/s] members of a group move alike: velocities this close
 PERSON_MAX_RADIUS_M = 1.0  # [m] a track wider than this is no person (worlds/fleet.py's limit)
 MOVING_M_S = 0.05         # [m/s] a track slower than this stands
@@ -90,28 +92,34 @@ def scan_segments(view, pos: np.ndarray, rows: np.ndarray, range_m: float) -> li
     keep = np.hypot(*(pts - pos).T) <= range_m
     for x, y, _, _, r in rows:
         keep &= np.hypot(pts[:, 0] - x, pts[:, 1] - y) > r + TRACK_MARGIN_M
-    lines, current = [], []
+    lines: list[np.ndarray] = []
+    chain: list[np.ndarray] = []
     for k in range(len(pts)):
-        if not keep[k]:
-            _close(lines, current, view.origin)
-            current = []
+        if keep[k] and chain and math.hypot(*(pts[k] - chain[-1])) <= SEGMENT_GAP_M:
+            chain.append(pts[k])
             continue
-        if current and math.hypot(*(pts[k] - current[-1])) > SEGMENT_GAP_M:
-            _close(lines, current, view.origin)
-            current = []
-        current.append(pts[k])
-    _close(lines, current, view.origin)
+        if chain:
+            _polyline(lines, chain, view.origin)
+        chain = [pts[k]] if keep[k] else []
+    _polyline(lines, chain, view.origin)
     return lines
 
 
-def _close(lines: list, current: list, origin: np.ndarray) -> None:
-    if len(current) >= 2:
-        lines.append(np.array(current, float))
-    elif len(current) == 1:
-        p = current[0]
+def _polyline(lines: list, chain: list, origin: np.ndarray) -> None:
+    """A chain of consecutive points as a polyline: its ends, and the points between at least
+    SEGMENT_MIN_M past the last kept; a single point as a 2 cm segment across its beam."""
+    if len(chain) == 1:
+        p = chain[0]
         d = p - origin
         n = np.array([-d[1], d[0]]) / max(math.hypot(*d), 1e-9) * 0.01
         lines.append(np.array([p - n, p + n], float))
+    elif len(chain) > 1:
+        verts = [chain[0]]
+        for p in chain[1:-1]:
+            if math.hypot(*(p - verts[-1])) >= SEGMENT_MIN_M:
+                verts.append(p)
+        verts.append(chain[-1])
+        lines.append(np.array(verts, float))
 
 
 def robot_radius(safety_m: float) -> float:

@@ -144,6 +144,7 @@ class _Senses:
         self.people = np.zeros((0, 2))
         self.radii = radii
         self.here = np.zeros(0, bool)
+        self._was_here = np.ones(len(radii), bool)   # every body placed on the first look
         self.kind = "wall"            # what the last clearance was closest to
         self.person = -1              # the person it was, if one
 
@@ -157,9 +158,12 @@ class _Senses:
             pos = [x, y, ROBOT_SEEN_HEIGHT_M / 2] if j != self.i else [0, 0, -10]
             p.resetBasePositionAndOrientation(body, pos, p.getQuaternionFromEuler([0, 0, yaw]),
                                               physicsClientId=cid)
-        for body, (x, y), here in zip(self.person_bodies, people, self.here, strict=True):
-            pos = [float(x), float(y), PERSON_HEIGHT_M / 2] if here else [0, 0, -10]
-            p.resetBasePositionAndOrientation(body, pos, [0, 0, 0, 1], physicsClientId=cid)
+        for k in np.flatnonzero(self.here | self._was_here):   # the absent stay parked
+            pos = [float(people[k][0]), float(people[k][1]), PERSON_HEIGHT_M / 2] \
+                if self.here[k] else [0, 0, -10]
+            p.resetBasePositionAndOrientation(self.person_bodies[k], pos, [0, 0, 0, 1],
+                                              physicsClientId=cid)
+        self._was_here = self.here
 
     def scan(self, x, y, yaw, t_ns):
         """The robot's scan at pose (x [m], y [m], yaw [rad]) and sim time t_ns [ns]."""

@@ -53,11 +53,12 @@ def _hull_outline(centres: np.ndarray, radius: float) -> np.ndarray:
     return convex_hull(pts)
 
 
-def draw_people(ax, world: World, people: np.ndarray, radii: np.ndarray,
+def draw_people(ax, world: World | None, people: np.ndarray, radii: np.ndarray,
                 shown: np.ndarray | None = None) -> list:
     """The people of a run on ``ax`` (module doc): ``people`` (T, n, 2) [m], ``radii`` (n,)
-    [m], ``shown`` (T, n) [m] each one's radius at each time (0: not in the scene).
-    Returns the legend's handles."""
+    [m], ``shown`` (T, n) [m] each one's radius at each time (0: not in the scene); the
+    ``world`` says who stands and the groups (None: nobody, none). Returns the legend's
+    handles."""
     from matplotlib.lines import Line2D
 
     people = np.asarray(people, float).reshape(-1, len(radii), 2) if len(radii) else \
@@ -65,8 +66,9 @@ def draw_people(ax, world: World, people: np.ndarray, radii: np.ndarray,
     if not people.size:
         return []
     here = np.ones(people.shape[:2], bool) if shown is None else np.asarray(shown) > 0
-    standing = [k < len(world.people) and world.people[k].standing
-                for k in range(people.shape[1])]
+    specs = world.people if world is not None else ()
+    groups = world.groups if world is not None else ()
+    standing = [k < len(specs) and specs[k].standing for k in range(people.shape[1])]
     for k in range(people.shape[1]):
         idx = np.flatnonzero(here[:, k])
         if not len(idx):
@@ -80,16 +82,16 @@ def draw_people(ax, world: World, people: np.ndarray, radii: np.ndarray,
         ax.plot(*xy[0], ".", color="0.45", ms=3, zorder=2)
         ax.add_patch(Circle(tuple(xy[-1]), float(radii[k]), fc="0.88", ec="0.45", lw=0.5,
                             zorder=2))
-    for g in world.groups:
+    for g in groups:
         members = np.array(g.members)
-        centres = people[0, members] if g.standing(world.people) else people[-1, members]
+        centres = people[0, members] if g.standing(specs) else people[-1, members]
         ax.add_patch(Polygon(_hull_outline(centres, float(np.mean(radii[members]))),
                              closed=True, fill=False, ec="0.2", lw=0.9, ls="--", zorder=2))
     handles = [Line2D([], [], color=TRACK_COLOUR, lw=0.9, label="people walking")]
     if any(standing):
         handles.append(Line2D([], [], ls="", marker="o", mfc=STANDING_COLOUR, mec="0.25",
                               label="standing"))
-    if world.groups:
+    if groups:
         handles.append(Line2D([], [], color="0.2", ls="--", lw=0.9, label="group's space"))
     return handles
 
