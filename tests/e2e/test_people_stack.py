@@ -71,3 +71,7 @@ def test_a_replayed_scene_runs_the_whole_stack_as_recorded(tmp_path):
             assert math.hypot(msg.x[k] - state[0], msg.y[k] - state[1]) < 0.03, (key, t, k)
             seen += 1
     assert seen > 1000                                            # every 20 ms of the run
+    from papf.report.metrics import run_metrics
+
+    series = run_metrics(rec).series                              # papf report draws them
+    assert series.people is not None and series.people.shape[1:] == (2 + len(tracks), 2)
