@@ -17,7 +17,7 @@ BODY_WIDTH_M across), a person a disc. Per robot (``CrowdMeter.results``):
 - **Hall's zones** [s, -]: per zone (intimate 0.45 m, personal 1.2 m, social 3.6 m of the
   footprint), the time someone was within it and the entries of people into it;
 - **group-space intrusions** [-, s]: entries of the footprint into a ``[[groups]]``
-  group's space, and the time spent in one;
+  group's space while its members are together, and the time spent in one;
 - **minimum time to collision** [s] over the run (inf: nobody ever closed in).
 
 The last three's geometry and sources: :mod:`common.crowd_social`. A person of radius 0 (a
@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from common.crowd_social import HALL_ZONES, group_gap, time_to_collision
+from common.crowd_social import HALL_ZONES, group_gap, time_to_collision, together
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 
 DISCOMFORT_M = 0.2        # [m] CrowdNav's discomfort distance
@@ -207,7 +207,8 @@ class CrowdMeter:
     def _in_groups(self, tr: _Track, corners: np.ndarray, xy: np.ndarray, radii: np.ndarray,
                    dt: float) -> None:
         """Entries into, and time in, a group's space (common/crowd_social.py)."""
-        inside = np.array([group_gap(corners, xy[g], float(radii[g].mean())) <= 0.0
+        inside = np.array([together(xy[g], radii[g])
+                           and group_gap(corners, xy[g], float(radii[g].mean())) <= 0.0
                            for g in self._groups], bool)
         tr.group_n += _entries(tr.group_in, inside)
         tr.group_in = inside

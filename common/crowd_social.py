@@ -12,7 +12,10 @@ Sources (docs/experiments.md "Measures" names each beside its figure):
   (for two, the strip between them) - the space an F-formation holds between its members
   (Kendon 1990's o-space with the members' p-space; the "group space" of Rios-Martinez et
   al. 2015, "From proxemics theory to socially-aware navigation: a survey"). Driving into it
-  is driving through the group;
+  is driving through the group. A group holds a space only while its members are together:
+  no two of them farther apart than Hall's personal distance, :data:`TOGETHER_M` between
+  their bodies (a walking pair split by a crowd is two people, and a robot between them
+  crosses no group);
 - **time to collision** (HuNavSim's and SocNavBench's): at constant velocities, the first
   time the robot's circumscribed disc (:data:`common.robot.FOOTPRINT_RADIUS_M`) touches a
   person's disc; 0 when they overlap while closing, inf when not closing;
@@ -35,6 +38,7 @@ import numpy as np
 from common.robot import FOOTPRINT_RADIUS_M
 
 HALL_ZONES = (("intimate", 0.45), ("personal", 1.2), ("social", 3.6))   # [m] (module doc)
+TOGETHER_M = 1.2   # [m] a group's members no farther apart than this (Hall's personal distance)
 
 
 def _cross(o, a, b) -> float:
@@ -95,6 +99,14 @@ def _vertex_edge_min(a: np.ndarray, b: np.ndarray) -> float:
             s, e = q[k], q[(k + 1) % len(q)]
             best = min(best, float(_point_segment(p, s, e).min()))
     return best
+
+
+def together(centres: np.ndarray, radii: np.ndarray) -> bool:
+    """No two members' bodies farther apart than :data:`TOGETHER_M` (module doc)."""
+    c = np.asarray(centres, float).reshape(-1, 2)
+    r = np.asarray(radii, float).reshape(-1)
+    gaps = np.hypot(*(c[:, None, :] - c[None, :, :]).transpose(2, 0, 1)) - r[:, None] - r[None, :]
+    return bool(gaps.max() <= TOGETHER_M) if len(c) > 1 else True
 
 
 def group_gap(footprint: np.ndarray, centres: np.ndarray, radius: float) -> float:

@@ -102,6 +102,12 @@ def test_group_intrusions_count_driving_between_members_not_past_them():
     assert past.results()["r"].group_intrusions == 0
 
 
+def test_a_group_drifted_apart_holds_no_space():
+    split = CrowdMeter(groups=((0, 1),))
+    drive_past(split, 0.0, groups_xy=[(3.0, -1.2), (3.0, 1.2)], radius=0.25)   # 1.9 m apart
+    assert split.results()["r"].group_intrusions == 0
+
+
 def test_a_person_of_radius_zero_is_not_there():
     meter = CrowdMeter()
     for k, x in enumerate(np.arange(0.0, 6.0, 0.1)):
