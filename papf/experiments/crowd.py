@@ -262,14 +262,17 @@ def run_crowd(out: str | Path, planners: Sequence[str] = DEFAULT_PLANNERS,
 
 
 def _scene_traces(jobs: list[CrowdJob], results: list[dict]) -> list[dict]:
-    """Per scene of the first seed: its world and every planner's path, the people's tracks."""
+    """Per scene of the first seed: its world and every planner's path, the people's tracks
+    (of the scene's longest run: they are the same people in every run until it ends)."""
     scenes: dict[str, dict] = {}
     for job, res in zip(jobs, results, strict=True):
         trace = res.get("trace")
         if not trace:
             continue
         s = scenes.setdefault(job.scene, {"world": job.world, "label": job.scene, "paths": {},
-                                          "people": trace["people"], "shown": trace["shown"]})
+                                          "people": [], "shown": []})
+        if len(trace["people"]) > len(s["people"]):
+            s["people"], s["shown"] = trace["people"], trace["shown"]
         for name, path in trace["paths"].items():
             s["paths"][job.planner if name == "robot" else f"{job.planner} {name}"] = path
     return list(scenes.values())

@@ -122,7 +122,7 @@ def plot_crowd_scenes(scenes: Sequence[dict], out_png: str | Path) -> Path | Non
         return None
     cols = min(len(scenes), 3)
     rows = -(-len(scenes) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.6 * rows), squeeze=False,
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.3 * rows), squeeze=False,
                              layout="constrained")
     handles: dict = {}
     with saved_png(fig, out_png) as out:
