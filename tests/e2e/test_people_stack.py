@@ -75,3 +75,16 @@ def test_a_replayed_scene_runs_the_whole_stack_as_recorded(tmp_path):
 
     series = run_metrics(rec).series                              # papf report draws them
     assert series.people is not None and series.people.shape[1:] == (2 + len(tracks), 2)
+
+
+def test_the_crowd_planners_pass_the_standing_group_through_the_stack():
+    """ORCA and the social force as planner processes (tracks from --objects truth, their
+    libraries compiled before the node is ready: no lockstep fault), on crowd-standing."""
+    for planner in ("orca", "social_force"):
+        code, res, err = papf_run("--world", "crowd-standing", "--planner", planner,
+                                  "--timeout", "300")
+        assert res is not None, err
+        assert (code, res["outcome"], res["collisions"]) == (0, "reached", 0), res
+        assert not res.get("faults"), res["faults"]
+        assert res["robots"][0]["group_intrusions"] == 0
+        assert 0.0 < res["robots"][0]["min_separation_m"] < 1.5    # passed beside them

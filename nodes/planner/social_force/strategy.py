@@ -58,6 +58,7 @@ class SocialForceStrategy(Strategy):
     roles = ("crowd",)
     colour, colour_map = "tab:cyan", "PuBu"
     uses_objects = True
+    needs_blas = True    # pysocialforce's numba kernels use np.dot: the node keeps scipy
     Params = SocialForceParams
     SPECS = SOCIAL_FORCE
 
@@ -72,8 +73,14 @@ class SocialForceStrategy(Strategy):
         self._tracks, self._v = tuple(objects), v
 
     def warm_up(self, apf: APFParams) -> None:
-        """Import the library (and compile its kernels) before the node is ready."""
-        self._simulator(np.zeros((1, 6)), apf)
+        """Import the library and compile its kernels (a first force) before the node is
+        ready: the first cycle's compile would outlast the driver's lockstep timeout."""
+        sim = self._simulator(np.array([[0.0, 0.0, 0.1, 0.0, 1.0, 0.0],
+                                        [1.0, 0.5, -0.5, 0.0, 0.0, 0.5]]), apf)
+        sim.env._obstacles = [np.array([[0.5, -0.5], [0.6, -0.5]])]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sim.compute_forces()
+        del sim.peds.ped_states[:-1], sim.peds.group_states[:-1]
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
