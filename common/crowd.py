@@ -14,6 +14,23 @@ own radius of the current one; after the last, the first again if ``loop``, else
 arrived and stands still. The seed draws a tiny perturbation of each preferred velocity
 (at most 0.1 mm/s, as RVO2's examples do) that breaks perfect symmetries (two people
 exactly head-on); same seed, same inputs -> the same positions bit for bit.
+
+Three more kinds of people share the world, none stepped by a model:
+
+- **standing** people (``speed = 0``, or no goal and no waypoints) stay at their start: to
+  both models they are agents whose velocity is given (zero), as the robots are;
+- **replayed** people (``[[people_replay]]``, :mod:`worlds.people_replay`) are where their
+  recording says at every instant (linear between rows) and do not react; they follow the
+  ``[[people]]`` in every list (:attr:`Crowd.positions`, ...). One not in the scene has
+  radius 0 (:attr:`Crowd.radii`; :attr:`Crowd.body_radii` is its radius when there) and,
+  to the models, stands far away;
+- **walking groups** (``[[groups]]``): each member walks its own route at the group's pace
+  (the slowest member's preferred speed) and is drawn back toward the members' centre of
+  mass when farther from it than ``(N - 1) / 2`` m - the coherence of Moussaïd et al.
+  2010 ("The walking behaviour of pedestrian social groups and its impact on crowd
+  dynamics", PLoS ONE 5(4), eq. 5: a unit force toward the centre of mass beyond that
+  threshold), here a preferred-velocity term of :data:`GROUP_COHESION_M_S`. A member held
+  up by the robot so holds up the others, and the group walks past side by side.
 """
 
 from __future__ import annotations
@@ -42,6 +59,10 @@ ORCA_SAFETY_M = 0.01           # [m] added to an ORCA agent's radius (CrowdNav's
 # of the avoiding, a robot or another model's person does not
 ORCA_EXTERNAL_MARGIN_M = 0.05
 SF_WALL_STEP_M = 0.1           # [m] spacing of a wall's sample points (pysocialforce's 10/m)
+GROUP_COHESION_M_S = 0.3       # [m/s] a group member's pull toward the members' centre (beyond
+                               # (N - 1)/2 m; Moussaïd et al. 2010 give the force's direction
+                               # and threshold, this size is ours: a step a third of a walk)
+AWAY_M = 1.0e5                 # [m] where the models see a replayed person not in the scene
 
 
 def obstacle_polygons(world) -> list[np.ndarray]:
@@ -68,25 +89,45 @@ def obstacle_polygons(world) -> list[np.ndarray]:
 class Crowd:
     """The people of a world, stepped with their models (module doc)."""
 
-    def __init__(self, people: Sequence, world, seed: int):
+    def __init__(self, people: Sequence, world, seed: int, replay: bool = True):
         self._people = tuple(people)
         self._world = world
         self._rng = np.random.default_rng(seed)
         n = len(self._people)
-        self._pos = np.array([p.start for p in self._people], float).reshape(n, 2)
-        self._vel = np.zeros((n, 2))
-        self._radii = np.array([p.radius for p in self._people], float).reshape(n)
+        self._replay = tuple(world.replayed) if replay else ()
+        self._replay_r = np.array([spec.radius for spec in world.people_replay
+                                   for _ in spec.tracks] if replay else [], float)
+        m = len(self._replay)
+        self._pos = np.zeros((n + m, 2))
+        self._pos[:n] = np.array([p.start for p in self._people], float).reshape(n, 2)
+        self._vel = np.zeros((n + m, 2))
+        self._radii = np.concatenate([np.array([p.radius for p in self._people], float)
+                                      .reshape(n), self._replay_r])
+        self._present = np.ones(n + m, bool)
         self._speed = np.array([p.speed for p in self._people], float).reshape(n)
         self._leg = np.zeros(n, int)           # index of the waypoint walked to
-        self._arrived = np.zeros(n, bool)
+        self._standing = np.array([p.standing for p in self._people], bool).reshape(n)
+        self._arrived = self._standing.copy()
+        self._walked = np.zeros(n)             # [m] path each has walked
+        self._first_goal_s = np.full(n, math.nan)   # [s] when each reached its first route point
+        self._walked_goal = np.full(n, math.nan)    # [m] its path then
         self._t = 0.0                          # [s] since the start (moving obstacles' clock)
         self._moving = [ob for ob in world.obstacles if ob.moving]
-        self._orca = np.array([i for i, p in enumerate(self._people) if p.model == "orca"], int)
-        self._sf = np.array([i for i, p in enumerate(self._people) if p.model != "orca"], int)
+        walking = [i for i, p in enumerate(self._people) if not p.standing]
+        self._orca = np.array([i for i in walking if self._people[i].model == "orca"], int)
+        self._sf = np.array([i for i in walking if self._people[i].model != "orca"], int)
+        self._still = np.array([i for i, p in enumerate(self._people) if p.standing], int)
+        self._groups = [np.array(g.members, int) for g in getattr(world, "groups", ())
+                        if max(g.members) < n and not g.standing(self._people)]
+        for g in self._groups:                 # the group's pace: its slowest member's
+            self._speed[g] = self._speed[g].min()
         self._polys = obstacle_polygons(world)
         self._rvo = None
         self._sim = None
         self._n_ext = None
+        self._spans = None                    # (m, 2) [s] each replayed person's first, last row
+        self._present[n:] = True              # every replayed person placed on the first call
+        self._place_replayed()
 
     # -- read-outs ------------------------------------------------------------------------
     @property
@@ -101,12 +142,46 @@ class Crowd:
 
     @property
     def radii(self) -> np.ndarray:
-        """(n,) [m] each person's body radius."""
+        """(n,) [m] each person's body radius now; 0 for a replayed person not in the scene."""
+        return np.where(self._present, self._radii, 0.0)
+
+    @property
+    def body_radii(self) -> np.ndarray:
+        """(n,) [m] each person's body radius when in the scene."""
         return self._radii.copy()
 
+    @property
+    def present(self) -> np.ndarray:
+        """(n,) bool: in the scene now (only a replayed person may not be)."""
+        return self._present.copy()
+
+    @property
+    def reacting(self) -> int:
+        """How many of the people are ``[[people]]`` (the rest are replayed)."""
+        return len(self._people)
+
+    @property
+    def time_s(self) -> float:
+        """[s] since the start."""
+        return self._t
+
     def arrived(self) -> np.ndarray:
-        """(n,) bool: reached its goal (or last waypoint, not looping)."""
+        """(n,) bool: reached its goal (or last waypoint, not looping); standing people have."""
         return self._arrived.copy()
+
+    def walked(self) -> np.ndarray:
+        """(k,) [m] the path each of the ``[[people]]`` has walked so far."""
+        return self._walked.copy()
+
+    def first_goal_s(self) -> np.ndarray:
+        """(k,) [s] when each of the ``[[people]]`` reached its goal (its first waypoint); nan:
+        not yet, or standing."""
+        return self._first_goal_s.copy()
+
+    def walked_to_goal(self) -> np.ndarray:
+        """(k,) [m] the path each of the ``[[people]]`` had walked when it reached its goal
+        (its first waypoint); nan: not yet, or standing."""
+        return self._walked_goal.copy()
 
     # -- stepping -------------------------------------------------------------------------
     def step(self, dt_s: float, robots: Sequence[tuple[float, float, float, float]]) -> None:
@@ -116,6 +191,7 @@ class Crowd:
             raise ValueError(f"dt_s must be a positive number of seconds, got {dt_s!r}")
         if not len(self._people):
             self._t += dt_s
+            self._place_replayed()
             return
         self._advance_legs()
         ext = self._externals(robots)          # (m, 5): x, y, vx, vy, radius
@@ -127,9 +203,33 @@ class Crowd:
         if self._sf.size:
             p, v = self._step_sf(dt_s, ext, pref)
             new_pos[self._sf], new_vel[self._sf] = p, v
+        n = len(self._people)
+        self._walked += np.hypot(*(new_pos[:n] - self._pos[:n]).T)
         self._pos, self._vel = new_pos, new_vel
         self._t += dt_s
+        self._place_replayed()
         self._advance_legs()
+
+    def _place_replayed(self) -> None:
+        """The replayed people where their recording has them at the current time."""
+        from worlds.people_replay import replay_state
+
+        n = len(self._people)
+        t = round(self._t, 9)           # the sum of steps, to the ns: 200 x 0.02 s is 4 s
+        if self._spans is None:
+            self._spans = np.array([(tr.first_s, tr.last_s) for tr in self._replay],
+                                   float).reshape(-1, 2)
+        due = (self._spans[:, 0] <= t) & (t <= self._spans[:, 1])
+        # the people in the scene now, and those who were a step ago (to leave it)
+        for k in np.flatnonzero(due | self._present[n:]):
+            track = self._replay[k]
+            state = replay_state(track, t)
+            self._present[n + k] = state is not None
+            if state is None:       # held at the nearest row, not moving (radius 0 says gone)
+                self._pos[n + k] = track.xy[0] if t < track.first_s else track.xy[-1]
+                self._vel[n + k] = 0.0
+            else:
+                self._pos[n + k], self._vel[n + k] = state[:2], state[2:]
 
     def _advance_legs(self) -> None:
         """Next waypoint for whoever is within its radius of the current one."""
@@ -138,6 +238,8 @@ class Crowd:
                 wx, wy = p.route[self._leg[i]]
                 if math.hypot(wx - self._pos[i, 0], wy - self._pos[i, 1]) > self._radii[i]:
                     break
+                if self._leg[i] == 0 and math.isnan(self._first_goal_s[i]):
+                    self._first_goal_s[i], self._walked_goal[i] = self._t, self._walked[i]
                 if self._leg[i] + 1 < len(p.route):
                     self._leg[i] += 1
                 elif p.loop and len(p.route) > 1:
@@ -149,30 +251,45 @@ class Crowd:
     def _preferred(self) -> np.ndarray:
         """(n, 2) [m/s] toward the current waypoint at the preferred speed (0 once arrived),
         plus the seeded perturbation."""
-        target = np.array([p.route[k] for p, k in zip(self._people, self._leg, strict=True)], float)
-        d = target - self._pos
+        n = len(self._people)
+        target = np.array([p.route[k] if p.route else p.start
+                           for p, k in zip(self._people, self._leg, strict=True)], float)
+        d = target.reshape(n, 2) - self._pos[:n]
         dist = np.hypot(d[:, 0], d[:, 1])
         unit = d / np.maximum(dist, 1e-12)[:, None]
         pref = unit * self._speed[:, None]
         pref[self._arrived] = 0.0
+        for g in self._groups:                 # coherence (module doc)
+            centre = self._pos[g].mean(axis=0)
+            off = centre - self._pos[g]
+            far = np.hypot(off[:, 0], off[:, 1])
+            pull = far > (len(g) - 1) / 2
+            pref[g[pull]] += off[pull] / far[pull][:, None] * GROUP_COHESION_M_S
         angle = self._rng.uniform(0.0, 2 * math.pi, len(self._people))
         size = self._rng.uniform(0.0, PERTURB_M_S, len(self._people))
         return pref + np.column_stack([np.cos(angle), np.sin(angle)]) * size[:, None]
 
     def _externals(self, robots) -> np.ndarray:
-        """(m, 5) the agents whose velocity is given: robots, then moving obstacles."""
+        """(m, 5) the agents whose velocity is given: robots, moving obstacles, then the
+        standing people and the replayed ones (far away while not in the scene)."""
         rows = [(float(x), float(y), float(vx), float(vy), FOOTPRINT_RADIUS_M)
                 for x, y, vx, vy in robots]
         for ob in self._moving:
             s = ob.state_at(self._t)
             rows.append((s.x, s.y, s.vx, s.vy, ob.model.reach(ob)))
-        ext = np.array(rows, float).reshape(len(rows), 5)
+        n_given = len(rows)
         if self._n_ext is None:
-            self._n_ext = len(ext)
-        elif len(ext) != self._n_ext:
+            self._n_ext = n_given
+        elif n_given != self._n_ext:
             raise ValueError(f"{len(robots)} robots given; this crowd was first stepped with "
                              f"{self._n_ext - len(self._moving)} (their number is fixed)")
-        return ext
+        n = len(self._people)
+        fixed = np.concatenate([self._still, np.arange(n, n + len(self._replay))]).astype(int)
+        people = self._others_rows(fixed)
+        gone = ~self._present[fixed]
+        people[gone, 0] = AWAY_M + 10.0 * np.arange(int(gone.sum()))
+        people[gone, 1] = AWAY_M
+        return np.concatenate([np.array(rows, float).reshape(n_given, 5), people])
 
     def _step_orca(self, dt: float, ext: np.ndarray, pref: np.ndarray):
         """The ORCA group's new positions and velocities (RVO2 one step)."""
@@ -259,6 +376,11 @@ def _sample_edge(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(k, 2) points [m] from a to b, at most SF_WALL_STEP_M apart."""
     k = max(2, math.ceil(math.hypot(*(b - a)) / SF_WALL_STEP_M) + 1)
     return np.column_stack([np.linspace(a[0], b[0], k), np.linspace(a[1], b[1], k)])
+
+
+def load_pysocialforce():
+    """pysocialforce, imported once without its side effects (:func:`_pysocialforce`)."""
+    return _pysocialforce()
 
 
 def _pysocialforce():

@@ -13,7 +13,15 @@ BODY_WIDTH_M across), a person a disc. Per robot (``CrowdMeter.results``):
 - **path irregularity** [rad/m]: unnecessary turning per metre (Guzzi et al. 2013,
   "Human-friendly robot navigation in dynamic environments", ICRA; SocNavBench, Biswas et
   al. 2022): (total |heading change| - the turn a straight path needs, i.e. from the first
-  heading to the bearing of the goal) / path length. Without a goal, the last position.
+  heading to the bearing of the goal) / path length. Without a goal, the last position;
+- **Hall's zones** [s, -]: per zone (intimate 0.45 m, personal 1.2 m, social 3.6 m of the
+  footprint), the time someone was within it and the entries of people into it;
+- **group-space intrusions** [-, s]: entries of the footprint into a ``[[groups]]``
+  group's space while its members are together, and the time spent in one;
+- **minimum time to collision** [s] over the run (inf: nobody ever closed in).
+
+The last three's geometry and sources: :mod:`common.crowd_social`. A person of radius 0 (a
+replayed person not in the scene) is not there for any measure.
 """
 
 from __future__ import annotations
@@ -23,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from common.crowd_social import HALL_ZONES, group_gap, time_to_collision, together
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 
 DISCOMFORT_M = 0.2        # [m] CrowdNav's discomfort distance
@@ -82,6 +91,15 @@ class CrowdMeasures:
     path_m: float                    # length of the path [m]
     rotation_rad: float              # total |heading change| [rad]
     irregularity_rad_per_m: float    # unnecessary turning per metre [rad/m]
+    intimate_s: float = 0.0          # someone within 0.45 m [s] (Hall's intimate zone)
+    personal_s: float = 0.0          # someone within 1.2 m [s]
+    social_s: float = 0.0            # someone within 3.6 m [s]
+    intimate_n: int = 0              # entries of people into the intimate zone [-]
+    personal_n: int = 0              # ... the personal zone
+    social_n: int = 0                # ... the social zone
+    group_intrusions: int = 0        # entries into a group's space [-]
+    group_s: float = 0.0             # time inside a group's space [s]
+    min_ttc_s: float = math.inf      # least time to collision [s]
 
 
 @dataclass
@@ -94,53 +112,108 @@ class _Track:
     discomfort_s: float = 0.0
     intrusions: int = 0
     inside: np.ndarray | None = None              # (n,) bool: person in personal space
+    zone_s: dict = field(default_factory=lambda: {name: 0.0 for name, _ in HALL_ZONES})
+    zone_n: dict = field(default_factory=lambda: {name: 0 for name, _ in HALL_ZONES})
+    zone_in: dict = field(default_factory=dict)   # zone -> (n,) bool: person inside
+    group_n: int = 0
+    group_s: float = 0.0
+    group_in: np.ndarray | None = None            # (groups,) bool: footprint inside
+    ttc: float = math.inf
+
+
+def _entries(before: np.ndarray | None, inside: np.ndarray) -> int:
+    """New members of ``inside`` since ``before`` (all of them at the first step)."""
+    if before is None or len(before) != len(inside):
+        before = np.zeros(len(inside), bool)
+    return int((inside & ~before).sum())
 
 
 class CrowdMeter:
-    """Per-robot crowd measures; ``goals`` name -> (x, y) [m] for the irregularity."""
+    """Per-robot crowd measures; ``goals`` name -> (x, y) [m] for the irregularity;
+    ``groups``: each group's members (indexes into the people's arrays)."""
 
-    def __init__(self, goals: dict[str, tuple[float, float]] | None = None):
+    def __init__(self, goals: dict[str, tuple[float, float]] | None = None,
+                 groups: tuple[tuple[int, ...], ...] = ()):
         self._goals = dict(goals or {})
+        self._groups = [np.asarray(g, int) for g in groups]
         self._tracks: dict[str, _Track] = {}
         self._t: float | None = None
+        self._xy: np.ndarray | None = None        # the people's last centres (velocities)
 
     def update(self, t_s: float, robots: dict[str, tuple[float, float, float]],
-               people_xy: np.ndarray, people_radii: np.ndarray, active=None) -> None:
+               people_xy: np.ndarray, people_radii: np.ndarray, active=None,
+               people_v: np.ndarray | None = None) -> None:
         """One control step at time t_s [s]: robots' poses (x [m], y [m], yaw [rad]), people's
-        centres (n, 2) [m] and radii (n,) [m]; ``active``: the names measured this step
+        centres (n, 2) [m], radii (n,) [m] (0: not in the scene) and velocities (n, 2) [m/s]
+        (default: from their last centres); ``active``: the names measured this step
         (default all; the others are only there to be kept clear of, e.g. a robot at its goal)."""
         dt = 0.0 if self._t is None else t_s - self._t
         if dt < 0:
             raise ValueError(f"time went back: {t_s} s after {self._t} s")
-        self._t = t_s
         xy = np.asarray(people_xy, float).reshape(-1, 2)
         radii = np.asarray(people_radii, float).reshape(-1)
         if len(radii) != len(xy):
             raise ValueError(f"{len(xy)} people positions but {len(radii)} radii")
+        if people_v is None:
+            people_v = (xy - self._xy) / dt if dt > 0 and self._xy is not None and \
+                len(self._xy) == len(xy) else np.zeros_like(xy)
+        self._t, self._xy = t_s, xy
+        here = radii > 0
+        people = (xy[here], radii[here], np.asarray(people_v, float).reshape(-1, 2)[here])
         for name, pose in robots.items():
-            if active is not None and name not in active:
-                continue
-            tr = self._tracks.setdefault(name, _Track())
-            x, y, yaw = (float(v) for v in pose)
-            if tr.poses:
-                px, py, pyaw = tr.poses[-1]
-                tr.path_m += math.hypot(x - px, y - py)
-                tr.rotation_rad += abs(_wrap(yaw - pyaw))
-            tr.poses.append((x, y, yaw))
-            if len(xy):
-                gap = np.maximum(point_box_distance(xy, x, y, yaw) - radii, 0.0)
-                tr.person_min = min(tr.person_min, float(gap.min()))
-                if gap.min() < DISCOMFORT_M:
+            if active is None or name in active:
+                self._robot(self._tracks.setdefault(name, _Track()), name, pose, robots, dt,
+                            people, xy, radii)
+
+    def _robot(self, tr: _Track, name: str, pose, robots, dt: float, people, all_xy,
+               all_radii) -> None:
+        """One robot's share of a step."""
+        x, y, yaw = (float(v) for v in pose)
+        v = (0.0, 0.0)
+        if tr.poses:
+            px, py, pyaw = tr.poses[-1]
+            tr.path_m += math.hypot(x - px, y - py)
+            tr.rotation_rad += abs(_wrap(yaw - pyaw))
+            if dt > 0:
+                v = ((x - px) / dt, (y - py) / dt)
+        tr.poses.append((x, y, yaw))
+        xy, radii, pv = people
+        if len(all_xy):
+            # every person keeps a slot (entries are per person), one not there never inside
+            gap_all = np.full(len(all_xy), math.inf)
+            here = all_radii > 0
+            gap_all[here] = np.maximum(point_box_distance(all_xy[here], x, y, yaw)
+                                       - all_radii[here], 0.0)
+            if here.any():
+                tr.person_min = min(tr.person_min, float(gap_all.min()))
+                if gap_all.min() < DISCOMFORT_M:
                     tr.discomfort_s += dt
-                inside = gap < PERSONAL_SPACE_M
-                before = tr.inside if tr.inside is not None and len(tr.inside) == len(inside) \
-                    else np.zeros(len(inside), bool)
-                tr.intrusions += int((inside & ~before).sum())
-                tr.inside = inside
-            for other, opose in robots.items():
-                if other != name:
-                    tr.robot_min = min(tr.robot_min, box_box_distance((x, y, yaw),
-                                                                      tuple(opose)))
+                tr.ttc = min(tr.ttc, time_to_collision((x, y), v, xy, pv, radii))
+            inside = gap_all < PERSONAL_SPACE_M
+            tr.intrusions += _entries(tr.inside, inside)
+            tr.inside = inside
+            for zone, reach in HALL_ZONES:
+                within = gap_all < reach
+                tr.zone_n[zone] += _entries(tr.zone_in.get(zone), within)
+                tr.zone_in[zone] = within
+                if within.any():
+                    tr.zone_s[zone] += dt
+        if self._groups:
+            self._in_groups(tr, box_corners(x, y, yaw), all_xy, all_radii, dt)
+        for other, opose in robots.items():
+            if other != name:
+                tr.robot_min = min(tr.robot_min, box_box_distance((x, y, yaw), tuple(opose)))
+
+    def _in_groups(self, tr: _Track, corners: np.ndarray, xy: np.ndarray, radii: np.ndarray,
+                   dt: float) -> None:
+        """Entries into, and time in, a group's space (common/crowd_social.py)."""
+        inside = np.array([together(xy[g], radii[g])
+                           and group_gap(corners, xy[g], float(radii[g].mean())) <= 0.0
+                           for g in self._groups], bool)
+        tr.group_n += _entries(tr.group_in, inside)
+        tr.group_in = inside
+        if inside.any():
+            tr.group_s += dt
 
     def results(self) -> dict[str, CrowdMeasures]:
         """name -> the robot's measures so far."""
@@ -158,4 +231,8 @@ class CrowdMeter:
                              min_robot_separation_m=tr.robot_min,
                              discomfort_s=tr.discomfort_s, intrusions=tr.intrusions,
                              path_m=tr.path_m, rotation_rad=tr.rotation_rad,
-                             irregularity_rad_per_m=irregular)
+                             irregularity_rad_per_m=irregular,
+                             **{f"{z}_s": tr.zone_s[z] for z, _ in HALL_ZONES},
+                             **{f"{z}_n": tr.zone_n[z] for z, _ in HALL_ZONES},
+                             group_intrusions=tr.group_n, group_s=tr.group_s,
+                             min_ttc_s=tr.ttc)

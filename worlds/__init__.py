@@ -18,9 +18,10 @@ from common.optional import tomllib
 from common.robot import GOAL_TOLERANCE_MIN_M
 from common.syntax import toml_problem
 from common.text import suggest
-from worlds.fleet import PersonSpec, RobotSpec, parse_people, parse_robots
+from worlds.fleet import GroupSpec, PersonSpec, RobotSpec, parse_groups, parse_people, parse_robots
 from worlds.kinds import KINDS  # noqa: F401 (re-exported: the kinds' TOML names -> classes)
 from worlds.obstacle import DEFAULT_HEIGHT, Obstacle  # noqa: F401 (re-exported)
+from worlds.people_replay import ReplaySpec, parse_replays
 from worlds.traffic import Motion, Road, state_at
 from worlds.validate import MAX_FILE_BYTES, check_document, check_text_size
 
@@ -46,6 +47,24 @@ class World:
     vehicle: str = "rosbot"                      # ``[robot].vehicle``: rosbot | car (IAPF cases)
     robots: tuple[RobotSpec, ...] = ()           # ``[[robots]]`` (start/goal are the first's)
     people: tuple[PersonSpec, ...] = ()          # ``[[people]]``
+    groups: tuple[GroupSpec, ...] = ()           # ``[[groups]]`` (indexes into people)
+    people_replay: tuple[ReplaySpec, ...] = ()   # ``[[people_replay]]``: recorded people
+
+    @property
+    def has_people(self) -> bool:
+        """People of any kind: ``[[people]]`` who react, or replayed ones."""
+        return bool(self.people or self.people_replay)
+
+    @property
+    def replayed(self) -> tuple:
+        """Every replayed person's track (:class:`worlds.people_replay.ReplayTrack`), in
+        order: they follow the ``[[people]]`` in every people list of a run."""
+        return tuple(tr for spec in self.people_replay for tr in spec.tracks)
+
+    @property
+    def n_people(self) -> int:
+        """People in a run's people lists: ``[[people]]``, then the replayed ones."""
+        return len(self.people) + sum(len(s.tracks) for s in self.people_replay)
 
     @property
     def fleet(self) -> tuple[RobotSpec, ...]:
@@ -145,7 +164,7 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
     check_document(data, source)
     ctx = _Ctx(source)
     name = _world_name(ctx, data, source)
-    robots = people = ()
+    robots = ()
     if "robots" in data:
         for table in ("robot", "goal"):
             if table in data:
@@ -155,8 +174,7 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
         first = robots[0]
         data = {**data, "robot": {"start": list(first.start)},
                 "goal": {"position": list(first.goal), "tolerance": first.tolerance}}
-    if "people" in data:
-        people = parse_people(ctx, data["people"])
+    people, groups, replays = _people(ctx, data, source)
     robot = ctx.table(data, "robot", default={})
     start = ctx.vec(robot, "start", (2, 3), "robot.start", default=[0.0, 0.0, 0.0])
     vehicle = ctx.str(robot, "vehicle", "robot.vehicle", default="rosbot")
@@ -178,13 +196,22 @@ def parse_world(data: dict, source: str = "<dict>") -> World:
     road = _road(ctx, data["road"]) if "road" in data else None
     if road is not None and len(goal) != 2:
         ctx.fail("[road]", "a road needs a 2-D world (goal.position with 2 numbers)")
-    if (robots or people) and (len(goal) != 2 or vehicle != "rosbot"):
-        ctx.fail("[[robots]]" if robots else "[[people]]",
+    if (robots or people or replays) and (len(goal) != 2 or vehicle != "rosbot"):
+        ctx.fail("[[robots]]" if robots else "[[people]]" if people else "[[people_replay]]",
                  "several robots and people share a 2-D world of ROSbots")
     return World(name=name, description=ctx.str(data, "description", default=""),
                  start=tuple(start), goal=tuple(goal), tolerance=tolerance,
                  obstacles=tuple(obstacles), source=source, road=road,
-                 vehicle=vehicle, robots=robots, people=people)
+                 vehicle=vehicle, robots=robots, people=people, groups=groups,
+                 people_replay=replays)
+
+
+def _people(ctx: _Ctx, data: dict, source: str) -> tuple:
+    """``[[people]]``, ``[[groups]]`` (of those people), ``[[people_replay]]`` (files read)."""
+    people = parse_people(ctx, data["people"]) if "people" in data else ()
+    groups = parse_groups(ctx, data["groups"], people) if "groups" in data else ()
+    replays = parse_replays(ctx, data["people_replay"], source, MAX_COORD_M) if "people_replay" in data else ()
+    return people, groups, replays
 
 
 def _road(ctx: _Ctx, t) -> Road:

@@ -42,7 +42,7 @@ def nearest_obstacle(world: World, point: tuple[float, ...]) -> tuple[int, float
 def check_runnable(world: World, robot_radius_m: float = START_CLEAR_M) -> None:
     """WorldError when the world cannot give a run (module doc); with several robots or
     people, for each of them (:func:`check_fleet`)."""
-    if world.robots or world.people:
+    if world.robots or world.has_people:
         check_fleet(world, robot_radius_m)
         return
     _check_one(world, world.start, world.goal, world.tolerance, "", robot_radius_m)
@@ -52,7 +52,7 @@ def check_fleet(world: World, robot_radius_m: float = START_CLEAR_M) -> None:
     """Every robot's start and goal as :func:`check_runnable` checks one robot's; no two robots'
     footprints overlapping at their starts; no person starting inside an obstacle, a robot's
     footprint or another person."""
-    from common.crowd_measures import box_box_distance, point_box_distance
+    from common.crowd_measures import box_box_distance
 
     where = f"world {world.name!r} ({world.source or 'no file'})"
     fleet = world.fleet
@@ -65,19 +65,33 @@ def check_fleet(world: World, robot_radius_m: float = START_CLEAR_M) -> None:
                                  f"footprints overlapping at {_xy(a.start[:2])} and "
                                  f"{_xy(b.start[:2])}; move them apart")
     for k, person in enumerate(world.people):
-        near = nearest_obstacle(world, person.start)
-        if near is not None and near[1] < person.radius:
-            raise WorldError(f"{where}: people[{k}] starts at {_xy(person.start)} inside "
-                             f"obstacles[{near[0]}] ({world.obstacles[near[0]].kind})")
-        for r in fleet:
-            if point_box_distance(np.array([person.start]), *r.start)[0] < person.radius:
-                who = f"robot {r.name!r}" if r.name else "the robot"
-                raise WorldError(f"{where}: people[{k}] starts at {_xy(person.start)} on {who}'s "
-                                 "footprint; move one of them")
-        for j, other in enumerate(world.people[:k]):
-            if np.hypot(*np.subtract(person.start, other.start)) < person.radius + other.radius:
-                raise WorldError(f"{where}: people[{j}] and people[{k}] start overlapping at "
-                                 f"{_xy(other.start)} and {_xy(person.start)}")
+        _check_person(world, k, person, fleet, where, robot_radius_m)
+
+
+def _check_person(world: World, k: int, person, fleet, where: str, robot_radius_m: float) -> None:
+    """people[k] off every obstacle, robot and earlier person; standing off every goal."""
+    from common.crowd_measures import point_box_distance
+
+    near = nearest_obstacle(world, person.start)
+    if near is not None and near[1] < person.radius:
+        raise WorldError(f"{where}: people[{k}] starts at {_xy(person.start)} inside "
+                         f"obstacles[{near[0]}] ({world.obstacles[near[0]].kind})")
+    for r in fleet:
+        if point_box_distance(np.array([person.start]), *r.start)[0] < person.radius:
+            who = f"robot {r.name!r}" if r.name else "the robot"
+            raise WorldError(f"{where}: people[{k}] starts at {_xy(person.start)} on {who}'s "
+                             "footprint; move one of them")
+    for r in fleet if person.standing else ():
+        if np.hypot(*np.subtract(person.start, r.goal)) < person.radius + robot_radius_m \
+                - r.tolerance:
+            who = f"robot {r.name!r}'s" if r.name else "the robot's"
+            raise WorldError(f"{where}: people[{k}] stands at {_xy(person.start)} on "
+                             f"{who} goal {_xy(r.goal)}, which can then never be reached; "
+                             "move one of them")
+    for j, other in enumerate(world.people[:k]):
+        if np.hypot(*np.subtract(person.start, other.start)) < person.radius + other.radius:
+            raise WorldError(f"{where}: people[{j}] and people[{k}] start overlapping at "
+                             f"{_xy(other.start)} and {_xy(person.start)}")
 
 
 def _check_one(world: World, start, goal, tolerance: float, name: str,

@@ -57,11 +57,13 @@ def truth_objects(world: World, stamp_ns: int, near: tuple[float, float] | None 
     if bodies is not None:
         first = len(world.obstacles)
         for k, r in enumerate(bodies.person_radius):
+            if not r > 0:       # a replayed person not in the scene now
+                continue
             vx, vy = _velocity(bodies.person_vx, bodies.person_vy, k)
             add(first + k, bodies.person_x[k], bodies.person_y[k],
                 yaw=math.atan2(vy, vx) if vx or vy else 0.0, vx=vx, vy=vy,
                 length=2 * r, width=2 * r)
-        first += len(world.people)
+        first += world.n_people
         index = {spec.name: j for j, spec in enumerate(world.robots)}
         for k, name in enumerate(bodies.robots):
             vx, vy = _velocity(bodies.robot_vx, bodies.robot_vy, k)

@@ -21,8 +21,9 @@ import difflib
 from collections.abc import Iterable
 
 from common.errors import WorldError
-from worlds.fleet import PERSON_KEYS, ROBOT_KEYS
+from worlds.fleet import GROUP_KEYS, PERSON_KEYS, ROBOT_KEYS
 from worlds.kinds import KINDS
+from worlds.people_replay import REPLAY_KEYS
 
 MAX_FILE_BYTES = 1024 * 1024     # [bytes] the largest packaged world is 3 KB
 MAX_DEPTH = 6                    # [-] tables/arrays nested (obstacles[].motion.track[][] is 5)
@@ -32,7 +33,8 @@ MAX_LANES = 16                   # [-] a motorway has 4-5 per direction
 MAX_TRACK_POINTS = 10_000        # [-] samples of one obstacle's motion track
 MAX_OBSTACLES = 10_000           # [-] in a file
 
-TOP = ("name", "description", "robot", "goal", "obstacles", "road", "robots", "people")
+TOP = ("name", "description", "robot", "goal", "obstacles", "road", "robots", "people", "groups",
+       "people_replay")
 TABLES = {"robot": ("start", "vehicle"), "goal": ("position", "tolerance"),
           "road": ("y_min", "lane_width", "lanes")}
 MOTION_KEYS = ("track",)
@@ -67,7 +69,8 @@ def check_document(data: dict, source: str) -> None:
     if isinstance(lanes, int) and not isinstance(lanes, bool) and lanes > MAX_LANES:
         _fail(source, "road.lanes", f"{lanes} lanes, more than {MAX_LANES}")
     _obstacles(data.get("obstacles"), source)
-    for array, valid in (("robots", ROBOT_KEYS), ("people", PERSON_KEYS)):
+    for array, valid in (("robots", ROBOT_KEYS), ("people", PERSON_KEYS), ("groups", GROUP_KEYS),
+                         ("people_replay", REPLAY_KEYS)):
         entries = data.get(array)
         for i, entry in enumerate(entries if isinstance(entries, list) else ()):
             if isinstance(entry, dict):

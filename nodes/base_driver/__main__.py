@@ -77,7 +77,7 @@ def main_sim(args: argparse.Namespace) -> int:
     config = DriverConfig.from_rates(args.odom_hz, args.scan_hz, args.watchdog)
     with open_node(NAME, args, log) as node:
         publish = node.publish
-        people = ("sim/people",) if world.people else ()   # on this node's namespace
+        people = ("sim/people",) if world.has_people else ()   # on this node's namespace
         if world.robots:   # a fleet: each robot's share under its own namespace
             publish = fleet_nodes(node, [r.name for r in world.robots], log)
             node.declare_publishers(*people)

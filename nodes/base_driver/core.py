@@ -116,12 +116,12 @@ class DriverCore:
         self._answered: set[int] = set()          # robots whose command answers this scan
         self._index = {name: i for i, name in enumerate(self.names)}
         self.crowd = None
-        if world.people:   # people who react (common/crowd.py), bodies in the physics
+        if world.has_people:   # people who react or replayed (common/crowd.py), in the physics
             from common.crowd import Crowd  # pyrvo / pysocialforce: only with people
 
             self.crowd = Crowd(world.people, world, seed)
-            self.sim.add_people(self.crowd.radii)
-            self.sim.place_people(self.crowd.positions)
+            self.sim.add_people(self.crowd.body_radii)
+            self.sim.place_people(self.crowd.positions, self.crowd.present)
 
     @property
     def collision_count(self) -> int:
@@ -211,7 +211,7 @@ class DriverCore:
         if self.crowd is not None:   # people take the instant's step, seeing the robots now
             robots = [(*self.sim.pose(i)[:2], *self.sim.velocity(i)) for i in range(n)]
             self.crowd.step(self.config.odom_period_ns / NS_PER_S, robots)
-            self.sim.place_people(self.crowd.positions)
+            self.sim.place_people(self.crowd.positions, self.crowd.present)
         for _ in range(self.config.odom_period_ns // step_ns):
             t = self.sim.t_ns
             for i in range(n):
@@ -239,9 +239,17 @@ class DriverCore:
             if key in new:
                 self.collision_counts[i] += 1
                 what = (f"robot {self.names[c.robot]}" if c.robot >= 0 else
-                        f"person {c.person}" if c.person >= 0 else
+                        f"person {c.person}, {self._cause(i, c.person)}" if c.person >= 0 else
                         f"obstacle {c.obstacle} ({self.world.obstacles[c.obstacle].kind})")
                 self._event(i, t, "collision", what, c.x, c.y)
+
+    def _cause(self, i: int, k: int) -> str:
+        """Who caused robot ``i``'s contact with person ``k`` (common/crowd_social.py)."""
+        from common.crowd_social import collision_cause
+
+        by = collision_cause(self.sim.pose(i)[:2], self.sim.velocity(i),
+                             self.crowd.positions[k], self.crowd.velocities[k])
+        return f"caused by the {by}"
 
     def _event(self, i: int, t_ns: int, kind: str, detail: str, x: float = float("nan"),
                y: float = float("nan")) -> None:

@@ -190,6 +190,7 @@ class SimBase:
         self._robot_index = {body: i for i, body in enumerate(self.robots)}
         self.people: list[int] = []                                   # add_people
         self._person_index: dict[int, int] = {}
+        self._people_here: list[bool] = []                            # place_people
         self._targets_of = [(0.0, 0.0)] * len(self.robots)           # [rad/s] left, right
         self.robot = self.robots[0]
         for _ in range(SETTLE_STEPS):
@@ -349,11 +350,17 @@ class SimBase:
             self._person_index[body] = len(self.people)
             self.people.append(body)
 
-    def place_people(self, xy) -> None:
-        """Put each person's body at its (x, y) [m]."""
-        for body, (x, y) in zip(self.people, xy, strict=True):
-            p.resetBasePositionAndOrientation(body, [float(x), float(y), PERSON_HEIGHT_M / 2],
-                                              [0, 0, 0, 1], physicsClientId=self.cid)
+    def place_people(self, xy, present=None) -> None:
+        """Put each person's body at its (x, y) [m]; one not ``present`` (a replayed person
+        outside their recording's rows) far below the floor, where nothing touches it."""
+        present = [True] * len(self.people) if present is None else list(present)
+        before = self._people_here or [True] * len(self.people)
+        for k, (body, (x, y), here) in enumerate(zip(self.people, xy, present, strict=True)):
+            if not (here or before[k]):
+                continue                        # parked, and stays so
+            pos = [float(x), float(y), PERSON_HEIGHT_M / 2] if here else [0.0, 0.0, -100.0]
+            p.resetBasePositionAndOrientation(body, pos, [0, 0, 0, 1], physicsClientId=self.cid)
+        self._people_here = present
 
     def close(self) -> None:
         if self.cid is not None and p.isConnected(self.cid):

@@ -100,7 +100,7 @@ def main_sim(args: argparse.Namespace) -> int:
                 node.inbox.put((pose_topic, pose))
 
         node.subscribe(pose_topic, handler=keep_due)
-        pairs = BodyPairs() if (world.robots or world.people) else None
+        pairs = BodyPairs() if (world.robots or world.has_people) else None
         if pairs is not None:   # a fleet: the others' bodies of each scan instant
             node.subscribe("sim/bodies")
         node.declare_publishers("scan", *(("objects",) if args.truth_objects else ()))

@@ -128,7 +128,7 @@ class LidarSim:
                 pos, quat = [0.0, 0.0, -100.0], [0, 0, 0, 1]
             p.resetBasePositionAndOrientation(body, pos, quat, physicsClientId=cid)
         for k in range(len(self._people)):
-            if k < len(bodies.person_x):
+            if k < len(bodies.person_x) and bodies.person_radius[k] > 0:
                 r = bodies.person_radius[k]
                 if self._people[k] is None or self._people[k][1] != r:
                     if self._people[k] is not None:

@@ -69,7 +69,10 @@ def parse_args(argv=None) -> argparse.Namespace:
 def run(args: argparse.Namespace) -> int:
     """Open the session, build the planner, serve scans until stopped; the exit code."""
     log = setup_logging(NODE_NAME, args.log_level)
-    lazy.numba_without_scipy()   # numba would import scipy.linalg for nothing (nodes/planner/lazy.py)
+    # numba would import scipy.linalg for nothing (nodes/planner/lazy.py); a library's kernels
+    # (pysocialforce's, the social-force planner's) use np.dot and need it
+    if not getattr(PLANNERS.get(args.planner), "needs_blas", False):
+        lazy.numba_without_scipy()
     try:
         planner = make_planner(args.planner, args.params, [*preset_sets(args.preset), *args.set])
     except ConfigError as exc:

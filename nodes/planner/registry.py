@@ -30,10 +30,10 @@ PRESETS = ("default", "paper")
 
 #: the parts a planner may declare it plays (``Strategy.roles``): ``compared`` puts it in the
 #: comparison experiments' default planner lists, ``traffic`` in the traffic experiment's
-#: (beside the planners that read tracks) and the crowd experiment's; ``<paper>-baseline`` / ``<paper>-proposed``
-#: name the planner a paper's own comparison is about (at most one planner each).
-ROLES = ("compared", "traffic", "papf-baseline", "papf-proposed", "arapf-proposed", "wang-proposed",
-         "wang-baseline", "car-proposed")
+#: (beside the planners that read tracks), ``crowd`` in the crowd experiment's; ``<paper>-baseline`` /
+#: ``<paper>-proposed`` name the planner a paper's own comparison is about (at most one planner each).
+ROLES = ("compared", "traffic", "crowd", "papf-baseline", "papf-proposed", "arapf-proposed",
+         "wang-proposed", "wang-baseline", "car-proposed")
 
 
 def _discover() -> dict[str, type[Strategy]]:

@@ -154,7 +154,8 @@ def bodies_scene(msg: Bodies) -> dict:
     texts = [text(x, y, BODY_HEIGHT_M + 0.2, name, {**c("other_robot"), "a": 1.0}, 0.1)
              for name, x, y in zip(msg.robots, msg.robot_x, msg.robot_y, strict=True)]
     people = [cylinder(x, y, PERSON_HEIGHT_M / 2, r, PERSON_HEIGHT_M, c("person"))
-              for x, y, r in zip(msg.person_x, msg.person_y, msg.person_radius, strict=True)]
+              for x, y, r in zip(msg.person_x, msg.person_y, msg.person_radius, strict=True)
+              if r > 0]   # radius 0: a replayed person not in the scene now
     return scene_update([entity(msg.stamp_ns, WORLD, "fleet", cubes=cubes, texts=texts,
                                 cylinders=people)])
 

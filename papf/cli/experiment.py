@@ -155,17 +155,27 @@ def _add_random(exp) -> None:
 
 
 def _add_crowd(exp) -> None:
-    p = exp.add_parser("crowd", help="planners x numbers of people x seeds in a hall: a "
-                                     "CrowdNav-style table",
-                       description="A robot crosses a hall of people walking back and forth "
-                                   "(ORCA), offline: every planner x --people x --runs seeds; "
-                                   "crowd.md, crowd.csv, crowd-summary.csv, crowd.png and the "
-                                   "scenes' worlds/ into --out (docs/experiments.md, Crowd).")
-    p.add_argument("--planners", default="apf,papf,arapf", help="comma-separated "
-                                                                "(default apf,papf,arapf)")
-    p.add_argument("--people", default="0,5,10,20", metavar="N1,N2",
-                   help="numbers of people, comma-separated, each 0-20 (default 0,5,10,20)")
-    p.add_argument("--runs", type=arg_type("--runs", integer(1, 10_000)), default=3, help="seeds per planner and number (default 3)")
+    from nodes.planner.registry import with_role
+
+    crowd = ",".join(with_role("crowd"))
+    p = exp.add_parser("crowd", help="planners x scenes x seeds among people: the social-"
+                                     "navigation measures with confidence intervals",
+                       description="A robot crosses a hall among people, offline: every planner "
+                                   "x scene (hall: walkers who step aside, --people of them; "
+                                   "groups: standing groups and people, a walking pair; replay: "
+                                   "recorded tracks replayed blind to the robot) x --runs seeds; "
+                                   "crowd.md, crowd.csv, crowd-summary.csv, crowd.png, "
+                                   "crowd-scenes.png and the scenes' worlds/ into --out "
+                                   "(docs/experiments.md, Crowd).")
+    p.add_argument("--planners", default=crowd, help=f"comma-separated (default {crowd})")
+    p.add_argument("--scenes", default="hall,groups,replay", metavar="S1,S2",
+                   help="comma-separated, of hall, groups, replay (default all three)")
+    p.add_argument("--replay", metavar="F1,F2",
+                   help="the replay scene's track files (eth-ucy: 'frame id x y' rows, e.g. "
+                        "the ETH/UCY recordings; default the packaged walkers-hall.txt)")
+    p.add_argument("--people", default="10", metavar="N1,N2",
+                   help="the hall's numbers of people, comma-separated, each 0-20 (default 10)")
+    p.add_argument("--runs", type=arg_type("--runs", integer(1, 10_000)), default=10, help="seeds per planner and scene (default 10)")
     p.add_argument("--seed", type=arg_type("--seed", SEED), default=0, help="first seed S: runs use S..S+runs-1")
     p.add_argument("--out", default="crowd", metavar="DIR", help="output directory")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
@@ -205,6 +215,7 @@ def cmd_crowd(args) -> int:
         raise ConfigError(f"--runs {args.runs} --seed {args.seed}: need runs >= 1, seed >= 0")
     if not args.timeout > 0:
         raise ConfigError(f"--timeout {args.timeout!r}: need a number of seconds > 0")
+    scenes, replay = _crowd_scenes(args)
     worlds = [w.strip() for w in (args.worlds or "").split(",") if w.strip()]
     if worlds:
         from worlds import load_world
@@ -214,12 +225,31 @@ def cmd_crowd(args) -> int:
                 raise ConfigError(f"--worlds: {w!r} is not a 2-D world of ROSbots")
     run_crowd(args.out, planner_list(args.planners), people,
               list(range(args.seed, args.seed + args.runs)), args.timeout, args.set,
-              sweep_options(args), worlds=worlds)
+              sweep_options(args), worlds=worlds, scenes=scenes, replay=replay)
     stem = "crowd-worlds" if worlds else "crowd"
     print((Path(args.out) / f"{stem}.md").read_text())
     print(f"wrote {args.out}/{stem}.md, {stem}.csv, {stem}-summary.csv"
-          + ("" if worlds else ", crowd.png and worlds/"), file=sys.stderr)
+          + ("" if worlds else ", crowd.png, crowd-scenes.png and worlds/"), file=sys.stderr)
     return 0
+
+
+def _crowd_scenes(args) -> tuple[list[str], list[str]]:
+    """``--scenes`` and ``--replay`` checked (every track file read) before any run."""
+    from papf.experiments.crowd import SCENES
+
+    scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
+    bad = [s for s in scenes if s not in SCENES]
+    if not scenes or bad:
+        raise ConfigError(f"--scenes {args.scenes!r}: comma-separated, of {', '.join(SCENES)}")
+    replay = [f.strip() for f in (args.replay or "").split(",") if f.strip()]
+    if replay and "replay" not in scenes:
+        raise ConfigError("--replay names track files for the replay scene; add replay to "
+                          "--scenes")
+    from papf.experiments.crowd_scenes import replay_scene
+
+    for f in replay:                      # a bad file: exit 2, one line, before any run
+        replay_scene(f, 0)
+    return scenes, replay
 
 
 def _add_iapf(exp) -> None:

@@ -125,7 +125,7 @@ def _plot(world, result, args) -> None:
         run = result.trace
         plot_crowd(world, {f"{r.name} ({r.planner}, {r.result.outcome})": r.result.path
                            for r in run.robots}, run.people, run.radii, args.plot,
-                   f"{world.name} (offline, seed {args.seed})")
+                   f"{world.name} (offline, seed {args.seed})", shown=run.shown)
         return
     if result.motion == "unicycle":   # with the mind and the ROSbot's footprint
         from papf.plots.mind import plot_plan

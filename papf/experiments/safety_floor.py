@@ -179,7 +179,7 @@ def run_case(case: Case, seed: int = 0) -> dict:
     from worlds import load_world
 
     world = load_world(case.world)
-    if world.vehicle == "rosbot" and world.dims == 2 and not (world.robots or world.people):
+    if world.vehicle == "rosbot" and world.dims == 2 and not (world.robots or world.has_people):
         s = _plan_2d(world, planner_beyond_ranges(case.planner, case.sets), case.planner, seed,
                      TIMEOUT_S, 0.1, None, False).summary()
     else:

@@ -13,7 +13,9 @@ has an outcome. The fleet's figures (docs/architecture.md "Fleets"):
 - ``min_separation_m``: the closest approach of a robot's footprint to another robot's
   (footprint to footprint, from the pose samples of one instant) or a person;
 - ``discomfort_s``: the time a person spent within 0.2 m of a robot's footprint (0
-  without people); both by :mod:`common.crowd_measures`, summed over robots at the top.
+  without people); both by :mod:`common.crowd_measures`, summed over robots at the top;
+- per robot with people, the social measures of :mod:`common.crowd_measures` (Hall's
+  zones: ``intimate_s`` ... ``social_n``; ``group_intrusions``, ``group_s``, ``min_ttc_s``).
 
 A world with ``[[people]]`` and one robot runs this way too (one robot, its namespace the
 run's), so its JSON has the people's figures and a ``robots`` list of one.
@@ -49,11 +51,12 @@ class FleetMeter:
     core, measured)."""
 
     def __init__(self, names: list[str], goals: dict[str, tuple[float, float]], people: bool,
-                 period_ns: int = SAMPLE_NS):
+                 period_ns: int = SAMPLE_NS, groups: tuple[tuple[int, ...], ...] = ()):
         self.names, self.people, self.period_ns = names, people, period_ns
-        self.meter = CrowdMeter(goals)
+        self.meter = CrowdMeter(goals, groups)
         self._at: dict[int, dict] = {}
         self._runs: dict[str, list[tuple[int, float, float]]] = {n: [] for n in names}
+        self._measures: dict[str, list] = {n: [] for n in names}   # beside _runs, per instant
 
     def on_pose(self, name: str, msg: Odometry) -> None:
         """A robot's pose sample (``sim/pose``)."""
@@ -81,6 +84,7 @@ class FleetMeter:
         self.meter.update(t / NS, at, xy, np.asarray(crowd.radius if crowd else ()))
         for n, m in self.meter.results().items():
             self._runs[n].append((t, m.min_separation_m, m.discomfort_s))
+            self._measures[n].append(m)
 
     def at(self, name: str, t_end_ns: int) -> tuple[float, float]:
         """Robot ``name``'s (min separation [m], inf: nobody to measure against; discomfort
@@ -88,15 +92,34 @@ class FleetMeter:
         i = bisect_right(self._runs[name], (t_end_ns, math.inf, math.inf))
         return self._runs[name][i - 1][1:] if i else (math.inf, 0.0)
 
+    def social_at(self, name: str, t_end_ns: int) -> dict:
+        """Robot ``name``'s social measures up to ``t_end_ns`` as JSON figures ({} without
+        people)."""
+        i = bisect_right(self._runs[name], (t_end_ns, math.inf, math.inf))
+        if not (i and self.people):
+            return {}
+        m = self._measures[name][i - 1]
+        out = {k: round(getattr(m, k), 6) for k in SOCIAL}
+        out["min_ttc_s"] = round(m.min_ttc_s, 6) if math.isfinite(m.min_ttc_s) else None
+        return out
 
-def robot_json(name: str, planner: str, r: RunResult, min_sep: float, discomfort_s: float) -> dict:
-    """One robot's object in ``papf run --json``'s ``robots``."""
+
+#: the social measures of common.crowd_measures.CrowdMeasures in a robot's JSON object
+SOCIAL = ("intimate_s", "intimate_n", "personal_s", "personal_n", "social_s", "social_n",
+          "group_intrusions", "group_s")
+
+
+def robot_json(name: str, planner: str, r: RunResult, min_sep: float, discomfort_s: float,
+               social: dict | None = None) -> dict:
+    """One robot's object in ``papf run --json``'s ``robots`` (``social``: its social
+    measures, :meth:`FleetMeter.social_at`)."""
     d = r.to_json()
     out = {"name": name, "planner": planner}
     for k in ("outcome", "duration_s", "path_length_m", "charge_mAh", "energy_J", "collisions"):
         out[k] = d[k]
     out["min_separation_m"] = round(min_sep, 6) if math.isfinite(min_sep) else None
     out["discomfort_s"] = round(discomfort_s, 6)
+    out.update(social or {})
     if r.reason:
         out["reason"] = r.reason
     return out
@@ -124,7 +147,8 @@ def fleet_result(robots: list[tuple[str, str, RunMonitor]], meter: FleetMeter,
     crowd = {n: meter.at(n, round(r.sim_time_s * NS)) for n, _, r in results}
     closest = min(sep for sep, _ in crowd.values())
     return replace(total, fleet=tuple(
-        robot_json(n, p, r, *crowd[n]) for n, p, r in results),
+        robot_json(n, p, r, *crowd[n], meter.social_at(n, round(r.sim_time_s * NS)))
+        for n, p, r in results),
         min_separation_m=closest if math.isfinite(closest) else None,
         discomfort_s=sum(d for _, d in crowd.values()))
 

@@ -150,7 +150,7 @@ def run(cfg: RunConfig) -> RunResult:
 def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
          run_id: str, monitor: RunMonitor, keys: Keys, wall0: float) -> RunResult:
     """:func:`run` once its router is open: start the nodes, drive the run, stop them."""
-    if world.robots or world.people:
+    if world.robots or world.has_people:
         return _run_fleet(cfg, world, graph, router, run_key, run_id, wall0)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
@@ -173,7 +173,8 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
     names = [r.name for r in robots]
     planners = {r.name: r.planner or cfg.planner for r in robots}
     goals = {r.name: tuple(r.goal) for r in robots}
-    meter = FleetMeter(names, goals, bool(world.people))
+    meter = FleetMeter(names, goals, world.has_people,
+                       groups=tuple(g.members for g in world.groups))
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
         seqs = {}
@@ -184,7 +185,7 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
                                              run_key=bytes.fromhex(run_key),
                                              run_id=bytes.fromhex(run_id))
             seq.watch_poses(lambda msg, n=r.name: meter.on_pose(n, msg))
-        if world.people:   # on the driver's namespace, the run's
+        if world.has_people:   # on the driver's namespace, the run's
             seqs[names[0]].watch_key(Keys(cfg.namespace).key("sim/people"), People,
                                      meter.on_people)
         try:

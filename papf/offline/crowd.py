@@ -13,6 +13,14 @@ lockstep, one control period ``dt`` at a time:
 3. a person now overlapping a robot's footprint is a robot-person collision of that robot;
 4. :class:`common.crowd_measures.CrowdMeter` takes the step.
 
+A planner that reads obstacle tracks (``uses_objects``: ORCA, social force, IAPF) gets, before
+each scan, the ground truth the stack's LiDAR gives with ``--objects truth``
+(:func:`worlds.messages.truth_objects`: the people in the scene and the other robots within
+the LiDAR's range, with their velocities). A person collision is split by who caused it
+(:func:`common.crowd_social.collision_cause`). When the run is over, the same people walk the
+same time again without the robots (same seed): their path and time to their goals against
+the run's give the robot's effect on them (:func:`common.crowd_social.extension`).
+
 Collisions (the footprint's clearance < 0, checked every 20 ms substep of the drive):
 ``wall`` (the world's obstacles, pybullet as ``papf plan``), ``robot`` (another robot's
 footprint, at its pose of the period's start), ``person`` (a disc). A robot stops at its
@@ -30,14 +38,18 @@ import numpy as np
 
 from common.crowd import Crowd
 from common.crowd_measures import CrowdMeter, box_box_distance, point_box_distance
+from common.crowd_social import collision_cause, extension
 from common.quiet import import_quietly
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarSim
 from nodes.planner.registry import make_planner
+from nodes.planner.road import Track
 from papf.offline.result import PlanResult
 from papf.offline.unicycle import Drive, FootprintChecker, start_pose
+from schemas.messages import Bodies
 from worlds import World
+from worlds.messages import truth_objects
 
 p = import_quietly("pybullet")
 
@@ -57,6 +69,8 @@ class RobotRun:
     result: PlanResult
     collisions: dict = field(default_factory=lambda: dict.fromkeys(COLLISION_KINDS, 0))
     measures: object = None       # common.crowd_measures.CrowdMeasures
+    caused: dict = field(default_factory=lambda: {"robot": 0, "person": 0})  # person collisions
+    effect: object = None         # common.crowd_social.Extension: the people's, of the run
 
     def summary(self) -> dict:
         """The robot's object of ``papf plan --json`` (``robots``)."""
@@ -65,13 +79,29 @@ class RobotRun:
                 "duration_s": round(r.duration_s, 6), "path_length_m": round(r.length_m, 6),
                 "collisions": r.collisions, **{f"collisions_{k}": v
                                                for k, v in self.collisions.items()},
+                **{f"collisions_person_by_{k}": v for k, v in self.caused.items()},
                 "min_clearance_m": round(r.min_clearance_m, 6),
                 "min_separation_m": _num(m.min_separation_m),
                 "min_person_separation_m": _num(m.min_person_separation_m),
                 "min_robot_separation_m": _num(m.min_robot_separation_m),
                 "discomfort_s": round(m.discomfort_s, 6), "intrusions": m.intrusions,
                 "path_irregularity_rad_per_m": round(m.irregularity_rad_per_m, 6),
-                "reason": r.reason}
+                **{f"{z}_{u}": round(getattr(m, f"{z}_{u}"), 6) for z in HALL for u in "sn"},
+                "group_intrusions": m.group_intrusions, "group_s": round(m.group_s, 6),
+                "min_ttc_s": _num(m.min_ttc_s),
+                **_effect_json(self.effect), "reason": r.reason}
+
+
+HALL = ("intimate", "personal", "social")
+
+
+def _effect_json(e) -> dict:
+    """The people's path and time extension as JSON figures (None: nobody to compare)."""
+    if e is None:
+        return {}
+    return {"people_compared": e.people, "people_held": e.held,
+            "people_path_ext_m": _num(e.path_m), "people_time_ext_s": _num(e.time_s),
+            "people_path_ext_pct": _num(e.path_pct), "people_time_ext_pct": _num(e.time_pct)}
 
 
 @dataclass
@@ -81,11 +111,12 @@ class CrowdRun:
     robots: list[RobotRun]
     times: np.ndarray             # (T,) [s]
     people: np.ndarray            # (T, n, 2) [m]
-    radii: np.ndarray             # (n,) [m]
+    radii: np.ndarray             # (n,) [m] each body's, when in the scene
+    shown: np.ndarray | None = None   # (T, n) [m] radius at each time: 0 = not in the scene
 
 
 def _num(v: float):
-    """A figure for JSON: rounded, None when infinite (nobody to measure against)."""
+    """A figure for JSON: rounded, None when infinite or nan (nobody to measure against)."""
     return round(v, 6) if math.isfinite(v) else None
 
 
@@ -112,19 +143,27 @@ class _Senses:
         self.poses: list[tuple[float, float, float]] = []
         self.people = np.zeros((0, 2))
         self.radii = radii
+        self.here = np.zeros(0, bool)
+        self._was_here = np.ones(len(radii), bool)   # every body placed on the first look
         self.kind = "wall"            # what the last clearance was closest to
+        self.person = -1              # the person it was, if one
 
-    def see(self, poses, people: np.ndarray) -> None:
-        """The others' poses (x, y, yaw) and the people's centres (n, 2) [m] for this period."""
+    def see(self, poses, people: np.ndarray, radii_now: np.ndarray | None = None) -> None:
+        """The others' poses (x, y, yaw) and the people's centres (n, 2) [m] for this period;
+        ``radii_now``: 0 for a person not in the scene (default: everybody is)."""
         self.poses, self.people = poses, people
+        self.here = np.ones(len(people), bool) if radii_now is None else np.asarray(radii_now) > 0
         cid = self.lidar.cid
         for j, (body, (x, y, yaw)) in enumerate(zip(self.robot_bodies, poses, strict=True)):
             pos = [x, y, ROBOT_SEEN_HEIGHT_M / 2] if j != self.i else [0, 0, -10]
             p.resetBasePositionAndOrientation(body, pos, p.getQuaternionFromEuler([0, 0, yaw]),
                                               physicsClientId=cid)
-        for body, (x, y) in zip(self.person_bodies, people, strict=True):
-            p.resetBasePositionAndOrientation(body, [float(x), float(y), PERSON_HEIGHT_M / 2],
-                                              [0, 0, 0, 1], physicsClientId=cid)
+        for k in np.flatnonzero(self.here | self._was_here):   # the absent stay parked
+            pos = [float(people[k][0]), float(people[k][1]), PERSON_HEIGHT_M / 2] \
+                if self.here[k] else [0, 0, -10]
+            p.resetBasePositionAndOrientation(self.person_bodies[k], pos, [0, 0, 0, 1],
+                                              physicsClientId=cid)
+        self._was_here = self.here
 
     def scan(self, x, y, yaw, t_ns):
         """The robot's scan at pose (x [m], y [m], yaw [rad]) and sim time t_ns [ns]."""
@@ -139,10 +178,12 @@ class _Senses:
                 d = d if d > 0 else -1e-9          # touching is a collision
                 if d < best:
                     best, self.kind = d, "robot"
-        if len(self.people):
-            d = float((point_box_distance(self.people, x, y, yaw) - self.radii).min())
-            if d < best:
-                best, self.kind = d, "person"
+        if self.here.any():
+            gaps = np.where(self.here, point_box_distance(self.people, x, y, yaw) - self.radii,
+                            np.inf)
+            k = int(gaps.argmin())
+            if gaps[k] < best:
+                best, self.kind, self.person = float(gaps[k]), "person", k
         return best
 
     def close(self) -> None:
@@ -157,7 +198,7 @@ def plan_crowd(world: World, planner_name: str, sets: list[str], params_file, se
     :class:`PlanResult` with the whole run in ``trace`` (a :class:`CrowdRun`)."""
     fleet = world.fleet
     crowd = Crowd(world.people, world, seed)
-    radii = crowd.radii
+    radii = crowd.body_radii
     checker = FootprintChecker(world)
     senses, drives = [], []
     try:
@@ -167,12 +208,13 @@ def plan_crowd(world: World, planner_name: str, sets: list[str], params_file, se
                           tolerance=spec.tolerance)
             s = _Senses(world, lidar, i, len(fleet), radii, rseed, checker)
             senses.append(s)
-            s.see([tuple(r.start) for r in fleet], crowd.positions)
+            s.see([tuple(r.start) for r in fleet], crowd.positions, crowd.radii)
             planner = make_planner(spec.planner or planner_name, params_file, sets)
             drives.append(Drive(own, planner, spec.planner or planner_name, rseed,
                                 start_pose(own, rseed), s.scan, s.clearance, max_time_s, dt,
                                 CommandGate(RosbotLimits()), keep_states))
         run = _lockstep(world, fleet, drives, senses, crowd, dt)
+        _people_effect(world, seed, crowd, run, dt)
     finally:
         for s in senses:
             s.close()
@@ -180,50 +222,127 @@ def plan_crowd(world: World, planner_name: str, sets: list[str], params_file, se
     return _fleet_result(world, seed, run)
 
 
+def _velocity(d) -> tuple[float, float]:
+    """[m/s] a drive's world-frame velocity now."""
+    return d.v * math.cos(d.yaw), d.v * math.sin(d.yaw)
+
+
+def _bodies(world: World, fleet, drives, i: int, crowd: Crowd, t_ns: int) -> Bodies:
+    """What the stack's driver would put on robot ``i``'s ``sim/bodies`` now."""
+    xy, v, r = crowd.positions, crowd.velocities, crowd.radii
+    others = [j for j in range(len(drives)) if j != i]
+    return Bodies(stamp_ns=t_ns, robots=tuple(fleet[j].name or "robot" for j in others),
+                  robot_x=tuple(drives[j].x for j in others),
+                  robot_y=tuple(drives[j].y for j in others),
+                  robot_yaw=tuple(drives[j].yaw for j in others),
+                  person_x=tuple(map(float, xy[:, 0])), person_y=tuple(map(float, xy[:, 1])),
+                  person_radius=tuple(map(float, r)),
+                  robot_vx=tuple(_velocity(drives[j])[0] for j in others),
+                  robot_vy=tuple(_velocity(drives[j])[1] for j in others),
+                  person_vx=tuple(map(float, v[:, 0])), person_vy=tuple(map(float, v[:, 1])))
+
+
+def _give_objects(world: World, fleet, drives, i: int, crowd: Crowd, lidar_range: float) -> None:
+    """Robot ``i``'s planner gets the ground-truth tracks (module doc), if it reads them."""
+    d = drives[i]
+    if not d.planner.strategy.uses_objects:
+        return
+    objects = truth_objects(world, d.t, (d.x, d.y), lidar_range,
+                            _bodies(world, fleet, drives, i, crowd, d.t))
+    d.planner.set_objects(Track(o.x, o.y, o.yaw, o.vx, o.vy, o.length, o.width, o.id)
+                          for o in objects.tracks)
+
+
+class _Tally:
+    """Each robot's collisions by kind, and its person collisions by who caused them."""
+
+    def __init__(self, n: int):
+        self.kinds = [dict.fromkeys(COLLISION_KINDS, 0) for _ in range(n)]
+        self.caused = [{"robot": 0, "person": 0} for _ in range(n)]
+
+    def person(self, i: int, d, crowd: Crowd, k: int) -> None:
+        """Robot ``i`` (drive ``d``) touched person ``k``."""
+        self.kinds[i]["person"] += 1
+        self.caused[i][collision_cause((d.x, d.y), _velocity(d), crowd.positions[k],
+                                       crowd.velocities[k])] += 1
+
+
 def _lockstep(world, fleet, drives, senses, crowd, dt) -> CrowdRun:
     """Advance robots and people together until every robot has its outcome."""
-    collisions = [dict.fromkeys(COLLISION_KINDS, 0) for _ in drives]
-    meter = CrowdMeter({spec.name or "robot": spec.goal for spec in fleet})
+    tally = _Tally(len(drives))
+    meter = CrowdMeter({spec.name or "robot": spec.goal for spec in fleet},
+                       tuple(g.members for g in world.groups))
     names = [spec.name or "robot" for spec in fleet]
+    lidar_range = senses[0].lidar.params.range_max if senses else 0.0
 
     def poses():
         return [(d.x, d.y, d.yaw) for d in drives]
 
-    meter.update(0.0, dict(zip(names, poses(), strict=True)), crowd.positions, crowd.radii)
-    times, tracks, t = [0.0], [crowd.positions], 0.0
+    meter.update(0.0, dict(zip(names, poses(), strict=True)), crowd.positions, crowd.radii,
+                 people_v=crowd.velocities)
+    times, tracks, shown, t = [0.0], [crowd.positions], [crowd.radii], 0.0
     while any(not d.outcome for d in drives):
-        now, people = poses(), crowd.positions
+        now, people, radii_now = poses(), crowd.positions, crowd.radii
         active = [i for i, d in enumerate(drives) if not d.outcome]
         for i in active:
-            senses[i].see(now, people)
+            senses[i].see(now, people, radii_now)
+            _give_objects(world, fleet, drives, i, crowd, lidar_range)
             drives[i].cycle()
             if drives[i].outcome == "collision":
-                collisions[i][senses[i].kind] += 1
-        crowd.step(dt, [(d.x, d.y, d.v * math.cos(d.yaw), d.v * math.sin(d.yaw))
-                        if not d.outcome else (d.x, d.y, 0.0, 0.0) for d in drives])
+                if senses[i].kind == "person":
+                    tally.person(i, drives[i], crowd, senses[i].person)
+                else:
+                    tally.kinds[i][senses[i].kind] += 1
+        crowd.step(dt, [(d.x, d.y, *_velocity(d)) if not d.outcome else (d.x, d.y, 0.0, 0.0)
+                        for d in drives])
         t += dt
-        people = crowd.positions
-        for i in active:                  # a person who walked into a robot
-            d = drives[i]
-            if d.outcome or not len(people):
-                continue
-            gap = float((point_box_distance(people, d.x, d.y, d.yaw) - crowd.radii).min())
-            d.min_clear = min(d.min_clear, gap)
-            if gap < 0:
-                d.collisions += 1
-                collisions[i]["person"] += 1
-                d.outcome, d.t_end = "collision", d.t
-                d.reason = f"a person walked into the footprint at ({d.x:.2f}, {d.y:.2f})"
-        meter.update(t, dict(zip(names, poses(), strict=True)), people, crowd.radii,
-                     active={names[i] for i in active})
+        people, radii_now = crowd.positions, crowd.radii
+        for i in active:
+            _walked_into(drives[i], i, crowd, tally)
+        meter.update(t, dict(zip(names, poses(), strict=True)), people, radii_now,
+                     active={names[i] for i in active}, people_v=crowd.velocities)
         times.append(t)
         tracks.append(people)
+        shown.append(radii_now)
     measures = meter.results()
     robots = [RobotRun(name=names[i], planner=d.name, result=d.result(),
-                       collisions=collisions[i], measures=measures[names[i]])
+                       collisions=tally.kinds[i], caused=tally.caused[i],
+                       measures=measures[names[i]])
               for i, d in enumerate(drives)]
     return CrowdRun(robots=robots, times=np.array(times),
-                    people=np.array(tracks).reshape(len(times), -1, 2), radii=crowd.radii)
+                    people=np.array(tracks).reshape(len(times), -1, 2), radii=crowd.body_radii,
+                    shown=np.array(shown).reshape(len(times), -1))
+
+
+def _walked_into(d, i: int, crowd: Crowd, tally: _Tally) -> None:
+    """A person who walked into robot ``i``'s footprint: a collision (who caused it: the
+    velocities decide, as for any other)."""
+    here = crowd.radii > 0
+    if d.outcome or not here.any():
+        return
+    gaps = np.where(here, point_box_distance(crowd.positions, d.x, d.y, d.yaw) - crowd.radii,
+                    np.inf)
+    k = int(gaps.argmin())
+    d.min_clear = min(d.min_clear, float(gaps[k]))
+    if gaps[k] < 0:
+        d.collisions += 1
+        tally.person(i, d, crowd, k)
+        d.outcome, d.t_end = "collision", d.t
+        d.reason = f"a person walked into the footprint at ({d.x:.2f}, {d.y:.2f})"
+
+
+def _people_effect(world: World, seed: int, crowd: Crowd, run: CrowdRun, dt: float) -> None:
+    """The reacting people's walk without the robots, the same time (module doc): each
+    robot's ``effect`` (the same people for all: the fleet's effect)."""
+    if not world.people:
+        return
+    alone = Crowd(world.people, world, seed)
+    for _ in range(len(run.times) - 1):
+        alone.step(dt, [])
+    effect = extension(crowd.first_goal_s(), crowd.walked_to_goal(), alone.first_goal_s(),
+                       alone.walked_to_goal())
+    for r in run.robots:
+        r.effect = effect
 
 
 def _fleet_result(world: World, seed: int, run: CrowdRun) -> PlanResult:

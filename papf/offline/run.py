@@ -53,7 +53,7 @@ def simulate(world: World | str | Path, planner: str, params=None, seed: int = 0
         raise ConfigError("whole_time: car-scale road worlds only ([robot] vehicle = \"car\")")
     if motion == "fixed-step":
         return _fixed_step(world, planner, sets, params_file)
-    if world.robots or world.people:
+    if world.robots or world.has_people:
         from papf.offline.crowd import plan_crowd
 
         return plan_crowd(world, planner, sets, params_file, seed, max_time_s, dt, keep_states,

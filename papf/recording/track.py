@@ -53,6 +53,8 @@ class RunTrack:
     people_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     people_xy: list[np.ndarray] = field(default_factory=list)   # (k, 2) [m] per sample
     people_r: np.ndarray = field(default_factory=lambda: np.zeros(0))   # (k,) [m]
+    # (k,) [m] per sample: a replayed person not in the scene then has radius 0
+    people_radii: list[np.ndarray] = field(default_factory=list)
 
 
 def scan_points(scan: Scan) -> np.ndarray:
@@ -148,4 +150,5 @@ def load_track(path: str | Path, world: str | None = None,
                     np.array([(m.x, m.y, m.yaw) for m in ms])) for n, ms in sorted(others.items())},
         people_t=np.array([p.stamp_ns for p in people]) / 1e9,
         people_xy=[np.column_stack([p.x, p.y]).reshape(-1, 2) for p in people],
-        people_r=np.array(people[0].radius if people else ()))
+        people_r=np.array(people[0].radius if people else ()),
+        people_radii=[np.asarray(p.radius, float) for p in people])

@@ -144,7 +144,11 @@ class Animator:
             out.append(ax.annotate(name, xyyaw[k, :2], fontsize=7, zorder=7,
                                    xytext=(4, 4), textcoords="offset points"))
         if len(tr.people_t) and tr.people_t[0] <= t + 1e-9:
-            for (x, y), r in zip(tr.people_xy[_at(tr.people_t, t)], tr.people_r, strict=True):
+            k = _at(tr.people_t, t)
+            radii = tr.people_radii[k] if len(tr.people_radii) > k else tr.people_r
+            for (x, y), r in zip(tr.people_xy[k], radii, strict=True):
+                if not r > 0:     # a replayed person not in the scene then
+                    continue
                 out.append(ax.add_patch(Circle((x, y), r, color=PERSON_COLOUR, alpha=0.6,
                                                zorder=5)))
         return out

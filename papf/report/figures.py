@@ -102,6 +102,7 @@ def trajectories_png(runs: Sequence[RunMetrics], world: World | None, path: Path
         draw_world(ax, static_world(world))
         t_end = max((r.t_end_s for r in runs if math.isfinite(r.t_end_s)), default=0.0)
         draw_traffic(ax, world, t_end)    # road lines; each moving obstacle over the runs
+    _draw_people(ax, runs, world)
     style = run_styles(runs)
     for r in runs:
         if r.series is None or r.series.x.size == 0:
@@ -127,6 +128,18 @@ def trajectories_png(runs: Sequence[RunMetrics], world: World | None, path: Path
     fig.legend(loc="outside lower center", ncol=4, fontsize=8, frameon=False)
     return _save(fig, path, f"trajectories on {world_name} from {pose_source or 'the pose'}, "
                  "to each run's outcome; outlines: the robot's footprint every metre", note)
+
+
+def _draw_people(ax, runs: Sequence[RunMetrics], world: World | None) -> None:
+    """The people of the first run that recorded them (``sim/people``): the detours are
+    explained by who was in the way (papf/plots/crowd.py draws them)."""
+    from papf.plots.crowd import draw_people
+
+    for r in runs:
+        if r.series is not None and r.series.people is not None and len(r.series.people):
+            shown = r.series.people_r
+            draw_people(ax, world, r.series.people, shown.max(axis=0), shown)
+            return
 
 
 def charge_png(runs: Sequence[RunMetrics], summaries: Sequence[PlannerSummary], path: Path,

@@ -36,6 +36,7 @@ from schemas import (
     Clock,
     Event,
     Odometry,
+    People,
     PlannerStatus,
     Twist,
     WheelStates,
@@ -61,6 +62,13 @@ class Series:
     heading: np.ndarray      # [rad] unwrapped yaw
     v: np.ndarray            # [m/s] odometry forward speed
     w: np.ndarray            # [rad/s] odometry yaw rate
+    # the people of the run (``sim/people``), every PEOPLE_EVERY_NS: (T, n, 2) [m], and each
+    # one's radius at each sample (T, n) [m] (0: a replayed person not in the scene)
+    people: np.ndarray | None = None
+    people_r: np.ndarray | None = None
+
+
+PEOPLE_EVERY_NS = 500_000_000   # [ns] the people kept for the trajectories' picture
 
 UNKNOWN_WORLD = "unknown"   # a recording without the launcher's metadata (papf record, no --meta)
 MID_RUN_NS = 1_000_000_000  # [ns] a recording whose first stamp is later began mid-run
@@ -163,6 +171,7 @@ class _Collector:
         self.ground_truth = False       # poses came from sim/pose (else from odom)
         self.first_ns: int | None = None   # [ns] earliest stamp recorded
         self.run_started = False        # the recording holds the run's run_started event
+        self.people: list[People] = []  # sim/people every PEOPLE_EVERY_NS (the picture)
         m = self.monitor
         self.handlers = {f"{ns}/clock": (Clock, m.on_clock),
                          f"{ns}/planner/status": (PlannerStatus, m.on_status),
@@ -172,7 +181,13 @@ class _Collector:
                          f"{ns}/cmd_vel": (Twist, m.on_cmd),
                          f"{ns}/odom": (Odometry, self._on_odom),
                          f"{ns}/wheels": (WheelStates, self.remeter.feed),
-                         f"{ns}/battery/measured": (BatteryVoltage, self.remeter.measured)}
+                         f"{ns}/battery/measured": (BatteryVoltage, self.remeter.measured),
+                         f"{ns}/sim/people": (People, self._on_people)}
+
+    def _on_people(self, msg: People) -> None:
+        if msg.stamp_ns % PEOPLE_EVERY_NS == 0 and (
+                not self.people or len(msg.x) == len(self.people[0].x)):
+            self.people.append(msg)
 
     def _on_sim_pose(self, msg: Odometry) -> None:
         self.ground_truth = True
@@ -371,7 +386,7 @@ def _assemble(path: Path, meta: dict, col: _Collector, model: str,
         remeter_diff_mAh=_remeter_diff(col.remeter.states, live),
         ang_accel_sq=ang, jerk_sq=jerk, heading_oscillations=heading_oscillations(w),
         collisions=res.collisions,
-        series=_series(col.poses, col.odom, t_end) if with_series else None,
+        series=_series(col.poses, col.odom, t_end, col.people) if with_series else None,
         recorded_from_s=t0 / NS,
     )
 
@@ -424,14 +439,19 @@ def _remeter_diff(states: list[BatteryState], live: BatteryState | None) -> floa
     return same.charge_used_mAh - live.charge_used_mAh
 
 
-def _series(poses: list[Odometry], odom: list[Odometry], t_end: int) -> Series:
+def _series(poses: list[Odometry], odom: list[Odometry], t_end: int,
+            people: list[People] = ()) -> Series:
     poses = [p for p in poses if p.stamp_ns <= t_end]
     by_stamp = {o.stamp_ns: o for o in odom if o.stamp_ns <= t_end}
     both = [(p, by_stamp[p.stamp_ns]) for p in poses if p.stamp_ns in by_stamp]
+    crowd = [m for m in people if m.stamp_ns <= t_end]
     return Series(t_s=np.array([p.stamp_ns / NS for p, _ in both]),
                   x=np.array([p.x for p, _ in both]), y=np.array([p.y for p, _ in both]),
                   heading=_unwrap_heading([p.yaw for p, _ in both]),
-                  v=np.array([o.v for _, o in both]), w=np.array([o.w for _, o in both]))
+                  v=np.array([o.v for _, o in both]), w=np.array([o.w for _, o in both]),
+                  people=np.array([np.column_stack([m.x, m.y]) for m in crowd]) if crowd
+                  else None,
+                  people_r=np.array([m.radius for m in crowd], float) if crowd else None)
 
 
 def differences_from_live(name: str, live, m: RunMetrics,

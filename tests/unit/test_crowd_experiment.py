@@ -31,21 +31,33 @@ def test_summary_rates_and_means():
              "irregularity_rad_per_m": 0.5}
             for o, d, s in (("reached", 80.0, 0.2), ("reached", 90.0, 0.4),
                             ("collision", 10.0, 0.0), ("stagnated", 50.0, ""))]
-    (row,) = summarize(rows)
+    (row,) = summarize(rows, by="people")
     assert (row["runs"], row["reached"], row["collision"], row["stagnated"]) == (4, 50.0, 25.0, 25.0)
     assert row["time_s"] == 85.0                       # successful runs only
+    assert row["time_s_ci"] == pytest.approx(12.706 * 5.0 * 2 ** 0.5 / 2 ** 0.5, abs=1e-3)
     assert row["min_separation_m"] == pytest.approx(0.2)   # the runs that met someone
+    assert (row["reached_lo"], row["reached_hi"]) == (15.0, 85.0)   # Wilson, 2 of 4
 
 
 def test_a_small_sweep_writes_its_files(tmp_path):
-    summary = run_crowd(tmp_path, planners=["apf"], people=[0, 3], seeds=[0], timeout_s=30,
-                        progress=False)
-    assert [(r["planner"], r["people"]) for r in summary] == [("apf", 0), ("apf", 3)]
+    summary = run_crowd(tmp_path, planners=["apf", "orca"], people=[0, 3], seeds=[0],
+                        timeout_s=20, progress=False, scenes=("hall", "groups", "replay"))
+    assert [(r["planner"], r["scene"]) for r in summary] == [
+        (p, s) for p in ("apf", "orca") for s in ("hall-0", "hall-3", "groups",
+                                                 "replay-walkers-hall")]
     with (tmp_path / "crowd.csv").open() as fh:
         rows = list(csv.DictReader(fh))
-    assert len(rows) == 2 and rows[0]["min_separation_m"] == ""   # nobody to meet
-    for name in ("crowd.md", "crowd-summary.csv", "crowd.png", "worlds/crowd-3-0.toml"):
+    assert len(rows) == 8 and rows[0]["min_separation_m"] == ""   # nobody to meet
+    for k in ("intimate_s", "personal_n", "group_intrusions", "min_ttc_s",
+              "collisions_person_by_person", "people_time_ext_s"):
+        assert k in rows[0]
+    for name in ("crowd.md", "crowd-summary.csv", "crowd.png", "crowd-scenes.png",
+                 "worlds/crowd-3-0.toml", "worlds/crowd-groups-0.toml",
+                 "worlds/crowd-replay-walkers-hall-0.toml"):
         assert (tmp_path / name).is_file()
+    again = run_crowd(tmp_path, planners=["apf", "orca"], people=[0, 3], seeds=[0],
+                      timeout_s=20, progress=False, scenes=("hall", "groups", "replay"))
+    assert again == summary                            # from the journal, the same
 
 
 @pytest.mark.parametrize("argv, says", [
@@ -53,6 +65,9 @@ def test_a_small_sweep_writes_its_files(tmp_path):
     (["--people", "five"], "--people 'five'"),
     (["--runs", "0"], "--runs=0: must be an integer in [1, 10000]"),
     (["--planners", "nope"], "unknown ['nope']"),
+    (["--scenes", "hall,mall"], "--scenes 'hall,mall': comma-separated, of hall, groups, replay"),
+    (["--replay", "no-such.txt"], "track file"),
+    (["--scenes", "hall", "--replay", "x.txt"], "add replay to --scenes"),
     (["--worlds", "wang-3d-fig9"], "not a 2-D world of ROSbots"),
     (["--worlds", "no-such-world"], "no packaged world named 'no-such-world'"),
 ])
@@ -67,3 +82,27 @@ def test_bad_arguments_exit_2_with_one_line_before_any_run(argv, says, tmp_path,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and says in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_the_groups_scene_has_standing_groups_in_the_way_and_a_walking_pair():
+    from papf.experiments.crowd_scenes import groups_scene
+    from worlds.checks import check_runnable
+
+    a, text = groups_scene(2)
+    assert groups_scene(2)[1] == text and groups_scene(3)[1] != text
+    check_runnable(a)
+    standing = [g for g in a.groups if g.standing(a.people)]
+    walking = [g for g in a.groups if not g.standing(a.people)]
+    assert len(standing) == 2 and len(walking) == 1 and len(walking[0].members) == 2
+    centre = sum(a.people[i].start[1] for i in standing[0].members) / 3
+    assert abs(centre) <= 0.6 + 1e-9                  # the first is in the robot's way
+
+
+def test_a_replay_scene_crosses_a_foreign_files_span(tmp_path):
+    from papf.experiments.crowd_scenes import replay_scene
+
+    f = tmp_path / "eth.txt"
+    f.write_text("0 1 -2.0 5.0\n10 1 6.0 7.0\n0 2 1.0 6.0\n10 2 1.0 4.0\n")
+    w, _ = replay_scene(f, 0)
+    assert w.start[:2] == (-1.0, 5.5) and w.goal == (5.0, 5.5) and not w.obstacles
+    assert replay_scene(f, 1)[0].people_replay[0].from_s == 20.0

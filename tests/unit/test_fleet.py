@@ -190,7 +190,7 @@ def test_driving_into_a_person_is_a_collision():
                 core.command(Twist(stamp_ns=core.t_ns, v=0.4, w=0.0))
             core.advance()
             collisions += [m for t, m in core.outputs() if t == "events" and m.kind == "collision"]
-    assert [c.detail for c in collisions] == ["person 0"]
+    assert [c.detail for c in collisions] == ["person 0, caused by the robot"]
 
 
 def test_a_robots_unknown_planner_is_refused_before_anything_starts():

@@ -321,7 +321,7 @@ def test_crowd_keeps_each_finished_run_and_resumes_after_an_interrupt(tmp_path, 
     crowd.run_crowd(tmp_path, planners=["apf"], people=[0, 2], seeds=[0], timeout_s=5)
     assert calls == [2]                  # the finished run was taken from its file
     rows = (tmp_path / "crowd.csv").read_text().splitlines()
-    assert len(rows) == 3 and rows[1].split(",")[3] == "0"   # in job order
+    assert len(rows) == 3 and rows[1].split(",")[4] == "0"   # in job order (people)
 
 
 def test_traffic_keeps_each_finished_run_and_resumes_after_an_interrupt(tmp_path, monkeypatch):

@@ -109,7 +109,7 @@ def test_realtime_uses_latest_odom_and_stops_when_stale():
 def test_help_lists_every_planner():
     r = subprocess.run([sys.executable, "-m", "nodes.planner", "--help"], capture_output=True,
                        text=True, timeout=60, start_new_session=True)
-    assert r.returncode == 0 and "{apf,arapf,iapf,papf,wang,wang-apf}" in r.stdout
+    assert r.returncode == 0 and "{apf,arapf,iapf,orca,papf,social_force,wang,wang-apf}" in r.stdout
 
 
 def test_bad_setting_exits_2():

@@ -16,7 +16,7 @@ class APFStrategy(Strategy):
 
     name = "apf"
     rank = 0
-    roles = ("compared", "traffic", "papf-baseline")
+    roles = ("compared", "traffic", "crowd", "papf-baseline")
     colour, colour_map = "tab:blue", "Blues"
     PAPER_PRESET: dict = {}   # eq. 2 as written already: no deviation to switch off
     SPECS = APF_OWN

@@ -176,7 +176,7 @@ class ARAPFStrategy(Strategy):
 
     name = "arapf"
     rank = 2
-    roles = ("compared", "traffic", "arapf-proposed")
+    roles = ("compared", "traffic", "crowd", "arapf-proposed")
     colour, colour_map = "tab:purple", "Purples"
     planar_only = True   # reads the scan's beams (local minimum, object ends), not just points
     Params = ARAPFParams

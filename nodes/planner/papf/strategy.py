@@ -192,7 +192,7 @@ class PAPFStrategy(Strategy):
 
     name = "papf"
     rank = 1
-    roles = ("compared", "traffic", "papf-proposed")
+    roles = ("compared", "traffic", "crowd", "papf-proposed")
     colour, colour_map = "tab:orange", "Oranges"
     Params = PAPFParams
     SPECS = PAPF
