@@ -5,7 +5,15 @@ from __future__ import annotations
 
 import json
 
-from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
+from common.ros_link import (
+    add_face_args,
+    add_ros_args,
+    cmd_vel_type,
+    face_distro,
+    face_domain,
+    ros_distro,
+    ros_domain,
+)
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS
 from papf.cli.view import add_view_flag
@@ -70,6 +78,8 @@ def cmd_launch(args) -> int:
               "objects": args.objects, "ros": args.ros, "cmd_vel_type": args.cmd_vel_type,
               "ros_domain": domain, "ros_face_domain": face_domain(args),
               "ros_face": "1" if args.ros_face else None,
+              "ros_face_distro": face_distro(args) if args.ros_face else None,
+              "ros_distro": ros_distro(args) if args.ros == "rmw_zenoh" else None,
               "record_force": "1" if args.force else None}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
-from common.ros_link import add_face_args, face_domain
+from common.ros_link import add_face_args, face_distro, face_domain
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.options import add_planner_settings, add_world_and_planner, resolve_world
 from papf.cli.view import add_view_flag
@@ -67,7 +67,8 @@ def run_config(args):
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
-                     ros_face=face_domain(args), progress=None if not args.json else False)
+                     ros_face=face_domain(args), progress=None if not args.json else False,
+                     ros_face_distro=face_distro(args))
 
 
 def cmd_run(args) -> int:

@@ -58,6 +58,7 @@ class RunConfig:
     zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     ros_face: int | None = None        # the ROS 2 face's domain (nodes.ros_face); None: off
+    ros_face_distro: str | None = None  # the face's ROS 2 distro (jazzy, humble); None: jazzy
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
 
 
@@ -70,7 +71,8 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "realtime": "1" if cfg.realtime else None,
               "objects": cfg.objects, "view": cfg.view,
               "ros_face": None if cfg.ros_face is None else "1",
-              "ros_face_domain": cfg.ros_face}
+              "ros_face_domain": cfg.ros_face,
+              "ros_face_distro": cfg.ros_face_distro if cfg.ros_face is not None else None}
     return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,
                          values={k: v for k, v in values.items() if v is not None},
                          planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,

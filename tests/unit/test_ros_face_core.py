@@ -76,8 +76,9 @@ def test_goal_pose_becomes_our_goal_keeping_the_runs_tolerance():
     core.on_message("odom", Odometry(stamp_ns=7, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     g = core.goal_from_pose(_pose(4.0, 2.0, ""))
     assert (g.x, g.y, g.tolerance, g.stamp_ns, g.auth) == (4.0, 2.0, 0.3, 7, "")
-    with pytest.raises(SchemaError, match="frame 'map'"):
-        core.goal_from_pose(_pose(1.0, 1.0, "map"))
+    assert core.goal_from_pose(_pose(1.0, 1.0, "map")).x == 1.0   # map -> odom: the identity
+    with pytest.raises(SchemaError, match="frame 'base_link'"):
+        core.goal_from_pose(_pose(1.0, 1.0, "base_link"))
     with pytest.raises(SchemaError, match="not finite"):
         core.goal_from_pose(_pose(math.nan, 1.0))
     with pytest.raises(SchemaError, match="not a CDR PoseStamped"):
