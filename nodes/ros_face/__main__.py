@@ -45,6 +45,7 @@ from nodes.ros_face.core import FACE_TOPICS, GOAL_TOPIC, SUBSCRIBED, FaceCore
 from nodes.ros_face.navigate import ACTION, Navigator
 from nodes.ros_face.params import ParamServer
 from nodes.ros_face.ports import PORTS, VARIANTS
+from worlds.map_world import world_map
 
 NAME = "ros_face"
 GOAL_IN = "ros_goal_pose"            # inbox tag of /goal_pose samples
@@ -79,21 +80,6 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)
     return ap.parse_args(argv)
-
-
-def world_grid(world: str | None):
-    """The occupancy grid of ``world`` for ``/map``: a map world's own map, else its
-    obstacles at t = 0 at 5 cm (as ``papf export map``); None without a world or in 3-D."""
-    if not world:
-        return None
-    from worlds import load_world
-    from worlds.map_world import rasterize
-
-    w = load_world(world)
-    if w.dims != 2:
-        return None
-    grids = [ob.grid for ob in w.obstacles if hasattr(ob, "grid")]
-    return grids[0] if len(grids) == 1 and len(w.obstacles) == 1 else rasterize(w, 0.05)
 
 
 def foreign_subscribers(session, domain: int, topic: str, timeout_s: float = 1.0) -> list[str]:
@@ -315,7 +301,7 @@ def serve(args: argparse.Namespace, log) -> int:
     """Run the face; ConfigError if another ROS node subscribes the guarded topic."""
     domain = ros_domain(args)
     ros_distro(args)
-    grid = world_grid(args.world)
+    grid = world_map(args.world)
     with open_node(NAME, args, log) as node:
         others = foreign_subscribers(node.session, domain, rz.topic_name(GUARDED, args.ros_namespace))
         if others:

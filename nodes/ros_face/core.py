@@ -13,11 +13,11 @@ import math
 from typing import NamedTuple
 
 from common import rmw_zenoh as rz
-from common import robot
 from common import ros2_convert as rc
 from common.errors import SchemaError
+from common.ros2_bag import WheelJoints
 from common.units import NS_PER_S
-from common.urdf import WHEELS, rosbot_urdf
+from common.urdf import rosbot_urdf
 from schemas import Goal
 
 POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
@@ -54,14 +54,6 @@ GOAL_TOPIC = FaceTopic(POSE_STAMPED, rz.RELIABLE_10, "planner")   # taken, not p
 # our topics the face reads
 SUBSCRIBED = ("scan", "odom", "cmd_vel", "battery", "planner/state", "planner/status", "goal",
               "wheels", "clock")
-WHEEL_JOINTS = {name: f"{name}_wheel_joint" for name in WHEELS}   # common.urdf's names
-
-
-def wheel_origin(name: str) -> tuple[float, float, float]:
-    """The wheel joint's origin on ``base_link`` [m] (as common.urdf places it)."""
-    x = (0.5 if name.startswith("front") else -0.5) * robot.WHEELBASE_M
-    y = (0.5 if name.endswith("left") else -0.5) * robot.TRACK_M
-    return x, y, robot.WHEEL_RADIUS_M
 
 
 class FaceCore:
@@ -85,8 +77,7 @@ class FaceCore:
         self.goal: Goal | None = None          # the run's goal (tolerance, road kept on re-goal)
         self.last_ns = 0
         self.grid = grid
-        self.wheel_angle = dict.fromkeys(WHEELS, 0.0)   # [rad] integrated from wheel speeds
-        self.last_wheels_ns: int | None = None
+        self.wheels = WheelJoints()
         self.next_battery_ns = 0
         self.next_clock_ns = 0
 
@@ -140,22 +131,8 @@ class FaceCore:
         return [("clock", rc.serialize(rc.clock(msg.stamp_ns), rc.CLOCK))]
 
     def _on_wheels(self, msg):
-        """Wheel speeds -> ``/joint_states`` (angles integrated) and the wheels' ``/tf``
-        (what robot_state_publisher would make of them: RViz draws turning wheels)."""
-        dt = 0.0 if self.last_wheels_ns is None else max(msg.stamp_ns - self.last_wheels_ns, 0) / NS_PER_S
-        self.last_wheels_ns = msg.stamp_ns
-        speeds = dict(zip(msg.names, msg.speed, strict=False))
-        torques = dict(zip(msg.names, msg.torque, strict=False))
-        for name in WHEELS:
-            w = float(speeds.get(name, 0.0))
-            if math.isfinite(w):
-                self.wheel_angle[name] = math.remainder(self.wheel_angle[name] + w * dt, math.tau)
-        names = [WHEEL_JOINTS[n] for n in WHEELS]
-        js = rc.joint_state(msg.stamp_ns, names, [self.wheel_angle[n] for n in WHEELS],
-                            [float(speeds.get(n, 0.0)) for n in WHEELS],
-                            [float(torques.get(n, 0.0)) for n in WHEELS])
-        tfs = rc.wheel_transforms(msg.stamp_ns, {f"{n}_wheel_link": (wheel_origin(n), self.wheel_angle[n])
-                                                 for n in WHEELS})
+        """Wheel speeds -> ``/joint_states`` (angles integrated) and the wheels' ``/tf``."""
+        js, tfs = self.wheels.update(msg)
         return [("joint_states", rc.serialize(js, rc.JOINT_STATE)),
                 ("tf", rc.serialize(rc.tf_message(tfs), rc.TF_MESSAGE))]
 

@@ -22,9 +22,9 @@ import zenoh
 from zenoh.ext import HistoryConfig, declare_advanced_subscriber
 
 from common.transport import zenoh_config
+from papf.launch.supervisor import free_port
 from tests.support.e2e import start_papf_run
 from tests.support.rmw_client import NAV, Client
-from papf.launch.supervisor import free_port
 
 DOMAIN = 11
 P = "rcl_interfaces/srv/"
@@ -105,7 +105,7 @@ def check_graph(client: Client) -> None:
     topics = {"%scan": "2:", "%map": ":1:", "%joint_states": "", "%clock": "",
               "%navigate_to_pose%_action%status": ":1:", "%navigate_to_pose%_action%feedback": ""}
     for topic, qos in topics.items():
-        mine = [t for t in tokens if f"/MP/%/%/papf_" in t and f"/{topic}/" in t]
+        mine = [t for t in tokens if "/MP/%/%/papf_" in t and f"/{topic}/" in t]
         assert mine and mine[0].rsplit("/", 1)[1].startswith(qos), (topic, mine)
 
 
