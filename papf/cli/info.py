@@ -87,7 +87,7 @@ def _bag_info(args) -> int:
         first, last = bag.time_span_ns()
         info = {"file": args.file, "rosbag2": True, "duration_s": (last - first) / 1e9,
                 "topics": {t: {"type": m, "messages": n} for t, (m, n) in bag.bag_topics().items()},
-                "roles": asdict(topics), "as_our_keys": bag.counts()}
+                "roles": asdict(bag.topics), "as_our_keys": bag.counts()}
     if args.json:
         print(json.dumps(info, indent=2))
         return 0

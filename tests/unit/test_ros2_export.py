@@ -3,6 +3,7 @@ plain ``mcap`` library with ``mcap-ros2-support``'s decoder (neither is ours).""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import time
@@ -189,3 +190,17 @@ def test_not_a_run_recording(tmp_path, capsys):
     assert "no stack topics" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".o.partial")]
+
+
+def test_our_bag_reads_back_in_report_and_info_without_flags(exported, tmp_path, capsys):
+    """papf report and papf info take the export's /odom, /battery, /cmd_vel, /scan as they are."""
+    from papf.report.metrics import run_metrics
+
+    bag, _stats = exported
+    m = run_metrics(bag)
+    assert m.path_length_m == pytest.approx(0.05 * (N - 1), rel=0.02)   # 0.5 m/s for 1.9 s
+    assert main(["info", str(bag), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["roles"]["odom"] == "/odom" and info["as_our_keys"]["rosbot/odom"] == N
+    assert main(["report", str(bag), "--out", str(tmp_path / "rep")]) == 0
+    assert (tmp_path / "rep" / "report.md").is_file()
