@@ -45,6 +45,8 @@ def register(sub) -> None:
                         "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
+    p.add_argument("--format", choices=("mcap", "ros2"), default="mcap",
+                   help="--record as mcap (default) or ros2 (a rosbag2 directory)")
     p.add_argument("--energy-model", choices=sorted(MODELS),
                    help=f"the live meter's model (default {DEFAULT_MODEL}, in every profile)")
     p.add_argument("--realtime", action="store_true",
@@ -79,6 +81,7 @@ def cmd_launch(args) -> int:
               "ros_domain": domain, "ros_face_domain": face_domain(args),
               "ros_face": "1" if args.ros_face else None,
               "ros_face_distro": face_distro(args) if args.ros_face else None,
+              "record_format": "ros2" if args.record and args.format == "ros2" else None,
               "ros_distro": ros_distro(args) if args.ros == "rmw_zenoh" else None,
               "record_force": "1" if args.force else None}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,

@@ -23,6 +23,9 @@ def register(sub) -> None:
                    help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
+    p.add_argument("--format", choices=("mcap", "ros2"), default="mcap",
+                   help="--record as mcap (default: every message) or ros2 (a rosbag2 "
+                        "directory of the ROS 2 face's topics: ros2 bag play, papf report)")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit in seconds (default 300)")
     p.add_argument("--realtime", action="store_true", help="pace sim time to the wall clock")
@@ -68,7 +71,7 @@ def run_config(args):
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      ros_face=face_domain(args), progress=None if not args.json else False,
-                     ros_face_distro=face_distro(args))
+                     ros_face_distro=face_distro(args), record_format=args.format)
 
 
 def cmd_run(args) -> int:

@@ -23,7 +23,7 @@ from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
 from papf.launch.fleet import FleetMeter, fleet_result, progress_figures
 from papf.launch.outcome import RunMonitor, RunResult
-from papf.launch.preflight import check_run
+from papf.launch.preflight import bag_path, check_run
 from papf.launch.profile import LaunchOptions, Resolved, load_profile, resolve
 from papf.launch.sequence import CHECK_S, COALESCE_S, STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use
@@ -59,6 +59,7 @@ class RunConfig:
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     ros_face: int | None = None        # the ROS 2 face's domain (nodes.ros_face); None: off
     ros_face_distro: str | None = None  # the face's ROS 2 distro (jazzy, humble); None: jazzy
+    record_format: str = "mcap"        # --record as mcap (ours) or ros2 (a rosbag2 directory)
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
 
 
@@ -67,6 +68,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
     values = {"world": cfg.world, "planner": cfg.planner, "seed": cfg.seed,
               "energy_model": cfg.energy_model, "record": cfg.record,
               "record_force": "1" if cfg.force and cfg.record else None,
+              "record_format": "ros2" if cfg.record and cfg.record_format == "ros2" else None,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
               "objects": cfg.objects, "view": cfg.view,
@@ -93,8 +95,12 @@ def _show_line(verbose: bool):
 def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = load_world(cfg.world)  # WorldError before anything starts
-    check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
-              cfg.planner_args, force=cfg.force, view=cfg.view)   # before anything starts
+    bag = cfg.record is not None and cfg.record_format == "ros2"
+    if bag:   # a rosbag2 directory, checked as such (preflight.record_path checks files)
+        bag_path(cfg.record, cfg.force)
+    check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace,
+              None if bag else cfg.record, cfg.planner_args, force=cfg.force,
+              view=cfg.view)   # before anything starts
     port = cfg.port or (DEFAULT_PORT if not port_in_use(DEFAULT_PORT) else free_port())
     if cfg.port is None and port != DEFAULT_PORT:
         log.warning("port %d is in use; the embedded router listens on %d instead",

@@ -124,6 +124,8 @@ def export_ros2(src: str | Path, dst: str | Path) -> Ros2ExportStats:
 def _write(rec: Recording, topics: BagTopics, bag: Path, stats: Ros2ExportStats) -> None:
     first_ns = max(rec.time_span_ns()[0], 0)
     with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        for key, value in rec.run_metadata.items():   # world, planner, seed … for papf report
+            writer.set_custom_data(f"papf.{key}", str(value))
         latched = {name for name, _t, is_latched in topics.connections() if is_latched}
         conns: dict = {}
 

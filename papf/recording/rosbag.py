@@ -103,6 +103,26 @@ def is_rosbag(path: str | Path, topics: TopicMap | None = None) -> bool:
     return bool(cdr) and ((p.parent / "metadata.yaml").is_file() or bool(odoms & cdr))
 
 
+STACK_KEYS = ("world", "planner", "seed", "energy_model", "profile", "software_version")
+
+
+def stack_metadata(path: str | Path) -> dict[str, str]:
+    """What a bag of ours says about its run (``papf.*`` in ``custom_data`` of its
+    ``metadata.yaml``: world, planner, seed …; ``papf run --format ros2``, ``papf export
+    ros2``); {} for anyone else's bag or an unreadable file."""
+    import yaml
+
+    p = Path(path)
+    meta = (p if p.is_dir() else p.parent) / "metadata.yaml"
+    try:
+        info = yaml.safe_load(meta.read_text(encoding="utf-8"))["rosbag2_bagfile_information"]
+        custom = info.get("custom_data") or {}
+    except (OSError, ValueError, TypeError, KeyError, AttributeError, yaml.YAMLError):
+        return {}
+    return {k[5:]: str(v) for k, v in custom.items()
+            if isinstance(k, str) and k.startswith("papf.") and k[5:] in STACK_KEYS}
+
+
 def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | BagRecording:
     """Our recording, or a rosbag2 read as one (:class:`BagRecording`)."""
     return BagRecording(path, topics) if is_rosbag(path, topics) else Recording(path)
@@ -150,7 +170,8 @@ class BagRecording:
             self.close()
             raise
         self.metadata = {"run": {"namespace": NS, "source": SOURCE, "planner": "robot",
-                                 "world": f"bag {self.path.name}", "bag": str(self.path)}}
+                                 "world": f"bag {self.path.name}", "bag": str(self.path),
+                                 **stack_metadata(self.path)}}
 
     def __enter__(self) -> BagRecording:
         return self
