@@ -33,6 +33,8 @@ import sys
 import time
 from collections import Counter
 
+import zenoh
+
 from common import rmw_zenoh as rz
 from common import ros2_convert as rc
 from common import ros2_interfaces as ri
@@ -157,6 +159,7 @@ class Face:
             request = runauth.sign_request(request, self.key)
         key = self.node.keys.key("planner/params")
         for reply in self.node.session.get(key, payload=json.dumps(request).encode(),
+                                           consolidation=zenoh.ConsolidationMode.NONE,
                                            timeout=ANSWER_S):
             if reply.ok is not None:
                 try:

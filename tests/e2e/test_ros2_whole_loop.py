@@ -205,3 +205,30 @@ def test_a_nav2_user_tunes_steers_cancels_and_reaches_over_rmw_zenoh():
             proc.wait()
     result = json.loads(out.strip().splitlines()[-1])
     assert result["outcome"] == "reached", err[-3000:]
+
+
+@pytest.mark.e2e
+def test_humble_keys_and_a_face_that_refuses(router, session, spawn):
+    """The face on ROS 2 Humble's rmw_zenoh (no type hashes: ``TypeHashNotSupported``) with
+    ``--goals refuse`` (a lockstep run's): parameters are listed and read-only, a Nav2 goal
+    is refused, and nothing in the graph carries a RIHS01 hash."""
+    import sys
+
+    ns, domain = "humble1", DOMAIN + 1
+    spawn("planner", [sys.executable, "-m", "nodes.planner", "--planner", "apf", "--connect",
+                      router, "--namespace", ns])
+    spawn("face", [sys.executable, "-m", "nodes.ros_face", "--connect", router, "--namespace", ns,
+                   "--ros-domain", str(domain), "--ros-distro", "humble", "--goals", "refuse"])
+    client = Client(session, domain, "humble")
+    deadline = time.monotonic() + 90.0
+    listed = _until("the parameter services", lambda: _params_ready(client), deadline, 0.5)
+    assert "apf.v_max" in listed.result.names
+    assert client.key("/papf_planner/list_parameters", P + "ListParameters").endswith(
+        "/rcl_interfaces::srv::dds_::ListParameters_/TypeHashNotSupported")
+    res, _ = client.call("/papf_planner/set_parameters", P + "SetParameters", client.msg(
+        P + "SetParameters_Request", parameters=[_param(client, "apf.v_max", 3, double_value=0.3)]))
+    assert not res.results[0].successful and "read-only" in res.results[0].reason
+    _gid, req = client.goal_request(1.0, 0.0)
+    assert not client.call("navigate_to_pose/_action/send_goal", NAV + "_SendGoal", req)[0].accepted
+    tokens = [t for t in client.tokens() if "/papf_" in t and ("/MP/" in t or "/SS/" in t)]
+    assert tokens and all("/TypeHashNotSupported/" in t and "RIHS01" not in t for t in tokens)
