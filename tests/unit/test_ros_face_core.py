@@ -96,7 +96,10 @@ def test_rviz_config_shows_every_face_topic():
     topics = {d["Topic"]["Value"] for d in manager["Displays"] if "Topic" in d}
     topics.add(next(d for d in manager["Displays"]
                     if d["Class"].endswith("RobotModel"))["Description Topic"]["Value"])
-    assert topics == {"/scan", "/odom", "/plan", "/markers", "/robot_description"}
+    assert topics == {"/scan", "/odom", "/plan", "/markers", "/robot_description", "/map"}
+    qos = {d["Topic"]["Value"]: d["Topic"] for d in manager["Displays"] if "Topic" in d}
+    assert qos["/scan"]["Reliability Policy"] == "Best Effort"            # sensor data
+    assert qos["/map"]["Durability Policy"] == "Transient Local"
     assert any(d["Class"].endswith("/TF") for d in manager["Displays"])   # /tf, /tf_static
     goal, = [t for t in manager["Tools"] if t["Class"].endswith("SetGoal")]
     assert goal["Topic"]["Value"] == "/goal_pose"
