@@ -28,17 +28,14 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import sys
 import time
 from collections import Counter
 
-import zenoh
-
+from common import param_query, runauth
 from common import rmw_zenoh as rz
 from common import ros2_convert as rc
 from common import ros2_interfaces as ri
-from common import runauth
 from common.errors import ConfigError, PapfError, SchemaError
 from common.ports import describe
 from common.ros_link import RmwZenohLink, add_distro_arg, ros_distro, ros_domain
@@ -158,17 +155,10 @@ class Face:
         if signed:
             request = runauth.sign_request(request, self.key)
         key = self.node.keys.key("planner/params")
-        for reply in self.node.session.get(key, payload=json.dumps(request).encode(),
-                                           consolidation=zenoh.ConsolidationMode.NONE,
-                                           timeout=ANSWER_S):
-            if reply.ok is not None:
-                try:
-                    out = json.loads(reply.ok.payload.to_bytes())
-                except ValueError:
-                    continue
-                if isinstance(out, dict) and isinstance(out.get("params"), dict):
-                    return out
-        raise ConfigError(f"the planner did not answer on {key} within {ANSWER_S:g} s")
+        out = param_query.ask(self.node.session, key, request, ANSWER_S)
+        if out is None:
+            raise ConfigError(f"the planner did not answer on {key} within {ANSWER_S:g} s")
+        return out
 
     def _on_alive(self, sample) -> None:
         name = str(sample.key_expr).rsplit("/", 1)[-1]
