@@ -2,9 +2,12 @@
 
 What ``rmw_zenoh_cpp`` (ROS 2 Jazzy and later) writes, read from its sources
 (ros2/rmw_zenoh, ``rmw_zenoh_cpp/src/detail/``); each function and class names the source
-it follows. Payloads are CDR as on the bridge (:mod:`common.ros2`); Humble robots stay on
-``zenoh-bridge-ros2dds`` (no type hashes, no rmw_zenoh release; docs/robot.md). Used by
-:mod:`common.ros_link`, the ROS 2 face and ``papf node``/``topic`` with ``--ros rmw_zenoh``.
+it follows. Payloads are CDR as on the bridge (:mod:`common.ros2`). ROS 2 Humble's rmw_zenoh
+(its ``humble`` branch, released from 0.1.0) writes the same keys, tokens and attachments
+with the constant ``TypeHashNotSupported`` where Jazzy has the RIHS01 hash
+(:mod:`common.ros2_interfaces`; docs/ros2.md "Humble"): every function taking ``distro``
+follows it. Used by :mod:`common.ros_link`, the ROS 2 face and ``papf node``/``topic`` with
+``--ros rmw_zenoh``.
 """
 
 from __future__ import annotations
@@ -52,14 +55,12 @@ def ros_type_name(dds_name: str) -> str:
 
 
 @cache
-def type_hash(typename: str) -> str:
-    """RIHS01 type hash string of a ROS 2 message type (REP-2011), from the Jazzy type store."""
-    from rosbags.typesys import Stores, get_typestore
+def type_hash(typename: str, distro: str = "jazzy") -> str:
+    """The type hash rmw_zenoh writes for a ROS 2 message or service type: RIHS01 (REP-2011)
+    on jazzy, ``TypeHashNotSupported`` on humble (:func:`common.ros2_interfaces.type_hash`)."""
+    from common.ros2_interfaces import type_hash as hash_of
 
-    store = get_typestore(Stores.ROS2_JAZZY)
-    if typename not in store.types:
-        raise ConfigError(f"ROS 2 type {typename!r} is not in the Jazzy type store")
-    return store.hash_rihs01(typename)
+    return hash_of(typename, distro)
 
 
 def mangle(name: str) -> str:
@@ -78,16 +79,20 @@ def topic_name(topic: str, namespace: str = "") -> str:
     return "/" + "/".join(parts)
 
 
-def topic_key(domain: int, topic: str, typename: str) -> str:
+def topic_key(domain: int, topic: str, typename: str, distro: str = "jazzy") -> str:
     """The Zenoh key rmw_zenoh publishes ``topic`` of ``typename`` on in ``domain``.
 
     Topic key (``liveliness_utils.cpp``, ``TopicInfo::TopicInfo``):
     ``<domain>/<topic without leading/trailing "/">/<dds type>/<type hash>``, e.g.
     ``0/cmd_vel/geometry_msgs::msg::dds_::Twist_/RIHS01_9c45…``. The DDS type name is the
     type support's ``get_name()`` (``pkg::msg::dds_::Name_``); the hash is REP-2011's
-    RIHS01 (sha256 of the type description), computed here by ``rosbags``.
+    RIHS01 (sha256 of the type description), computed here by ``rosbags``. A service's key
+    has the same form (``rmw_service_data.cpp``: the service name, the service type's DDS
+    name ``pkg::srv::dds_::Name_`` and its hash); so has an action's, under
+    ``<action>/_action/send_goal`` … (rcl_action ``names.c``).
     """
-    return f"{domain}/{topic.strip('/')}/{dds_type_name(typename)}/{type_hash(typename)}"
+    return (f"{domain}/{topic.strip('/')}/{dds_type_name(typename)}/"
+            f"{type_hash(typename, distro)}")
 
 
 def check_domain(domain: int) -> int:

@@ -271,3 +271,71 @@ def scan_of(msg, stamp_ns: int | None = None) -> Scan:
                 range_min=float(msg.range_min), range_max=float(msg.range_max),
                 ranges=np.asarray(msg.ranges, dtype=np.float32), sensor_x=robot.LIDAR_X_M,
                 sensor_y=robot.LIDAR_Y_M, sensor_yaw=robot.LIDAR_YAW_RAD)
+
+
+# -- what RViz and Nav2 expect besides (the face, papf export ros2) ---------------------------
+OCCUPANCY_GRID = "nav_msgs/msg/OccupancyGrid"
+JOINT_STATE = "sensor_msgs/msg/JointState"
+CLOCK = "rosgraph_msgs/msg/Clock"
+DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
+MAP = "map"
+
+
+def occupancy_grid(grid, stamp_ns: int = 0, frame_id: str = MAP):
+    """``nav_msgs/msg/OccupancyGrid`` of a :class:`worlds.maps.OccupancyMap` (row-major from
+    the origin cell, -1 unknown, 0..100 occupied %), as Nav2's map_server publishes it."""
+    rows, cols = grid.shape
+    x0, y0, yaw = grid.origin
+    info = _cls("nav_msgs/msg/MapMetaData")(
+        map_load_time=time_msg(stamp_ns), resolution=float(grid.resolution), width=int(cols),
+        height=int(rows), origin=_pose(float(x0), float(y0), float(yaw)))
+    return _cls(OCCUPANCY_GRID)(header=header(stamp_ns, frame_id), info=info,
+                                data=np.ascontiguousarray(grid.data, dtype=np.int8).ravel())
+
+
+def tf_map_odom(stamp_ns: int):
+    """``map -> odom``, the identity: our world frame is the map's (no localisation drift)."""
+    return _transform(stamp_ns, MAP, ODOM, 0.0, 0.0, 0.0, 0.0)
+
+
+def joint_state(stamp_ns: int, names, positions, velocities, efforts):
+    """``sensor_msgs/msg/JointState`` of the wheel joints (rad, rad/s, N m)."""
+    return _cls(JOINT_STATE)(header=header(stamp_ns, ""), name=list(names),
+                             position=np.asarray(positions, np.float64),
+                             velocity=np.asarray(velocities, np.float64),
+                             effort=np.asarray(efforts, np.float64))
+
+
+def wheel_transforms(stamp_ns: int, joints: dict[str, tuple[tuple[float, float, float], float]]):
+    """``base_link -> <wheel>_link`` for each wheel: its joint's origin (x, y, z) [m] and its
+    angle [rad] about the axle (y), what robot_state_publisher makes of ``/joint_states``."""
+    out = []
+    for child, ((x, y, z), angle) in joints.items():
+        tf = _cls("geometry_msgs/msg/Transform")(
+            translation=_vec3(x, y, z),
+            rotation=_cls("geometry_msgs/msg/Quaternion")(x=0.0, y=math.sin(0.5 * angle), z=0.0,
+                                                          w=math.cos(0.5 * angle)))
+        out.append(_cls("geometry_msgs/msg/TransformStamped")(
+            header=header(stamp_ns, BASE_LINK), child_frame_id=child, transform=tf))
+    return out
+
+
+def tf_message(transforms):
+    """``tf2_msgs/msg/TFMessage`` of TransformStamped messages."""
+    return _cls(TF_MESSAGE)(transforms=list(transforms))
+
+
+def clock(stamp_ns: int):
+    """``rosgraph_msgs/msg/Clock`` at ``stamp_ns`` (sim time: what ``use_sim_time`` nodes read)."""
+    return _cls(CLOCK)(clock=time_msg(stamp_ns))
+
+
+def diagnostics(stamp_ns: int, statuses):
+    """``diagnostic_msgs/msg/DiagnosticArray`` of (name, level 0 OK/1 WARN/2 ERROR/3 STALE,
+    message, {key: value}) tuples."""
+    c = _cls("diagnostic_msgs/msg/DiagnosticStatus")
+    kv = _cls("diagnostic_msgs/msg/KeyValue")
+    out = [c(level=int(level), name=name, message=message, hardware_id="papf-stack",
+             values=[kv(key=k, value=str(v)) for k, v in values.items()])
+           for name, level, message, values in statuses]
+    return _cls(DIAGNOSTIC_ARRAY)(header=header(stamp_ns, ""), status=out)

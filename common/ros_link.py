@@ -14,7 +14,8 @@ import threading
 import time
 
 from common import rmw_zenoh as rz
-from common.errors import ConfigError
+from common.errors import ConfigError, SchemaError
+from common.ros2_interfaces import DEFAULT_DISTRO, DISTROS, check_distro
 
 MIDDLEWARES = ("bridge", "rmw_zenoh")
 CMD_VEL_TYPES = {"twist": "geometry_msgs/msg/Twist",
@@ -22,15 +23,29 @@ CMD_VEL_TYPES = {"twist": "geometry_msgs/msg/Twist",
 
 
 def add_ros_args(parser: argparse.ArgumentParser, cmd_vel: bool = True) -> None:
-    """``--ros``, ``--ros-domain`` (and ``--cmd-vel-type``) on a node or command."""
+    """``--ros``, ``--ros-domain``, ``--ros-distro`` (and ``--cmd-vel-type``) on a node or command."""
     g = parser.add_argument_group("the robot's ROS 2 middleware")
     g.add_argument("--ros", choices=MIDDLEWARES, default="bridge",
-                   help="zenoh-bridge-ros2dds (default) or rmw_zenoh (ROS 2 Jazzy and later)")
+                   help="zenoh-bridge-ros2dds (default) or rmw_zenoh (ROS 2 Humble or Jazzy and later)")
     g.add_argument("--ros-domain", type=int, default=None, metavar="N",
                    help="ROS domain id for rmw_zenoh (default: $ROS_DOMAIN_ID, else 0)")
+    add_distro_arg(g)
     if cmd_vel:
         g.add_argument("--cmd-vel-type", choices=tuple(CMD_VEL_TYPES), default="twist",
                        help="cmd_vel message: twist (the ROSbot's default) or twist_stamped")
+
+
+def add_distro_arg(parser) -> None:
+    """``--ros-distro jazzy|humble``: which rmw_zenoh's keys (type hashes) and message
+    definitions to speak (docs/ros2.md "Humble")."""
+    parser.add_argument("--ros-distro", choices=DISTROS, default=DEFAULT_DISTRO,
+                        help="the ROS 2 distro on rmw_zenoh: jazzy (and later: RIHS01 type "
+                             "hashes, default) or humble (rmw_zenoh 0.1: no type hashes)")
+
+
+def ros_distro(args: argparse.Namespace) -> str:
+    """``--ros-distro`` checked (ConfigError on an unknown one)."""
+    return check_distro(getattr(args, "ros_distro", DEFAULT_DISTRO) or DEFAULT_DISTRO)
 
 
 def add_face_args(parser: argparse.ArgumentParser) -> None:
@@ -41,6 +56,9 @@ def add_face_args(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ros-face-domain", type=int, default=None, metavar="N",
                         help="ROS domain of the face (default: $ROS_DOMAIN_ID, else 0); must "
                              "differ from a robot's on rmw_zenoh")
+    parser.add_argument("--ros-face-distro", choices=DISTROS, default=DEFAULT_DISTRO,
+                        help="the face's ROS 2 distro: jazzy (default; and later) or humble "
+                             "(rmw_zenoh 0.1: no type hashes)")
 
 
 def face_domain(args: argparse.Namespace) -> int | None:
@@ -55,6 +73,11 @@ def face_domain(args: argparse.Namespace) -> int | None:
                           "face's /cmd_vel, /scan and /odom would mix with the robot's; give "
                           "--ros-face-domain another domain")
     return domain
+
+
+def face_distro(args: argparse.Namespace) -> str:
+    """``--ros-face-distro`` checked (ConfigError on an unknown one)."""
+    return check_distro(getattr(args, "ros_face_distro", DEFAULT_DISTRO) or DEFAULT_DISTRO)
 
 
 def ros_domain(args: argparse.Namespace) -> int:
@@ -149,15 +172,63 @@ class _RmwPublisher:
         self.zpub.undeclare()
 
 
+class _RmwService:
+    """A service server the rmw_zenoh way (``rmw_service_data.cpp``): a complete queryable on
+    the service's key; each query carries the request's CDR and the client's attachment
+    (sequence number, stamp, client GID); the reply goes on the service's key with the CDR
+    response and an attachment of the request's sequence number, our stamp and the
+    client's GID, which is how the client matches it (``rmw_client_data.cpp``)."""
+
+    def __init__(self, session, key: str, handler, log=None):
+        self.key, self.handler, self.log = key, handler, log
+        self.bad = 0
+        self.queryable = session.declare_queryable(key, self._on_query, complete=True)
+
+    def _on_query(self, query) -> None:
+        try:
+            att = rz.Attachment.decode(query.attachment.to_bytes() if query.attachment else b"")
+        except SchemaError as exc:   # not an rmw_zenoh client: counted and dropped
+            self.bad += 1
+            if self.log is not None and self.bad <= 5:
+                self.log.warning("dropped a request on %s: %s", self.key, exc)
+            return
+        payload = query.payload.to_bytes() if query.payload is not None else b""
+        self.handler(payload, Reply(query, self.key, att))
+
+    def undeclare(self) -> None:
+        self.queryable.undeclare()
+
+
+class Reply:
+    """How to answer one service request, now or later (a query kept until its goal ends)."""
+
+    def __init__(self, query, key: str, request: rz.Attachment):
+        self.query, self.key, self.request = query, key, request
+        self.sent = False
+
+    def send(self, cdr: bytes) -> None:
+        """Reply once with ``cdr`` (a second call does nothing)."""
+        if self.sent:
+            return
+        self.sent = True
+        att = rz.Attachment(self.request.sequence_number, time.time_ns(), self.request.gid)
+        try:
+            self.query.reply(self.key, cdr, attachment=att.encode())
+        finally:
+            self.query.drop()   # the reply is final: the client's get completes
+
+
 class RmwZenohLink(RosLink):
     """One ROS 2 node on rmw_zenoh: ``/<ns>/<node>`` in ``domain``, its node token declared now."""
 
     middleware = "rmw_zenoh"
 
     def __init__(self, session, domain: int, node: str, namespace: str = "",
-                 ids: itertools.count | None = None):
-        """``ids``: entity ids shared by every link on one session (several ROS nodes)."""
+                 ids: itertools.count | None = None, distro: str = DEFAULT_DISTRO, log=None):
+        """``ids``: entity ids shared by every link on one session (several ROS nodes);
+        ``distro``: whose type hashes go in keys and tokens (``humble``: none)."""
         super().__init__(session, namespace)
+        self.distro, self.log = check_distro(distro), log
         self.domain = rz.check_domain(domain)
         self.zid = str(session.info.zid())
         self.ids = ids or itertools.count(0)
@@ -168,13 +239,17 @@ class RmwZenohLink(RosLink):
 
     def key(self, topic: str, typename: str) -> str:
         """The rmw_zenoh key of ``topic`` of ``typename`` in this domain and namespace."""
-        return rz.topic_key(self.domain, rz.topic_name(topic, self.namespace), typename)
+        return rz.topic_key(self.domain, self._fq(topic), typename, self.distro)
+
+    def _fq(self, name: str) -> str:
+        """A name under the link's namespace; one with a leading "/" is absolute."""
+        return name if name.startswith("/") else rz.topic_name(name, self.namespace)
 
     def _entity(self, kind: str, topic: str, typename: str, qos: rz.Qos) -> rz.Entity:
         n = self.node_entity
         return rz.Entity(self.domain, self.zid, n.node_id, next(self.ids), kind, n.namespace,
-                         n.node, topic=rz.topic_name(topic, self.namespace), typename=typename,
-                         qos=qos)
+                         n.node, topic=self._fq(topic), typename=typename,
+                         hash=rz.type_hash(typename, self.distro), qos=qos)
 
     def _token(self, entity: rz.Entity):
         return self._keep(self.session.liveliness().declare_token(entity.token()))
@@ -192,6 +267,12 @@ class RmwZenohLink(RosLink):
             zpub = ext.declare_advanced_publisher(
                 self.session, key, cache=ext.CacheConfig(max_samples=qos.depth),
                 sample_miss_detection=miss, publisher_detection=True)
+        elif qos.reliability == 2:   # best effort: dropped rather than queued under congestion
+            import zenoh
+
+            zpub = self.session.declare_publisher(
+                key, reliability=zenoh.Reliability.BEST_EFFORT,
+                congestion_control=zenoh.CongestionControl.DROP)
         else:
             zpub = self.session.declare_publisher(key)
         pub = self._keep(_RmwPublisher(zpub, entity.gid))
@@ -207,11 +288,22 @@ class RmwZenohLink(RosLink):
         return sub
 
 
+    def service(self, name: str, typename: str, handler, qos: rz.Qos = rz.RELIABLE_10):
+        """Serve ROS service ``name`` (relative to the link's namespace, or absolute with a
+        leading "/") of ``typename`` (``pkg/srv/Name``): ``handler(request_cdr, reply)`` is
+        called on Zenoh's thread; ``reply.send(response_cdr)`` answers, at once or later."""
+        entity = self._entity(rz.SERVICE, name, typename, qos)
+        srv = self._keep(_RmwService(self.session, self.key(name, typename), handler, self.log))
+        self._token(entity)
+        return srv
+
+
 def open_link(args: argparse.Namespace, session, node: str, namespace: str = "") -> RosLink:
     """The link ``--ros`` asks for; ``node`` names our ROS 2 node on rmw_zenoh."""
     middleware = getattr(args, "ros", "bridge")
     if middleware == "bridge":
         return BridgeLink(session, namespace)
     if middleware == "rmw_zenoh":
-        return RmwZenohLink(session, ros_domain(args), node, namespace)
+        return RmwZenohLink(session, ros_domain(args), node, namespace,
+                            distro=ros_distro(args))
     raise ConfigError(f"--ros {middleware!r}: give one of {', '.join(MIDDLEWARES)}")

@@ -67,6 +67,13 @@ def _chassis(root: ET.Element) -> None:
               m * (lx**2 + ly**2) / 12, centre)
 
 
+def wheel_origin(name: str) -> tuple[float, float, float]:
+    """Where the wheel ``name``'s joint sits on ``base_link`` [m]: its axle's centre."""
+    x = (0.5 if name.startswith("front") else -0.5) * robot.WHEELBASE_M
+    y = (0.5 if name.endswith("left") else -0.5) * robot.TRACK_M
+    return x, y, robot.WHEEL_RADIUS_M
+
+
 def _wheel(root: ET.Element, name: str) -> None:
     link = ET.SubElement(root, "link", name=f"{name}_wheel_link")
     r, w, m = robot.WHEEL_RADIUS_M, robot.WHEEL_WIDTH_M, robot.WHEEL_MASS_KG
@@ -74,12 +81,10 @@ def _wheel(root: ET.Element, name: str) -> None:
     _shape(link, ("cylinder", {"radius": _f(r), "length": _f(w)}), rpy=(-math.pi / 2, 0, 0))
     i_rim = m * (3 * r**2 + w**2) / 12
     _inertial(link, m, i_rim, m * r**2 / 2, i_rim)
-    x = (0.5 if name.startswith("front") else -0.5) * robot.WHEELBASE_M
-    y = (0.5 if name.endswith("left") else -0.5) * robot.TRACK_M
     joint = ET.SubElement(root, "joint", name=f"{name}_wheel_joint", type="continuous")
     ET.SubElement(joint, "parent", link=BASE_LINK)
     ET.SubElement(joint, "child", link=f"{name}_wheel_link")
-    _origin(joint, (x, y, r))
+    _origin(joint, wheel_origin(name))
     ET.SubElement(joint, "axis", xyz="0 1 0")
 
 

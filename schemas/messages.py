@@ -120,6 +120,8 @@ class Goal(Message):
     road_lane_width: float = field(0.0, unit="m", doc="lane width d_w")
     auth: str = field("", doc="the run's tag (common.runauth): a planner started by a run "
                               "acts only on goals that carry it")
+    cancel: bool = field(False, doc="drop the goal: the planner stops (zero commands) and "
+                                    "idles until the next goal (a ROS 2 action's cancel)")
 
 
 @message("PlannerState", 1)

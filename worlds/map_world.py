@@ -61,6 +61,21 @@ def map_world_file(yaml_path: str, start: str | None, goal: str | None,
     return str(out)
 
 
+def world_map(world: str | None, resolution: float = 0.05):
+    """What ROS 2 tools get as ``/map`` for ``world`` (a name or file): a map world's own map,
+    else its obstacles at t = 0 rasterised (:func:`rasterize`); None without a world or for a
+    3-D one. WorldError (one line) when the world does not load."""
+    if not world:
+        return None
+    from worlds import load_world
+
+    w = load_world(world)
+    if w.dims != 2:
+        return None
+    grids = [ob.grid for ob in w.obstacles if hasattr(ob, "grid")]
+    return grids[0] if len(grids) == 1 and len(w.obstacles) == 1 else rasterize(w, resolution)
+
+
 def rasterize(world, resolution: float = 0.05, margin_m: float = 1.0):
     """The world's obstacles (at t = 0) as an :class:`~worlds.maps.OccupancyMap` [m/cell]:
     a cell is occupied when an obstacle reaches within half its diagonal of its centre;

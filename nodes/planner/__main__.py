@@ -119,6 +119,7 @@ def _answer_params(node, name: str, planner, query, stamp_ns: int, check) -> Non
     payload = query.payload.to_bytes() if query.payload is not None else b""
     reply, changed = answer(name, planner, payload, check)
     query.reply(query.key_expr, json.dumps(reply).encode())
+    query.drop()   # final now: a querier consolidating replies gets it now, not at its timeout
     if reply["error"]:
         node.log.warning("parameter change refused: %s", reply["error"])
     if changed:

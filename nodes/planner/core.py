@@ -199,7 +199,12 @@ class Planner:
 
     # -- goal ---------------------------------------------------------------
     def set_goal(self, goal: Goal) -> PlannerStatus:
-        """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status."""
+        """Take a goal; the same goal again keeps the run going. Returns the ``ready`` status
+        (``idle`` for a cancelling goal: no goal, zero commands until the next one)."""
+        if goal.cancel:
+            self.goal, self.state, self.reason = None, "idle", "goal canceled"
+            self.strategy.reset()
+            return PlannerStatus(stamp_ns=goal.stamp_ns, state="idle", reason=self.reason)
         same = self.goal is not None and (self.goal.x, self.goal.y, self.goal.tolerance) == (
             goal.x, goal.y, goal.tolerance)
         # the goal handshake carries the run's road (none: road_lanes = 0)

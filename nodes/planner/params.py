@@ -14,7 +14,7 @@ import json
 from common.errors import ConfigError
 from common.runauth import RequestCheck
 from nodes.planner.core import Planner
-from nodes.planner.registry import load_params
+from nodes.planner.registry import load_params, settings_of
 
 MAX_REQUEST_BYTES = 64 * 1024   # [bytes] a request (every setting at once is ~3 KB)
 
@@ -41,6 +41,20 @@ def apply(name: str, planner: Planner, sets: list[str]) -> list[str]:
     return [k for k in after if after[k] != before[k]]
 
 
+def specs(name: str) -> dict[str, dict]:
+    """Every setting's declared type and range, ``table.field -> {...}`` (for descriptors:
+    the ROS 2 face's ``describe_parameters``): ``kind`` (float, int, bool, str), ``lo``,
+    ``hi`` (None: unbounded), ``lo_open``, ``hi_open``, ``choices``, ``unit``, ``safety``,
+    ``valid`` (the range in words, as errors say it)."""
+    out = {}
+    for field_name, (table, spec, _default) in settings_of(name).items():
+        out[f"{table}.{field_name}"] = {
+            "kind": spec.kind.__name__, "lo": spec.lo, "hi": spec.hi, "lo_open": spec.lo_open,
+            "hi_open": spec.hi_open, "choices": list(spec.choices), "unit": spec.unit,
+            "safety": spec.safety, "valid": spec.describe()}
+    return out
+
+
 def answer(name: str, planner: Planner, payload: bytes,
            check: RequestCheck | None = None) -> tuple[dict, list[str]]:
     """(reply, changed names) for one query payload; ``check``: the
@@ -48,13 +62,14 @@ def answer(name: str, planner: Planner, payload: bytes,
 
     Names are ``table.name`` as ``--set`` takes them: ``apf.<field>`` for
     :class:`~nodes.planner.field.APFParams`, ``<planner>.<field>`` for the algorithm's own.
-    Wire format (JSON): request ``{}`` (list) or ``{"set": ["apf.v_max=0.3", ...], "nonce": N,
+    Wire format (JSON): request ``{}`` (list; ``{"describe": true}`` adds ``"specs"``: each
+    setting's type and range, :func:`specs`) or ``{"set": ["apf.v_max=0.3", ...], "nonce": N,
     "auth": TAG}`` (a change is signed with the run's key: :func:`common.runauth.sign_request`;
     a planner started without a key takes unsigned changes); reply
     ``{"planner": NAME, "params": {name: value}, "error": ""}`` (``error`` says why a change
     was refused).
     """
-    error, changed = "", []
+    error, changed, request = "", [], None
     try:
         if len(payload) > MAX_REQUEST_BYTES:
             raise ConfigError(f"request of {len(payload):,} bytes; at most {MAX_REQUEST_BYTES:,}")
@@ -69,4 +84,7 @@ def answer(name: str, planner: Planner, payload: bytes,
             changed = apply(name, planner, sets)
     except (ConfigError, UnicodeDecodeError, ValueError) as exc:
         error = str(exc)
-    return {"planner": name, "params": current(name, planner), "error": error}, changed
+    reply = {"planner": name, "params": current(name, planner), "error": error}
+    if isinstance(request, dict) and request.get("describe") is True:
+        reply["specs"] = specs(name)
+    return reply, changed

@@ -40,6 +40,7 @@ from common.transport import (
 )
 from nodes.recorder.budget import Budget
 from nodes.recorder.ports import PORTS, VARIANTS
+from nodes.recorder.ros2_bag import FORMATS, Ros2BagWriter, check_bag_dir
 from nodes.recorder.tail import TAIL_MAX_S, RunEndWatch
 from nodes.recorder.writer import COMPRESSIONS, FLUSH_INTERVAL_S, RunWriter, WriterStats
 from schemas.messages import Event
@@ -120,9 +121,11 @@ def drain(intake: Intake, writer: RunWriter, max_samples: int, watch: RunEndWatc
 def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str],
            compression: str = "zstd", flush_interval_s: float = FLUSH_INTERVAL_S,
            close_on_run_ended: bool = False,
-           force: bool = False, announce: bool = False) -> WriterStats:
+           force: bool = False, announce: bool = False, fmt: str = "mcap") -> WriterStats:
     """Record until ``node.stop`` (or, with ``close_on_run_ended``, until the launcher's
-    ``run_ended``); returns the writer's counts. The file is complete on return.
+    ``run_ended``); returns the writer's counts. The file is complete on return. ``fmt``:
+    ``mcap`` (every message, ours) or ``ros2`` (a rosbag2 of the face's topics:
+    :mod:`nodes.recorder.ros2_bag`).
     ``announce`` (``papf record`` by hand): say which nodes of the namespace are alive, or
     that it waits for the stack, and when the first message came."""
     watch = RunEndWatch(node.keys.events) if close_on_run_ended else None
@@ -131,8 +134,9 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
     if run:
         meta["run_id"] = run   # only this run's samples are in it (Intake)
     intake = Intake(node)
-    with RunWriter(out, meta, compression=compression, flush_interval_s=flush_interval_s,
-                   force=force) as writer:
+    writer_cls = Ros2BagWriter if fmt == "ros2" else RunWriter
+    with writer_cls(out, meta, compression=compression, flush_interval_s=flush_interval_s,
+                    force=force) as writer:
         node.extra_health["recording"] = account(out, writer, intake, complete=False)
         sub = node.session.declare_subscriber(keys_expr, direct(intake.on_sample))
         try:
@@ -161,7 +165,10 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
                 sub.undeclare()
     node.log.info("closed %s: %d messages, %d bytes, %d channels", out, writer.stats.messages,
                   writer.stats.bytes, writer.stats.channels)
-    if writer.stats.dropped:
+    if writer.stats.dropped and fmt == "ros2":
+        node.log.info("%d messages not on the ROS 2 face (events, statuses…) left out of the "
+                      "rosbag2 (--format mcap keeps everything)", writer.stats.dropped)
+    elif writer.stats.dropped:
         node.log.warning("dropped %d messages on %d keys beyond %d channels", writer.stats.dropped,
                          writer.stats.dropped_keys, writer.stats.channels)
     if writer.dropped_by_key:
@@ -251,6 +258,9 @@ def add_recorder_args(parser: argparse.ArgumentParser, out_flag: bool = True) ->
                         help="key expression to record (default: <namespace>/**)")
     parser.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                         help="run metadata (world, planner, seed, ...), repeatable")
+    parser.add_argument("--format", choices=FORMATS, default="mcap",
+                        help="mcap (default: every message, ours) or ros2 (a rosbag2 directory "
+                             "of the ROS 2 face's topics: ros2 bag, RViz, papf report)")
     parser.add_argument("--compression", choices=sorted(COMPRESSIONS), default="zstd",
                         help="chunk compression (default: zstd)")
     parser.add_argument("--flush-interval", type=float, default=FLUSH_INTERVAL_S, metavar="S",
@@ -264,14 +274,18 @@ def main(args: argparse.Namespace) -> int:
     log = setup_logging(name, args.log_level)
     try:
         meta = parse_meta(args.meta)
-        check_output(args.out, force=args.force)   # before the bus: refuse at once
+        fmt = getattr(args, "format", "mcap")
+        if fmt == "ros2":   # before the bus: refuse at once
+            check_bag_dir(args.out, args.force)
+        else:
+            check_output(args.out, force=args.force)
         with open_node(name, args, log) as node:
             close = getattr(args, "close_on_run_ended", False)
             if close:
                 node.declare_publishers("events")   # up front: the one put must not be late
             record(node, args.out, args.keys or f"{args.namespace}/**", meta,
                    args.compression, args.flush_interval, close_on_run_ended=close,
-                   force=args.force, announce=not close)
+                   force=args.force, announce=not close, fmt=fmt)
             if close and not node.stop:   # the file is closed: say so, then wait to be stopped
                 node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=name,
                                              detail=str(args.out)))

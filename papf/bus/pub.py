@@ -50,14 +50,15 @@ def prepare(name: str, value: dict, keys: Keys, ros_type: str | None = None) -> 
 
 
 def publish(session, p: Prepared, ros: str, domain: int, times: int, rate_hz: float,
-            out: Callable[[str], None], stop: Callable[[], bool], duration_s: float = 0.0) -> int:
+            out: Callable[[str], None], stop: Callable[[], bool], duration_s: float = 0.0,
+            distro: str = "jazzy") -> int:
     """Put ``p`` ``times`` times (0: until stopped) at ``rate_hz``, for at most ``duration_s``
     (0: no limit); returns how many went out."""
     link = None
     if p.ros_topic is None:
         pub, key = session.declare_publisher(p.key_name), p.key_name
     else:
-        link = (RmwZenohLink(session, domain, ROS_NODE) if ros == "rmw_zenoh"
+        link = (RmwZenohLink(session, domain, ROS_NODE, distro=distro) if ros == "rmw_zenoh"
                 else BridgeLink(session))
         pub, key = link.publisher(p.ros_topic, p.typename), link.key(p.ros_topic, p.typename)
     out(f"publishing {p.typename} on {key}" + (f" at {rate_hz:g} Hz" if times != 1 else ""))

@@ -91,7 +91,7 @@ def _bag_info(args) -> int:
             info = {"file": args.file, "rosbag2": True, "duration_s": (last - first) / 1e9,
                     "topics": {t: {"type": m, "messages": n}
                                for t, (m, n) in bag.bag_topics().items()},
-                    "roles": asdict(topics), "as_our_keys": bag.counts()}
+                    "roles": asdict(bag.topics), "as_our_keys": bag.counts()}
     except ConfigError as exc:   # topics not the ROSbot's: still say what the bag holds
         info = _plain_bag(args.file)
         print_error("papf info", f"{exc} (papf report and replay need that)")

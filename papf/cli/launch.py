@@ -6,7 +6,15 @@ from __future__ import annotations
 import json
 
 from common.params import PORT, arg_type
-from common.ros_link import add_face_args, add_ros_args, cmd_vel_type, face_domain, ros_domain
+from common.ros_link import (
+    add_face_args,
+    add_ros_args,
+    cmd_vel_type,
+    face_distro,
+    face_domain,
+    ros_distro,
+    ros_domain,
+)
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from nodes.planner.registry import PLANNERS
 from papf.cli.options import add_port_range, use_ports
@@ -44,6 +52,8 @@ def register(sub) -> None:
                         "else tracker; none for the other planners)")
     p.add_argument("--record", metavar="F.mcap", help="record every message here")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
+    p.add_argument("--format", choices=("mcap", "ros2"), default="mcap",
+                   help="--record as mcap (default) or ros2 (a rosbag2 directory)")
     p.add_argument("--energy-model", choices=sorted(MODELS),
                    help=f"the live meter's model (default {DEFAULT_MODEL}, in every profile)")
     p.add_argument("--realtime", action="store_true",
@@ -93,6 +103,9 @@ def cmd_launch(args) -> int:
               "objects": args.objects, "ros": args.ros, "cmd_vel_type": args.cmd_vel_type,
               "ros_domain": domain, "ros_face_domain": face_domain(args),
               "ros_face": "1" if args.ros_face else None,
+              "ros_face_distro": face_distro(args) if args.ros_face else None,
+              "record_format": "ros2" if args.record and args.format == "ros2" else None,
+              "ros_distro": ros_distro(args) if args.ros == "rmw_zenoh" else None,
               "record_force": "1" if args.force else None}
     opt = LaunchOptions(args.profile, args.connect, args.listen, args.namespace, args.zenoh_config,
                         args.router_config, {k: v for k, v in values.items() if v is not None},

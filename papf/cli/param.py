@@ -47,14 +47,11 @@ def _usage(args) -> None:
 
 
 def _ask(session, key: str, request: dict) -> dict:
-    for reply in session.get(key, payload=json.dumps(request).encode(), timeout=ANSWER_S):
-        if reply.ok is not None:
-            try:
-                out = json.loads(reply.ok.payload.to_bytes())
-            except ValueError:
-                continue
-            if isinstance(out, dict) and isinstance(out.get("params"), dict):
-                return out
+    from common.param_query import ask
+
+    out = ask(session, key, request, ANSWER_S)
+    if out is not None:
+        return out
     raise ConfigError(f"no answer on {key} within {ANSWER_S:g} s: is the node running in this "
                       "namespace (papf launch / papf run), and may this identity query it?")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from common.params import PORT, SEED, TIMEOUT, arg_type
-from common.ros_link import add_face_args, face_domain
+from common.ros_link import add_face_args, face_distro, face_domain
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.options import (
     add_planner_settings,
@@ -29,6 +29,9 @@ def register(sub) -> None:
                    help="seed of all noise (default 0)")
     p.add_argument("--record", metavar="F.mcap", help="record every message to this MCAP file")
     p.add_argument("--force", action="store_true", help="replace the --record file if it exists")
+    p.add_argument("--format", choices=("mcap", "ros2"), default="mcap",
+                   help="--record as mcap (default: every message) or ros2 (a rosbag2 "
+                        "directory of the ROS 2 face's topics: ros2 bag play, papf report)")
     p.add_argument("--timeout", type=arg_type("--timeout", TIMEOUT), default=300.0, metavar="S",
                    help="sim-time limit in seconds (default 300)")
     p.add_argument("--realtime", action="store_true", help="pace sim time to the wall clock")
@@ -92,7 +95,8 @@ def run_config(args):
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      ros_face=face_domain(args), progress=None if not args.json else False,
                      link=args.link, robot_trace=args.robot_trace,
-                     robot_record=args.robot_record)
+                     robot_record=args.robot_record,
+                     ros_face_distro=face_distro(args), record_format=args.format)
 
 
 def cmd_run(args) -> int:

@@ -12,7 +12,7 @@ import argparse
 import sys
 
 from common.params import RATE_HZ, TIMEOUT, arg_type, integer, num
-from common.ros_link import add_ros_args, ros_domain
+from common.ros_link import add_ros_args, ros_distro, ros_domain
 from common.transport import StopRequested, add_zenoh_args
 from schemas import Keys
 
@@ -219,7 +219,7 @@ def cmd_topic_pub(args) -> int:
     stop = StopRequested()
     with _session(args) as s:
         publish(s, prepared, args.ros, domain, times, args.rate, _out, lambda: bool(stop),
-                duration_s=args.duration)
+                duration_s=args.duration, distro=ros_distro(args))
     return 130 if stop and times != 1 else 0
 
 

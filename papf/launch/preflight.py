@@ -18,7 +18,7 @@ import os
 import re
 from pathlib import Path
 
-from common.errors import ConfigError
+from common.errors import ConfigError, RecordingError
 from common.outfiles import OutputError, check_output
 from common.params import PORT, SEED, TIMEOUT, Spec, check_value
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, load_params
@@ -69,6 +69,18 @@ def record_path(path: str | None, force: bool = False) -> None:
         raise ConfigError(f"--record {path!r}: directory {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK):
         raise ConfigError(f"--record {path!r}: directory {str(parent)!r} is not writable")
+
+
+def bag_path(path: str | None, force: bool = False) -> None:
+    """A rosbag2 can be recorded at ``path`` (``--format ros2``): a new directory, or with
+    ``force`` an existing rosbag2 (:func:`nodes.recorder.ros2_bag.check_bag_dir`)."""
+    from nodes.recorder.ros2_bag import check_bag_dir
+
+    if path is not None:
+        try:
+            check_bag_dir(path, force)
+        except RecordingError as exc:
+            raise ConfigError(f"--record {exc}") from None
 
 
 def port_free(port: int | None) -> None:
@@ -223,7 +235,10 @@ def check_launch(opt, prof) -> None:
         planner = str(values.get("planner") or DEFAULT_PLANNER)
         planner_name(planner)
         planner_settings(planner, opt.planner_args)
-    record_path(values.get("record"), bool(values.get("record_force")))
+    if values.get("record_format") == "ros2":
+        bag_path(values.get("record"), bool(values.get("record_force")))
+    else:
+        record_path(values.get("record"), bool(values.get("record_force")))
     if values.get("world"):
         from worlds import load_world
 

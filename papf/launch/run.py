@@ -24,7 +24,7 @@ from papf.console.progress import RunProgress
 from papf.launch import portrange
 from papf.launch.fleet import FleetMeter, fleet_result, progress_figures
 from papf.launch.outcome import RunMonitor, RunResult
-from papf.launch.preflight import check_run
+from papf.launch.preflight import bag_path, check_run
 from papf.launch.profile import LaunchOptions, Resolved, load_profile, resolve
 from papf.launch.sequence import CHECK_S, COALESCE_S, STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use
@@ -59,6 +59,8 @@ class RunConfig:
     zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     ros_face: int | None = None        # the ROS 2 face's domain (nodes.ros_face); None: off
+    ros_face_distro: str | None = None  # the face's ROS 2 distro (jazzy, humble); None: jazzy
+    record_format: str = "mcap"        # --record as mcap (ours) or ros2 (a rosbag2 directory)
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
     link: str | None = None            # papf run --link PROFILE|SPEC (papf.launch.split)
     robot_trace: str | None = None     # --link: the emulated robot's command trace (JSON lines)
@@ -70,11 +72,13 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
     values = {"world": cfg.world, "planner": cfg.planner, "seed": cfg.seed,
               "energy_model": cfg.energy_model, "record": cfg.record,
               "record_force": "1" if cfg.force and cfg.record else None,
+              "record_format": "ros2" if cfg.record and cfg.record_format == "ros2" else None,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
               "objects": cfg.objects, "view": cfg.view,
               "ros_face": None if cfg.ros_face is None else "1",
-              "ros_face_domain": cfg.ros_face}
+              "ros_face_domain": cfg.ros_face,
+              "ros_face_distro": cfg.ros_face_distro if cfg.ros_face is not None else None}
     return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,
                          values={k: v for k, v in values.items() if v is not None},
                          planner_args=list(cfg.planner_args), timeout_s=cfg.timeout_s,
@@ -108,8 +112,12 @@ def preflight(cfg: RunConfig) -> World:
     ``papf run`` checks before it starts anything — and ``--dry-run`` too, so a dry run never
     prints a process list that the real run would refuse."""
     world = load_world(cfg.world)  # WorldError before anything starts
-    check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace, cfg.record,
-              cfg.planner_args, force=cfg.force, view=cfg.view)
+    bag = cfg.record is not None and cfg.record_format == "ros2"
+    if bag:   # a rosbag2 directory, checked as such (preflight.record_path checks files)
+        bag_path(cfg.record, cfg.force)
+    check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace,
+              None if bag else cfg.record, cfg.planner_args, force=cfg.force,
+              view=cfg.view)
     return world
 
 

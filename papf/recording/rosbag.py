@@ -37,10 +37,11 @@ class TopicMap:
     tf: str = "/tf"
 
     @classmethod
-    def parse(cls, text: str | None) -> TopicMap:
-        """``"odom=/odom,battery=/battery_state"`` (roles not named keep the ROSbot's name)."""
+    def parse(cls, text: str | None) -> TopicMap | None:
+        """``"odom=/odom,battery=/battery_state"`` (roles not named keep the ROSbot's name);
+        None when none is given: each bag then gets :meth:`for_bag`'s."""
         if not text:
-            return cls()
+            return None
         roles, given = [f.name for f in fields(cls)], {}
         for item in text.split(","):
             role, eq, topic = (s.strip() for s in item.partition("="))
@@ -54,6 +55,23 @@ class TopicMap:
         return replace(cls(), **given)
 
 
+    @classmethod
+    def for_bag(cls, have: dict[str, tuple[str, int]]) -> TopicMap:
+        """The names of a bag nobody named: the ROSbot's where the bag has them, else the
+        ROS 2 face's and ``papf export ros2``'s (:data:`FACE_NAMES`, e.g. ``/odom``) where it
+        has those with the role's type. So the stack's own bags read back without flags."""
+        given = {}
+        for role, names in FACE_NAMES.items():
+            default = getattr(cls(), role)
+            if default in have:
+                continue
+            found = [n for n in names if have.get(n, ("",))[0] == ROLE_TYPES[role]]
+            if found:
+                given[role] = found[0]
+        return replace(cls(), **given)
+
+
+FACE_NAMES = {"odom": ("/odom",)}   # role -> names the face and our export use instead
 ROLE_TYPES = {"odom": rc.ODOMETRY, "battery": rc.BATTERY_STATE, "cmd_vel": rc.TWIST,
               "scan": rc.LASER_SCAN, "tf": rc.TF_MESSAGE}
 REQUIRED = ("odom", "battery", "cmd_vel", "scan")
@@ -81,8 +99,28 @@ def is_rosbag(path: str | Path, topics: TopicMap | None = None) -> bool:
     if summary is None:
         return False
     cdr = {c.topic for c in summary.channels.values() if c.message_encoding == "cdr"}
-    odom = (topics or TopicMap()).odom
-    return bool(cdr) and ((p.parent / "metadata.yaml").is_file() or odom in cdr)
+    odoms = {topics.odom} if topics else {TopicMap().odom, *FACE_NAMES["odom"]}
+    return bool(cdr) and ((p.parent / "metadata.yaml").is_file() or bool(odoms & cdr))
+
+
+STACK_KEYS = ("world", "planner", "seed", "energy_model", "profile", "software_version")
+
+
+def stack_metadata(path: str | Path) -> dict[str, str]:
+    """What a bag of ours says about its run (``papf.*`` in ``custom_data`` of its
+    ``metadata.yaml``: world, planner, seed …; ``papf run --format ros2``, ``papf export
+    ros2``); {} for anyone else's bag or an unreadable file."""
+    import yaml
+
+    p = Path(path)
+    meta = (p if p.is_dir() else p.parent) / "metadata.yaml"
+    try:
+        info = yaml.safe_load(meta.read_text(encoding="utf-8"))["rosbag2_bagfile_information"]
+        custom = info.get("custom_data") or {}
+    except (OSError, ValueError, TypeError, KeyError, AttributeError, yaml.YAMLError):
+        return {}
+    return {k[5:]: str(v) for k, v in custom.items()
+            if isinstance(k, str) and k.startswith("papf.") and k[5:] in STACK_KEYS}
 
 
 def open_run(path: str | Path, topics: TopicMap | None = None) -> Recording | BagRecording:
@@ -127,17 +165,19 @@ class BagRecording:
     Stamps: a message's header stamp (the bag's receive time for ``/cmd_vel``, and for a
     topic whose header stamps are unset or more than a minute from the receive time: another
     clock), in ns since the bag's first stamp, so a bag's time starts near 0 like a run's.
-    ``--topics odom=/odom,battery=/battery_state`` maps another robot's names.
+    ``--topics odom=/odom,battery=/battery_state`` maps another robot's names; without it a
+    bag that has no ``/odometry/filtered`` but the face's ``/odom`` (``papf export ros2``,
+    ``--format ros2``) is read by those (:meth:`TopicMap.for_bag`).
     """
 
     def __init__(self, path: str | Path, topics: TopicMap | None = None):
         self.path = Path(path)
-        self.topics = topics or TopicMap()
         try:
             self._reader = AnyReader([self.path], default_typestore=rc.typestore())
             self._reader.open()
         except Exception as exc:   # rosbags raises its own errors for unreadable bags
             raise RecordingError(f"{self.path}: not a readable rosbag2 ({exc})") from None
+        self.topics = topics or TopicMap.for_bag(self.bag_topics())
         try:
             self.conns = self._connections()
             self._header_clock = {r: self._uses_header(c) for r, c in self.conns.items()}
@@ -146,7 +186,8 @@ class BagRecording:
             self.close()
             raise
         self.metadata = {"run": {"namespace": NS, "source": SOURCE, "planner": "robot",
-                                 "world": f"bag {self.path.name}", "bag": str(self.path)}}
+                                 "world": f"bag {self.path.name}", "bag": str(self.path),
+                                 **stack_metadata(self.path)}}
 
     def __enter__(self) -> BagRecording:
         return self

@@ -270,3 +270,34 @@ def test_lidar_source_reads_a_third_party_laserscan_over_rmw_zenoh(router, spawn
         assert r[300 // 2] == pytest.approx(3.0)
     finally:
         sub.undeclare()
+
+
+@pytest.mark.e2e
+def test_emulator_plays_a_humble_rosbot_on_rmw_zenoh(router, spawn, session):
+    """``--ros-distro humble``: rmw_zenoh's humble keys and tokens carry
+    ``TypeHashNotSupported`` where Jazzy has the RIHS01 hash (ros2/rmw_zenoh PR #388); the
+    emulator publishes odometry and takes /cmd_vel on them."""
+    keys = Keys("rmwhumble")
+    odom_key = f"{DOMAIN}/odometry/filtered/nav_msgs::msg::dds_::Odometry_/TypeHashNotSupported"
+    cmd_key = f"{DOMAIN}/cmd_vel/geometry_msgs::msg::dds_::Twist_/TypeHashNotSupported"
+    got = []
+    sub = session.declare_subscriber(odom_key, lambda s: got.append(
+        STORE.deserialize_cdr(s.payload.to_bytes(), ODOM)))
+    spawn("emulator", [sys.executable, "-m", "papf", "rosbot-emulator", "--connect", router,
+                       "--namespace", keys.ns, "--ros", "rmw_zenoh", "--ros-domain", str(DOMAIN),
+                       "--ros-distro", "humble"])
+    try:
+        assert not wait_alive(session, keys, ["rosbot_emulator"], 30.0)
+        tokens = [t for t in _tokens(session) if "/rosbot_emulator/" in t and "/NN/" not in t]
+        assert tokens and all(t.split("/")[-2] == "TypeHashNotSupported" for t in tokens), tokens
+        assert _wait(lambda: len(got) >= 5, 10.0)
+        cmd = STORE.types[TWIST](linear=STORE.types["geometry_msgs/msg/Vector3"](x=0.3, y=0.0, z=0.0),
+                                 angular=STORE.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0))
+        payload = bytes(STORE.serialize_cdr(cmd, TWIST))
+        for seq in range(1, 21):
+            session.put(cmd_key, payload, attachment=z_serialize(
+                (Int64(seq), Int64(time.time_ns()), bytes(16))).to_bytes())
+            time.sleep(0.05)
+        assert _wait(lambda: got[-1].pose.pose.position.x > 0.1, 5.0)
+    finally:
+        sub.undeclare()

@@ -106,8 +106,13 @@ def test_a_third_party_ros2_client_finds_decodes_and_steers_the_stack():
                for t in tokens)
     assert got["scan"][-1].header.frame_id == "laser" and len(got["scan"][-1].ranges) > 0
     assert got["odom"][-1].header.frame_id == "odom"
-    tf = got["tf"][-1].transforms[0]
+    tf = next(m.transforms[0] for m in reversed(got["tf"])
+              if m.transforms[0].header.frame_id == "odom")
     assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_link")
+    wheels = {t.child_frame_id for m in got["tf"] for t in m.transforms
+              if t.header.frame_id == "base_link"}
+    assert wheels == {f"{w}_wheel_link" for w in ("front_left", "front_right", "rear_left",
+                                                  "rear_right")}   # RViz turns the URDF's wheels
     result = json.loads(out.strip().splitlines()[-1])
     assert result["outcome"] == "reached", err[-2000:]
     assert result["path_length_m"] == pytest.approx(GOAL[0], abs=0.4)   # /goal_pose, not 5 m

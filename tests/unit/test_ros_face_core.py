@@ -76,8 +76,9 @@ def test_goal_pose_becomes_our_goal_keeping_the_runs_tolerance():
     core.on_message("odom", Odometry(stamp_ns=7, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     g = core.goal_from_pose(_pose(4.0, 2.0, ""))
     assert (g.x, g.y, g.tolerance, g.stamp_ns, g.auth) == (4.0, 2.0, 0.3, 7, "")
-    with pytest.raises(SchemaError, match="frame 'map'"):
-        core.goal_from_pose(_pose(1.0, 1.0, "map"))
+    assert core.goal_from_pose(_pose(1.0, 1.0, "map")).x == 1.0   # map -> odom: the identity
+    with pytest.raises(SchemaError, match="frame 'base_link'"):
+        core.goal_from_pose(_pose(1.0, 1.0, "base_link"))
     with pytest.raises(SchemaError, match="not finite"):
         core.goal_from_pose(_pose(math.nan, 1.0))
     with pytest.raises(SchemaError, match="not a CDR PoseStamped"):
@@ -95,7 +96,10 @@ def test_rviz_config_shows_every_face_topic():
     topics = {d["Topic"]["Value"] for d in manager["Displays"] if "Topic" in d}
     topics.add(next(d for d in manager["Displays"]
                     if d["Class"].endswith("RobotModel"))["Description Topic"]["Value"])
-    assert topics == {"/scan", "/odom", "/plan", "/markers", "/robot_description"}
+    assert topics == {"/scan", "/odom", "/plan", "/markers", "/robot_description", "/map"}
+    qos = {d["Topic"]["Value"]: d["Topic"] for d in manager["Displays"] if "Topic" in d}
+    assert qos["/scan"]["Reliability Policy"] == "Best Effort"            # sensor data
+    assert qos["/map"]["Durability Policy"] == "Transient Local"
     assert any(d["Class"].endswith("/TF") for d in manager["Displays"])   # /tf, /tf_static
     goal, = [t for t in manager["Tools"] if t["Class"].endswith("SetGoal")]
     assert goal["Topic"]["Value"] == "/goal_pose"
