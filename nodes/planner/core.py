@@ -182,6 +182,7 @@ class Planner:
         self._apf_for_l: dict[int, APFParams] = {}
         self.objects: tuple = ()        # latest obstacle tracks (strategies that use them)
         self.road = None                # the road of the run, once announced
+        self.passing = None             # nodes.planner.passing.Passing in a fleet, else None
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
@@ -262,6 +263,10 @@ class Planner:
         else:  # the planned velocity's component along the robot's heading (ours)
             v = max(0.0, plan.v_ref * math.cos(err))
         w = turn_rate(theta_ref, odom.yaw, apf)
+        if self.passing is not None and self.objects:   # a fleet: robots that pass each other
+            v_des = speed_ref(_norm(plan.force), 0.0, apf) if plan.v_ref is None else plan.v_ref
+            v, w = self.passing.adjust(odom.x, odom.y, odom.yaw, odom.v, theta_ref, v_des, v, w,
+                                       self.objects, apf)
         self.state, self.reason = "driving", ""
         compute_ns = time.perf_counter_ns() - t0
         return Twist(stamp_ns=t, v=v, w=w), lambda debug=True: (

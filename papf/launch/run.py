@@ -59,6 +59,7 @@ class RunConfig:
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
     ros_face: int | None = None        # the ROS 2 face's domain (nodes.ros_face); None: off
     objects: str | None = None         # none | truth | tracker; None: per planner (graph.objects_for)
+    passing: str | None = None         # a fleet's: orca | off; None: orca (profile._passing)
 
 
 def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
@@ -68,7 +69,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "record_force": "1" if cfg.force and cfg.record else None,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
-              "objects": cfg.objects, "view": cfg.view,
+              "objects": cfg.objects, "view": cfg.view, "passing": cfg.passing,
               "ros_face": None if cfg.ros_face is None else "1",
               "ros_face_domain": cfg.ros_face}
     return LaunchOptions(PROFILE, listen=[f"tcp/127.0.0.1:{port}"], namespace=cfg.namespace,

@@ -1,0 +1,66 @@
+"""The passing layer (nodes/planner/passing.py): the planner's command untouched without a
+neighbour, keep-right and ORCA with one, a fleet's run with it, the launcher's wiring."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nodes.planner.field import APFParams
+from nodes.planner.passing import Passing, PassingParams
+from nodes.planner.registry import make_planner
+from nodes.planner.road import Track
+from schemas.messages import Goal, Odometry, Scan
+
+APF = APFParams()
+ON = Passing(PassingParams(mode="orca"))
+
+
+def robot(x, y, yaw=0.0, v=0.0):
+    """Another ROSbot as the obstacle tracks carry it (chassis box, velocity)."""
+    return Track(x, y, yaw, v * math.cos(yaw), v * math.sin(yaw), 0.2, 0.235)
+
+
+def test_no_neighbour_in_range_leaves_the_command_untouched():
+    cmd = (0.0712, -0.31)
+    for tracks in ((), (robot(3.5, 0.0),), (robot(-2.0, -2.5),)):
+        assert ON.adjust(0.0, 0.0, 0.0, 0.1, 0.0, 0.1, *cmd, tracks, APF) == cmd
+    off = Passing(PassingParams(mode="off"))
+    assert off.adjust(0.0, 0.0, 0.0, 0.1, 0.0, 0.1, *cmd, (robot(0.5, 0.0, math.pi, 0.1),), APF) == cmd
+
+
+def test_head_on_both_keep_right_and_stay_apart():
+    """Two robots driving at each other turn to their own right, so they pass left side to
+    left side; a velocity that would reach the other within the time horizon is not taken."""
+    me, other = (0.0, 0.0, 0.0), (1.2, 0.0, math.pi)
+    v1, w1 = ON.adjust(*me, 0.1, 0.0, 0.1, 0.1, 0.0, (robot(*other, v=0.1),), APF)
+    v2, w2 = ON.adjust(*other, 0.1, math.pi, 0.1, 0.1, 0.0, (robot(*me, v=0.1),), APF)
+    assert w1 < 0 and w2 < 0                     # both turn clockwise: to their right
+    assert 0 <= v1 <= APF.v_max and 0 <= v2 <= APF.v_max
+
+
+def test_nobody_ahead_means_no_turn_to_the_right():
+    """A robot behind, going the same way, changes nothing of the heading asked."""
+    v, w = ON.adjust(0.0, 0.0, 0.0, 0.1, 0.0, 0.1, 0.1, 0.0, (robot(-1.0, 0.0, 0.0, 0.1),), APF)
+    assert w == pytest.approx(0.0, abs=1e-9) and v == pytest.approx(0.1, abs=1e-6)
+
+
+def test_a_robot_in_the_way_slows_or_steers_the_command():
+    """A robot standing 0.5 m ahead: the command no longer drives straight into it."""
+    v, w = ON.adjust(0.0, 0.0, 0.0, 0.1, 0.0, 0.1, 0.1, 0.0, (robot(0.5, 0.0),), APF)
+    assert w != 0.0 or v < 0.1
+
+
+def test_the_planner_core_applies_the_layer_only_with_tracks():
+    """One cycle of the planner core: the layer changes the command only when tracks are
+    near; without it (one robot) the command is the planner's, bit for bit."""
+    scan = Scan(stamp_ns=0, angle_min=-math.pi, angle_increment=2 * math.pi / 360, range_min=0.1,
+                range_max=10.0, ranges=np.full(360, np.inf, np.float32))
+    odom = Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.1, w=0.0)
+    plain, layered = make_planner("papf"), make_planner("papf")
+    layered.passing = ON
+    for p in (plain, layered):
+        p.set_goal(Goal(stamp_ns=0, x=5.0, y=0.0))
+    assert plain.step(scan, odom)[0] == layered.step(scan, odom)[0]
+    layered.set_objects([robot(0.8, 0.0, math.pi, 0.1)])
+    assert layered.step(scan, odom)[0] != plain.step(scan, odom)[0]
