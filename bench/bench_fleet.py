@@ -16,8 +16,16 @@ is watched on its own bus from the bench: between the first robot's ``sim/pose``
 ``--csv FILE --label L`` writes the rows labelled ``L`` (other labels kept). The machine's
 2 cores may be shared (other work): the 1-minute load average of each row is written with it.
 
+``--worlds W1,W2`` instead runs those worlds (robots that must pass each other: the packaged
+``fleet-*``) to their outcome, once per ``--passing`` mode (``off``: each planner alone;
+``orca``: the passing layer, nodes/planner/passing.py), and writes how many robots reached,
+collided, the closest approach, the longest robot's duration, x real time over the whole
+run (sim time over ``wall_time_s``) and the CPU split as above over the whole run.
+
     papf bench fleet [--robots 1,2,4,8] [--people 0,10,50] [--planner apf]
                      [--short-s 10] [--long-s 40] [--csv docs/data/fleet-scale.csv --label L]
+    papf bench fleet --worlds fleet-ring-16,fleet-junction [--passing off,orca] [--planner papf]
+                     [--timeout 120] [--csv docs/data/fleet-passing.csv --label L]
 """
 
 from __future__ import annotations
@@ -41,14 +49,20 @@ from bench.proc_cpu import TreeCPU  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import zenoh_config  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
+from papf.launch.profile import PASSING  # noqa: E402
 from papf.launch.supervisor import free_port, wait_port  # noqa: E402
 from schemas import Odometry  # noqa: E402
+from worlds import load_world  # noqa: E402
 
 PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
          "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
 FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_wall",
           "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
           "cpu_share_of_2_cores", "collisions", "load_avg_1min")
+PASSING_FIELDS = ("label", "world", "robots", "planner", "passing", "reached", "collisions",
+                  "min_separation_m", "duration_s", "sim_s", "wall_s", "sim_over_wall",
+                  "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
+                  "load_avg_1min")
 CYCLE_S = 0.1     # [s] the lockstep cycle: one scan, one command per robot
 LANE_M = 1.2      # [m] between the robots' lanes
 
@@ -136,20 +150,77 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
             "collisions": result["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
 
 
+def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dict:
+    """One fleet world to its outcome with the passing layer ``passing``: the row."""
+    robots = len(load_world(world).robots)
+    load = os.getloadavg()[0]
+    with TreeCPU() as tree:
+        proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", world,
+                                 "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
+                                 "--passing", passing, "--port", str(free_port())],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        out, err = proc.communicate(timeout=max(900.0, timeout_s * 30))
+        cpu = cpu_by_kind(tree)
+    lines = [ln for ln in out.splitlines() if ln.startswith("{")]
+    if not lines:
+        raise SystemExit(f"bench fleet: {world} --passing {passing}: no JSON (exit "
+                         f"{proc.returncode}): {err.strip().splitlines()[-1:]}")
+    r = json.loads(lines[-1])
+    sim, wall = r["sim_time_s"], r["wall_time_s"]
+    cycles = robots * sim / CYCLE_S
+    return {"world": world, "robots": robots, "planner": planner, "passing": passing,
+            "reached": sum(x["outcome"] == "reached" for x in r["robots"]),
+            "collisions": r["collisions"], "min_separation_m": r["min_separation_m"],
+            "duration_s": r["duration_s"], "sim_s": sim, "wall_s": round(wall, 2),
+            "sim_over_wall": round(sim / wall, 2) if wall > 0 else None,
+            "cpu_ms_per_robot_cycle": round(cpu["total"] / cycles * 1e3, 2) if cycles else None,
+            **{f"{col}_ms": round(cpu[col] / cycles * 1e3, 2) if cycles else None
+               for col in PARTS.values()},
+            "load_avg_1min": round(load, 1)}
+
+
+def main_worlds(args) -> None:
+    """``--worlds``: each world once per ``--passing`` mode, to its outcome (module doc)."""
+    rows = []
+    for world in [w for w in args.worlds.split(",") if w]:
+        for passing in [m for m in args.passing.split(",") if m]:
+            row = outcome_row(world, args.planner or one_with_role("papf-proposed"), passing,
+                              args.timeout)
+            print(json.dumps(row), flush=True)
+            rows.append({"label": args.label or "", **row})
+    if args.csv:
+        replace_label(args.csv, PASSING_FIELDS, args.label, rows)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(prog="papf bench fleet",
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
     parser.add_argument("--people", default="0,10,50", help="people counts")
     baseline = one_with_role("papf-baseline")
-    parser.add_argument("--planner", default=baseline, help=f"every robot's planner ({baseline})")
+    parser.add_argument("--planner", help=f"every robot's planner ({baseline}; with --worlds "
+                        f"{one_with_role('papf-proposed')})")
     parser.add_argument("--short-s", type=float, default=10.0, help="sim s of the short run")
     parser.add_argument("--long-s", type=float, default=40.0, help="sim s of the long run")
     parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     parser.add_argument("--label", help="the rows' label in --csv")
+    parser.add_argument("--worlds", help="fleet worlds to their outcome instead (module doc)")
+    parser.add_argument("--passing", default="off,orca", help="with --worlds: passing modes")
+    parser.add_argument("--timeout", type=float, default=120.0,
+                        help="with --worlds: sim seconds at most (120)")
     args = parser.parse_args()
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")
+    if args.worlds:
+        bad = [m for m in args.passing.split(",") if m not in PASSING]
+        if bad or not 0 < args.timeout <= 3600:
+            parser.error(f"--passing takes {','.join(PASSING)}; --timeout in (0, 3600] s")
+        for world in args.worlds.split(","):
+            if world:
+                load_world(world)   # a bad name: one line, before any run
+        main_worlds(args)
+        return
+    args.planner = args.planner or baseline
     try:
         robot_counts = [int(v) for v in args.robots.split(",") if v]
         people_counts = [int(v) for v in args.people.split(",") if v]

@@ -53,6 +53,7 @@ class PassingParams:
     mode: str = "off"              # off | orca
     range_m: float = 3.0           # [m] neighbours within this distance (centre to centre)
     max_neighbors: int = 10        # [-] nearest ones in ORCA
+    max_agent_radius_m: float = 1.0  # [m] a track wider than this is not an agent (a wall)
     time_horizon_s: float = 4.0    # [s] ORCA's tau: velocities safe for this long
     margin_m: float = 0.05         # [m] added to our disc: the tracking error allowed (NH-ORCA)
     keep_right_deg: float = 30.0   # [deg] the turn to the right when someone is ahead, closing
@@ -67,11 +68,14 @@ class Passing:
         self.params = params or PassingParams()
 
     def neighbours(self, x: float, y: float, tracks) -> list:
-        """The tracks within ``range_m`` of (x, y), nearest first, at most ``max_neighbors``."""
-        rng = self.params.range_m
-        near = sorted(((math.hypot(t.x - x, t.y - y), k, t) for k, t in enumerate(tracks)),
-                      key=lambda e: (e[0], e[1]))
-        return [t for d, _, t in near if d <= rng][: self.params.max_neighbors]
+        """The agents among ``tracks`` within ``range_m`` of (x, y), nearest first, at most
+        ``max_neighbors``. An agent is a track whose circumscribed disc
+        (:func:`agent_radius`) is at most ``max_agent_radius_m`` (a robot, a person, a small
+        obstacle); a wall or a road's car is left to the planner."""
+        prm = self.params
+        near = sorted(((math.hypot(t.x - x, t.y - y), k, t) for k, t in enumerate(tracks)
+                       if agent_radius(t) <= prm.max_agent_radius_m), key=lambda e: (e[0], e[1]))
+        return [t for d, _, t in near if d <= prm.range_m][: prm.max_neighbors]
 
     def adjust(self, x: float, y: float, yaw: float, v_now: float, theta_ref: float,
                v_des: float, v: float, w: float, tracks, apf: APFParams) -> tuple[float, float]:
@@ -112,6 +116,15 @@ class Passing:
         return False
 
 
+def agent_radius(track) -> float:
+    """[m] the disc ORCA gives a track: its box's circumscribed circle (a person's disc comes
+    as a square of its diameter: 1.41 x its radius, on the safe side); a track without a
+    size is a ROSbot."""
+    if track.length > 0 or track.width > 0:
+        return 0.5 * math.hypot(track.length, track.width)
+    return FOOTPRINT_RADIUS_M
+
+
 def _orca(x: float, y: float, vel, pref, near, radius: float, max_speed: float,
           prm: PassingParams) -> tuple[float, float]:
     """ORCA's new velocity of the robot at (x, y) among ``near`` (RVO2 one step, ``pyrvo``)."""
@@ -124,8 +137,8 @@ def _orca(x: float, y: float, vel, pref, near, radius: float, max_speed: float,
                   (float(vel[0]), float(vel[1])))
     sim.set_agent_pref_velocity(0, (float(pref[0]), float(pref[1])))
     for k, t in enumerate(near, start=1):
-        r = 0.5 * math.hypot(t.length, t.width) if t.length > 0 or t.width > 0 else FOOTPRINT_RADIUS_M
-        sim.add_agent((float(t.x), float(t.y)), prm.range_m, prm.max_neighbors, tau, tau, r,
+        sim.add_agent((float(t.x), float(t.y)), prm.range_m, prm.max_neighbors, tau, tau,
+                      agent_radius(t),
                       EXTERNAL_MAX_SPEED_M_S, (float(t.vx), float(t.vy)))
         sim.set_agent_pref_velocity(k, (float(t.vx), float(t.vy)))
     sim.do_step()

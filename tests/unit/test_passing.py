@@ -64,3 +64,13 @@ def test_the_planner_core_applies_the_layer_only_with_tracks():
     assert plain.step(scan, odom)[0] == layered.step(scan, odom)[0]
     layered.set_objects([robot(0.8, 0.0, math.pi, 0.1)])
     assert layered.step(scan, odom)[0] != plain.step(scan, odom)[0]
+
+
+def test_a_wall_or_a_car_is_no_agent():
+    """A long track (a wall of the truth objects, a road's car) is left to the planner: only
+    robots, people and small obstacles are ORCA's neighbours."""
+    wall = Track(1.5, 1.0, 0.0, 0.0, 0.0, 5.0, 0.05)
+    person = Track(1.0, -0.5, 0.0, 0.0, 0.0, 0.6, 0.6)
+    assert ON.neighbours(0.0, 0.0, (wall, person, robot(0.5, 0.5))) == [robot(0.5, 0.5), person]
+    cmd = (0.0712, -0.31)
+    assert ON.adjust(0.0, 0.0, 0.0, 0.1, 0.0, 0.1, *cmd, (wall,), APF) == cmd
