@@ -53,6 +53,7 @@ from papf.launch.profile import PASSING  # noqa: E402
 from papf.launch.supervisor import free_port, wait_port  # noqa: E402
 from schemas import Odometry  # noqa: E402
 from worlds import load_world  # noqa: E402
+from worlds.fleet import MAX_PEOPLE, MAX_ROBOTS  # noqa: E402
 
 PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
          "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
@@ -106,7 +107,8 @@ def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
     return out
 
 
-def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float) -> dict:
+def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float,
+            passing: str | None = None) -> dict:
     """One ``papf run --json``, watched on its bus: the wall time and CPU between the first
     robot's pose samples at ``short_s`` and at ``long_s`` of sim time (module doc)."""
     port = free_port()
@@ -114,7 +116,8 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
     with TreeCPU() as tree:
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", str(world),
                                  "--planner", planner, "--timeout", f"{long_s + 0.5:g}",
-                                 "--json", "--continue-on-collision", "--port", str(port)],
+                                 "--json", "--continue-on-collision", "--port", str(port),
+                                 *(["--passing", passing] if passing else [])],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             if not wait_port(port, 60.0):
@@ -192,7 +195,8 @@ def main_worlds(args) -> None:
         replace_label(args.csv, PASSING_FIELDS, args.label, rows)
 
 
-def main() -> None:
+def parse(argv=None) -> argparse.Namespace:
+    """The options (module doc); a usage error exits 2 in one line."""
     parser = argparse.ArgumentParser(prog="papf bench fleet",
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
@@ -205,43 +209,56 @@ def main() -> None:
     parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     parser.add_argument("--label", help="the rows' label in --csv")
     parser.add_argument("--worlds", help="fleet worlds to their outcome instead (module doc)")
-    parser.add_argument("--passing", default="off,orca", help="with --worlds: passing modes")
+    parser.add_argument("--passing", help="the passing layer: with --worlds the modes to compare "
+                        "(default off,orca), else the one of every run (default the run's: orca "
+                        "with two or more robots)")
     parser.add_argument("--timeout", type=float, default=120.0,
                         help="with --worlds: sim seconds at most (120)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")
     if args.worlds:
+        args.passing = args.passing or ",".join(reversed(PASSING))
         bad = [m for m in args.passing.split(",") if m not in PASSING]
         if bad or not 0 < args.timeout <= 3600:
             parser.error(f"--passing takes {','.join(PASSING)}; --timeout in (0, 3600] s")
         for world in args.worlds.split(","):
             if world:
                 load_world(world)   # a bad name: one line, before any run
-        main_worlds(args)
-        return
+        return args
     args.planner = args.planner or baseline
+    if args.passing not in (None, *PASSING):
+        parser.error(f"--passing takes one of {', '.join(PASSING)}")
     try:
-        robot_counts = [int(v) for v in args.robots.split(",") if v]
-        people_counts = [int(v) for v in args.people.split(",") if v]
+        args.robot_counts = [int(v) for v in args.robots.split(",") if v]
+        args.people_counts = [int(v) for v in args.people.split(",") if v]
     except ValueError:
         parser.error("--robots and --people are comma-separated integers, e.g. 1,2,4,8")
-    if not all(1 <= r <= 16 for r in robot_counts) or not all(0 <= p <= 200 for p in people_counts):
-        parser.error("robots in 1..16, people in 0..200 (the world format's limits)")
+    if not (all(1 <= r <= MAX_ROBOTS for r in args.robot_counts)
+            and all(0 <= p <= MAX_PEOPLE for p in args.people_counts)):
+        parser.error(f"robots in 1..{MAX_ROBOTS}, people in 0..{MAX_PEOPLE} (the world format's limits)")
     if not 0 < args.short_s < args.long_s:
         parser.error("need 0 < --short-s < --long-s")
+    return args
+
+
+def main(argv=None) -> None:
+    args = parse(argv)
+    if args.worlds:
+        main_worlds(args)
+        return
     rows = []
     with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
-        for people in people_counts:
-            for robots in robot_counts:
+        for people in args.people_counts:
+            for robots in args.robot_counts:
                 world = fleet_world(Path(tmp), robots, people)
                 row = {"robots": robots, "people": people, "planner": args.planner,
-                       **measure(world, robots, args.planner, args.short_s, args.long_s)}
+                       **measure(world, robots, args.planner, args.short_s, args.long_s,
+                                 args.passing)}
                 print(json.dumps(row), flush=True)
                 rows.append({"label": args.label or "", **row})
     if args.csv:
         replace_label(args.csv, FIELDS, args.label, rows)
-
 
 if __name__ == "__main__":
     main()

@@ -11,7 +11,8 @@ is left alone unless ``--force``), so each layout is a formula and not hand-type
   each to the opposite side (the classic reciprocal-avoidance test, van den Berg et al.
   2011): every path crosses the centre at once;
 - ``fleet-junction``: two 2 m wide corridors cross; two robots on each arm's centre line
-  drive straight across to the opposite arm (8 robots, four streams meeting).
+  drive straight across to the opposite arm, the first to its far end, the second behind it
+  (8 robots, four streams meeting; 4.8 m each, 48 s at PAPF's 0.1 m/s).
 
 ``fleet-corridor-swap`` (two robots in a corridor, each on its right half) is older and
 hand-written.
@@ -25,7 +26,7 @@ from pathlib import Path
 
 RING_RADIUS_M = 3.0      # [m] the ring's radius (a 6 m ring)
 SQUARE_HALF_M = 2.0      # [m] half side of fleet-swap-4's square
-ARM_M = 6.0              # [m] a junction arm's length from the centre
+ARM_M = 4.0              # [m] a junction arm's length from the centre
 HALF_WIDTH_M = 1.0       # [m] half the corridors' width
 WALL_M = 0.1             # [m] wall thickness
 
@@ -66,12 +67,12 @@ def swap_4(h: float = SQUARE_HALF_M) -> str:
 def junction(arm: float = ARM_M, half: float = HALF_WIDTH_M) -> str:
     """A crossroads of two corridors; two robots per arm on its centre line, going across."""
     rows, k = [], 0
+    near, far = arm - 2.2, arm - 1.0                    # [m] from the centre
     for a in range(4):                                  # east, north, west, south arms
         ux, uy = round(math.cos(a * math.pi / 2)), round(math.sin(a * math.pi / 2))
-        for d in (arm - 1.0, arm - 2.2):                # the first, then one behind it
+        for d, g in ((near, far), (far, near)):         # the first goes farther, the second follows
             k += 1
-            rows.append(_robot(f"r{k}", ux * d, uy * d, math.atan2(-uy, -ux),
-                               -ux * (arm - 1.0), -uy * (arm - 1.0)))
+            rows.append(_robot(f"r{k}", ux * d, uy * d, math.atan2(-uy, -ux), -ux * g, -uy * g))
     for sx in (-1, 1):                                  # the four corners' walls
         for sy in (-1, 1):
             corner = (sx * half, sy * half)
