@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -87,6 +88,19 @@ def fleet_world(folder: Path, robots: int, people: int) -> Path:
     return path
 
 
+def stop(proc: subprocess.Popen) -> None:
+    """End a ``papf run`` that is still going: SIGINT first, so the launcher stops its nodes
+    (a SIGKILL would leave them running), then SIGKILL after 30 s."""
+    if proc.poll() is not None:
+        return
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
 def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
     """CPU seconds so far of the run's processes (the bench's own excluded): per
     :data:`PARTS` column, and ``total`` of them all (router and any other process too)."""
@@ -134,9 +148,7 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
                 out, err = proc.communicate(timeout=max(600.0, long_s * 20))
                 sub.undeclare()
         finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+            stop(proc)
     if set(marks) != {"a", "b"}:
         raise SystemExit(f"{world.name}: the run never reached {long_s:g} s of sim time: "
                          f"{(out.strip().splitlines() or [err.strip()[-300:]])[-1][:300]}")
@@ -162,7 +174,10 @@ def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dic
                                  "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
                                  "--passing", passing, "--port", str(free_port())],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        out, err = proc.communicate(timeout=max(900.0, timeout_s * 30))
+        try:
+            out, err = proc.communicate(timeout=max(900.0, timeout_s * 30))
+        finally:
+            stop(proc)
         cpu = cpu_by_kind(tree)
     lines = [ln for ln in out.splitlines() if ln.startswith("{")]
     if not lines:

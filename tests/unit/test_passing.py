@@ -74,3 +74,44 @@ def test_a_wall_or_a_car_is_no_agent():
     assert ON.neighbours(0.0, 0.0, (wall, person, robot(0.5, 0.5))) == [robot(0.5, 0.5), person]
     cmd = (0.0712, -0.31)
     assert ON.adjust(0.0, 0.0, 0.0, 0.1, 0.0, 0.1, *cmd, (wall,), APF) == cmd
+
+
+def _planner_argv(world, *extra):
+    from papf.launch.profile import LaunchOptions, load_profile, resolve
+
+    opt = LaunchOptions("sim", values={"world": world, "planner": "papf", **dict(extra)})
+    return {p.name: p.argv for p in resolve(load_profile("sim"), opt).processes
+            if p.name.endswith("planner") or p.name.endswith("lidar_sim")}
+
+
+def test_a_fleet_passes_by_default_one_robot_never_unless_asked():
+    fleet = _planner_argv("fleet-swap")
+    assert all("--passing" in a and "--objects" in a for n, a in fleet.items() if n.endswith("planner"))
+    assert all("--truth-objects" in a for n, a in fleet.items() if n.endswith("lidar_sim"))
+    off = _planner_argv("fleet-swap", ("passing", "off"))
+    assert not any("--passing" in a or "--objects" in a for a in off.values())
+    one = _planner_argv("energy")
+    assert not any("--passing" in a or "--objects" in a for a in one.values())
+    asked = _planner_argv("energy", ("passing", "orca"))
+    assert "--passing" in asked["planner"] and "--objects" in asked["planner"]
+
+
+def test_passing_without_tracks_is_refused_before_anything_starts():
+    from common.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="--passing orca needs"):
+        _planner_argv("fleet-swap", ("objects", "none"))
+
+
+def test_offline_head_on_swap_passes_wider_with_the_layer():
+    """papf plan of fleet-swap (two robots exactly head-on): both reach without a contact
+    either way; with the layer they keep well apart (keep right, ORCA), alone they brush."""
+    from papf.offline.run import simulate
+
+    runs = {m: simulate("fleet-swap", "papf", max_time_s=90, passing=m).crowd["robots"]
+            for m in ("off", "orca")}
+    for robots in runs.values():
+        assert [r["outcome"] for r in robots] == ["reached", "reached"]
+        assert sum(r["collisions"] for r in robots) == 0
+    sep = {m: min(r["min_robot_separation_m"] for r in robots) for m, robots in runs.items()}
+    assert sep["orca"] > 0.5 > sep["off"]
