@@ -26,6 +26,10 @@ run (sim time over ``wall_time_s``) and the CPU split as above over the whole ru
                      [--short-s 10] [--long-s 40] [--csv docs/data/fleet-scale.csv --label L]
     papf bench fleet --worlds fleet-ring-16,fleet-junction [--passing off,orca] [--planner papf]
                      [--timeout 120] [--csv docs/data/fleet-passing.csv --label L]
+    papf bench fleet --driver-split 8,16 [--long-s 20] [--csv F --label L]
+
+``--driver-split R1,R2`` splits the sim driver's own CPU per robot-cycle (physics, tyre
+forces, contacts, command gates, messages) in-process: :mod:`bench.fleet_driver`.
 """
 
 from __future__ import annotations
@@ -229,6 +233,8 @@ def parse(argv=None) -> argparse.Namespace:
                         "with two or more robots)")
     parser.add_argument("--timeout", type=float, default=120.0,
                         help="with --worlds: sim seconds at most (120)")
+    parser.add_argument("--driver-split", metavar="R1,R2",
+                        help="robot counts: the sim driver's CPU split in-process instead")
     args = parser.parse_args(argv)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")
@@ -245,7 +251,7 @@ def parse(argv=None) -> argparse.Namespace:
     if args.passing not in (None, *PASSING):
         parser.error(f"--passing takes one of {', '.join(PASSING)}")
     try:
-        args.robot_counts = [int(v) for v in args.robots.split(",") if v]
+        args.robot_counts = [int(v) for v in (args.driver_split or args.robots).split(",") if v]
         args.people_counts = [int(v) for v in args.people.split(",") if v]
     except ValueError:
         parser.error("--robots and --people are comma-separated integers, e.g. 1,2,4,8")
@@ -257,10 +263,28 @@ def parse(argv=None) -> argparse.Namespace:
     return args
 
 
+def main_split(args) -> None:
+    """``--driver-split``: the driver's CPU split per robot count (bench.fleet_driver)."""
+    from bench.fleet_driver import SPLIT_FIELDS, split
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
+        for robots in args.robot_counts:
+            row = {**split(fleet_world(Path(tmp), robots, 0), args.long_s),
+                   "load_avg_1min": round(os.getloadavg()[0], 1)}
+            print(json.dumps(row), flush=True)
+            rows.append({"label": args.label or "", **row})
+    if args.csv:
+        replace_label(args.csv, SPLIT_FIELDS, args.label, rows)
+
+
 def main(argv=None) -> None:
     args = parse(argv)
     if args.worlds:
         main_worlds(args)
+        return
+    if args.driver_split:
+        main_split(args)
         return
     rows = []
     with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
