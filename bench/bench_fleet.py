@@ -51,6 +51,7 @@ import zenoh  # noqa: E402
 
 from bench.csvrows import replace_label  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
+from common.errors import PapfError  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import zenoh_config  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
@@ -243,9 +244,11 @@ def parse(argv=None) -> argparse.Namespace:
         bad = [m for m in args.passing.split(",") if m not in PASSING]
         if bad or not 0 < args.timeout <= 3600:
             parser.error(f"--passing takes {','.join(PASSING)}; --timeout in (0, 3600] s")
-        for world in args.worlds.split(","):
-            if world:
+        try:
+            for world in [w for w in args.worlds.split(",") if w]:
                 load_world(world)   # a bad name: one line, before any run
+        except PapfError as exc:
+            parser.error(str(exc))
         return args
     args.planner = args.planner or baseline
     if args.passing not in (None, *PASSING):
