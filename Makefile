@@ -6,7 +6,7 @@ PY      = $(VENV)/bin/python
 WORLD  ?= energy
 PLANNER ?= papf
 
-.PHONY: demo test lint coverage setup clean docs docs-check
+.PHONY: demo test test-slow lint coverage setup clean docs docs-check
 setup: $(VENV)/.installed
 
 $(VENV)/.installed: pyproject.toml
@@ -36,8 +36,14 @@ else
 	$(VENV)/bin/papf run --world $(WORLD) --planner $(PLANNER) --realtime --view $(DEMO_PORTS)
 endif
 
+# The tests on parallel workers (pytest-xdist; each worker its own ports and runtime dir,
+# tests/conftest.py), the slow tier left out: `make test-slow` runs it (CI does, second).
+TEST_WORKERS ?= 4
 test: setup
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m "not slow"
+
+test-slow: setup   # the slow tier: long end-to-end cases (marker `slow`), CI's second step
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m slow
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -16,14 +16,28 @@ is watched on its own bus from the bench: between the first robot's ``sim/pose``
 ``--csv FILE --label L`` writes the rows labelled ``L`` (other labels kept). The machine's
 2 cores may be shared (other work): the 1-minute load average of each row is written with it.
 
+``--worlds W1,W2`` instead runs those worlds (robots that must pass each other: the packaged
+``fleet-*``) to their outcome, once per ``--passing`` mode (``off``: each planner alone;
+``orca``: the passing layer, nodes/planner/passing.py), and writes how many robots reached,
+collided, the closest approach, the longest robot's duration, x real time over the whole
+run (sim time over ``wall_time_s``) and the CPU split as above over the whole run.
+
     papf bench fleet [--robots 1,2,4,8] [--people 0,10,50] [--planner apf]
                      [--short-s 10] [--long-s 40] [--csv docs/data/fleet-scale.csv --label L]
+    papf bench fleet --worlds fleet-ring-16,fleet-junction [--passing off,orca] [--planner papf]
+                     [--timeout 120] [--csv docs/data/fleet-passing.csv --label L]
+    papf bench fleet --driver-split 8,16 [--long-s 20] [--csv F --label L]
+
+``--driver-split R1,R2`` splits the sim driver's own CPU per robot-cycle (physics, tyre
+forces, contacts, command gates, messages) in-process: :mod:`bench.fleet_driver`.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -39,17 +53,25 @@ import zenoh  # noqa: E402
 
 from bench.csvrows import replace_label  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
+from common.errors import PapfError  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import zenoh_config  # noqa: E402
 from nodes.planner.registry import one_with_role  # noqa: E402
+from papf.launch.profile import PASSING  # noqa: E402
 from papf.launch.supervisor import free_port, wait_port  # noqa: E402
 from schemas import Odometry  # noqa: E402
+from worlds import load_world  # noqa: E402
+from worlds.fleet import MAX_PEOPLE, MAX_ROBOTS  # noqa: E402
 
 PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
          "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
 FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_wall",
           "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
           "cpu_share_of_2_cores", "collisions", "load_avg_1min")
+PASSING_FIELDS = ("label", "world", "robots", "planner", "passing", "reached", "collisions",
+                  "min_separation_m", "duration_s", "sim_s", "wall_s", "sim_over_wall",
+                  "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
+                  "load_avg_1min")
 CYCLE_S = 0.1     # [s] the lockstep cycle: one scan, one command per robot
 LANE_M = 1.2      # [m] between the robots' lanes
 
@@ -73,6 +95,19 @@ def fleet_world(folder: Path, robots: int, people: int) -> Path:
     return path
 
 
+def stop(proc: subprocess.Popen) -> None:
+    """End a ``papf run`` that is still going: SIGINT first, so the launcher stops its nodes
+    (a SIGKILL would leave them running), then SIGKILL after 30 s."""
+    if proc.poll() is not None:
+        return
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
 def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
     """CPU seconds so far of the run's processes (the bench's own excluded): per
     :data:`PARTS` column, and ``total`` of them all (router and any other process too)."""
@@ -93,7 +128,8 @@ def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
     return out
 
 
-def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float) -> dict:
+def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float,
+            passing: str | None = None) -> dict:
     """One ``papf run --json``, watched on its bus: the wall time and CPU between the first
     robot's pose samples at ``short_s`` and at ``long_s`` of sim time (module doc)."""
     port = free_port()
@@ -101,7 +137,8 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
     with TreeCPU() as tree:
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", str(world),
                                  "--planner", planner, "--timeout", f"{long_s + 0.5:g}",
-                                 "--json", "--continue-on-collision", "--port", str(port)],
+                                 "--json", "--continue-on-collision", "--port", str(port),
+                                 *(["--passing", passing] if passing else [])],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             if not wait_port(port, 60.0):
@@ -118,9 +155,7 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
                 out, err = proc.communicate(timeout=max(600.0, long_s * 20))
                 sub.undeclare()
         finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+            stop(proc)
     if set(marks) != {"a", "b"}:
         raise SystemExit(f"{world.name}: the run never reached {long_s:g} s of sim time: "
                          f"{(out.strip().splitlines() or [err.strip()[-300:]])[-1][:300]}")
@@ -137,41 +172,137 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
             "collisions": result["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
 
 
-def main() -> None:
+def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dict:
+    """One fleet world to its outcome with the passing layer ``passing``: the row."""
+    robots = len(load_world(world).robots)
+    load = os.getloadavg()[0]
+    with TreeCPU() as tree:
+        proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", world,
+                                 "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
+                                 "--passing", passing, "--port", str(free_port())],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            out, err = proc.communicate(timeout=max(900.0, timeout_s * 30))
+        finally:
+            stop(proc)
+        cpu = cpu_by_kind(tree)
+    lines = [ln for ln in out.splitlines() if ln.startswith("{")]
+    if not lines:
+        raise SystemExit(f"bench fleet: {world} --passing {passing}: no JSON (exit "
+                         f"{proc.returncode}): {err.strip().splitlines()[-1:]}")
+    r = json.loads(lines[-1])
+    sim, wall = r["sim_time_s"], r["wall_time_s"]
+    cycles = robots * sim / CYCLE_S
+    return {"world": world, "robots": robots, "planner": planner, "passing": passing,
+            "reached": sum(x["outcome"] == "reached" for x in r["robots"]),
+            "collisions": r["collisions"], "min_separation_m": r["min_separation_m"],
+            "duration_s": r["duration_s"], "sim_s": sim, "wall_s": round(wall, 2),
+            "sim_over_wall": round(sim / wall, 2) if wall > 0 else None,
+            "cpu_ms_per_robot_cycle": round(cpu["total"] / cycles * 1e3, 2) if cycles else None,
+            **{f"{col}_ms": round(cpu[col] / cycles * 1e3, 2) if cycles else None
+               for col in PARTS.values()},
+            "load_avg_1min": round(load, 1)}
+
+
+def main_worlds(args) -> None:
+    """``--worlds``: each world once per ``--passing`` mode, to its outcome (module doc)."""
+    rows = []
+    for world in [w for w in args.worlds.split(",") if w]:
+        for passing in [m for m in args.passing.split(",") if m]:
+            row = outcome_row(world, args.planner or one_with_role("papf-proposed"), passing,
+                              args.timeout)
+            print(json.dumps(row), flush=True)
+            rows.append({"label": args.label or "", **row})
+    if args.csv:
+        replace_label(args.csv, PASSING_FIELDS, args.label, rows)
+
+
+def parse(argv=None) -> argparse.Namespace:
+    """The options (module doc); a usage error exits 2 in one line."""
     parser = ArgumentParser(prog="papf bench fleet",
                                      description=plain(__doc__.splitlines()[0]))
     parser.add_argument("--robots", default="1,2,4,8", help="robot counts")
     parser.add_argument("--people", default="0,10,50", help="people counts")
     baseline = one_with_role("papf-baseline")
-    parser.add_argument("--planner", default=baseline, help=f"every robot's planner ({baseline})")
+    parser.add_argument("--planner", help=f"every robot's planner ({baseline}; with --worlds "
+                        f"{one_with_role('papf-proposed')})")
     parser.add_argument("--short-s", type=float, default=10.0, help="sim s of the short run")
     parser.add_argument("--long-s", type=float, default=40.0, help="sim s of the long run")
     parser.add_argument("--csv", type=Path, help="write the rows here (with --label)")
     parser.add_argument("--label", help="the rows' label in --csv")
-    args = parser.parse_args()
+    parser.add_argument("--worlds", help="fleet worlds to their outcome instead (module doc)")
+    parser.add_argument("--passing", help="the passing layer: with --worlds the modes to compare "
+                        "(default off,orca), else the one of every run (default the run's: orca "
+                        "with two or more robots)")
+    parser.add_argument("--timeout", type=float, default=120.0,
+                        help="with --worlds: sim seconds at most (120)")
+    parser.add_argument("--driver-split", metavar="R1,R2",
+                        help="robot counts: the sim driver's CPU split in-process instead")
+    args = parser.parse_args(argv)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")
+    if args.worlds:
+        args.passing = args.passing or ",".join(reversed(PASSING))
+        bad = [m for m in args.passing.split(",") if m not in PASSING]
+        if bad or not 0 < args.timeout <= 3600:
+            parser.error(f"--passing takes {','.join(PASSING)}; --timeout in (0, 3600] s")
+        try:
+            for world in [w for w in args.worlds.split(",") if w]:
+                load_world(world)   # a bad name: one line, before any run
+        except PapfError as exc:
+            parser.error(str(exc))
+        return args
+    args.planner = args.planner or baseline
+    if args.passing not in (None, *PASSING):
+        parser.error(f"--passing takes one of {', '.join(PASSING)}")
     try:
-        robot_counts = [int(v) for v in args.robots.split(",") if v]
-        people_counts = [int(v) for v in args.people.split(",") if v]
+        args.robot_counts = [int(v) for v in (args.driver_split or args.robots).split(",") if v]
+        args.people_counts = [int(v) for v in args.people.split(",") if v]
     except ValueError:
         parser.error("--robots and --people are comma-separated integers, e.g. 1,2,4,8")
-    if not all(1 <= r <= 16 for r in robot_counts) or not all(0 <= p <= 200 for p in people_counts):
-        parser.error("robots in 1..16, people in 0..200 (the world format's limits)")
+    if not (all(1 <= r <= MAX_ROBOTS for r in args.robot_counts)
+            and all(0 <= p <= MAX_PEOPLE for p in args.people_counts)):
+        parser.error(f"robots in 1..{MAX_ROBOTS}, people in 0..{MAX_PEOPLE} (the world format's limits)")
     if not 0 < args.short_s < args.long_s:
         parser.error("need 0 < --short-s < --long-s")
+    return args
+
+
+def main_split(args) -> None:
+    """``--driver-split``: the driver's CPU split per robot count (bench.fleet_driver)."""
+    from bench.fleet_driver import SPLIT_FIELDS, split
+
     rows = []
     with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
-        for people in people_counts:
-            for robots in robot_counts:
+        for robots in args.robot_counts:
+            row = {**split(fleet_world(Path(tmp), robots, 0), args.long_s),
+                   "load_avg_1min": round(os.getloadavg()[0], 1)}
+            print(json.dumps(row), flush=True)
+            rows.append({"label": args.label or "", **row})
+    if args.csv:
+        replace_label(args.csv, SPLIT_FIELDS, args.label, rows)
+
+
+def main(argv=None) -> None:
+    args = parse(argv)
+    if args.worlds:
+        main_worlds(args)
+        return
+    if args.driver_split:
+        main_split(args)
+        return
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="papf-bench-fleet-") as tmp:
+        for people in args.people_counts:
+            for robots in args.robot_counts:
                 world = fleet_world(Path(tmp), robots, people)
                 row = {"robots": robots, "people": people, "planner": args.planner,
-                       **measure(world, robots, args.planner, args.short_s, args.long_s)}
+                       **measure(world, robots, args.planner, args.short_s, args.long_s,
+                                 args.passing)}
                 print(json.dumps(row), flush=True)
                 rows.append({"label": args.label or "", **row})
     if args.csv:
         replace_label(args.csv, FIELDS, args.label, rows)
-
 
 if __name__ == "__main__":
     main()

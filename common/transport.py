@@ -44,6 +44,7 @@ from schemas.keys import STAMP_ORDERED, TOPICS
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("client", "peer", "router")
 BATCH_POLL_S = 0.01      # [s wall] a node with batched topics drains them this often
+BATCH_IDLE_POLL_S = 0.04  # [s wall] ... at most this seldom after drains that found nothing
 URGENT_POLL_S = 0.0002   # [s wall] ... while the node waits for a batched sample to go on
 BATCH_CAPACITY = 65536   # [samples] per batched topic between drains (then Zenoh waits)
 
@@ -353,7 +354,10 @@ class Node:
     A *batched* topic (``subscribe(..., batched=True)``) skips both hand-offs: Zenoh keeps
     its samples in its own channel, and :meth:`messages` drains them every
     :data:`BATCH_POLL_S` on the main thread — for a node that watches a stream and is not on
-    the lockstep's path (the meter), where one wake per batch replaces two per message.
+    the lockstep's path (the meter), where one wake per batch replaces two per message. A
+    drain that finds nothing doubles the wait (up to :data:`BATCH_IDLE_POLL_S`), one that
+    finds samples resets it: in lockstep the samples come in one burst per cycle, and a
+    fleet's sixteen meters polling every 10 ms between bursts cost more than their work.
     A payload that fails to decode, or whose stamp is out of range or goes back on a
     stamp-ordered topic (:class:`common.units.StampGuard`), is logged (rate-limited),
     counted in :attr:`bad_messages` and dropped: a bad peer never crashes a node.
@@ -521,13 +525,15 @@ class Node:
                 except queue.Empty:
                     yield None, None
             return
-        silent_s = 0.0
+        silent_s, idle_s = 0.0, BATCH_POLL_S
         while not self.stop:
             got = False
             for item in self._drain_batched():
                 got = True
                 yield item
-            wait_s = URGENT_POLL_S if urgent() else BATCH_POLL_S
+            # nothing came: wait longer next time (an inbox item still wakes at once)
+            idle_s = BATCH_POLL_S if got else min(2 * idle_s, BATCH_IDLE_POLL_S, tick_s)
+            wait_s = URGENT_POLL_S if urgent() else idle_s
             try:
                 item = self.inbox.get(timeout=wait_s)
             except queue.Empty:

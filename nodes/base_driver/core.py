@@ -154,9 +154,11 @@ class DriverCore:
             out.append(("sim/people", self._people(t)))
         if self.is_scan_instant():
             self._answered = set()
+        # every robot's velocity read once per instant, not once per robot that sees it
+        vel = [self.sim.velocity(j) for j in range(len(self.names))] if scan else []
         for i, odom in enumerate(odoms):
             if scan:
-                out.append((self.topic(i, "sim/bodies"), self._bodies(t, i, odoms)))
+                out.append((self.topic(i, "sim/bodies"), self._bodies(t, i, odoms, vel)))
             out += [(self.topic(i, "sim/pose"), odom), (self.topic(i, "odom"), odom),
                     (self.topic(i, "wheels"), self.sim.wheel_states(t, i)),
                     (self.topic(i, "clock"), Clock(stamp_ns=t))]
@@ -164,13 +166,14 @@ class DriverCore:
             self._pending[i] = []
         return out
 
-    def _bodies(self, t: int, i: int, odoms: list) -> Bodies:
-        """What robot ``i``'s LiDAR sees move at ``t``: every other robot, every person."""
+    def _bodies(self, t: int, i: int, odoms: list, vel: list) -> Bodies:
+        """What robot ``i``'s LiDAR sees move at ``t``: every other robot (``odoms``, ``vel``:
+        every robot's pose and world-frame velocity at ``t``), every person."""
         others = [j for j in range(len(self.names)) if j != i]
         xy = self.crowd.positions if self.crowd is not None else np.zeros((0, 2))
         pv = self.crowd.velocities if self.crowd is not None else np.zeros((0, 2))
         radii = self.crowd.radii if self.crowd is not None else ()
-        rv = [self.sim.velocity(j) for j in others]
+        rv = [vel[j] for j in others]
         return Bodies(stamp_ns=t, robots=tuple(self.names[j] for j in others),
                       robot_x=tuple(odoms[j].x for j in others),
                       robot_y=tuple(odoms[j].y for j in others),

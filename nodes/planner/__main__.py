@@ -7,7 +7,9 @@ Settings: ``--planner`` (algorithm), ``--params FILE.toml`` and ``--set name=val
 odometry instead of the same stamp), ``--stale-timeout S`` (zero command when odometry
 or scans are older than that), ``--pair-timeout S`` (lockstep: wall time a scan waits for
 its odometry), ``--objects`` (take obstacle tracks from ``<ns>/objects``, sim ground
-truth or the tracker node, and wait for the scan's own in lockstep), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
+truth or the tracker node, and wait for the scan's own in lockstep), ``--passing orca``
+(a fleet's robots pass each other: the reciprocal layer of :mod:`nodes.planner.passing` over
+the command, fed by the obstacle tracks), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
 Exit code 2 on a bad setting.
 """
 
@@ -27,6 +29,7 @@ from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner import lazy
 from nodes.planner.loop import PLAN_HORIZON_S, PlannerLoop
 from nodes.planner.params import answer
+from nodes.planner.passing import MODES, Passing, PassingParams
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
 from nodes.planner.settings import NODE
@@ -61,9 +64,15 @@ def parse_args(argv=None) -> argparse.Namespace:
                          f"on a slow link [s] (default {PLAN_HORIZON_S:g}; docs/link-driving.md)")
     ap.add_argument("--objects", action="store_true",
                     help="subscribe to <ns>/objects and pair each scan with its obstacle tracks")
+    ap.add_argument("--passing", choices=MODES, default="off",
+                    help="orca: pass the robots and people of the obstacle tracks (a fleet; needs "
+                         "--objects), off: the planner's command as it is (default)")
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)
-    return ap.parse_args(argv)
+    args = ap.parse_args(argv)
+    if args.passing != "off" and not args.objects:
+        ap.error(f"--passing {args.passing} needs --objects (the other robots come as obstacle tracks)")
+    return args
 
 
 def run(args: argparse.Namespace) -> int:
@@ -78,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
     except ConfigError as exc:
         log.error("%s", exc)
         return 2
+    if args.passing != "off":
+        planner.passing = Passing(PassingParams(mode=args.passing))
     warm_up(planner)
     with open_node(NODE_NAME, args, log) as node:
         loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,

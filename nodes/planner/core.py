@@ -187,6 +187,7 @@ class Planner:
         # 0 steps (lockstep, offline) = plain commands, as before
         self.plan_steps = 0
         self.plan_dt_ns = 100_000_000
+        self.passing = None             # nodes.planner.passing.Passing in a fleet, else None
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
@@ -273,6 +274,10 @@ class Planner:
         else:  # the planned velocity's component along the robot's heading (ours)
             v = max(0.0, plan.v_ref * math.cos(err))
         w = turn_rate(theta_ref, odom.yaw, apf)
+        if self.passing is not None and self.objects:   # a fleet: robots that pass each other
+            v_des = speed_ref(_norm(plan.force), 0.0, apf) if plan.v_ref is None else plan.v_ref
+            v, w = self.passing.adjust(odom.x, odom.y, odom.yaw, odom.v, theta_ref, v_des, v, w,
+                                       self.objects, apf)
         self.state, self.reason = "driving", ""
         compute_ns = time.perf_counter_ns() - t0
         return self._twist(t, v, w, odom, theta_ref, plan, apf), lambda debug=True: (

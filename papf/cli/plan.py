@@ -40,6 +40,9 @@ def register(sub) -> None:
                    help="robot (default) or fixed-step: Wang's MATLAB point, step 0.5, J = 200, "
                         "the obstacles' centres known (planners "
                         f"{one_with_role('wang-baseline')} and {one_with_role('wang-proposed')} only)")
+    p.add_argument("--passing", choices=("orca", "off"),
+                   help="robots pass each other: orca (default with two or more [[robots]]; "
+                        "each planner told the others' poses and velocities) or off")
     p.add_argument("--plot", metavar="OUT.png",
                    help="write a PNG: world, path, footprints, and the planner's prediction, "
                         "abandoned predictions, top quarks and temporary goal at its most "
@@ -67,7 +70,7 @@ def cmd_plan(args) -> int:
     sets = [*preset_sets(args.preset), *args.set]
     result = simulate(world, args.planner, params=sets, seed=args.seed, max_time_s=args.timeout,
                       dt=args.dt, params_file=args.params, keep_states=bool(args.plot),
-                      motion=args.motion)
+                      motion=args.motion, passing=args.passing)
     if args.out:
         write_path(result, args.out, force=True)   # checked above (check_outputs)
     if args.plot:  # matplotlib: only with --plot

@@ -54,6 +54,9 @@ def register(sub) -> None:
     p.add_argument("--objects", choices=("none", "truth", "tracker"),
                    help="obstacle tracks for the planner: the sim's ground truth, the tracker "
                         "node on the scans, or none (default: truth for iapf, else none)")
+    p.add_argument("--passing", choices=("orca", "off"),
+                   help="a fleet's robots pass each other: orca (default with two or more "
+                        "robots; each planner gets the others as --objects) or off")
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
@@ -93,6 +96,7 @@ def run_config(args):
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
+                     passing=args.passing,
                      ros_face=face_domain(args), progress=None if not args.json else False,
                      link=args.link, robot_trace=args.robot_trace,
                      robot_record=args.robot_record,

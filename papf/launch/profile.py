@@ -30,11 +30,12 @@ from worlds import load_world, world_path
 VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record", "energy_model",
              "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
              "view", "ros", "ros_domain", "cmd_vel_type", "ros_face", "ros_face_domain",
-             "record_force", "ros_distro", "ros_face_distro", "record_format")
+             "record_force", "ros_distro", "ros_face_distro", "record_format", "passing")
 ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth
 FLEET_NODES = ("energy_meter", "planner", "tracker", "lidar_sim")   # one per robot of [[robots]]
+PASSING = ("orca", "off")   # a fleet's passing layer (nodes.planner.passing); orca by default
 
 
 def objects_for(planner: str | None, objects: str | None,
@@ -248,7 +249,10 @@ def resolve(prof: Profile, opt: LaunchOptions) -> Resolved:
             extra = ["--keys", "**"] if spec.name == "recorder" else []   # recording: all keys
             argv = _argv(spec, values, prof, opt, common(fleet[0].name) + extra)
         else:
-            argv = _argv(spec, values, prof, opt, common(opt.namespace))
+            mine = dict(values)
+            if spec.name in FLEET_NODES:   # one robot: its passing layer only when asked
+                _passing(mine, 1, opt, prof)
+            argv = _argv(spec, mine, prof, opt, common(opt.namespace))
         if argv:
             procs.append(Process(spec.name, prof.host, tuple(argv)))
     return Resolved(prof, procs, connect, listen)
@@ -267,10 +271,28 @@ def _per_robot(spec: NodeSpec, fleet: tuple, values: dict, prof: Profile, opt: L
     for robot in fleet:
         mine = dict(values, planner=robot.planner or values.get("planner", ""))
         mine["objects"] = objects_for(mine["planner"], opt.values.get("objects"), prof.objects)
+        _passing(mine, len(fleet), opt, prof)
         argv = _argv(spec, mine, prof, opt, common(robot.name))
         if argv:
             procs.append(Process(f"{robot.name}/{spec.name}", prof.host, tuple(argv)))
     return procs
+
+
+def _passing(mine: dict, robots: int, opt: LaunchOptions, prof: Profile) -> None:
+    """The passing layer of a robot's planner (``passing``): ``orca`` by default in a fleet of
+    two or more robots, else ``off`` (one robot: only when asked, for its people). On, the
+    planner gets the others as obstacle tracks: the first of ``truth``, ``tracker`` the
+    profile serves when ``--objects`` was not given."""
+    mine.pop("passing", None)
+    passing = opt.values.get("passing", "orca" if robots >= 2 else "off")
+    if passing == "off":
+        return
+    if mine["objects"] == "none" and opt.values.get("objects") is None:
+        mine["objects"] = next((o for o in ("truth", "tracker") if o in prof.objects), "none")
+    if mine["objects"] == "none":
+        raise ConfigError(f"--passing {passing} needs the other robots as obstacle tracks: "
+                          "--objects truth or tracker (or --passing off)")
+    mine["passing"] = passing
 
 
 def _argv(spec: NodeSpec, values: dict, prof: Profile, opt: LaunchOptions,

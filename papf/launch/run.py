@@ -65,6 +65,7 @@ class RunConfig:
     link: str | None = None            # papf run --link PROFILE|SPEC (papf.launch.split)
     robot_trace: str | None = None     # --link: the emulated robot's command trace (JSON lines)
     robot_record: str | None = None    # --link: the robot side's own recording (its black box)
+    passing: str | None = None         # a fleet's: orca | off; None: orca (profile._passing)
 
 
 def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
@@ -75,7 +76,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "record_format": "ros2" if cfg.record and cfg.record_format == "ros2" else None,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
-              "objects": cfg.objects, "view": cfg.view,
+              "objects": cfg.objects, "view": cfg.view, "passing": cfg.passing,
               "ros_face": None if cfg.ros_face is None else "1",
               "ros_face_domain": cfg.ros_face,
               "ros_face_distro": cfg.ros_face_distro if cfg.ros_face is not None else None}

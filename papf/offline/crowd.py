@@ -43,6 +43,7 @@ from common.quiet import import_quietly
 from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarSim
+from nodes.planner.passing import Passing, PassingParams
 from nodes.planner.registry import make_planner
 from nodes.planner.road import Track
 from papf.offline.result import PlanResult
@@ -191,11 +192,23 @@ class _Senses:
         self.lidar.close()
 
 
+def passing_for(world: World, mode: str | None) -> str:
+    """The passing layer of a run: ``mode`` as given, else ``orca`` for a fleet of two or
+    more robots and ``off`` otherwise (one robot keeps its planner's figures)."""
+    if mode is not None:
+        return mode
+    return "orca" if len(world.robots) >= 2 else "off"
+
+
 def plan_crowd(world: World, planner_name: str, sets: list[str], params_file, seed: int,
                max_time_s: float, dt: float, keep_states: bool = False,
-               lidar=None) -> PlanResult:
+               lidar=None, passing: str | None = None) -> PlanResult:
     """Every robot of ``world`` among its people to an outcome (module doc); the fleet's
-    :class:`PlanResult` with the whole run in ``trace`` (a :class:`CrowdRun`)."""
+    :class:`PlanResult` with the whole run in ``trace`` (a :class:`CrowdRun`).
+
+    ``passing``: the planners' passing layer (:func:`passing_for`); on, each planner gets the
+    other robots and the people as obstacle tracks (ground truth) every period."""
+    mode = passing_for(world, passing)
     fleet = world.fleet
     crowd = Crowd(world.people, world, seed)
     radii = crowd.body_radii
@@ -210,6 +223,8 @@ def plan_crowd(world: World, planner_name: str, sets: list[str], params_file, se
             senses.append(s)
             s.see([tuple(r.start) for r in fleet], crowd.positions, crowd.radii)
             planner = make_planner(spec.planner or planner_name, params_file, sets)
+            if mode != "off":
+                planner.passing = Passing(PassingParams(mode=mode, step_s=dt))
             drives.append(Drive(own, planner, spec.planner or planner_name, rseed,
                                 start_pose(own, rseed), s.scan, s.clearance, max_time_s, dt,
                                 CommandGate(RosbotLimits()), keep_states))
@@ -243,9 +258,10 @@ def _bodies(world: World, fleet, drives, i: int, crowd: Crowd, t_ns: int) -> Bod
 
 
 def _give_objects(world: World, fleet, drives, i: int, crowd: Crowd, lidar_range: float) -> None:
-    """Robot ``i``'s planner gets the ground-truth tracks (module doc), if it reads them."""
+    """Robot ``i``'s planner gets the ground-truth tracks (module doc), if it reads them or
+    its passing layer (nodes.planner.passing) does."""
     d = drives[i]
-    if not d.planner.strategy.uses_objects:
+    if not d.planner.strategy.uses_objects and d.planner.passing is None:
         return
     objects = truth_objects(world, d.t, (d.x, d.y), lidar_range,
                             _bodies(world, fleet, drives, i, crowd, d.t))
@@ -343,6 +359,20 @@ def _people_effect(world: World, seed: int, crowd: Crowd, run: CrowdRun, dt: flo
                        alone.walked_to_goal())
     for r in run.robots:
         r.effect = effect
+
+
+def _truth_tracks(i: int, drives, crowd) -> list[Track]:
+    """What robot ``i`` is told of the others at the period's start: every other robot's
+    chassis box and velocity, every person's disc and velocity (as ``--objects truth``)."""
+    sx, sy, _ = SimParams().chassis_size
+    tracks = [Track(d.x, d.y, d.yaw, *((0.0, 0.0) if d.outcome else
+                                       (d.v * math.cos(d.yaw), d.v * math.sin(d.yaw))), sx, sy, j)
+              for j, d in enumerate(drives) if j != i]
+    vel = crowd.velocities
+    for k, ((x, y), r) in enumerate(zip(crowd.positions, crowd.radii, strict=True)):
+        tracks.append(Track(float(x), float(y), 0.0, float(vel[k][0]), float(vel[k][1]),
+                            2 * float(r), 2 * float(r), len(drives) + k))
+    return tracks
 
 
 def _fleet_result(world: World, seed: int, run: CrowdRun) -> PlanResult:

@@ -31,14 +31,17 @@ MOTIONS = ("robot", "fixed-step")
 def simulate(world: World | str | Path, planner: str, params=None, seed: int = 0,
              max_time_s: float = DEFAULT_MAX_TIME_S, dt: float = 0.1, lidar=None,
              keep_states: bool = False, params_file: str | Path | None = None,
-             motion: str = "robot", whole_time: bool = False) -> PlanResult:
+             motion: str = "robot", whole_time: bool = False,
+             passing: str | None = None) -> PlanResult:
     """Run ``planner`` on ``world`` (a World, packaged name or path) to an outcome.
 
     ``params``: planner settings (``{"name": value}`` or ``["name=value"]``, as ``--set``);
     ``seed``: LiDAR noise and start jitter; ``max_time_s`` [s]: sim-time limit; ``dt`` [s]:
     control period; ``lidar``: scan geometry and noise (2-D; default the stack's);
     ``keep_states``: the planner's state per cycle in ``states``; ``whole_time``: car-scale
-    worlds only, drive all of ``max_time_s`` through contacts (the IAPF paper's figures).
+    worlds only, drive all of ``max_time_s`` through contacts (the IAPF paper's figures);
+    ``passing``: a fleet's passing layer, ``off`` | ``orca`` (None: ``orca`` for two or more
+    robots, :func:`papf.offline.crowd.passing_for`).
     """
     if motion not in MOTIONS:
         raise ConfigError(f"motion {motion!r}; valid: {list(MOTIONS)}")
@@ -57,7 +60,7 @@ def simulate(world: World | str | Path, planner: str, params=None, seed: int = 0
         from papf.offline.crowd import plan_crowd
 
         return plan_crowd(world, planner, sets, params_file, seed, max_time_s, dt, keep_states,
-                          lidar)
+                          lidar, passing)
     if world.vehicle == "car":
         from papf.offline.road import plan_car
 

@@ -85,6 +85,19 @@ def _match(argv: list[str], table) -> tuple | None:
     return None
 
 
+def _own_view_port(args: list[str]) -> list[str]:
+    """A Foxglove view on a free port of its own, never the default 8765: two views of one
+    block, or of two blocks on parallel test workers, would take the same port."""
+    args = [str(free_port()) if a == "8765" else a for a in args]
+    if "--view" in args:
+        k = args.index("--view")
+        if k + 1 == len(args) or not args[k + 1].isdigit():
+            args = [*args[:k + 1], str(free_port()), *args[k + 1:]]
+    if args[:1] == ["view"] and "--port" not in args:
+        args = [*args, "--port", str(free_port())]
+    return args
+
+
 class Session:
     """A block's commands, in one directory, against one router port."""
 
@@ -133,6 +146,7 @@ class Session:
         extra = SHORT[short][0] if short and not background else []
         if "--help" in args or "--dry-run" in args:
             return args
+        args = _own_view_port(args)
         # a run in the foreground has a router of its own; one in the background is the block's
         port = self.port if background else free_port()
         if args[0] == "run" and "--port" not in args:
@@ -259,6 +273,7 @@ def _prepare(cwd: Path, block: list[Example]) -> None:
         write_bag(cwd / "other-bag", names={"odom": "/odom", "battery": "/battery_state"})
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 @pytest.mark.parametrize("block", sorted(BLOCKS))
 def test_docs_block_runs(block, tmp_path):
     examples_ = BLOCKS[block]

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import io
 
+import pytest
 from rich.console import Console
 
 from papf.experiments.energy import EnergyExperiment, run_experiment
 from tests.e2e.test_report import SHORT_WORLD
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_one_real_run_through_the_stack(tmp_path):
     world = tmp_path / "short.toml"
     world.write_text(SHORT_WORLD)

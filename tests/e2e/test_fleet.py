@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 
+import pytest
 import zenoh
 
 from common.transport import wait_alive, zenoh_config
@@ -40,6 +41,7 @@ to = [4.0, 1.0]
 """
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_corridor_swap_head_on_both_reach_and_repeat(tmp_path):
     world = tmp_path / "swap.toml"
     world.write_text(HEAD_ON)
@@ -55,6 +57,7 @@ def test_corridor_swap_head_on_both_reach_and_repeat(tmp_path):
     assert first == second
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_two_robots_on_two_routers_are_one_network():
     """Two `papf launch robot` hosts, each its own router and namespace, the second joined to
     the first: `papf topic list` on either router sees both robots' nodes; with --namespace

@@ -10,9 +10,12 @@ import sys
 import threading
 import time
 
+import pytest
+
 from papf.launch.supervisor import free_port, wait_port
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_goal_retargets_the_planner_of_a_launched_session():
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"

@@ -7,6 +7,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from bench.foxglove_ws import FoxgloveClient
 from common import runauth
 from common.transport import wait_alive
@@ -21,6 +23,7 @@ def _papf(*args, env=None):
                           timeout=120, stdin=subprocess.DEVNULL, env=env)
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_a_keyed_planner_takes_changes_only_from_its_key(router, spawn, session, tmp_path,
                                                          monkeypatch):
     key = runauth.new_key()

@@ -5,6 +5,8 @@ import csv
 import os
 import time
 
+import pytest
+
 from papf.experiments.paper_tests import run_paper_tests
 from papf.experiments.random_worlds import run_random
 from papf.experiments.sweep import SweepOptions, map_runs
@@ -35,6 +37,7 @@ def _rows(path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_offline_random_sweep_same_csv_with_two_workers(tmp_path):
     for workers in (1, 2):
         run_random(tmp_path / f"w{workers}", n=2, seed=3, planners=("apf", "papf"),
@@ -44,6 +47,7 @@ def test_offline_random_sweep_same_csv_with_two_workers(tmp_path):
     assert len(rows) == 4 and all(float(r["duration_s"]) > 0 for r in rows)
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_stack_sweep_same_csv_with_two_workers(tmp_path):
     """Two full-stack runs at once (own router ports and namespaces): the CSV of a
     sequential sweep, byte for byte, and every recording gathered here."""

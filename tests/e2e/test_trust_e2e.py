@@ -14,6 +14,7 @@ import time
 
 import msgpack
 import numpy as np
+import pytest
 import zenoh
 
 from common.transport import zenoh_config
@@ -99,6 +100,7 @@ def test_bus_fuzz_gives_the_figures_of_the_clean_run():
     assert_no_orphans(port)
 
 
+@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_a_dead_energy_meter_freezes_the_figures_and_is_named():
     """Item 4: the run ends at the meter's death, within the timeout, naming it."""
     port = free_port()

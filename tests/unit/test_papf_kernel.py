@@ -141,3 +141,18 @@ def test_scan_points_numba_and_numpy_identical():
         for a, b in zip(fast, slow, strict=True):
             assert a.dtype == b.dtype and np.array_equal(a, b)
         assert fast[2].sum() > 100 and not np.isfinite(fast[0][~fast[2]]).any()
+
+
+def test_kernel_params_built_once_per_settings_from_the_papers_products():
+    """One KernelParams per (APFParams, PAPFParams) pair: the same object again while the
+    settings stay, a new one when they change; its gains are eq. 2's and eq. 7's products."""
+    from nodes.planner.papf.params import kernel_params
+
+    apf, pp = APFParams(), PAPFParams()
+    kp = kernel_params(apf, pp)
+    assert kernel_params(apf, pp) is kp
+    assert kp.g_goal == apf.k_vg * apf.q_v * apf.q_g and kp.g_obs == apf.k_vo * apf.q_v * apf.q_o
+    assert kp.g_q == pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
+    assert (kp.i_max, kp.n_stag, kp.q_lim) == (pp.i_max, pp.n_stag, apf.d_o)
+    other = kernel_params(apf, PAPFParams(motion_quarks_within_d_o=False, d_q=1.5))
+    assert other is not kp and other.q_lim == 1.5

@@ -9,6 +9,7 @@ import pytest
 from nodes.planner.core import scan_view
 from nodes.planner.field import APFParams, Repulsors, apf_force
 from nodes.planner.papf.kernels import HAVE_NUMBA, rollout, tail_stagnation
+from nodes.planner.papf.params import KernelParams
 from nodes.planner.papf.strategy import (
     PAPFParams,
     PAPFStrategy,
@@ -202,10 +203,13 @@ def test_numba_and_numpy_kernels_are_bit_identical():
             obs = rng.uniform(-2.0, 3.0, (300, dims))
             quarks = rng.uniform(-1.0, 2.0, (int(rng.integers(0, 5)), dims))
             goal = rng.uniform(2.0, 6.0, dims)
-            args = (np.zeros(dims), goal, -5.0, obs, 10 / 300, 0.5, quarks, 50 / 300, 1.0, 0.03, 41, 0.03)
             for goal_range in (math.inf, 1.0):
-                a = rollout(*args, use_numba=True, goal_range=goal_range)
-                b = rollout(*args, use_numba=False, goal_range=goal_range)
+                kp = KernelParams(g_goal=-5.0, g_obs=10 / 300, g_q=50 / 300, d_o=0.5, d_q=1.0,
+                                  step=0.03, i_max=33, n_stag=8, stag_radius=0.0625, max_quarks=10,
+                                  pull_range=goal_range, ball=0.25, tie_tol=1e-3, q_lim=0.5)
+                args = (np.zeros(dims), goal, obs, quarks, kp, 41, 0.03)
+                a = rollout(*args, use_numba=True)
+                b = rollout(*args, use_numba=False)
                 assert a[1] == b[1] and np.array_equal(a[0], b[0])
     fast = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PP)
     slow = predict(np.zeros(2), np.array([8.0, 0.0]), WALL, APF, PAPFParams(use_numba=False))

@@ -8,12 +8,12 @@ the cycle splits between kernels and numpy: docs/planners.md, "The algorithms in
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 
 from nodes.planner.field import EPS_M
 from nodes.planner.papf.kernels import HAVE_NUMBA, numba
+from nodes.planner.papf.params import kernel_params
 
 if HAVE_NUMBA:
     from nodes.planner.papf.kernels import _field_numba, _predict_numba
@@ -21,13 +21,11 @@ if HAVE_NUMBA:
     _jit = numba.njit(cache=True, error_model="numpy")
 
     @_jit
-    def _front(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max, n_stag,
-               stag_radius, max_quarks, goal_range):  # pragma: no cover - compiled
+    def _front(start, goal, obstacles, quarks, kp):  # pragma: no cover - compiled
         """The prediction, eq. 2 at the robot and the distance of each quark in use."""
         paths, n_paths, length, qbuf, lo, hi, resolved, reached = _predict_numba(
-            start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max, n_stag,
-            stag_radius, max_quarks, goal_range)
-        f_apf = _field_numba(start, goal, g_goal, obstacles, g_obs, d_o)
+            start, goal, obstacles, quarks, kp)
+        f_apf = _field_numba(start, goal, obstacles, kp)
         qdist = np.empty(hi - lo)
         for k in range(hi - lo):
             rx, ry = qbuf[lo + k, 0] - start[0], qbuf[lo + k, 1] - start[1]
@@ -35,8 +33,8 @@ if HAVE_NUMBA:
         return paths, n_paths, length, qbuf, lo, hi, resolved, reached, f_apf, qdist
 
     @_jit
-    def _back(pos, pts, proj, u, tie_tol, eq8, target, g_goal, obstacles, g_obs, d_o, quarks,
-              qdist, cube, q_lim, g_quark):  # pragma: no cover - compiled
+    def _back(pos, pts, proj, u, eq8, target, obstacles, quarks, qdist, cube,
+              kp):  # pragma: no cover - compiled
         """Eq. 8's point (when ``eq8``; else ``target`` stays) and the motion force at ``pos``.
 
         ``proj`` = ``(pts - pos) @ u`` and ``cube`` = the quarks' softened distance cubed,
@@ -54,18 +52,18 @@ if HAVE_NUMBA:
                     top = dist[k]
             best = -1
             for k in range(n):
-                if dist[k] >= top - tie_tol:
+                if dist[k] >= top - kp.tie_tol:
                     best = k
             target = pts[best].copy()
-        f = _field_numba(pos, target, g_goal, obstacles, g_obs, d_o)
+        f = _field_numba(pos, target, obstacles, kp)
         if quarks.shape[0]:
             sx = sy = 0.0
             for k in range(quarks.shape[0]):
-                if qdist[k] > EPS_M and qdist[k] <= q_lim:
+                if qdist[k] > EPS_M and qdist[k] <= kp.q_lim:
                     sx = sx + (quarks[k, 0] - pos[0]) / cube[k]
                     sy = sy + (quarks[k, 1] - pos[1]) / cube[k]
-            f[0] = f[0] + (0.0 - g_quark * sx)
-            f[1] = f[1] + (0.0 - g_quark * sy)
+            f[0] = f[0] + (0.0 - kp.g_q * sx)
+            f[1] = f[1] + (0.0 - kp.g_q * sy)
         else:
             f[0] = f[0] + 0.0
             f[1] = f[1] + 0.0
@@ -81,16 +79,14 @@ def plan_compiled(pos, goal, obstacles, apf, pp, quarks=None):
     :class:`~nodes.planner.papf.strategy.PAPFParams`; ``quarks``: the ones already placed (or None).
     ``abandoned`` is one ``(n, i_max + 1, 2)`` array (a sequence of the abandoned paths).
     """
-    last = _LAST   # one read: another thread may replace it meanwhile
-    c = last[2] if (apf is last[0] and pp is last[1]) else _remember(apf, pp)
+    c = kernel_params(apf, pp)
     pos = np.ascontiguousarray(pos, dtype=float)
     goal = np.ascontiguousarray(goal, dtype=float)
     obstacles = np.ascontiguousarray(obstacles, dtype=float).reshape(-1, 2)
     quarks = (_NO_QUARKS if quarks is None else
               np.ascontiguousarray(quarks, dtype=float).reshape(-1, 2))
     paths, n_paths, length, qbuf, lo, hi, resolved, reached, f_apf, qdist = _front(
-        pos, goal, c.g_goal, obstacles, c.g_obs, c.d_o, quarks, c.g_q, c.d_q, c.step, c.i_max,
-        c.n_stag, c.stag_radius, c.max_quarks, c.pull_range)
+        pos, goal, obstacles, quarks, c)
     path = paths[n_paths - 1, :length]
     eq8 = resolved or not pp.unresolved_global_goal
     if eq8:   # numpy's own rounding (BLAS) as in temporary_goal; norm(v) is sqrt(v . v)
@@ -101,43 +97,8 @@ def plan_compiled(pos, goal, obstacles, apf, pp, quarks=None):
     else:     # no stagnation-free path after M repetitions: eq. 7 with the global goal
         pts, proj, u = path, _EMPTY, _EMPTY
     cube = np.maximum(qdist, c.ball) ** 3     # numpy's power, as quark_force
-    target, force = _back(pos, pts, proj, u, c.tie_tol, eq8, goal, c.g_goal, obstacles, c.g_obs,
-                          c.d_o, qbuf[lo:hi], qdist, cube, c.q_lim, c.g_q)
+    target, force = _back(pos, pts, proj, u, eq8, goal, obstacles, qbuf[lo:hi], qdist, cube, c)
     return path, qbuf[lo:hi], paths[: n_paths - 1, : c.i_max + 1], bool(resolved), target, force
-
-
-class _Constants(NamedTuple):
-    g_goal: float
-    g_obs: float
-    g_q: float
-    d_o: float
-    d_q: float
-    step: float
-    i_max: int
-    n_stag: int
-    stag_radius: float
-    max_quarks: int
-    pull_range: float
-    ball: float
-    tie_tol: float
-    q_lim: float
-
-
-def _remember(apf, pp) -> _Constants:
-    """The gains and derived numbers of one (APFParams, PAPFParams) pair, kept for the next
-    cycles (the planner passes the same two objects until its settings change)."""
-    global _LAST
-    c = _Constants(
-        apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o,
-        pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q, float(apf.d_o), float(pp.d_q),
-        float(pp.step_m), int(pp.i_max), int(pp.n_stag), float(pp.stag_radius),
-        int(pp.max_quarks), float(pp.pull_range), float(pp.quark_ball_m), float(pp.tie_tol_m),
-        float(apf.d_o if pp.motion_quarks_within_d_o else pp.d_q))
-    _LAST = (apf, pp, c)
-    return c
-
-
-_LAST: tuple = (None, None, None)
 
 
 _EMPTY = np.zeros(0)

@@ -4,6 +4,10 @@
 constant step ``Delta``; it is the hot loop of PAPF (up to (M + 1) * (lambda + lambda_stag)
 / Delta force evaluations over the whole scan per cycle).
 
+Every kernel takes the cycle's gains and counts as one
+:class:`~nodes.planner.papf.params.KernelParams` (``kp``), built once per settings by
+:func:`~nodes.planner.papf.params.kernel_params`.
+
 The two implementations give **bit-identical** results (tested): the numpy one uses
 :func:`nodes.planner.field.coulomb_sum` (sequential sums, per-point arithmetic written out)
 and scalar maths for the step; the numba one does the same operations in the same order
@@ -18,6 +22,7 @@ import numpy as np
 
 from common.optional import HAVE_NUMBA, numba_or_none
 from nodes.planner.field import EPS_M, coulomb_sum
+from nodes.planner.papf.params import KernelParams, kernel_params  # noqa: F401  (re-exported)
 
 numba = numba_or_none()   # None without the extra "fast": the numpy twins run
 
@@ -55,25 +60,24 @@ def _advance(prev, f, step, goal, out):
 _advance_jit = numba.njit(cache=True, error_model="numpy")(_advance) if HAVE_NUMBA else None
 
 
-def _force_numpy(pos, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range):
+def _force_numpy(pos, goal, obstacles, quarks, kp):
     f = np.zeros_like(pos)
-    f = f - g_goal * coulomb_sum(pos, _carrot(pos, goal, goal_range, np.empty_like(pos))[None, :])
-    f = f - g_obs * coulomb_sum(pos, obstacles, d_o)
+    f = f - kp.g_goal * coulomb_sum(pos, _carrot(pos, goal, kp.pull_range, np.empty_like(pos))[None, :])
+    f = f - kp.g_obs * coulomb_sum(pos, obstacles, kp.d_o)
     if quarks.shape[0]:
-        f = f - g_q * coulomb_sum(pos, quarks, d_q)
+        f = f - kp.g_q * coulomb_sum(pos, quarks, kp.d_q)
     return f
 
 
-def rollout_numpy(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, n_steps,
-                  stop_radius, goal_range):
+def rollout_numpy(start, goal, obstacles, quarks, kp, n_steps, stop_radius):
     """Numpy reference of :func:`rollout` (same arguments and result)."""
     dims = start.shape[0]
     path = np.empty((n_steps + 1, dims))
     path[0] = start
     for i in range(1, n_steps + 1):
         prev = path[i - 1]
-        f = _force_numpy(prev, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, goal_range)
-        if _advance(prev, f, step, goal, path[i]) <= stop_radius * stop_radius:
+        f = _force_numpy(prev, goal, obstacles, quarks, kp)
+        if _advance(prev, f, kp.step, goal, path[i]) <= stop_radius * stop_radius:
             return path[: i + 1], True
     return path, False
 
@@ -150,15 +154,17 @@ if HAVE_NUMBA:
         return n
 
     @_jit
-    def _rollout_into(path, near, goal2, f, start, goal, g_goal, obstacles, g_obs, d_o, quarks,
-                      g_q, d_q, step, n_steps, stop_radius, goal_range):  # pragma: no cover
+    def _rollout_into(path, scratch, start, goal, obstacles, quarks, kp, n_steps,
+                      stop_radius):  # pragma: no cover - compiled
         """Algorithm 1 into ``path`` (n_steps + 1, D); returns (points written, reached).
 
-        ``near`` (2, K, D), ``goal2`` (1, D), ``f`` (D,): scratch buffers.
+        ``scratch`` = (``near`` (2, K, D), ``goal2`` (1, D), ``f`` (D,)): buffers.
         """
+        near, goal2, f = scratch
+        step = kp.step
         path[0] = start
-        reach = d_o + CANDIDATE_BLOCK * step + 1e-6
-        reach_sub = d_o + CANDIDATE_SUBBLOCK * step + 1e-6
+        reach = kp.d_o + CANDIDATE_BLOCK * step + 1e-6
+        reach_sub = kp.d_o + CANDIDATE_SUBBLOCK * step + 1e-6
         n_block = n_near = 0
         for i in range(1, n_steps + 1):
             prev = path[i - 1]
@@ -167,23 +173,27 @@ if HAVE_NUMBA:
             if (i - 1) % CANDIDATE_SUBBLOCK == 0:
                 n_near = _near(prev, near[0, :n_block], reach_sub, near[1])
             f[:] = 0.0
-            _carrot_jit(prev, goal, goal_range, goal2[0])
-            _coulomb_acc(prev, goal2, np.inf, g_goal, f)
-            _coulomb_acc(prev, near[1, :n_near], d_o, g_obs, f)
+            _carrot_jit(prev, goal, kp.pull_range, goal2[0])
+            _coulomb_acc(prev, goal2, np.inf, kp.g_goal, f)
+            _coulomb_acc(prev, near[1, :n_near], kp.d_o, kp.g_obs, f)
             if quarks.shape[0]:
-                _coulomb_acc(prev, quarks, d_q, g_q, f)
+                _coulomb_acc(prev, quarks, kp.d_q, kp.g_q, f)
             if _advance_jit(prev, f, step, goal, path[i]) <= stop_radius * stop_radius:
                 return i + 1, True
         return n_steps + 1, False
 
     @_jit
-    def _rollout_numba(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step,
-                       n_steps, stop_radius, goal_range):  # pragma: no cover - compiled
+    def _scratch(obstacles, dims):  # pragma: no cover - compiled
+        """The buffers :func:`_rollout_into` works in."""
+        return np.empty((2, *obstacles.shape)), np.empty((1, dims)), np.empty(dims)
+
+    @_jit
+    def _rollout_numba(start, goal, obstacles, quarks, kp, n_steps,
+                       stop_radius):  # pragma: no cover - compiled
         dims = start.shape[0]
         path = np.empty((n_steps + 1, dims))
-        n, reached = _rollout_into(path, np.empty((2, *obstacles.shape)), np.empty((1, dims)),
-                                   np.empty(dims), start, goal, g_goal, obstacles, g_obs, d_o, quarks,
-                                   g_q, d_q, step, n_steps, stop_radius, goal_range)
+        n, reached = _rollout_into(path, _scratch(obstacles, dims), start, goal, obstacles, quarks,
+                                   kp, n_steps, stop_radius)
         return path[:n], reached
 
 
@@ -220,38 +230,41 @@ def tail_stagnation(path: np.ndarray, first: int, radius: float,
     return _tail_python(path, int(first), float(radius))
 
 
-def rollout(start, goal, g_goal: float, obstacles, g_obs: float, d_o: float, quarks,
-            g_q: float, d_q: float, step: float, n_steps: int, stop_radius: float,
-            use_numba: bool = True, goal_range: float = math.inf) -> tuple[np.ndarray, bool]:
-    """Algorithm 1: ``path[0] = start``, ``path[i] = path[i-1] + step * F/|F|`` for ``n_steps``.
+def _arrays(start, goal, obstacles, quarks) -> tuple:
+    """The kernels' array arguments: contiguous float64, points as (K, D)."""
+    dims = len(start)
+    return (np.ascontiguousarray(start, dtype=float), np.ascontiguousarray(goal, dtype=float),
+            np.ascontiguousarray(obstacles, dtype=float).reshape(-1, dims),
+            np.ascontiguousarray(quarks, dtype=float).reshape(-1, dims))
+
+
+def rollout(start, goal, obstacles, quarks, kp: KernelParams, n_steps: int, stop_radius: float,
+            use_numba: bool = True) -> tuple[np.ndarray, bool]:
+    """Algorithm 1: ``path[0] = start``, ``path[i] = path[i-1] + Delta * F/|F|`` for ``n_steps``.
 
     ``F = -g_goal S(goal) - g_obs S(obstacles within d_o) - g_q S(quarks within d_q)`` with
-    ``S`` = :func:`coulomb_sum` (gains are ``k q_V q_X``). A goal farther than ``goal_range``
-    pulls as one ``goal_range`` away in its direction (the PAPF prediction's pull range). Stops early, returning
-    ``(path[:i+1], True)``, once a point is within ``stop_radius`` of the goal. Zero force:
-    the point stays (a stagnation the caller detects).
+    ``S`` = :func:`coulomb_sum` (gains are ``k q_V q_X``, all from ``kp``). A goal farther
+    than ``kp.pull_range`` pulls as one that far away in its direction (the PAPF
+    prediction's pull range). Stops early, returning ``(path[:i+1], True)``, once a point is
+    within ``stop_radius`` of the goal. Zero force: the point stays (a stagnation the
+    caller detects).
     """
-    args = (np.ascontiguousarray(start, dtype=float), np.ascontiguousarray(goal, dtype=float),
-            float(g_goal), np.ascontiguousarray(obstacles, dtype=float).reshape(-1, len(start)),
-            float(g_obs), float(d_o),
-            np.ascontiguousarray(quarks, dtype=float).reshape(-1, len(start)), float(g_q),
-            float(d_q), float(step), int(n_steps), float(stop_radius), float(goal_range))
+    args = (*_arrays(start, goal, obstacles, quarks), kp, int(n_steps), float(stop_radius))
     if use_numba and HAVE_NUMBA:
         return _rollout_numba(*args)
     return rollout_numpy(*args)
 
 
-def _predict_python(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max,
-                    n_stag, stag_radius, max_quarks, goal_range):
+def _predict_python(start, goal, obstacles, quarks, kp):
     """Numpy reference of :func:`predict_paths` (same arguments and result)."""
+    i_max, max_quarks = kp.i_max, kp.max_quarks
     quarks = quarks[max(0, quarks.shape[0] - max_quarks):]
     abandoned = []
     while True:
-        path, reached = rollout_numpy(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q,
-                                      step, i_max + n_stag, step, goal_range)
+        path, reached = rollout_numpy(start, goal, obstacles, quarks, kp, i_max + kp.n_stag, kp.step)
         if reached:
             return path, quarks, abandoned, True, True
-        stuck, mean = _tail_python(path, i_max + 1, stag_radius)
+        stuck, mean = _tail_python(path, i_max + 1, kp.stag_radius)
         if not stuck:
             return path[: i_max + 1], quarks, abandoned, True, False
         if len(abandoned) >= max_quarks or max_quarks <= 0:
@@ -262,28 +275,28 @@ def _predict_python(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q
 
 if HAVE_NUMBA:
     @_jit
-    def _predict_numba(start, goal, g_goal, obstacles, g_obs, d_o, quarks, g_q, d_q, step, i_max,
-                       n_stag, stag_radius, max_quarks, goal_range):  # pragma: no cover - compiled
+    def _predict_numba(start, goal, obstacles, quarks, kp):  # pragma: no cover - compiled
         """:func:`_predict_python` with every rollout written into one buffer.
 
         Returns (paths, n_paths, last length, quark buffer, first quark, end quark, resolved, reached):
         ``paths[:n_paths - 1]`` are the abandoned ones (their first i_max + 1 points).
         """
         dims = start.shape[0]
-        n_steps = i_max + n_stag
+        i_max, max_quarks = kp.i_max, kp.max_quarks
+        n_steps = i_max + kp.n_stag
         m = max(max_quarks, 0)
         paths = np.empty((m + 1, n_steps + 1, dims))
         qbuf = np.empty((quarks.shape[0] + m + 1, dims))
         qbuf[: quarks.shape[0]] = quarks
         lo, hi = max(0, quarks.shape[0] - max_quarks), quarks.shape[0]
-        near, goal2, f = np.empty((2, *obstacles.shape)), np.empty((1, dims)), np.empty(dims)
+        scratch = _scratch(obstacles, dims)
         k = 0
         while True:
-            n, reached = _rollout_into(paths[k], near, goal2, f, start, goal, g_goal, obstacles, g_obs, d_o,
-                                       qbuf[lo:hi], g_q, d_q, step, n_steps, step, goal_range)
+            n, reached = _rollout_into(paths[k], scratch, start, goal, obstacles, qbuf[lo:hi], kp,
+                                       n_steps, kp.step)
             if reached:
                 return paths, k + 1, n, qbuf, lo, hi, True, True
-            stuck, mean = _tail_numba(paths[k], i_max + 1, stag_radius)
+            stuck, mean = _tail_numba(paths[k], i_max + 1, kp.stag_radius)
             if not stuck:
                 return paths, k + 1, i_max + 1, qbuf, lo, hi, True, False
             if k >= max_quarks or max_quarks <= 0:
@@ -294,9 +307,7 @@ if HAVE_NUMBA:
             hi += 1
 
 
-def predict_paths(start, goal, g_goal: float, obstacles, g_obs: float, d_o: float, quarks,
-                  g_q: float, d_q: float, step: float, i_max: int, n_stag: int,
-                  stag_radius: float, max_quarks: int, goal_range: float = math.inf,
+def predict_paths(start, goal, obstacles, quarks, kp: KernelParams,
                   use_numba: bool = True) -> tuple[np.ndarray, np.ndarray, list, bool, bool]:
     """PAPF Algorithm 1 with the top-quark loop of Sec. III-B, in one call (one kernel call).
 
@@ -304,47 +315,41 @@ def predict_paths(start, goal, g_goal: float, obstacles, g_obs: float, d_o: floa
     if the last ``n_stag`` points lie within ``stag_radius`` of their mean
     (:func:`tail_stagnation`) the prediction stagnated: a top quark goes at that mean (the
     oldest giving way beyond ``max_quarks``), the path is abandoned and the rollout repeats,
-    at most ``max_quarks`` times. Returns ``(path, quarks, abandoned, resolved, reached)``:
-    the last path (its first ``i_max + 1`` points unless it reached the goal), the quarks in
-    use (oldest first), the abandoned paths, False if still stagnating after ``max_quarks``
-    repetitions, True if the path reached the goal.
+    at most ``max_quarks`` times (every number from ``kp``). Returns ``(path, quarks,
+    abandoned, resolved, reached)``: the last path (its first ``i_max + 1`` points unless it
+    reached the goal), the quarks in use (oldest first), the abandoned paths, False if still
+    stagnating after ``max_quarks`` repetitions, True if the path reached the goal.
     """
-    dims = len(start)
-    args = (np.ascontiguousarray(start, dtype=float), np.ascontiguousarray(goal, dtype=float),
-            float(g_goal), np.ascontiguousarray(obstacles, dtype=float).reshape(-1, dims),
-            float(g_obs), float(d_o), np.ascontiguousarray(quarks, dtype=float).reshape(-1, dims),
-            float(g_q), float(d_q), float(step), int(i_max), int(n_stag), float(stag_radius),
-            int(max_quarks), float(goal_range))
+    args = (*_arrays(start, goal, obstacles, quarks), kp)
     if not (use_numba and HAVE_NUMBA):
         return _predict_python(*args)
     paths, n_paths, length, qbuf, lo, hi, resolved, reached = _predict_numba(*args)
-    abandoned = [paths[k, : int(i_max) + 1] for k in range(n_paths - 1)]
+    abandoned = [paths[k, : kp.i_max + 1] for k in range(n_paths - 1)]
     return paths[n_paths - 1, :length], qbuf[lo:hi], abandoned, bool(resolved), bool(reached)
 
 
 if HAVE_NUMBA:
     @_jit
-    def _field_numba(pos, goal, g_goal, obstacles, g_obs, d_o):  # pragma: no cover - compiled
+    def _field_numba(pos, goal, obstacles, kp):  # pragma: no cover - compiled
         f = np.zeros(pos.shape[0])
         goal2 = np.empty((1, pos.shape[0]))
         goal2[0] = goal
-        _coulomb_acc(pos, goal2, np.inf, g_goal, f)
-        _coulomb_acc(pos, obstacles, d_o, g_obs, f)
+        _coulomb_acc(pos, goal2, np.inf, kp.g_goal, f)
+        _coulomb_acc(pos, obstacles, kp.d_o, kp.g_obs, f)
         return f
 
 
-def field_force(pos, goal, g_goal: float, obstacles, g_obs: float, d_o: float,
-                use_numba: bool = True) -> np.ndarray:
+def field_force(pos, goal, obstacles, kp: KernelParams, use_numba: bool = True) -> np.ndarray:
     """Eq. 2 at ``pos``: ``-g_goal S(goal) - g_obs S(obstacles within d_o)`` (S = coulomb_sum).
 
     Bit for bit :func:`nodes.planner.field.apf_force` without extra repulsors (gains
-    ``k_VG q_V q_G`` and ``k_VO q_V q_O``), one compiled call instead of numpy's dozen.
+    ``k_VG q_V q_G`` and ``k_VO q_V q_O`` from ``kp``), one compiled call instead of numpy's dozen.
     """
     pos = np.ascontiguousarray(pos, dtype=float)
     goal = np.ascontiguousarray(goal, dtype=float)
     obstacles = np.ascontiguousarray(obstacles, dtype=float).reshape(-1, pos.shape[0])
     if use_numba and HAVE_NUMBA:
-        return _field_numba(pos, goal, float(g_goal), obstacles, float(g_obs), float(d_o))
+        return _field_numba(pos, goal, obstacles, kp)
     f = np.zeros_like(pos)
-    f = f - g_goal * coulomb_sum(pos, goal[None, :])
-    return f - g_obs * coulomb_sum(pos, obstacles, d_o)
+    f = f - kp.g_goal * coulomb_sum(pos, goal[None, :])
+    return f - kp.g_obs * coulomb_sum(pos, obstacles, kp.d_o)

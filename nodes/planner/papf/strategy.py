@@ -17,6 +17,7 @@ import numpy as np
 from nodes.planner.core import Plan, ScanView, Strategy
 from nodes.planner.field import EPS_M, APFParams
 from nodes.planner.lazy import lazy_module
+from nodes.planner.papf.params import kernel_params
 from nodes.planner.papf.settings import PAPF
 
 # the kernels (and numba) load when a PAPF planner is built, not with the registry
@@ -86,9 +87,6 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
     quark beyond ``M`` replaces the oldest one. The whole loop is one kernel call
     (:func:`nodes.planner.papf.kernels.predict_paths`).
     """
-    g_goal = apf.k_vg * apf.q_v * apf.q_g
-    g_obs = apf.k_vo * apf.q_v * apf.q_o
-    g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
     dims = len(pos)
     quarks = np.zeros((0, dims)) if quarks is None else np.asarray(quarks, float).reshape(-1, dims)
     if not pp.use_numba:
@@ -101,8 +99,7 @@ def predict(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks=None) -
     if not (pp.stop_at_goal and pp.replace_oldest_quark):
         return _predict_loop(pos, goal, obstacles, apf, pp, quarks)
     path, quarks, abandoned, resolved, reached = kernels.predict_paths(
-        pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q, pp.step_m, pp.i_max,
-        pp.n_stag, pp.stag_radius, pp.max_quarks, pp.pull_range, pp.use_numba)
+        pos, goal, obstacles, quarks, kernel_params(apf, pp), pp.use_numba)
     return Prediction(path, quarks, abandoned, resolved, reached)
 
 
@@ -115,9 +112,7 @@ def _predict_loop(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks) 
     quarks that persist): the quarks already placed all stay and only ``M - M_curr`` more
     may be placed, so once M quarks exist for this goal no repetition is left.
     """
-    g_goal = apf.k_vg * apf.q_v * apf.q_g
-    g_obs = apf.k_vo * apf.q_v * apf.q_o
-    g_q = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
+    kp = kernel_params(apf, pp)
     stop = pp.step_m if pp.stop_at_goal else 0.0
     if pp.replace_oldest_quark:
         quarks = quarks[max(0, quarks.shape[0] - pp.max_quarks):]
@@ -126,12 +121,12 @@ def _predict_loop(pos, goal, obstacles, apf: APFParams, pp: PAPFParams, quarks) 
         budget = pp.max_quarks - quarks.shape[0]
     abandoned = []
     while True:
-        path, reached = kernels.rollout(pos, goal, g_goal, obstacles, g_obs, apf.d_o, quarks, g_q, pp.d_q,
-                                pp.step_m, pp.i_max + pp.n_stag, stop, pp.use_numba, pp.pull_range)
+        path, reached = kernels.rollout(pos, goal, obstacles, quarks, kp, kp.i_max + kp.n_stag, stop,
+                                        pp.use_numba)
         if reached:
             return Prediction(path, quarks, abandoned, True, True)
-        main = path[: pp.i_max + 1]
-        stuck, mean = kernels.tail_stagnation(path, pp.i_max + 1, pp.stag_radius, pp.use_numba)
+        main = path[: kp.i_max + 1]
+        stuck, mean = kernels.tail_stagnation(path, kp.i_max + 1, kp.stag_radius, pp.use_numba)
         if not stuck:
             return Prediction(main, quarks, abandoned, True, False)
         if len(abandoned) >= budget:
@@ -171,12 +166,12 @@ def quark_force(pos, quarks: np.ndarray, apf: APFParams, pp: PAPFParams) -> np.n
     force = np.zeros_like(pos)
     if len(quarks) == 0:
         return force
+    kp = kernel_params(apf, pp)
     r = np.asarray(quarks, dtype=float) - pos
     dist = np.sqrt(np.sum(r * r, axis=1))
-    keep = (dist > EPS_M) & (dist <= (apf.d_o if pp.motion_quarks_within_d_o else pp.d_q))
-    soft = np.maximum(dist[keep], pp.quark_ball_m)
-    gain = pp.k_vq_factor * apf.k_vo * apf.q_v * pp.q_q
-    return force - gain * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
+    keep = (dist > EPS_M) & (dist <= kp.q_lim)
+    soft = np.maximum(dist[keep], kp.ball)
+    return force - kp.g_q * np.sum(r[keep] / (soft ** 3)[:, None], axis=0)
 
 
 #: ``--preset paper``: Algorithm 1 and Sec. III as written, every deviation above off: quarks
@@ -218,8 +213,8 @@ class PAPFStrategy(Strategy):
             for quarks in (None, np.array([[0.4, 0.3]])):
                 papf_kernel.plan_compiled(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]), apf,
                               self.params, quarks)
-        kernels.field_force(np.zeros(2), np.array([1.0, 0.0]), 1.0, np.array([[0.5, 0.1]]), 1.0, 0.5,
-                    self.params.use_numba)
+        kernels.field_force(np.zeros(2), np.array([1.0, 0.0]), np.array([[0.5, 0.1]]),
+                            kernel_params(apf, self.params), self.params.use_numba)
 
     def plan(self, pos: np.ndarray, yaw: float, goal: np.ndarray, view: ScanView,
              apf: APFParams) -> Plan:
@@ -231,15 +226,15 @@ class PAPFStrategy(Strategy):
             return self._plan_compiled(pos, goal, obstacles, apf, kept)
         pred = predict(pos, goal, obstacles, apf, pp, kept)
         self.quarks = pred.quarks
-        g_goal, g_obs = apf.k_vg * apf.q_v * apf.q_g, apf.k_vo * apf.q_v * apf.q_o
+        kp = kernel_params(apf, pp)
         if pred.resolved or not pp.unresolved_global_goal:       # eq. 2: the direction line
-            f_apf = kernels.field_force(pos, goal, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
+            f_apf = kernels.field_force(pos, goal, obstacles, kp, pp.use_numba)
             direction = f_apf if np.linalg.norm(f_apf) > 0 else goal - pos
             target = temporary_goal(pos, direction, pred.path, pp.tie_tol_m)
             mode = ("bypass" if pred.quarks.shape[0] else "drive") if pred.resolved else "unresolved"
         else:   # no stagnation-free path after M repetitions: eq. 7 with the global goal
             target, mode = goal, "unresolved"
-        force = (kernels.field_force(pos, target, g_goal, obstacles, g_obs, apf.d_o, pp.use_numba)
+        force = (kernels.field_force(pos, target, obstacles, kp, pp.use_numba)
                  + quark_force(pos, pred.quarks, apf, pp))
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
                     predicted_path=pred.path, abandoned_paths=pred.abandoned,
