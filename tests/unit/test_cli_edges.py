@@ -326,14 +326,16 @@ def test_a_bag_with_other_names_gets_the_exact_topics_option(tmp_path):
     from tests.support.bags import write_bag
 
     bag = tmp_path / "bag"
-    write_bag(bag, names={"odom": "/odom"})   # as `papf export ros2` names it
+    write_bag(bag, names={"odom": "/wheel_odom"})   # neither the ROSbot's name nor the face's
     res = papf("report", str(bag))
-    assert res.returncode == 2 and res.stderr.strip().endswith("Read it with --topics odom=/odom")
+    assert res.returncode == 2 and \
+        res.stderr.strip().endswith("Read it with --topics odom=/wheel_odom")
     assert "chars)" not in res.stderr
-    res = papf("report", str(bag), "--topics", "odom=/odom")
+    res = papf("report", str(bag), "--topics", "odom=/wheel_odom")
     assert res.returncode == 0, res.stderr
     res = papf("info", str(bag))   # info still lists what the bag holds
-    assert res.returncode == 0 and "/odom" in res.stdout and "--topics odom=/odom" in res.stderr
+    assert res.returncode == 0 and "/wheel_odom" in res.stdout and \
+        "--topics odom=/wheel_odom" in res.stderr
 
 
 def test_a_benchmark_refuses_a_foreign_csv_before_measuring(tmp_path, capsys):
