@@ -384,6 +384,7 @@ class Node:
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._subscribers: list[zenoh.Subscriber] = []
         self._batched: list[tuple[str, type[Message], zenoh.Subscriber]] = []
+        self._gathered: list[Node] = []            # shares drained with this node's (gather)
         self._listeners: list = []                 # matching listeners of on-demand topics
         self._unheard: set[str] = set()            # on-demand topics no subscriber matches now
         self._token = None
@@ -518,7 +519,7 @@ class Node:
         (a scan waits for its odometry) the channels are looked at every
         :data:`URGENT_POLL_S` instead of every :data:`BATCH_POLL_S`.
         """
-        if not self._batched:
+        if not (self._batched or self._gathered):
             while not self.stop:
                 try:
                     yield self.inbox.get(timeout=tick_s)
@@ -548,11 +549,21 @@ class Node:
 
     def _drain_batched(self) -> Iterator[tuple[str, Message]]:
         """Every sample waiting in the batched topics' channels, decoded and checked, in
-        :func:`round_robin` order."""
+        :func:`round_robin` order; then the gathered shares', as ``<namespace>/<topic>``."""
         for topic, msg_type, payload, attachment in round_robin(self._batched):
             msg = self.accept(topic, payload, msg_type, attachment)
             if msg is not None:
                 yield topic, msg
+        for share in self._gathered:
+            for topic, msg in share._drain_batched():
+                yield f"{share.keys.ns}/{topic}", msg
+
+    def gather(self, share: Node) -> None:
+        """Drain ``share``'s batched topics in this node's :meth:`messages` (a process that
+        serves several robots, one :class:`Node` per robot on this session: one loop, one
+        wake per batch for all of them). Its samples are checked by ``share`` (its keys, its
+        seals, its stamps) and come out as ``<share's namespace>/<topic>``."""
+        self._gathered.append(share)
 
     # -- health -----------------------------------------------------------
     def ready(self) -> None:
@@ -589,6 +600,7 @@ class Node:
         for sub in self._subscribers:
             sub.undeclare()
         self._batched.clear()
+        self._gathered.clear()
         for listener in self._listeners:
             listener.undeclare()
         self._listeners.clear()

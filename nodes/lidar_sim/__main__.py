@@ -16,9 +16,17 @@ also publishes the ground truth (pose, velocity, size of every obstacle, person 
 robot within the LiDAR's range) as ``Objects`` with the scan's stamp, just before the scan: the sim's
 answer to ``--objects truth`` (also in HIL, for the virtual obstacles).
 
+One process may serve a whole fleet (``--robots r1,r2,...``, names of the world's
+``[[robots]]``; the launch profile's ``fleet = "one"``): one pybullet world holding every
+robot's box, each robot's ``sim/pose`` and ``sim/bodies`` taken on its own namespace and its
+``scan`` (and ``objects``) put there, its token ``<robot>/alive/lidar_sim`` — the same
+messages, bit for bit, as a LiDAR process per robot, without a process, a session and a copy
+of the world per robot.
+
 Settings: ``--world``, ``--seed`` (noise), ``--beams`` (300), ``--scan-hz`` (10),
 ``--noise-sd`` (0.01 m), ``--noise-rel`` (0), ``--pose-source sim|odom``,
-``--truth-objects``, plus the Zenoh options. Liveliness token: ``<ns>/alive/lidar_sim``.
+``--truth-objects``, ``--robots``, plus the Zenoh options. Liveliness token:
+``<ns>/alive/lidar_sim``.
 """
 
 from __future__ import annotations
@@ -27,12 +35,13 @@ import argparse
 import sys
 
 from common.cliparse import ArgumentParser
-from common.errors import PapfError
+from common.errors import ConfigError, PapfError
 from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
+from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
 from nodes.lidar_sim.options import OPTIONS
 from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
+from schemas import Keys
 from worlds import load_world
 from worlds.messages import truth_objects
 
@@ -90,9 +99,12 @@ def main_sim(args: argparse.Namespace) -> int:
     log = setup_logging(NAME, args.log_level)
     world = load_world(args.world)
     params = LidarParams(beams=args.beams, noise_sd=args.noise_sd, noise_rel=args.noise_rel)
-    schedule = ScanSchedule(period_ns(args.scan_hz, "scan rate"))
-    pose_topic = "sim/pose" if args.pose_source == "sim" else "odom"
+    period = period_ns(args.scan_hz, "scan rate")
     fleet = [r.name for r in world.robots]
+    if args.robots:
+        return main_fleet(args, world, params, period, log)
+    schedule = ScanSchedule(period)
+    pose_topic = "sim/pose" if args.pose_source == "sim" else "odom"
     robot = fleet.index(args.namespace) if args.namespace in fleet else 0
     with LidarSim(world, params, args.seed, robot) as lidar, open_node(NAME, args, log) as node:
         def keep_due(pose) -> None:  # Zenoh's callback thread: only due poses wake the main one
@@ -121,6 +133,68 @@ def main_sim(args: argparse.Namespace) -> int:
             node.publish("scan", lidar.scan(pose.x, pose.y, pose.yaw, pose.stamp_ns))
             count += 1
         log.info("published %d scans", count)
+    return 0
+
+
+def robots_of(args: argparse.Namespace, world) -> list[str]:
+    """``--robots`` checked against the world's ``[[robots]]`` (ConfigError: one line)."""
+    names = [n for n in args.robots.split(",") if n]
+    fleet = [r.name for r in world.robots]
+    unknown = [n for n in names if n not in fleet]
+    if unknown or not names or len(set(names)) != len(names):
+        raise ConfigError(f"--robots {args.robots!r}: names of the world's robots, each once; "
+                          f"{world.name!r} has {', '.join(fleet) or 'none'}")
+    if args.pose_source != "sim":
+        raise ConfigError("--robots (the sim's fleet) scans from the ground truth: no "
+                          "--pose-source odom")
+    return names
+
+
+def main_fleet(args: argparse.Namespace, world, params, period: int, log) -> int:
+    """One process for the fleet's LiDARs (module doc): each robot's share a :class:`Node`
+    on this session under its namespace; its poses and bodies queued to this node's inbox as
+    ``<robot>/<topic>``, each scan cast in the one world as its messages complete."""
+    from nodes.lidar_sim.core import LidarSim
+
+    names = robots_of(args, world)
+    index = {r.name: i for i, r in enumerate(world.robots)}   # each robot's noise: its index
+    objects = ("objects",) if args.truth_objects else ()
+    with LidarSim(world, params, args.seed, fleet=tuple(index)) as lidar, \
+            open_node(NAME, args, log) as node:
+        shares, pairs = {}, {}
+        for name in names:
+            share = shares[name] = Node(NAME, node.session, Keys(name), log)
+            schedule, pairs[name] = ScanSchedule(period), BodyPairs()
+
+            def keep_due(pose, schedule=schedule, topic=f"{name}/sim/pose") -> None:
+                if schedule.due(pose.stamp_ns):   # Zenoh's thread: only due poses wake us
+                    node.inbox.put((topic, pose))
+
+            share.subscribe("sim/pose", handler=keep_due)
+            share.subscribe("sim/bodies",
+                            handler=lambda m, t=f"{name}/sim/bodies": node.inbox.put((t, m)))
+            share.declare_publishers("scan", *objects)
+        for share in shares.values():
+            share.ready()
+        node.ready()   # <namespace>/alive/lidar_sim too: the process itself is up
+        count = 0
+        for topic, msg in node.messages():
+            if topic is None:
+                continue
+            name, _, suffix = topic.partition("/")
+            pose, bodies = pairs[name].add(suffix, msg)
+            if pose is None:
+                continue
+            lidar.place_bodies(bodies)   # the others where they are, this robot's box parked
+            if args.truth_objects:
+                shares[name].publish("objects", truth_objects(
+                    world, pose.stamp_ns, (pose.x, pose.y), params.range_max, bodies))
+            shares[name].publish("scan", lidar.scan(pose.x, pose.y, pose.yaw, pose.stamp_ns,
+                                                    robot=index[name]))
+            count += 1
+        log.info("published %d scans for %d robots", count, len(names))
+        for share in shares.values():
+            share.close()
     return 0
 
 
@@ -159,6 +233,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="pose to scan from: ground truth sim/pose (default) or odom")
     parser.add_argument("--truth-objects", action="store_true",
                         help="also publish the obstacles' ground truth on <ns>/objects (sim)")
+    parser.add_argument("--robots", metavar="R1,R2,...",
+                        help="one process for these robots of the world's [[robots]], each on "
+                             "its own namespace (sim)")
     parser.add_argument("--log-level", default="INFO")
     add_zenoh_args(parser)
     return parser

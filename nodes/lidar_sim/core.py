@@ -12,7 +12,13 @@ obstacle height).
 In a fleet, :meth:`LidarSim.place_bodies` puts the other robots (boxes of the ROSbot's
 200 x 235 x 220 mm body) and the people (discs in the scan plane) at their poses of the scan's instant
 (``Bodies``, from the sim driver) before the rays are cast; a person is a sphere centred on
-the scan plane, whose section there is the person's disc (cheaper to cast against).
+the scan plane, whose section there is the person's disc (cheaper to cast against). One
+:class:`LidarSim` may cast every robot's scans (``fleet``: the robots' names, each with a box
+of its own in the one world): ``place_bodies`` with a robot's ``Bodies`` moves the others'
+boxes where it says and parks the rest — the robot's own — below the floor, so each scan sees the
+same bodies at the same poses as a LiDAR of its own would — the same ranges, bit for bit
+(a ray's hit fraction on a body depends only on that body's shape and pose, and the closest
+hit wins whatever else the world holds; ``tests/unit/test_lidar_fleet.py``).
 
 Invalid readings: no return within ``range_max`` -> ``inf``; a return closer than
 ``range_min`` -> ``inf`` too, because the A3 reports distance 0 ("no valid
@@ -90,7 +96,7 @@ class LidarSim:
     """Cast a scan at a robot pose in ``world`` (see module doc)."""
 
     def __init__(self, world: World, params: LidarParams | None = None, seed: int = 0,
-                 robot: int = 0):
+                 robot: int = 0, fleet: tuple[str, ...] = ()):
         self.params = prm = params or LidarParams()
         if seed < 0:
             raise ConfigError(f"lidar seed = {seed} must be >= 0")
@@ -104,6 +110,10 @@ class LidarSim:
             self.moving = MovingBodies(self.cid, world, self.bodies)
             self._robots: list[int] = []          # other robots' bodies (place_bodies)
             self._people: list = []               # (body, radius) of each person, or None
+            # a fleet's: every robot's box by name, and the pose each was last put at (a box
+            # that did not move since the previous robot's scan is not put again)
+            self._named = {name: self._robot_body() for name in fleet}
+            self._at: dict[int, tuple] = {}
         except Exception:
             p.disconnect(self.cid)
             raise
@@ -113,13 +123,15 @@ class LidarSim:
         says; bodies beyond what it lists wait far below the floor. A person is a sphere of
         its radius centred on the scan plane: in that plane, the same disc as a cylinder's,
         and a ray meets a sphere far more cheaply (measured: 50 people as cylinders made a
-        scan 6.5x slower, as spheres 1.7x)."""
+        scan 6.5x slower, as spheres 1.7x). In a LiDAR of the whole fleet (``fleet``) the
+        robots ``bodies`` lists are the others of the robot whose scan comes next (module doc)."""
+        if self._named:
+            self._place_fleet(bodies)
+            self._place_people(bodies)
+            return
         cid = self.cid
-        shapes = ((self._robots, len(bodies.robots), self._robot_body),
-                  (self._people, len(bodies.person_x), None))
-        for pool, n, make in shapes:
-            while len(pool) < n:
-                pool.append(make() if make else None)
+        while len(self._robots) < len(bodies.robots):
+            self._robots.append(self._robot_body())
         for k, body in enumerate(self._robots):
             if k < len(bodies.robots):
                 quat = p.getQuaternionFromEuler([0, 0, bodies.robot_yaw[k]])
@@ -127,6 +139,30 @@ class LidarSim:
             else:
                 pos, quat = [0.0, 0.0, -100.0], [0, 0, 0, 1]
             p.resetBasePositionAndOrientation(body, pos, quat, physicsClientId=cid)
+        self._place_people(bodies)
+
+    def _place_fleet(self, bodies: Bodies) -> None:
+        """Every robot's box where ``bodies`` has it; any robot it does not list (the one
+        whose scan this is) below the floor."""
+        at = {name: (x, y, yaw) for name, x, y, yaw in
+              zip(bodies.robots, bodies.robot_x, bodies.robot_y, bodies.robot_yaw, strict=True)}
+        for name, body in self._named.items():
+            pose = at.get(name)
+            if self._at.get(body, ()) == pose:
+                continue
+            self._at[body] = pose
+            if pose is None:
+                pos, quat = [0.0, 0.0, -100.0], [0, 0, 0, 1]
+            else:
+                quat = p.getQuaternionFromEuler([0, 0, pose[2]])
+                pos = [pose[0], pose[1], robot.BODY_HEIGHT_M / 2]
+            p.resetBasePositionAndOrientation(body, pos, quat, physicsClientId=self.cid)
+
+    def _place_people(self, bodies: Bodies) -> None:
+        cid = self.cid
+        pool = self._people
+        while len(pool) < len(bodies.person_x):
+            pool.append(None)
         for k in range(len(self._people)):
             if k < len(bodies.person_x) and bodies.person_radius[k] > 0:
                 r = bodies.person_radius[k]
@@ -174,18 +210,22 @@ class LidarSim:
         fraction[np.fromiter(map(_BODY, hits), np.int64, n) < 0] = np.inf
         return fraction * prm.range_max
 
-    def scan(self, pose_x: float, pose_y: float, pose_yaw: float, stamp_ns: int) -> Scan:
-        """The noisy scan taken at robot pose (x [m], y [m], yaw [rad]) at sim time ``stamp_ns``.
+    def scan(self, pose_x: float, pose_y: float, pose_yaw: float, stamp_ns: int,
+             robot: int | None = None) -> Scan:
+        """The noisy scan taken at robot pose (x [m], y [m], yaw [rad]) at sim time ``stamp_ns``
+        (``robot``: the index of the fleet's robot it is for, its noise; default the one
+        given at construction).
 
         Moving obstacles are placed where they are at ``stamp_ns`` first.
         """
         prm = self.params
+        robot = self.robot if robot is None else robot
         if self.moving:
             self.moving.place(stamp_ns)
         ranges = self.true_ranges(pose_x, pose_y, pose_yaw)
         hit = np.isfinite(ranges)
         if prm.noise_sd > 0 or prm.noise_rel > 0:
-            key = [self.seed, stamp_ns % 2**64] + ([self.robot] if self.robot else [])
+            key = [self.seed, stamp_ns % 2**64] + ([robot] if robot else [])
             rng = np.random.default_rng(key)
             noise = rng.normal(0.0, 1.0, prm.beams)
             ranges[hit] += (prm.noise_sd + prm.noise_rel * ranges[hit]) * noise[hit]

@@ -35,6 +35,7 @@ ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth
 FLEET_NODES = ("energy_meter", "planner", "tracker", "lidar_sim")   # one per robot of [[robots]]
+FLEET = ("each", "one")   # a robot node's processes in a fleet: one per robot, or one for all
 PASSING = ("orca", "off")   # a fleet's passing layer (nodes.planner.passing); orca by default
 
 
@@ -64,6 +65,9 @@ class NodeSpec:
     needs: str | None = None                # start only when this variable is set ("var=value":
                                             # only when it has that value)
     if_set: dict = field(default_factory=dict)   # variable (or "var=value") -> extra args
+    fleet: str = "each"                     # a FLEET_NODES node in a fleet: a process per robot
+                                            # (each), or one serving every robot (one:
+                                            # --robots r1,r2,...) when their arguments agree
 
 
 @dataclass(frozen=True)
@@ -135,7 +139,12 @@ def load_profile(name_or_path: str) -> Profile:
         text = path.read_text(encoding="utf-8")
         data = tomllib.loads(text)
         nodes = tuple(NodeSpec(n["name"], n["module"], tuple(n.get("args", ())), n.get("needs"),
-                               dict(n.get("if_set", {}))) for n in data.get("nodes", ()))
+                               dict(n.get("if_set", {})), str(n.get("fleet", "each")))
+                      for n in data.get("nodes", ()))
+        bad = [n.name for n in nodes if n.fleet not in FLEET]
+        if bad:
+            raise ConfigError(f"launch profile {str(path)!r}: node {bad[0]}: fleet must be one of "
+                              f"{', '.join(FLEET)}")
         prof = Profile(data.get("name", path.stem), data.get("description", ""), nodes,
                        data.get("host", "local"), data.get("partner"),
                        bool(data.get("router", False)), tuple(data.get("listen", ())),
@@ -266,13 +275,25 @@ def fleet_of(values: dict) -> tuple:
 def _per_robot(spec: NodeSpec, fleet: tuple, values: dict, prof: Profile, opt: LaunchOptions,
                common) -> list[Process]:
     """A node of each robot: ``<robot>/<node>``, its namespace the robot's name, its planner
-    the robot's own (else ``--planner``), its obstacle tracks as that planner needs."""
+    the robot's own (else ``--planner``), its obstacle tracks as that planner needs. A node
+    with ``fleet = "one"`` whose every robot gets the same arguments is one process instead,
+    ``<node>`` on the run's namespace with ``--robots r1,r2,...`` (each robot's keys and token
+    its own: the node serves each robot as its own process would)."""
+    mine = {}
+    for robot in fleet:
+        mine[robot.name] = dict(values, planner=robot.planner or values.get("planner", ""))
+        mine[robot.name]["objects"] = objects_for(mine[robot.name]["planner"],
+                                                  opt.values.get("objects"), prof.objects)
+        _passing(mine[robot.name], len(fleet), opt, prof)
+    if spec.fleet == "one":
+        alike = {tuple(_argv(spec, m, prof, opt, []) or ()) for m in mine.values()}
+        if len(alike) == 1:
+            argv = _argv(spec, next(iter(mine.values())), prof, opt,
+                         [*common(opt.namespace), "--robots", ",".join(mine)])
+            return [Process(spec.name, prof.host, tuple(argv))] if argv else []
     procs = []
     for robot in fleet:
-        mine = dict(values, planner=robot.planner or values.get("planner", ""))
-        mine["objects"] = objects_for(mine["planner"], opt.values.get("objects"), prof.objects)
-        _passing(mine, len(fleet), opt, prof)
-        argv = _argv(spec, mine, prof, opt, common(robot.name))
+        argv = _argv(spec, mine[robot.name], prof, opt, common(robot.name))
         if argv:
             procs.append(Process(f"{robot.name}/{spec.name}", prof.host, tuple(argv)))
     return procs

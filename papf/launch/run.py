@@ -212,11 +212,15 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
 
 
 def _alive_groups(commands: dict[str, list[str]]) -> dict[str, list[str]]:
-    """Liveliness names per namespace: each process's ``--namespace``, its name's last part."""
+    """Liveliness names per namespace: each process's ``--namespace``, its name's last part;
+    a process serving several robots (``--robots r1,r2``) in each of theirs too."""
     groups: dict[str, list[str]] = {}
     for name, argv in commands.items():
+        node = name.rpartition("/")[2]
         ns = argv[len(argv) - 1 - argv[::-1].index("--namespace") + 1]
-        groups.setdefault(ns, []).append(name.rpartition("/")[2])
+        served = argv[argv.index("--robots") + 1].split(",") if "--robots" in argv else []
+        for n in (ns, *served):
+            groups.setdefault(n, []).append(node)
     return groups
 
 

@@ -49,3 +49,36 @@ def test_node_process_meters_and_survives_garbage(router, session, spawn):
         assert child.returncode is None
     finally:
         sub.undeclare()
+
+
+def test_one_process_meters_each_robot_of_a_fleet_as_its_own_meter(router, session, spawn):
+    """``--robots r1,r2``: each robot's token, its own account on its own namespace, the
+    states a meter of its own computes from the same messages (the core, fed alike)."""
+    from nodes.energy_meter.core import EnergyMeter
+
+    names = ["fm1", "fm2"]
+    got: dict[str, queue.Queue] = {n: queue.Queue() for n in names}
+    subs = [session.declare_subscriber(Keys(n).battery, lambda s, q=got[n]: q.put(
+        BatteryState.from_bytes(s.payload.to_bytes()))) for n in names]
+    child = spawn("energy_meter", [sys.executable, "-m", "nodes.energy_meter", "--model", "motor",
+                                   "--connect", router, "--namespace", "fmproc",
+                                   "--robots", ",".join(names)])
+    try:
+        for ns in (*names, "fmproc"):
+            assert not wait_alive(session, Keys(ns), ["energy_meter"], timeout_s=30,
+                                  abort=lambda: child.returncode is not None), list(child.tail)
+        expected = {n: EnergyMeter("motor") for n in names}
+        for k in range(5):
+            t = k * DT_NS
+            for i, n in enumerate(names):   # different work per robot: different accounts
+                o, w = odom(t, v=0.1 * (i + 1)), wheels(t, (2.0 * (i + 1),) * 4, (0.02 * (i + 1),) * 4)
+                session.put(Keys(n).odom, o.to_bytes())
+                session.put(Keys(n).wheels, w.to_bytes())
+                expected[n].feed(o)
+                want = expected[n].feed(w)
+                assert got[n].get(timeout=15) == want
+        assert got["fm1"].empty() and got["fm2"].empty()
+        assert child.returncode is None
+    finally:
+        for sub in subs:
+            sub.undeclare()

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from common.errors import ConfigError
 from nodes.base_driver.core import DriverCore
 from nodes.base_driver.sim import SimBase
 from nodes.lidar_sim.__main__ import BodyPairs
@@ -15,6 +16,7 @@ from nodes.lidar_sim.core import LidarParams, LidarSim
 from papf.launch.fleet import FleetMeter, fleet_result
 from papf.launch.outcome import RunMonitor
 from papf.launch.profile import LaunchOptions, load_profile, resolve
+from papf.launch.run import _alive_groups
 from schemas.messages import Bodies, Odometry, People, PlannerStatus, Twist
 from worlds import parse_world
 
@@ -105,14 +107,39 @@ def test_launch_gives_each_robot_its_nodes_and_planner(tmp_path):
     graph = resolve(load_profile("sim"), LaunchOptions("sim", values={"world": str(path),
                                                                        "planner": "apf"}))
     nodes = graph.nodes
-    assert {"r1/planner", "r2/planner", "r1/lidar_sim", "r2/energy_meter", "base_driver"} <= set(nodes)
-    assert "planner" not in nodes and sum(n.endswith("base_driver") for n in nodes) == 1
+    # the LiDARs and the meters serve every robot from one process each (fleet = "one")
+    assert {"r1/planner", "r2/planner", "lidar_sim", "energy_meter", "base_driver"} == set(nodes)
 
     def arg(name, flag):
         argv = nodes[name]
         return argv[argv.index(flag) + 1]
     assert (arg("r1/planner", "--planner"), arg("r2/planner", "--planner")) == ("apf", "papf")
-    assert (arg("r1/planner", "--namespace"), arg("r2/lidar_sim", "--namespace")) == ("r1", "r2")
+    assert (arg("r1/planner", "--namespace"), arg("r2/planner", "--namespace")) == ("r1", "r2")
+    assert arg("lidar_sim", "--robots") == arg("energy_meter", "--robots") == "r1,r2"
+    assert _alive_groups(nodes) == {"rosbot": ["energy_meter", "lidar_sim", "base_driver"],
+                                    "r1": ["energy_meter", "planner", "lidar_sim"],
+                                    "r2": ["energy_meter", "planner", "lidar_sim"]}
+
+
+def test_a_fleet_node_whose_robots_differ_runs_per_robot(tmp_path):
+    """Without the passing layer only the IAPF robot's LiDAR gives ground-truth tracks:
+    the LiDARs' arguments differ, so each robot gets its own (the meters still agree)."""
+    path = tmp_path / "f.toml"
+    path.write_text('name = "f"\n[[robots]]\nname = "r1"\nstart = [0, 0]\ngoal = [3, 0]\n'
+                    '[[robots]]\nname = "r2"\nstart = [3, 1]\ngoal = [0, 1]\nplanner = "iapf"\n')
+    nodes = resolve(load_profile("sim"), LaunchOptions(
+        "sim", values={"world": str(path), "planner": "apf", "passing": "off"})).nodes
+    assert {"r1/lidar_sim", "r2/lidar_sim", "energy_meter"} <= set(nodes) and "lidar_sim" not in nodes
+    assert "--truth-objects" in nodes["r2/lidar_sim"] and "--truth-objects" not in nodes["r1/lidar_sim"]
+    assert "--robots" not in nodes["r1/lidar_sim"]
+
+
+def test_a_profile_names_how_a_node_serves_a_fleet(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text('name = "p"\n[[nodes]]\nname = "lidar_sim"\nmodule = "nodes.lidar_sim"\n'
+                    'fleet = "shared"\n')
+    with pytest.raises(ConfigError, match="fleet must be one of each, one"):
+        load_profile(str(path))
 
 
 def pose(t, x, y=0.0, yaw=0.0):
