@@ -37,6 +37,9 @@ from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 DISCOMFORT_M = 0.2        # [m] CrowdNav's discomfort distance
 PERSONAL_SPACE_M = 0.5    # [m] personal space (intrusions)
 _HALF = np.array([BODY_LENGTH_M / 2, BODY_WIDTH_M / 2])
+# [m] a footprint's circumradius: two footprints are at least their centres' distance less
+# twice this apart (less a slack far above the rounding of either computation)
+_REACH_M = 2 * math.hypot(BODY_LENGTH_M / 2, BODY_WIDTH_M / 2) + 1e-9
 
 
 def box_corners(x: float, y: float, yaw: float) -> np.ndarray:
@@ -72,6 +75,33 @@ def _separated(ca: np.ndarray, cb: np.ndarray, yaws) -> bool:
             if pa.max() < pb.min() or pb.max() < pa.min():
                 return True
     return False
+
+
+class _RobotGaps:
+    """The robots' footprint distances of one step: a pair's distance computed once (it is
+    symmetric, to the bit: the same axes tested, the same two minima taken) and only when it
+    could lower a robot's minimum — a pair whose centres are farther apart than that minimum
+    plus two circumradii cannot, so a fleet's step costs a few pairs, not every pair twice."""
+
+    def __init__(self, robots: dict):
+        self.poses = [tuple(float(v) for v in p) for p in robots.values()]
+        self.index = {name: i for i, name in enumerate(robots)}
+        xy = np.array([p[:2] for p in self.poses], float).reshape(-1, 2)
+        self.centres = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+        self._known: dict[tuple[int, int], float] = {}
+
+    def closest(self, name: str, below: float) -> float:
+        """min(``below``, robot ``name``'s footprint distance to every other robot) [m]."""
+        i, best = self.index[name], below
+        for j, centre in enumerate(self.centres[i]):
+            if j == i or centre - _REACH_M >= best:
+                continue
+            pair = (i, j) if i < j else (j, i)
+            d = self._known.get(pair)
+            if d is None:
+                d = self._known[pair] = box_box_distance(self.poses[pair[0]], self.poses[pair[1]])
+            best = min(best, d)
+        return best
 
 
 def _wrap(a: float) -> float:
@@ -160,12 +190,13 @@ class CrowdMeter:
         self._t, self._xy = t_s, xy
         here = radii > 0
         people = (xy[here], radii[here], np.asarray(people_v, float).reshape(-1, 2)[here])
+        gaps = _RobotGaps(robots)
         for name, pose in robots.items():
             if active is None or name in active:
-                self._robot(self._tracks.setdefault(name, _Track()), name, pose, robots, dt,
+                self._robot(self._tracks.setdefault(name, _Track()), name, pose, gaps, dt,
                             people, xy, radii)
 
-    def _robot(self, tr: _Track, name: str, pose, robots, dt: float, people, all_xy,
+    def _robot(self, tr: _Track, name: str, pose, gaps: _RobotGaps, dt: float, people, all_xy,
                all_radii) -> None:
         """One robot's share of a step."""
         x, y, yaw = (float(v) for v in pose)
@@ -200,9 +231,7 @@ class CrowdMeter:
                     tr.zone_s[zone] += dt
         if self._groups:
             self._in_groups(tr, box_corners(x, y, yaw), all_xy, all_radii, dt)
-        for other, opose in robots.items():
-            if other != name:
-                tr.robot_min = min(tr.robot_min, box_box_distance((x, y, yaw), tuple(opose)))
+        tr.robot_min = gaps.closest(name, tr.robot_min)
 
     def _in_groups(self, tr: _Track, corners: np.ndarray, xy: np.ndarray, radii: np.ndarray,
                    dt: float) -> None:

@@ -83,3 +83,27 @@ def test_bad_inputs():
         meter.update(0.5, {"r": (0, 0, 0)}, np.zeros((0, 2)), np.zeros(0))
     with pytest.raises(ValueError, match="radii"):
         meter.update(2.0, {"r": (0, 0, 0)}, np.zeros((2, 2)), np.zeros(1))
+
+
+def test_robot_separation_is_every_pairs_minimum_to_the_bit():
+    """The meter computes a pair once and skips pairs too far apart to matter: each robot's
+    minimum is still that of every pair, both ways, to the bit (random fleets, many steps)."""
+    rng = np.random.default_rng(3)
+    names = [f"r{i}" for i in range(12)]
+    meter = CrowdMeter()
+    naive = dict.fromkeys(names, math.inf)
+    grid = np.array([(i % 4, i // 4) for i in range(len(names))], float) * 1.0
+    seen = set()
+    for step in range(60):   # robots on a 1 m grid, jostling more and more: minima fall
+        xy = grid + rng.uniform(-1, 1, (len(names), 2)) * (0.05 + 0.6 * step / 60)
+        yaw = rng.uniform(-math.pi, math.pi, len(names))
+        robots = {n: (float(x), float(y), float(a)) for n, (x, y), a in zip(names, xy, yaw)}
+        meter.update(step * 0.1, robots, np.zeros((0, 2)), np.zeros(0))
+        for n, pose in robots.items():
+            for m, other in robots.items():
+                if m != n:
+                    naive[n] = min(naive[n], box_box_distance(pose, other))
+        got = meter.results()
+        assert {n: got[n].min_robot_separation_m for n in names} == naive
+        seen |= set(naive.values())
+    assert len(seen) > 30 and min(seen) == 0.0   # many minima, and contacts too
