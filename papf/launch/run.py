@@ -192,7 +192,7 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
                                  goal=(r.goal[0], r.goal[1], r.tolerance))
             seqs[r.name] = seq = RunSequence(session, Keys(r.name), sup, monitor,
                                              run_key=bytes.fromhex(run_key),
-                                             run_id=bytes.fromhex(run_id))
+                                             run_id=bytes.fromhex(run_id), commands=False)
             seq.watch_poses(lambda msg, n=r.name: meter.on_pose(n, msg))
         if world.has_people:   # on the driver's namespace, the run's
             seqs[names[0]].watch_key(Keys(cfg.namespace).key("sim/people"), People,
@@ -275,8 +275,9 @@ def watch_fleet(seqs: dict[str, RunSequence], sup: Supervisor, progress,
     monitors = {n: s.monitor for n, s in seqs.items()}
     last_clock, last_change, next_check = -1, time.monotonic(), 0.0
     while not all(m.done for m in monitors.values()):
-        if not sum(len(seq.drain(0.0)) for seq in seqs.values()):
-            time.sleep(COALESCE_S)
+        for seq in seqs.values():
+            seq.drain(0.0)
+        time.sleep(COALESCE_S)   # found or not: the next messages gather, one wake per batch
         now = time.monotonic()
         if now < next_check:
             continue

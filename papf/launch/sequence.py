@@ -46,7 +46,8 @@ class RunSequence:
     def __init__(self, session: zenoh.Session, keys: Keys, sup: Supervisor, monitor: RunMonitor,
                  pose_topic: str = "sim/pose", stop: Callable[[], bool] = lambda: False,
                  stall_s: float = STALL_S, run_key: bytes | None = None,
-                 run_id: bytes | None = None, link: LinkWatch | None = None):
+                 run_id: bytes | None = None, link: LinkWatch | None = None,
+                 commands: bool = True):
         self.session, self.keys, self.sup, self.monitor = session, keys, sup, monitor
         self.link = link                     # a split run: the link to the robot, watched
         self.stop, self.stall_s = stop, stall_s
@@ -61,6 +62,8 @@ class RunSequence:
                           "events": monitor.on_event, "battery": monitor.on_battery,
                           "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose,
                           "goal": monitor.on_goal}
+        if not commands:   # a fleet's robot: no stop latency in its figures, no cmd_vel to watch
+            del self._handlers["cmd_vel"]
         if pose_topic == "sim/pose":
             # the sim driver puts sim/pose(t) just before clock(t), at every instant: the pose
             # samples carry the sim time, and the launcher is not woken for clock as well
