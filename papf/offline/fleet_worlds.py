@@ -10,6 +10,9 @@ is left alone unless ``--force``), so each layout is a formula and not hand-type
 - ``fleet-ring-8``, ``fleet-ring-16``: 8 and 16 ROSbots evenly on a 6 m ring (3 m radius),
   each to the opposite side (the classic reciprocal-avoidance test, van den Berg et al.
   2011): every path crosses the centre at once;
+- ``fleet-ring-32``: 32 ROSbots on a 12 m ring (6 m radius: the same 1.18 m between
+  neighbours as ``fleet-ring-16``), each to the opposite side — the world format's largest
+  fleet;
 - ``fleet-junction``: two 2 m wide corridors cross; two robots on each arm's centre line
   drive straight across to the opposite arm, the first to its far end, the second behind it
   (8 robots, four streams meeting; 4.8 m each, 48 s at PAPF's 0.1 m/s).
@@ -90,6 +93,8 @@ WORLDS = {
     "fleet-swap-4": ("Four ROSbots at a 4 m square's corners, each to the opposite corner", swap_4),
     "fleet-ring-8": ("8 ROSbots on a 6 m ring, each to the opposite side", lambda: ring(8)),
     "fleet-ring-16": ("16 ROSbots on a 6 m ring, each to the opposite side", lambda: ring(16)),
+    "fleet-ring-32": ("32 ROSbots on a 12 m ring, each to the opposite side",
+                      lambda: ring(32, 2 * RING_RADIUS_M)),
     "fleet-junction": ("Two 2 m corridors cross; two ROSbots on each arm drive straight across",
                        junction),
 }

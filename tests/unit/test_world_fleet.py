@@ -53,8 +53,8 @@ def test_people_walk_to_a_goal_or_along_waypoints():
      "finite number"),
     ({**TWO, "people": [{"start": [0, 0], "goal": [1, 1], "loop": True}]}, "only waypoints"),
     ({**TWO, "people": [{"start": [0, 0], "goal": [1, 1]}] * 201}, "more than 200"),
-    ({"robots": [{"name": f"r{i}", "start": [i, 0], "goal": [i, 5]} for i in range(17)]},
-     "more than 16"),
+    ({"robots": [{"name": f"r{i}", "start": [i, 0], "goal": [i, 5]} for i in range(33)]},
+     "more than 32"),
     ({**TWO, "peeple": []}, "did you mean 'people'?"),
 ])
 def test_a_bad_fleet_or_crowd_is_refused_in_one_line(doc, says):
