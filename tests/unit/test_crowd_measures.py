@@ -97,7 +97,8 @@ def test_robot_separation_is_every_pairs_minimum_to_the_bit():
     for step in range(60):   # robots on a 1 m grid, jostling more and more: minima fall
         xy = grid + rng.uniform(-1, 1, (len(names), 2)) * (0.05 + 0.6 * step / 60)
         yaw = rng.uniform(-math.pi, math.pi, len(names))
-        robots = {n: (float(x), float(y), float(a)) for n, (x, y), a in zip(names, xy, yaw)}
+        robots = {n: (float(x), float(y), float(a))
+                  for n, (x, y), a in zip(names, xy, yaw, strict=True)}
         meter.update(step * 0.1, robots, np.zeros((0, 2)), np.zeros(0))
         for n, pose in robots.items():
             for m, other in robots.items():
