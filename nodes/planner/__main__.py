@@ -96,11 +96,14 @@ def run(args: argparse.Namespace) -> int:
                            send_command=lambda cmd: node.publish("cmd_vel", cmd),
                            want_state=lambda: node.listened("planner/state"),
                            plan_horizon_s=args.plan_horizon)
-        for topic in ("scan", "goal") + (("objects",) if args.objects else ()):
+        for topic in ("scan", "goal"):
             node.subscribe(topic)
         # odometry comes at 50 Hz, scans at 10 Hz: it waits in Zenoh's channel and is taken
-        # when a scan wakes the loop (odom(t) nearly always came first), not one wake each
+        # when a scan wakes the loop (odom(t) nearly always came first), not one wake each;
+        # so do the obstacle tracks, put just before the scan they go with (one wake a cycle)
         node.subscribe("odom", batched=True)
+        if args.objects:
+            node.subscribe("objects", batched=True)
         node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
         params_check = runauth.RequestCheck(runauth.key_from_env(), seal.run_from_env())
         params_q = node.session.declare_queryable(  # answered on this thread, in arrival order

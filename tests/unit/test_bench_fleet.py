@@ -7,7 +7,7 @@ from bench.bench_fleet import fleet_world, parse
 from bench.fleet_driver import split
 
 
-@pytest.mark.parametrize("argv", [["--robots", "17"], ["--passing", "sideways"],
+@pytest.mark.parametrize("argv", [["--robots", "33"], ["--passing", "sideways"],
                                   ["--worlds", "fleet-swap", "--passing", "orca,maybe"],
                                   ["--worlds", "no-such-world"], ["--csv", "x.csv"]])
 def test_bad_options_are_one_line_usage_errors(argv, capsys):
