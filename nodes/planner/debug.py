@@ -12,6 +12,7 @@ draws by (docs/architecture.md "Extending").
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass, field
@@ -83,20 +84,26 @@ def debug_values(owner: str, fields: tuple, values: dict) -> tuple[DebugValue, .
     """The cycle's ``values`` (name -> value) as messages, one per declared field in
     declaration order (a field not given this cycle: empty). DebugError on an undeclared
     name or a value that is not of the field's kind."""
-    if values:
-        unknown = values.keys() - {f.name for f in fields}
-        if unknown:
-            raise DebugError(f"{owner}: debug {sorted(unknown)} not declared; declared: "
-                             f"{[f.name for f in fields] or 'none'} (the strategy's DEBUG)")
-    out = []
-    for f in fields:
-        payload = _CONVERT[f.kind](owner, f.name, values.get(f.name))
-        s = f.style
-        out.append(DebugValue.from_normal(
-            name=f.name, kind=f.kind, unit=f.unit, label=f.caption,
-            colour=tuple(float(x) for x in s.colour), size=float(s.size), dashed=bool(s.dashed),
-            **payload))
-    return tuple(out)
+    if values and not values.keys() <= _names(fields):
+        unknown = sorted(values.keys() - _names(fields))
+        raise DebugError(f"{owner}: debug {unknown} not declared; declared: "
+                         f"{[f.name for f in fields] or 'none'} (the strategy's DEBUG)")
+    return tuple(DebugValue.from_normal(**_constant(f), **_CONVERT[f.kind](
+        owner, f.name, values.get(f.name))) for f in fields)
+
+
+@functools.lru_cache(maxsize=256)
+def _names(fields: tuple) -> frozenset:
+    return frozenset(f.name for f in fields)
+
+
+@functools.lru_cache(maxsize=1024)
+def _constant(f: DebugField) -> dict:
+    """What a field's message holds every cycle: its declaration, in the message's form."""
+    s = f.style
+    return {"name": f.name, "kind": f.kind, "unit": f.unit, "label": f.caption,
+            "colour": tuple(float(x) for x in s.colour), "size": float(s.size),
+            "dashed": bool(s.dashed)}
 
 
 def _array(owner: str, name: str, value, ndim: int) -> np.ndarray:
@@ -114,22 +121,27 @@ def _array(owner: str, name: str, value, ndim: int) -> np.ndarray:
     return arr
 
 
+def _empty(value) -> bool:
+    """None, or an empty sequence or array (the common cycle: nothing to show)."""
+    return value is None or (isinstance(value, (list, tuple, np.ndarray)) and len(value) == 0)
+
+
 def _points(owner: str, name: str, value) -> dict:
-    if value is None:
+    if _empty(value):
         return {"points": ()}
     arr = _array(owner, name, value, 2)
     return {"points": tuple(map(tuple, arr[:, :2].tolist()))}
 
 
 def _point(owner: str, name: str, value) -> dict:
-    if value is None:
+    if _empty(value):
         return {"points": ()}
     arr = _array(owner, name, value, 1)
     return {"points": (tuple(arr[:2].tolist()),) if arr.size else ()}
 
 
 def _paths(owner: str, name: str, value) -> dict:
-    if value is None:
+    if _empty(value):
         return {"paths": ()}
     if isinstance(value, np.ndarray) and value.ndim == 3:   # one conversion for all of them
         arr = _array(owner, name, value, 3)
