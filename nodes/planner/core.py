@@ -186,7 +186,7 @@ class Planner:
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
-        """The latest obstacle tracks (:class:`nodes.planner.iapf.fields.Track`)."""
+        """The latest obstacle tracks (:class:`nodes.planner.road.Track`)."""
         self.objects = tuple(tracks)
 
     def set_road(self, road: Lanes | None) -> None:
