@@ -1,8 +1,12 @@
-"""ROSbot velocity-command safety, shared by the simulated and the real-robot driver.
+"""How a ROSbot takes a velocity command: the controller's gate and the arc it drives.
 
-Pure Python (no pybullet, no zenoh). :class:`CommandGate` does what the ROS 2
-``diff_drive_controller`` of the ROSbot does with ``/cmd_vel`` (docs/architecture.md "The robot",
-docs/architecture.md "Safety"):
+One gate for every ROSbot of the stack: the world simulator's robots
+(``nodes/world_sim``), the real robot's base driver (``nodes/base_driver``), the ROSbot
+emulator (``papf/robot/emulator.py``) and the offline runs (``papf/offline``), so a command
+is limited alike wherever it goes. Pure Python (no pybullet, no zenoh).
+
+:class:`CommandGate` does what the ROS 2 ``diff_drive_controller`` of the ROSbot does with
+``/cmd_vel`` (docs/architecture.md "The robot", docs/architecture.md "Safety"):
 
 1. non-finite ``v`` or ``w`` -> the whole command is treated as a stop (0, 0);
 2. velocity clamp ``|v| <= v_max``, ``|w| <= w_max``;
@@ -26,9 +30,10 @@ from common import robot
 from common.errors import ConfigError
 from common.params import SEED, Spec, pos
 
-# Declared ranges of the driver's options (common.params): checked when parsed and here.
+# Declared ranges of the drivers' options (common.params): the world simulator's and the
+# ROSbot driver's command lines share them; checked when parsed and again when used.
 # The watchdog is a safety setting: past 2 s a robot keeps driving on a lost command.
-OPTIONS: dict[str, Spec] = {
+DRIVER_OPTIONS: dict[str, Spec] = {
     "odom_hz": pos(1000.0, "Hz"), "scan_hz": pos(100.0, "Hz"),
     "watchdog": pos(2.0, "s", safety=True), "lockstep_timeout": pos(60.0, "s"), "seed": SEED,
 }
