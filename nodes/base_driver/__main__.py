@@ -25,9 +25,8 @@ import os
 import sys
 
 from common.cliparse import ArgumentParser
-from common.drive import DRIVER_OPTIONS
+from common.drive import add_driver_args
 from common.errors import PapfError
-from common.params import arg_type
 from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast
 from nodes.base_driver.ports import PORTS, VARIANTS
@@ -55,10 +54,6 @@ def simulator_argv(argv: list[str]) -> list[str] | None:
     return [sys.executable, "-m", SIMULATOR, *rest]
 
 
-def _opt(name: str):
-    return arg_type("--" + name.replace("_", "-"), DRIVER_OPTIONS[name])
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(prog="python -m nodes.base_driver",
                             description=plain(__doc__.split("\n\n")[0]),
@@ -68,19 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--driver", choices=("sim", "rosbot"), default="sim",
                         help="the real robot (rosbot), or the world simulator (sim, the default: "
                              "python -m nodes.world_sim)")
-    parser.add_argument("--world", default="energy",
-                        help="world name or .toml path: its start is the robot's pose at run "
-                             "start (default energy)")
-    parser.add_argument("--seed", type=_opt("seed"), default=0, help="(the simulator's)")
-    parser.add_argument("--realtime", action="store_true", help="(the simulator's; always here)")
-    parser.add_argument("--lockstep-timeout", type=_opt("lockstep_timeout"), default=2.0,
-                        metavar="S", help="(the simulator's)")
-    parser.add_argument("--scan-hz", type=_opt("scan_hz"), default=10.0, help="(the simulator's)")
-    parser.add_argument("--odom-hz", type=_opt("odom_hz"), default=50.0,
-                        help="odometry, wheels and clock tick (50)")
-    parser.add_argument("--watchdog", type=_opt("watchdog"), default=0.5, metavar="S",
-                        help="stop when no fresh command for S seconds (default 0.5)")
-    parser.add_argument("--log-level", default="INFO")
+    add_driver_args(parser, simulator=False)
     add_zenoh_args(parser)
     return parser
 

@@ -24,9 +24,8 @@ import sys
 import time
 
 from common.cliparse import ArgumentParser
-from common.drive import DRIVER_OPTIONS
+from common.drive import add_driver_args
 from common.errors import PapfError
-from common.params import arg_type
 from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
 from nodes.world_sim.loop import WorldLoop
@@ -133,31 +132,13 @@ def fleet_nodes(node: Node, names: list[str], log):
     return publish
 
 
-def _opt(name: str):
-    return arg_type("--" + name.replace("_", "-"), DRIVER_OPTIONS[name])
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(prog="python -m nodes.world_sim",
                             description=plain(__doc__.split("\n\n")[0]),
                             formatter_class=argparse.RawDescriptionHelpFormatter,
                             epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"
                             + describe(PORTS, VARIANTS))
-    parser.add_argument("--world", default="energy", help="world name or .toml path")
-    parser.add_argument("--seed", type=_opt("seed"), default=0, help="noise seed (default 0)")
-    parser.add_argument("--realtime", action="store_true",
-                        help="pace sim time to the wall clock and never wait for commands")
-    parser.add_argument("--lockstep-timeout", type=_opt("lockstep_timeout"),
-                        default=2.0, metavar="S",
-                        help="wall seconds to wait for the cmd_vel of a scan (default 2.0)")
-    parser.add_argument("--scan-hz", type=_opt("scan_hz"),
-                        default=10.0, help="scan / lockstep rate (10)")
-    parser.add_argument("--odom-hz", type=_opt("odom_hz"),
-                        default=50.0, help="odometry rate (50)")
-    parser.add_argument("--watchdog", type=_opt("watchdog"),
-                        default=0.5, metavar="S",
-                        help="stop when no fresh command for S seconds (default 0.5)")
-    parser.add_argument("--log-level", default="INFO")
+    add_driver_args(parser)
     add_zenoh_args(parser)
     return parser
 
