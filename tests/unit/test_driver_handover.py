@@ -48,3 +48,14 @@ def test_the_drivers_own_help_and_a_mistake_before_the_hand_over():
     assert "<bridge>/odometry/filtered" in helped.stdout and "--bridge-namespace" in helped.stdout
     res = _node("--watchdg", "1")
     assert res.returncode == 2 and "did you mean --watchdog?" in res.stderr, res.stderr
+
+
+def test_node_info_names_both_packages_behind_the_drivers_token():
+    """``papf node info base_driver``: the simulator's ports and the robot driver's."""
+    from papf.bus.graph import node_ports
+
+    variants = node_ports("base_driver").variants
+    assert list(variants) == ["--driver sim", "--driver rosbot"]
+    assert ("out", "sim/pose", "Odometry") in variants["--driver sim"]
+    assert ("out", "link", "LinkHealth") in variants["--driver rosbot"]
+    assert list(node_ports("planner").variants)[0] == ""
