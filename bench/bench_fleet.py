@@ -238,7 +238,7 @@ def parse(argv=None) -> argparse.Namespace:
     parser.add_argument("--timeout", type=float, default=120.0,
                         help="with --worlds: sim seconds at most (120)")
     parser.add_argument("--driver-split", metavar="R1,R2",
-                        help="robot counts: the sim driver's CPU split in-process instead")
+                        help="robot counts: the world simulator's CPU split in-process instead")
     args = parser.parse_args(argv)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")

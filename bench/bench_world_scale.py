@@ -1,5 +1,5 @@
 """Cost against the size of the world: worlds of N cylinders and square halls from ROS maps
-of W x W m at 5 cm, each run by the simulated driver + LiDAR loop (the ``papf bench sim
+of W x W m at 5 cm, each run by the world simulator + LiDAR loop (the ``papf bench sim
 --loop`` chain: ``nodes.world_sim`` and ``nodes.lidar_sim`` as processes, every scan
 answered here with a constant Twist).
 

@@ -26,7 +26,7 @@ from schemas.messages import WHEEL_NAMES
 WHEEL_RADIUS = robot.WHEEL_RADIUS_M          # [m]
 MASS = robot.MASS_KG                         # [kg]
 YAW_INERTIA = robot.YAW_INERTIA_KGM2         # [kg m^2]
-EFFECTIVE_TRACK = robot.EFFECTIVE_TRACK_M    # [m] (the sim driver reproduces the same)
+EFFECTIVE_TRACK = robot.EFFECTIVE_TRACK_M    # [m] (the world simulator reproduces the same)
 
 
 # -- commands -----------------------------------------------------------------------------------

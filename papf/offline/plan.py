@@ -4,7 +4,7 @@
 The real :class:`nodes.planner.core.Planner` in the one offline closed loop
 (:func:`papf.offline.unicycle.closed_loop`) with the stack's robot: scans from
 :class:`nodes.lidar_sim.core.LidarSim` (pybullet rays, seeded noise) every control period
-``dt`` (10 Hz, as the stack), the start pose jittered as the sim driver does for the same
+``dt`` (10 Hz, as the stack), the start pose jittered as the world simulator does for the same
 seed, the driver's :class:`~common.drive.CommandGate` (|v| <= 0.9 m/s,
 |w| <= 3 rad/s, 1 m/s^2, 4 rad/s^2) and the footprint box of the driver's chassis
 (0.200 x 0.235 m) against the world's obstacles in pybullet (:mod:`worlds.bullet`); in 3-D

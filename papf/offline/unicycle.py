@@ -9,7 +9,7 @@ drives an ideal unicycle (:func:`~common.drive.unicycle`, exact arcs every
 What senses and what collides is passed in: the stack's LiDAR (pybullet) and the robot's
 footprint box (:class:`FootprintChecker`) for ``papf plan``; exact numpy rays and a point
 (:mod:`worlds.geometry`) for the planner tests (:mod:`tests.support.toysim`, worlds from :mod:`worlds.toy`). The start pose of a
-seed is the sim driver's (:func:`start_pose`). No wheel slip or skid dynamics: that is what
+seed is the world simulator's (:func:`start_pose`). No wheel slip or skid dynamics: that is what
 the stack's pybullet driver adds.
 """
 

@@ -50,7 +50,7 @@ class EmulatedRosbot:
     Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
     With ``--world`` the body also touches the world's obstacles: each contact during a run
     (``run_started`` .. ``run_ended`` on our ``<ns>/events``) is a ``collision`` event there,
-    stamped on the run's clock, as the sim driver reports one (:class:`BodyContacts`).
+    stamped on the run's clock, as the world simulator reports one (:class:`BodyContacts`).
     """
 
     def __init__(self, cmd_timeout_s: float = 0.5, start: Pose2D = ORIGIN):
@@ -84,7 +84,7 @@ class EmulatedRosbot:
 
 
 class BodyContacts:
-    """The emulated body against the world's obstacles (what the sim driver's physics reports
+    """The emulated body against the world's obstacles (what the world simulator's physics reports
     as ``collision`` events): the ROSbot's footprint box (:mod:`common.robot`), sampled at
     its corners and edge midpoints, inside an obstacle's footprint = contact. One event per
     contact episode per obstacle; an episode ends after :data:`CONTACT_GAP_NS` without
