@@ -65,7 +65,7 @@ class RunSequence:
         if not commands:   # a fleet's robot: no stop latency in its figures, no cmd_vel to watch
             del self._handlers["cmd_vel"]
         if pose_topic == "sim/pose":
-            # the sim driver puts sim/pose(t) just before clock(t), at every instant: the pose
+            # the world simulator puts sim/pose(t) just before clock(t), at every instant: the pose
             # samples carry the sim time, and the launcher is not woken for clock as well
             del self._handlers["clock"]
             self._handlers[pose_topic] = lambda msg: (monitor.on_pose(msg),

@@ -16,3 +16,13 @@ def scan(t: int, n: int = 16) -> Scan:
     """A scan at ``t`` [ns] of ``n`` beams round the robot that see nothing (all inf)."""
     return Scan(stamp_ns=t, angle_min=0.0, angle_increment=2 * np.pi / n, range_min=0.2,
                 range_max=10.0, ranges=np.full(n, np.inf, dtype=np.float32))
+
+
+def planner_debug(planner: str, **values) -> tuple:
+    """``PlannerState.debug`` of registered ``planner`` with these values of its declared
+    fields (the others empty), for states built by hand."""
+    from nodes.planner.debug import debug_values
+    from nodes.planner.registry import PLANNERS
+
+    cls = PLANNERS[planner]
+    return debug_values(cls.name, cls.DEBUG, values)

@@ -17,11 +17,11 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from common.drive import DRIVER_OPTIONS
 from common.errors import ConfigError, SchemaError
 from common.params import Spec, check_value
 from common.transport import Node
 from common.units import MAX_STAMP_NS
-from nodes.base_driver.limits import OPTIONS as DRIVER_OPTIONS
 from nodes.energy_meter.battery import PackParams
 from nodes.energy_meter.models import MOTOR_SPECS, PAPER_SPECS
 from nodes.lidar_sim.options import OPTIONS as LIDAR_OPTIONS

@@ -13,10 +13,10 @@ import pytest
 from common.errors import ConfigError
 from common.transport import Node
 from common.units import MAX_STAMP_NS, StampGuard
-from nodes.base_driver.core import DriverConfig
 from nodes.energy_meter.core import EnergyMeter
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import check_setting, load_params, make_planner, settings_of
+from nodes.world_sim.core import WorldConfig
 from schemas import Keys
 from schemas.keys import STAMP_ORDERED
 from schemas.messages import Goal, Odometry, Scan
@@ -51,7 +51,7 @@ def test_live_parameter_path_is_the_same_check():
 
 def test_nodes_check_their_settings_again():
     with pytest.raises(ConfigError, match="watchdog"):
-        DriverConfig.from_rates(watchdog_s=float("inf"))
+        WorldConfig.from_rates(watchdog_s=float("inf"))
     with pytest.raises(ConfigError, match="stale_timeout"):
         PlannerLoop(make_planner("apf"), stale_timeout_s=float("nan"))
     with pytest.raises(ConfigError, match="initial_soc"):
