@@ -16,3 +16,10 @@ def scan(t: int, n: int = 16) -> Scan:
     """A scan at ``t`` [ns] of ``n`` beams round the robot that see nothing (all inf)."""
     return Scan(stamp_ns=t, angle_min=0.0, angle_increment=2 * np.pi / n, range_min=0.2,
                 range_max=10.0, ranges=np.full(n, np.inf, dtype=np.float32))
+
+
+def scan_63(t: int) -> Scan:
+    """A scan at ``t`` [ns] of 63 beams 0.1 rad apart from angle 0 that see nothing (all inf):
+    what the stamp tests of the node intake and the planner loop feed."""
+    return Scan(stamp_ns=t, angle_min=0.0, angle_increment=0.1, range_min=0.1, range_max=10.0,
+                ranges=np.full(63, np.inf, np.float32))

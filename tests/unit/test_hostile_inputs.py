@@ -99,9 +99,10 @@ def test_a_huge_world_argument_is_one_line():
         load_world("x" * 50_000)
 
 
-def _launch(**kw) -> LaunchOptions:
+def _launch(**kw):
+
     values = {"world": "energy", **kw.pop("values", {})}
-    return LaunchOptions("sim", values=values, **kw)
+    return LaunchOptions(kw.pop("profile", "sim"), values=values, **kw)
 
 
 @pytest.mark.parametrize("opt,match", [

@@ -7,7 +7,6 @@ import logging
 import subprocess
 import sys
 
-import numpy as np
 import pytest
 
 from common.errors import ConfigError
@@ -19,7 +18,9 @@ from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import check_setting, load_params, make_planner, settings_of
 from schemas import Keys
 from schemas.keys import STAMP_ORDERED
-from schemas.messages import Goal, Odometry, Scan
+from schemas.messages import Goal
+from tests.support.messages import odom as _odom
+from tests.support.messages import scan_63 as _scan
 
 
 @pytest.mark.parametrize("setting", ["d_o=nan", "d_o=-1", "d_o=0", "v_max=0", "v_max=inf",
@@ -70,15 +71,6 @@ def test_node_options_refused_at_parse_time_with_exit_2():
 
 
 # -- item 2: stamps ------------------------------------------------------------------------------
-def _odom(t):
-    return Odometry(stamp_ns=t, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0)
-
-
-def _scan(t):
-    return Scan(stamp_ns=t, angle_min=0.0, angle_increment=0.1, range_min=0.1, range_max=10.0,
-                ranges=np.full(63, np.inf, np.float32))
-
-
 @pytest.mark.parametrize("stamp", [-2**63, -1, MAX_STAMP_NS + 1, 2**64 - 1])
 def test_extreme_stamp_is_dropped_and_counted(stamp):
     node = Node("probe", None, Keys("t"), logging.getLogger("probe"))

@@ -11,7 +11,8 @@ from common.intake import Trust
 from common.units import MAX_STAMP_NS, StampGuard
 from nodes.recorder.budget import QUEUE_FULL, Budget
 from papf.launch.resume import Journal, RobotRun, decide, write_journal
-from schemas import Event, Odometry
+from schemas import Event
+from tests.support.messages import odom as _odom
 
 KEY, OTHER = b"k" * 16, b"o" * 16
 RUN, RUN2 = bytes.fromhex("11" * 8), bytes.fromhex("22" * 8)
@@ -79,10 +80,6 @@ def test_a_fixed_run_node_takes_its_run_only_and_no_key_takes_all():
     assert planner.check("scan", "rosbot/scan", *_sealed(key_expr="rosbot/scan", run=RUN2)[:2]) \
         == seal.OTHER_RUN
     assert Trust(None, None).check("scan", "rosbot/scan", b"x", None) == "ok"
-
-
-def _odom(stamp: int) -> Odometry:
-    return Odometry(stamp_ns=stamp, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0)
 
 
 def test_a_stamp_from_the_future_is_dropped_and_moves_nothing():
