@@ -23,6 +23,9 @@ from tests.support.cli import papf
 KEYS = Keys("rosbot")
 
 
+SETTINGS = settings(max_examples=60, deadline=None)
+
+
 def _scan(stamp: int = 100) -> Scan:
     return Scan(stamp_ns=stamp, angle_min=-math.pi, angle_increment=0.1, range_min=0.2,
                 range_max=25.0, ranges=[1.0] * 20)
@@ -125,9 +128,6 @@ def test_teleop_keys_and_limits():
         TeleopState(max_v=2.0)
 
 
-SETTINGS = settings(max_examples=60, deadline=None)
-
-
 @SETTINGS
 @given(st.lists(st.integers(0, 3000), min_size=1, max_size=300))
 def test_inbox_stays_within_its_bounds_and_keeps_the_newest(sizes):
@@ -152,7 +152,7 @@ def test_echo_under_a_flood_says_it_dropped_and_how_many():
 
 
 @settings(max_examples=40, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.text(max_size=400))
 def test_echoed_text_has_no_control_characters_and_is_bounded(text):
     shown = safe_text(text)

@@ -16,6 +16,9 @@ from papf.cli.report import finite
 from papf.experiments.journal import Journal, run_key
 from worlds import load_world, world_path
 
+SETTINGS = settings(max_examples=40, deadline=None,
+                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+
 
 @pytest.mark.parametrize("experiment", [["crowd", "--people", "0", "--runs", "1"],
                                         ["random", "--n", "1"], ["traffic"], ["paper-tests"],
@@ -27,10 +30,6 @@ def test_an_experiment_out_that_is_a_file_is_one_line_before_any_run(tmp_path, c
     f.write_text("mine")
     assert main(["experiment", *experiment, "--out", str(f)]) == 2
     assert "is a file" in capsys.readouterr().err and f.read_text() == "mine"
-
-
-SETTINGS = settings(max_examples=40, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 @SETTINGS

@@ -12,6 +12,9 @@ from hypothesis import strategies as st
 
 from common.outfiles import OutputError, check_output, exclusive, output
 
+SETTINGS = settings(max_examples=25, deadline=None,
+                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+
 
 @pytest.mark.skipif(__import__("os").geteuid() == 0, reason="root writes anywhere")
 def test_an_output_in_a_read_only_directory_is_refused_before_the_work(tmp_path):
@@ -43,10 +46,6 @@ def test_a_jsonl_trace_appends_only_to_json_lines(tmp_path):
         with append_jsonl(good) as fh:
             fh.write('{"v": 1}\n')
     assert good.read_text() == '{"v": 1}\n{"v": 1}\n'
-
-
-SETTINGS = settings(max_examples=25, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 @SETTINGS

@@ -27,6 +27,9 @@ from tests.support.messages import scan_63 as _scan
 MS = 1_000_000
 
 
+KEY = bytes.fromhex(runauth.new_key())
+
+
 def loop(**kw):
     lp = PlannerLoop(make_planner("apf"), **kw)
     out = lp.on_message("goal", Goal(stamp_ns=7, x=3.0, y=0.0), 0.0)
@@ -146,9 +149,6 @@ def test_lockstep_pair_timeout_outlasts_the_drivers_lockstep_timeout():
     assert LOCKSTEP_PAIR_TIMEOUT_S > max(driver_default, float(profile["defaults"]["lockstep_timeout"]))
     assert loop().pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
     assert TrackerLoop(Tracker(TrackerParams())).pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
-
-
-KEY = bytes.fromhex(runauth.new_key())
 
 
 def _ask(planner, request: dict, check) -> dict:

@@ -15,6 +15,11 @@ from nodes.planner.registry import PLANNERS, check_setting, load_params, make_pl
 SETTINGS = settings(max_examples=60, deadline=None)
 
 
+FLOORS = {"d_o": S.D_O_MIN_M, "k_vo_l": S.K_VO_L_MIN, "q_o": -S.CHARGE_MIN, "q_v": -S.CHARGE_MIN}
+PROBES = ["d_o=1e-9", "k_vo_l=1e-300", "q_o=-1e-300", "q_v=-1e-300", "d_o=0.2",
+          "arapf.k_ro_l=1e-9", "wang.k_rep_l=1e-9", "wang.rho_0=1e-9"]
+
+
 @SETTINGS
 @given(k_vg=st.floats(0.01, 60.0), q_g=st.floats(0.01, 12.0), k_vo_l=st.floats(1.0, 60.0),
        q_o=st.floats(-5.0, -0.2))
@@ -49,13 +54,6 @@ def test_attraction_settings_measured_to_collide_are_refused(planner, sets, matc
         return
     with pytest.raises(ConfigError, match=match):
         load_params(planner, None, sets)
-
-
-FLOORS = {"d_o": S.D_O_MIN_M, "k_vo_l": S.K_VO_L_MIN, "q_o": -S.CHARGE_MIN, "q_v": -S.CHARGE_MIN}
-
-
-PROBES = ["d_o=1e-9", "k_vo_l=1e-300", "q_o=-1e-300", "q_v=-1e-300", "d_o=0.2",
-          "arapf.k_ro_l=1e-9", "wang.k_rep_l=1e-9", "wang.rho_0=1e-9"]
 
 
 @pytest.mark.parametrize("setting", PROBES)

@@ -28,6 +28,10 @@ from tests.conftest import tiny_disk_free
 from tests.support.cli import papf
 from tests.support.recordings import ODOM_RUN_N, odom_at, write_odom_recording
 
+SETTINGS = settings(max_examples=25, deadline=None,
+                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+N = ODOM_RUN_N
+
 
 def test_papf_info_shows_a_recorded_peers_escape_sequences_never_runs_them(tmp_path, capsys):
     from nodes.recorder.writer import RunWriter
@@ -42,10 +46,6 @@ def test_papf_info_shows_a_recorded_peers_escape_sequences_never_runs_them(tmp_p
     out = capsys.readouterr().out
     assert "\x1b" not in out and "\x07" not in out and "\\x1b[2J" in out
     assert max(len(line) for line in out.splitlines()) < 1000   # a 100 KB key: one short line
-
-
-SETTINGS = settings(max_examples=25, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 def test_the_recorder_refuses_an_existing_recording(tmp_path):
@@ -134,9 +134,6 @@ def test_every_reader_refuses_a_decompression_bomb_before_allocating(tmp_path, m
         Recording(path)
     stats = recover(path, tmp_path / "fixed.mcap")
     assert stats.scan.bad_chunks == 1 and stats.messages == 0
-
-
-N = ODOM_RUN_N
 
 
 @pytest.fixture

@@ -11,6 +11,8 @@ from common import runauth
 from papf.launch.outcome import RunMonitor
 from schemas import Goal
 
+KEY = bytes.fromhex(runauth.new_key())
+
 
 def test_a_key_directory_another_user_made_or_linked_is_not_used(tmp_path, monkeypatch):
     import os
@@ -26,9 +28,6 @@ def test_a_key_directory_another_user_made_or_linked_is_not_used(tmp_path, monke
         runauth.publish_key("rosbot", runauth.new_key())
     assert runauth.read_key("rosbot") is None
     assert (elsewhere / "rosbot.key").read_text() == "00" * 32 + " 1\n"
-
-
-KEY = bytes.fromhex(runauth.new_key())
 
 
 @settings(max_examples=60, deadline=None)

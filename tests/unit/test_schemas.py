@@ -15,6 +15,17 @@ from schemas.base import Message
 from schemas.keys import Keys
 from schemas.messages import ALL_MESSAGES
 
+SETTINGS = settings(max_examples=60, deadline=None)
+FAST = settings(max_examples=150, deadline=None,
+                suppress_health_check=[HealthCheck.too_slow])
+# msgpack-able values, including the awkward ones: huge ints, nan/inf, bytes, nesting
+scalars = st.one_of(st.none(), st.booleans(), st.integers(-2**63, 2**64 - 1),
+                    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=20),
+                    st.binary(max_size=64))
+values = st.recursive(scalars, lambda inner: st.one_of(
+    st.lists(inner, max_size=6), st.dictionaries(st.text(max_size=8), inner, max_size=6)),
+    max_leaves=20)
+
 
 def samples() -> list[Message]:
     return [
@@ -194,9 +205,6 @@ def test_objects_nest_tracks_and_name_a_bad_one():
     assert schema["items"]["title"] == "papf/ObjectTrack/v1"
 
 
-SETTINGS = settings(max_examples=60, deadline=None)
-
-
 @SETTINGS
 @given(st.text(min_size=1, max_size=300))
 def test_a_namespace_taken_is_a_plain_printable_key(ns):
@@ -214,21 +222,6 @@ def test_namespaces_must_make_valid_keys():
         with pytest.raises(ValueError):
             Keys(bad)
     assert Keys("lab/r1").scan == "lab/r1/scan"
-
-
-FAST = settings(max_examples=150, deadline=None,
-                suppress_health_check=[HealthCheck.too_slow])
-
-
-# msgpack-able values, including the awkward ones: huge ints, nan/inf, bytes, nesting
-scalars = st.one_of(st.none(), st.booleans(), st.integers(-2**63, 2**64 - 1),
-                    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=20),
-                    st.binary(max_size=64))
-
-
-values = st.recursive(scalars, lambda inner: st.one_of(
-    st.lists(inner, max_size=6), st.dictionaries(st.text(max_size=8), inner, max_size=6)),
-    max_leaves=20)
 
 
 @FAST

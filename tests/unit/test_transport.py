@@ -17,6 +17,9 @@ from schemas.messages import Odometry
 from tests.support.messages import odom as _odom
 from tests.support.messages import scan_63 as _scan
 
+FAST = settings(max_examples=150, deadline=None,
+                suppress_health_check=[HealthCheck.too_slow])
+
 
 def test_config_defaults_to_embedded_router_client():
     conf = zenoh_config()
@@ -47,10 +50,6 @@ def test_extreme_stamp_is_dropped_and_counted(stamp):
     assert node.accept("odom", _odom(stamp).to_bytes()) is None
     assert node.accept("scan", _scan(stamp).to_bytes()) is None
     assert node.bad_messages == {"odom": 1, "scan": 1}
-
-
-FAST = settings(max_examples=150, deadline=None,
-                suppress_health_check=[HealthCheck.too_slow])
 
 
 def _node() -> Node:

@@ -40,6 +40,10 @@ thickness = 0.05
 """
 
 
+SETTINGS = settings(max_examples=60, deadline=None)
+BASE = world_data("energy-blocking")
+
+
 def write(tmp_path, text, name="w.toml"):
     p = tmp_path / name
     p.write_text(text)
@@ -126,9 +130,6 @@ def test_a_goal_tolerance_below_the_floor_is_refused_by_goal_and_worlds(toleranc
         parse_world({"goal": {"position": [1.0, 0.0], "tolerance": tolerance}}, "t")
 
 
-SETTINGS = settings(max_examples=60, deadline=None)
-
-
 @SETTINGS
 @given(st.text(max_size=120))
 def test_a_world_name_that_is_taken_is_a_plain_file_name(name):
@@ -154,15 +155,12 @@ def test_a_default_world_name_is_the_file_stem_made_plain(stem):
     assert name.isprintable() and not name.startswith(".") and 0 < len(name) <= 100
 
 
-BASE = world_data("energy-blocking")
-
-
 def _with(**top) -> dict:
     return {**json.loads(json.dumps(BASE)), **top}
 
 
 @settings(max_examples=40, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(key=st.text(st.characters(min_codepoint=97, max_codepoint=122), min_size=1, max_size=12))
 def test_any_unknown_obstacle_key_is_refused(key):
     data = _with()
@@ -185,7 +183,7 @@ def test_a_misspelt_key_says_what_was_meant(data, match):
 
 
 @settings(max_examples=40, deadline=None,
-                    suppress_health_check=[HealthCheck.function_scoped_fixture])
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(table=st.text(st.characters(min_codepoint=97, max_codepoint=122), min_size=1, max_size=10))
 def test_any_unknown_table_is_refused(table):
     if table in TOP:
