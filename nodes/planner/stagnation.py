@@ -10,12 +10,21 @@ import numpy as np
 from common.units import NS_PER_S
 from nodes.planner.field import APFParams
 
+# [ns] a gap this long between two checks is time the planner did not steer (no scan reached
+# it: a link outage, a sensor gone quiet), ten scan periods of the RPLIDAR's 10 Hz
+INPUT_GAP_NS = 1_000_000_000
+
 
 class StagnationWatch:
     """Stagnated when, within ``stagnation_window_s``, the robot makes no progress of
     ``stagnation_progress_m`` towards the goal and does not move ``stagnation_roam_m`` away
     from where the window began (nor searches, e.g. PAPF placing a quark); or when it makes
-    no such progress within ``stagnation_max_s`` (ours, APFParams.stagnation_*)."""
+    no such progress within ``stagnation_max_s`` (ours, APFParams.stagnation_*).
+
+    Time without input is not time without progress: a gap of :data:`INPUT_GAP_NS` or more
+    between two checks (the planner got no scan: a link outage on a split) moves the
+    window's and the last progress's times forward by the gap, so the robot is judged on
+    the time it was steered. In simulation (lockstep, offline) no such gap occurs."""
 
     def __init__(self) -> None:
         self.reset()
@@ -26,9 +35,15 @@ class StagnationWatch:
         self.best_ns = 0           # time of the last progress [ns]
         self.window_ns = 0         # time the current window began [ns]
         self.anchor = None         # position where the current window began [m]
+        self.last_ns: int | None = None   # time of the last check [ns]
 
     def check(self, t_ns: int, dist: float, apf: APFParams, pos=None, searching: bool = False) -> str:
         """At time ``t_ns`` [ns], ``dist`` [m] from the goal, at ``pos`` [m]: the reason, or ""."""
+        if self.last_ns is not None and t_ns - self.last_ns >= INPUT_GAP_NS:
+            gap = t_ns - self.last_ns
+            self.best_ns += gap
+            self.window_ns += gap
+        self.last_ns = t_ns
         if dist < self.best - apf.stagnation_progress_m or not math.isfinite(self.best):
             self.best, self.best_ns = dist, t_ns
             self.window_ns, self.anchor = t_ns, pos

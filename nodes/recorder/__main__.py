@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import queue
 import time
 from collections import Counter
@@ -28,6 +29,7 @@ import zenoh
 from common.cliparse import ArgumentParser
 from common.errors import ConfigError, PapfError, RecordingError
 from common.outfiles import check_output
+from common.params import arg_type, num
 from common.ports import describe, plain
 from common.transport import (
     Node,
@@ -121,7 +123,8 @@ def drain(intake: Intake, writer: RunWriter, max_samples: int, watch: RunEndWatc
 def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str],
            compression: str = "zstd", flush_interval_s: float = FLUSH_INTERVAL_S,
            close_on_run_ended: bool = False,
-           force: bool = False, announce: bool = False, fmt: str = "mcap") -> WriterStats:
+           force: bool = False, announce: bool = False, fmt: str = "mcap",
+           duration_s: float = 0.0) -> WriterStats:
     """Record until ``node.stop`` (or, with ``close_on_run_ended``, until the launcher's
     ``run_ended``); returns the writer's counts. The file is complete on return. ``fmt``:
     ``mcap`` (every message, ours) or ``ros2`` (a rosbag2 of the face's topics:
@@ -144,7 +147,7 @@ def record(node: Node, out: str | Path, keys_expr: str, metadata: dict[str, str]
             node.log.info("recording %s into %s", keys_expr, out)
             if announce:
                 _announce(node, metadata)
-            _loop(node, intake, writer, watch)
+            _loop(node, intake, writer, watch, duration_s)
             if watch is not None and watch.seen:
                 _tail(node, intake, writer, watch)
             sub.undeclare()   # nothing more comes in: the queue can be emptied
@@ -210,11 +213,15 @@ def _announce(node: Node, metadata: dict[str, str]) -> None:
                       "(--meta world=W --meta planner=P --meta seed=S say what ran)")
 
 
-def _loop(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch | None) -> None:
+def _loop(node: Node, intake: Intake, writer: RunWriter, watch: RunEndWatch | None,
+          duration_s: float = 0.0) -> None:
+    """Record until stopped, the run ended (``watch``) or ``duration_s`` [s] passed (0: no
+    limit)."""
     started = time.monotonic()
+    until = started + duration_s if duration_s > 0 else math.inf
     next_status = started + STATUS_EVERY_S
     last_count, first = 0, True
-    while not node.stop and not (watch and watch.seen):
+    while not node.stop and not (watch and watch.seen) and time.monotonic() < until:
         if drain(intake, writer, BATCH, watch) == 0:
             writer.maybe_flush()
             node.stop.wait(IDLE_WAIT_S)
@@ -261,6 +268,9 @@ def add_recorder_args(parser: argparse.ArgumentParser, out_flag: bool = True) ->
     parser.add_argument("--format", choices=FORMATS, default="mcap",
                         help="mcap (default: every message, ours) or ros2 (a rosbag2 directory "
                              "of the ROS 2 face's topics: ros2 bag, RViz, papf report)")
+    parser.add_argument("--duration", type=arg_type("--duration", num(0.0, 1e6, "s")), default=0.0, metavar="S",
+                        help="stop after S seconds of wall time, the file complete (default 0: "
+                             "until Ctrl-C)")
     parser.add_argument("--compression", choices=sorted(COMPRESSIONS), default="zstd",
                         help="chunk compression (default: zstd)")
     parser.add_argument("--flush-interval", type=float, default=FLUSH_INTERVAL_S, metavar="S",
@@ -285,7 +295,8 @@ def main(args: argparse.Namespace) -> int:
                 node.declare_publishers("events")   # up front: the one put must not be late
             record(node, args.out, args.keys or f"{args.namespace}/**", meta,
                    args.compression, args.flush_interval, close_on_run_ended=close,
-                   force=args.force, announce=not close, fmt=fmt)
+                   force=args.force, announce=not close, fmt=fmt,
+                   duration_s=getattr(args, "duration", 0.0))
             if close and not node.stop:   # the file is closed: say so, then wait to be stopped
                 node.publish("events", Event(stamp_ns=0, kind="recording_closed", source=name,
                                              detail=str(args.out)))

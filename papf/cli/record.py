@@ -13,7 +13,7 @@ from nodes.recorder.__main__ import main as recorder_main
 def register(sub) -> None:
     """Add ``papf record`` and its options to the subcommands ``sub``."""
     p = sub.add_parser("record", help="record every message of a namespace into an MCAP",
-                       description="Record until Ctrl-C (the file is then complete).")
+                       description="Record until Ctrl-C or --duration S (the file is then complete).")
     p.add_argument("out", metavar="F.mcap", help="recording to write")
     add_recorder_args(p, out_flag=False)
     add_zenoh_args(p)

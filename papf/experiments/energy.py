@@ -267,7 +267,7 @@ def run_experiment(exp: EnergyExperiment, console: Console | None = None,
                 result = _resumed(journal, exp, spec)
                 if result is None:
                     result = _one_run(exp, spec, progress, task, world.goal[:2], run_fn)
-                    journal.put(_spec_key(exp, spec), result.to_json())   # on disk as it ends
+                    journal.put(_spec_key(exp, spec), journal_entry(result))   # as it ends
                 results.append((spec, result))
                 progress.advance(task)
                 console.print(_result_line(spec, result), highlight=False, soft_wrap=True)
@@ -318,6 +318,24 @@ def _spec_key(exp: EnergyExperiment, spec: RunSpec) -> str:
 
     return run_key(world_path(exp.world).read_text(encoding="utf-8"), spec.planner, spec.seed,
                    spec.preset, spec.path.name, exp.timeout_s, exp.energy_model)
+
+
+#: the figures a resumed run is checked with against its recording (``_mismatches``)
+EXACT_FIGURES = ("duration_s", "path_length_m", "charge_mAh", "energy_J", "sim_time_s",
+                 "wall_time_s")
+
+
+def journal_entry(result: RunResult) -> dict:
+    """A finished run as the journal keeps it: the run's JSON with its figures unrounded
+    (JSON floats round-trip exactly), so that a resumed run's figures still equal what its
+    recording gives to :data:`papf.report.metrics.REPRODUCE_TOL` (the JSON's 6 decimals
+    would not: a resumed experiment would call every run a mismatch and exit 6)."""
+    entry = result.to_json()
+    for k in EXACT_FIGURES:
+        v = getattr(result, k)
+        if math.isfinite(v):
+            entry[k] = v
+    return entry
 
 
 def _resumed(journal: Journal, exp: EnergyExperiment, spec: RunSpec) -> RunResult | None:

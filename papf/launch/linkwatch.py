@@ -76,8 +76,8 @@ class LinkWatch:
             return (f"nothing from the robot for {(wall_ns - self.ear.lost_since) * 1e-9:.1f} s "
                     "(an outage)")
         r = self.robot
-        if r is None:   # a driver that does not report: the link is not known to be at fault
-            return ""
+        if r is None:   # a driver that does not report: only what the laptop heard
+            return self._laptop_outages(wall_ns, run_s)
         if r.state == "lost":
             return f"the robot heard no command for {r.outage_s:.1f} s in {r.outages} outages"
         refused = r.late + r.stale
@@ -91,4 +91,13 @@ class LinkWatch:
         if r.outages and r.outage_s >= OUTAGE_SHARE * run_s:
             return (f"{r.outages} outages, {r.outage_s:.1f} s without commands "
                     f"(longest {r.longest_outage_s:.1f} s)")
+        return self._laptop_outages(wall_ns, run_s)
+
+    def _laptop_outages(self, wall_ns: int, run_s: float) -> str:
+        """The outages the laptop itself heard (the robot's report may predate them: it
+        comes over the same link)."""
+        seen = self.ear.outage_lengths(wall_ns)
+        if run_s > 0 and seen and sum(seen) >= OUTAGE_SHARE * run_s:
+            return (f"nothing from the robot for {sum(seen):.1f} s of the run in {len(seen)} "
+                    f"outage{'s' if len(seen) > 1 else ''} (longest {max(seen):.1f} s)")
         return ""
