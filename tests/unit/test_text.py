@@ -49,7 +49,7 @@ def test_log_lines_show_escape_sequences_never_run_them():
     stream = io.StringIO()
     handler = logging.StreamHandler(stream)
     handler.addFilter(SafeLogFilter())
-    log = logging.getLogger("test_hostile_round2")
+    log = logging.getLogger("test_text")
     log.addHandler(handler)
     try:
         log.warning("ignored a goal from %s", "\x1b[2Jpeer\r" + "z" * 10_000)
