@@ -26,9 +26,8 @@ from papf.experiments.energy import (
 from papf.experiments.journal import Journal
 from papf.launch.outcome import RunResult
 from papf.launch.run import resolve_run
-from papf.report import run_metrics
 from papf.report.metrics import differences_from_live
-from tests.support.recordings import write_synthetic
+from tests.support.recordings import FakeRuns
 
 
 def test_plan_names_files_and_seeds(tmp_path):
@@ -48,28 +47,6 @@ def test_bad_settings_are_refused_before_any_run(tmp_path, change, match):
     exp = replace(EnergyExperiment(out=tmp_path), **change)
     with pytest.raises(ConfigError, match=match):
         run_experiment(exp, Console(file=io.StringIO()), run_fn=pytest.fail)
-
-
-class FakeRuns:
-    """Stands in for papf.launch.run.run: writes a synthetic recording, returns its summary."""
-
-    def __init__(self, charge_error: float = 0.0, cut_first: int = 0):
-        self.configs = []
-        self.charge_error = charge_error
-        self.cut_first = cut_first   # this many first recordings lose their end
-
-    def __call__(self, cfg) -> RunResult:
-        self.configs.append(cfg)
-        speed = (0.4 if cfg.planner == "apf" else 0.5) + 0.01 * cfg.seed
-        write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed)
-        m = run_metrics(cfg.record)
-        if len(self.configs) <= self.cut_first:  # the live run was whole; the file is not
-            Path(cfg.record).unlink()            # (recordings are never overwritten)
-            write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed, total_k=80,
-                            outcome=None, meta={"timeout_s": "300"})
-        return RunResult(m.outcome, cfg.planner, "energy", cfg.seed, m.duration_s,
-                         m.path_length_m, m.charge_mAh + self.charge_error, m.energy_J, 0,
-                         m.t_end_s, 0.1)
 
 
 def test_experiment_records_every_run_and_reports(tmp_path):

@@ -58,7 +58,7 @@ def test_experiment_port_puts_every_runs_router_on_it(tmp_path, monkeypatch):
 
     from papf.experiments.energy import EnergyExperiment, run_experiment
     from papf.launch.portrange import PORT_ENV
-    from tests.unit.test_experiment_energy import FakeRuns
+    from tests.support.recordings import FakeRuns
 
     monkeypatch.setenv(PORT_ENV, "7600")
     fake = FakeRuns()
