@@ -1,4 +1,5 @@
-"""`papf experiment energy`: plan, settings checks, orchestration (with a stand-in run), and a
+"""`papf experiment energy`: plan (a paper preset run only where it differs), settings checks,
+orchestration (with a stand-in run), and a
 journal that keeps a run's figures exact (a resumed experiment must not call its own runs
 mismatches)."""
 
@@ -22,6 +23,7 @@ from papf.experiments.energy import (
     plan,
     print_summary,
     run_experiment,
+    validate,
 )
 from papf.experiments.journal import Journal
 from papf.launch.outcome import RunResult
@@ -147,3 +149,12 @@ def test_the_json_alone_would_have_been_a_mismatch():
     rounded = RunResult(**{**live.__dict__, **{k: v for k, v in live.to_json().items()
                                                if k in EXACT_FIGURES}})
     assert differences_from_live("papf-1", rounded, live) != []
+
+
+def test_energy_experiment_runs_a_paper_variant_only_where_it_differs(tmp_path):
+    exp = EnergyExperiment(out=tmp_path, runs=2, planners=("apf", "papf"), presets=("default", "paper"))
+    names = [s.path.name for s in plan(exp)]
+    assert names == ["apf-1.mcap", "apf-2.mcap", "papf-1.mcap", "papf-2.mcap",
+                     "papf-paper-1.mcap", "papf-paper-2.mcap"]
+    with pytest.raises(ConfigError, match="presets"):
+        validate(EnergyExperiment(out=tmp_path, presets=("fast",)))
