@@ -1,7 +1,6 @@
 """`papf experiment energy`: plan (a paper preset run only where it differs), settings checks,
-orchestration (with a stand-in run), and a
-journal that keeps a run's figures exact (a resumed experiment must not call its own runs
-mismatches)."""
+orchestration (with a stand-in run), and a journal that keeps a run's figures exact (a resumed
+experiment must not call its own runs mismatches)."""
 
 from __future__ import annotations
 
