@@ -9,7 +9,8 @@ is watched on its own bus from the bench: between the first robot's ``sim/pose``
 - ``sim_over_wall`` = the sim time between the two samples / the wall time between them;
 - ``cpu_ms_per_robot_cycle`` = the CPU of every process of the run (launcher and router,
   nodes; from /proc by ``bench.proc_cpu.TreeCPU``) between them / (R x the 100 ms cycles
-  in it); ``driver_ms``,
+  in it); ``driver_ms`` (the world simulator, ``nodes.world_sim``: physics, people, every robot's
+  driver share),
   ``lidar_ms``, ``planner_ms``, ``meter_ms``, ``launcher_ms`` split it by kind of process
   (all robots' together; the launcher is also the run's router).
 
@@ -28,7 +29,7 @@ run (sim time over ``wall_time_s``) and the CPU split as above over the whole ru
                      [--timeout 120] [--csv docs/data/fleet-passing.csv --label L]
     papf bench fleet --driver-split 8,16 [--long-s 20] [--csv F --label L]
 
-``--driver-split R1,R2`` splits the sim driver's own CPU per robot-cycle (physics, tyre
+``--driver-split R1,R2`` splits the world simulator's own CPU per robot-cycle (physics, tyre
 forces, contacts, command gates, messages) in-process: :mod:`bench.fleet_driver`.
 """
 
@@ -63,7 +64,7 @@ from schemas import Odometry  # noqa: E402
 from worlds import load_world  # noqa: E402
 from worlds.fleet import MAX_PEOPLE, MAX_ROBOTS  # noqa: E402
 
-PARTS = {"nodes.base_driver": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
+PARTS = {"nodes.world_sim": "driver", "nodes.lidar_sim": "lidar", "nodes.planner": "planner",
          "nodes.energy_meter": "meter", "papf": "launcher"}   # process (TreeCPU name) -> column
 FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_wall",
           "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
@@ -237,7 +238,7 @@ def parse(argv=None) -> argparse.Namespace:
     parser.add_argument("--timeout", type=float, default=120.0,
                         help="with --worlds: sim seconds at most (120)")
     parser.add_argument("--driver-split", metavar="R1,R2",
-                        help="robot counts: the sim driver's CPU split in-process instead")
+                        help="robot counts: the world simulator's CPU split in-process instead")
     args = parser.parse_args(argv)
     if bool(args.csv) != bool(args.label):
         parser.error("--csv and --label go together")

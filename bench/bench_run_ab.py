@@ -102,7 +102,9 @@ def process_rows(label: str, runs: list[dict]) -> list[dict]:
 
 
 def _short(name: str) -> str:
-    """``nodes.base_driver`` -> ``base_driver``; ``papf`` (the command itself) -> ``launcher``."""
+    """``nodes.world_sim`` -> ``world_sim``; ``papf`` (the command itself) -> ``launcher``. A
+    checkout from before the world simulator had its own node runs it as ``nodes.base_driver``:
+    its rows say ``base_driver``."""
     return "launcher" if name == "papf" else name.removeprefix("nodes.").removeprefix("papf.")
 
 

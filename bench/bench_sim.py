@@ -18,7 +18,7 @@ CPU microseconds per 100 ms cycle of physics, ray cast, planner, meter, encoding
 decoding, and one Zenoh hop between two processes — what a run costs before any
 transport; ``--csv FILE`` writes those parts (one row per planner and part).
 
-``--loop``: the lockstep loop alone — ``nodes.base_driver`` (sim) and ``nodes.lidar_sim``
+``--loop``: the lockstep loop alone — ``nodes.world_sim`` and ``nodes.lidar_sim``
 as processes, every scan answered here with a constant Twist of the same stamp (a
 trivial planner), ``--sim-s`` seconds of sim time after ``run_started``.
 
@@ -63,7 +63,7 @@ def bench(sim_s: float, world: str, beams: int) -> dict:
         if not wait_port(port, 20):
             raise RuntimeError(f"router did not start on {endpoint}")
         common = ["--connect", endpoint, "--world", world]
-        sup.start("base_driver", [py, "-m", "nodes.base_driver", *common])
+        sup.start("base_driver", [py, "-m", "nodes.world_sim", *common])
         sup.start("lidar_sim", [py, "-m", "nodes.lidar_sim", *common, "--beams", str(beams)])
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             missing = wait_alive(session, keys, ["base_driver", "lidar_sim"], 60,

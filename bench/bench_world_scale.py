@@ -1,6 +1,6 @@
 """Cost against the size of the world: worlds of N cylinders and square halls from ROS maps
-of W x W m at 5 cm, each run by the simulated driver + LiDAR loop (the ``papf bench sim
---loop`` chain: ``nodes.base_driver`` and ``nodes.lidar_sim`` as processes, every scan
+of W x W m at 5 cm, each run by the world simulator + LiDAR loop (the ``papf bench sim
+--loop`` chain: ``nodes.world_sim`` and ``nodes.lidar_sim`` as processes, every scan
 answered here with a constant Twist).
 
 Per world: ``start_s`` (processes started -> both alive: parsing, building the pybullet
@@ -92,8 +92,8 @@ def run(world: Path, sim_s: float) -> dict:
         if not wait_port(port, 20):
             raise RuntimeError(f"router did not start on {endpoint}")
         t_start = time.perf_counter()
-        nodes = [sup.start(n, [py, "-m", f"nodes.{n}", "--connect", endpoint, "--world", str(world)])
-                 for n in ("base_driver", "lidar_sim")]
+        nodes = [sup.start(n, [py, "-m", module, "--connect", endpoint, "--world", str(world)])
+                 for n, module in (("base_driver", "nodes.world_sim"), ("lidar_sim", "nodes.lidar_sim"))]
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             missing = wait_alive(session, keys, ["base_driver", "lidar_sim"], 120,
                                  abort=lambda: bool(sup.dead()))

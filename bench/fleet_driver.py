@@ -1,7 +1,7 @@
-"""Where the sim driver's share of a fleet cycle goes, in-process (no bus): ``papf bench
+"""Where the world simulator's share of a fleet cycle goes, in-process (no bus): ``papf bench
 fleet --driver-split 8,16``.
 
-The driver core (:class:`nodes.base_driver.core.DriverCore`) of the bench's lanes world with
+The simulator's core (:class:`nodes.world_sim.core.WorldCore`) of the bench's lanes world with
 R robots is stepped through ``--long-s`` of sim time as the lockstep would (every robot's
 command answers every scan), each message encoded as the node would put it. The CPU time
 (``time.process_time``; the machine's other work does not count, though it cools the caches)
@@ -20,9 +20,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from nodes.base_driver import core as core_mod
-from nodes.base_driver import limits as limits_mod
-from nodes.base_driver import sim as sim_mod
+from common import drive as drive_mod
+from nodes.world_sim import core as core_mod
+from nodes.world_sim import physics as sim_mod
 from schemas.messages import Twist
 from worlds import load_world
 
@@ -45,12 +45,12 @@ def split(world_file: Path, sim_s: float, warm_s: float = 1.0) -> dict:
     """The driver's CPU split for the world (module doc), per robot per 100 ms cycle [ms]."""
     totals = dict.fromkeys(_PARTS, 0.0)
     patches = [(sim_mod.SimBase, "_apply_tyre_forces", "tyres"), (sim_mod.SimBase, "contacts", "contacts"),
-               (limits_mod.CommandGate, "output", "gate"), (core_mod.DriverCore, "outputs", "messages")]
+               (drive_mod.CommandGate, "output", "gate"), (core_mod.WorldCore, "outputs", "messages")]
     saved = [(cls, name, getattr(cls, name)) for cls, name, _ in patches]
     for cls, name, part in patches:
         setattr(cls, name, _timed(totals, part, getattr(cls, name)))
     try:
-        with core_mod.DriverCore(load_world(str(world_file)), 0) as drv:
+        with core_mod.WorldCore(load_world(str(world_file)), 0) as drv:
             n = len(drv.names)
 
             def run(seconds: float) -> None:

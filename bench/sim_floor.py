@@ -1,6 +1,6 @@
 """The floor of a lockstep run: the same chain as ``papf run``, in one process, no bus.
 
-Driver core (physics) -> LiDAR cast -> planner loop -> command, the energy meter on every
+World simulator core (physics) -> LiDAR cast -> planner loop -> command, the energy meter on every
 odometry/wheels pair, every message encoded once per put and decoded once per subscriber
 of the ``sim`` profile (as the processes do) — the same objects the nodes compute, so the
 run's sim time of ``reached`` comes out as the stack's. Thread CPU seconds per part, and
@@ -18,11 +18,11 @@ import sys
 import time
 from collections import Counter
 
-from nodes.base_driver.core import DriverConfig, DriverCore
 from nodes.energy_meter.core import EnergyMeter
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import make_planner, one_with_role
+from nodes.world_sim.core import WorldConfig, WorldCore
 from worlds import load_world
 from worlds.messages import goal_message
 
@@ -47,7 +47,7 @@ def chain(world_name: str = "energy", planner_name: str | None = None, seed: int
     """Run the lockstep chain in-process until the planner's outcome (or the timeout);
     the planner by default the PAPF paper's baseline (APF)."""
     world = load_world(world_name)
-    core = DriverCore(world, seed, DriverConfig())
+    core = WorldCore(world, seed, WorldConfig())
     lidar = LidarSim(world, LidarParams(), seed)
     loop = PlannerLoop(make_planner(planner_name or one_with_role("papf-baseline")))
     meter = EnergyMeter("motor")

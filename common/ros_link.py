@@ -2,8 +2,9 @@
 
 ``--ros bridge`` (default, ``zenoh-bridge-ros2dds``) or ``--ros rmw_zenoh`` (we are ROS 2
 nodes, :mod:`common.rmw_zenoh`). :func:`open_link` gives a :class:`RosLink` that hands
-out publishers and subscriptions by ROS topic and type. Used by the base driver, the
-ROS 2 face and ``papf rosbot-emulator``.
+out publishers and subscriptions by ROS topic and type; :class:`BridgeTopics` names the
+robot's own topics on it. Used by the base driver, the real LiDAR source
+(``nodes/lidar_sim/ros2_source.py``), the ROS 2 face and ``papf rosbot-emulator``.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import argparse
 import itertools
 import threading
 import time
+from dataclasses import dataclass
 
 from common import rmw_zenoh as rz
 from common.errors import ConfigError, SchemaError
@@ -20,6 +22,40 @@ from common.ros2_interfaces import DEFAULT_DISTRO, DISTROS, check_distro
 MIDDLEWARES = ("bridge", "rmw_zenoh")
 CMD_VEL_TYPES = {"twist": "geometry_msgs/msg/Twist",
                  "twist_stamped": "geometry_msgs/msg/TwistStamped"}
+
+
+@dataclass(frozen=True)
+class BridgeTopics:
+    """Bridge keys of the robot's ROS 2 topics: ``[<namespace>/]<topic>``.
+
+    The bridge namespace is a setting of its own, distinct from our key namespace:
+    :meth:`check_separate` refuses any overlap with our msgpack keys (docs/architecture.md "The robot").
+    """
+
+    namespace: str = ""
+    cmd_vel: str = "cmd_vel"
+    odometry: str = "odometry/filtered"
+    battery: str = "battery"
+    scan: str = "scan"
+
+    def key(self, topic: str) -> str:
+        topic = topic.strip("/")
+        return f"{self.namespace.strip('/')}/{topic}" if self.namespace.strip("/") else topic
+
+    @property
+    def keys(self) -> dict[str, str]:
+        return {t: self.key(getattr(self, t)) for t in ("cmd_vel", "odometry", "battery", "scan")}
+
+    def check_separate(self, our_namespace: str) -> None:
+        """ConfigError if a bridge key falls under ``<our_namespace>/`` (or contains wildcards)."""
+        for name, key in self.keys.items():
+            if not key or "*" in key or "$" in key:
+                raise ConfigError(f"bridge {name} key {key!r} must be a plain key without wildcards")
+            if key == our_namespace or key.startswith(our_namespace + "/"):
+                raise ConfigError(
+                    f"bridge {name} key {key!r} overlaps our namespace {our_namespace!r}: the "
+                    "bridge carries CDR and our keys msgpack; give the bridge another namespace "
+                    "(--bridge-namespace) or none")
 
 
 def add_ros_args(parser: argparse.ArgumentParser, cmd_vel: bool = True) -> None:

@@ -1,4 +1,6 @@
-"""Time on the wire is integer nanoseconds; these are the only conversions.
+"""Time on the wire is integer nanoseconds; these are the only conversions, and the one
+rate-to-period rule of the sim's time grid (:func:`period_ns`: the world simulator's
+odometry and scan instants, the simulated LiDAR's scans).
 
 A stamp is valid when it lies in ``[0, MAX_STAMP_NS]``: a sim clock starts at 0 and
 a wall clock is nanoseconds since the epoch, both far below 2**62 (146 years).
@@ -9,6 +11,8 @@ on a topic whose stamps only go forward.
 from __future__ import annotations
 
 import time
+
+from common.errors import ConfigError
 
 NS_PER_S = 1_000_000_000       # [ns/s]
 MAX_STAMP_NS = 2**62           # [ns] largest stamp any node accepts (see module doc)
@@ -29,6 +33,18 @@ def s_to_ns(seconds: float) -> int:
 def ns_to_s(ns: int) -> float:
     """Integer nanoseconds -> seconds."""
     return ns / NS_PER_S
+
+
+def period_ns(hz: float, what: str) -> int:
+    """An exact integer period [ns] for a rate [Hz]; ConfigError if 1 s is not a whole number
+    of ns periods (every instant of the time grid is then exact: docs/architecture.md "Time")."""
+    if not (hz > 0) or hz != hz:
+        raise ConfigError(f"{what} = {hz!r} Hz must be > 0")
+    period = round(NS_PER_S / hz)
+    if period * hz != NS_PER_S:
+        raise ConfigError(f"{what} = {hz} Hz gives a period of {NS_PER_S / hz} ns, not an integer; "
+                          "use a rate that divides 1e9 ns (e.g. 10, 20, 25, 50 Hz)")
+    return period
 
 
 def stamp_ok(stamp_ns: int) -> bool:

@@ -1,5 +1,5 @@
 """Which static obstacles are near a point, without walking all of them: a uniform grid of
-bounding boxes (used by the simulated driver to name the obstacle a robot touches inside a
+bounding boxes (used by the world simulator to name the obstacle a robot touches inside a
 merged mesh, and by anything else that asks "what is here" in a world of thousands).
 
 Each static obstacle is filed in every cell of :data:`CELL_M` its bounding box overlaps; a

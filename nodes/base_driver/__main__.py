@@ -1,186 +1,88 @@
-"""ROSbot base driver node: ``python -m nodes.base_driver --driver sim|rosbot ...``.
+"""The real ROSbot's base driver: ``python -m nodes.base_driver --driver rosbot ...``.
 
-``--driver sim`` (default) runs the simulated ROSbot (:mod:`nodes.base_driver.core`)
-on the lockstep protocol of docs/architecture.md; ``--driver rosbot`` hands over to
-the real-robot bridge driver (``nodes.base_driver.rosbot_node.main``).
+``--driver rosbot`` drives the robot through ``zenoh-bridge-ros2dds`` or rmw_zenoh
+(:mod:`nodes.base_driver.rosbot_node`: the command gate and its limits, the plan follower and
+collision monitor of a slow link, the robot's odometry on the run's clock).
+``--driver sim`` (the default, kept for scripts written before the simulator had a node of
+its own) hands over to the world simulator: this process becomes ``python -m
+nodes.world_sim`` with the same options (``execv``: the same process id, so a supervisor's
+signals and a parent's death reach it), whose ``--help`` lists them.
 
 Ports: :mod:`nodes.base_driver.ports` (``--help`` prints them).
 
-Settings: ``--world`` (packaged name or .toml path), ``--seed`` (noise), ``--odom-hz``
-(50), ``--scan-hz`` (10, lockstep instants), ``--watchdog`` (0.5 s of sim time),
-``--lockstep-timeout`` (2.0 wall s, then a ``node_fault`` event and free running in
-real time until a command answers the latest scan again), ``--realtime`` (pace sim
-time to the wall clock, never wait for commands), plus the Zenoh options.
+Settings: ``--world`` (the world whose start is the robot's pose when a run starts),
+``--odom-hz`` (50: the tick of odometry, wheels and clock), ``--watchdog`` (0.5 s), the
+bridge's topics, the link driving's settings, the ROS 2 middleware, plus the Zenoh options.
+``--seed``, ``--scan-hz``, ``--lockstep-timeout`` and ``--realtime`` are the simulator's:
+taken and unused here (the robot is always real time), so one command line serves both.
 Liveliness token: ``<ns>/alive/base_driver``.
 """
 
 from __future__ import annotations
 
 import argparse
-import queue
+import os
 import sys
-import time
 
 from common.cliparse import ArgumentParser
+from common.drive import add_driver_args
 from common.errors import PapfError
-from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
-from nodes.base_driver.limits import OPTIONS
-from nodes.base_driver.loop import DriverLoop
+from common.transport import add_zenoh_args, exit_fast
 from nodes.base_driver.ports import PORTS, VARIANTS
-from schemas import Keys
-from worlds import load_world
 
-NAME = "base_driver"
-PUBLISHES = ("sim/pose", "odom", "wheels", "events")
-ON_DEMAND = ("clock",)   # 50 Hz that no node of a sim run reads (sim/pose carries the time)
+SIMULATOR = "nodes.world_sim"   # what --driver sim runs (another node: started, never imported)
 
 
-def drive(node: Node, loop: DriverLoop, publish=None) -> None:
-    """Wire a :class:`DriverLoop` to the bus until the run ends or the node is stopped."""
-    inbox, publish = node.inbox, publish or node.publish
-    while not node.stop:
-        out, until = loop.step(time.monotonic())
-        for topic, msg in out:
-            publish(topic, msg)
-        if until is None:
-            return
-        while not (node.stop or loop.ready):   # feed inputs until `until` (past: what is queued)
-            remaining = until - time.monotonic()
-            try:
-                item = inbox.get(timeout=min(remaining, 0.1)) if remaining > 0 else inbox.get_nowait()
-            except queue.Empty:
-                if remaining > 0:
-                    continue
-                break
-            loop.on_message(*item)
-
-
-def wait_for_start(node: Node) -> bool:
-    """Block until an ``events`` ``run_started`` arrives (True) or stop is requested (False)."""
-    while not node.stop:
-        try:
-            topic, msg = node.inbox.get(timeout=0.1)
-        except queue.Empty:
-            continue
-        if topic is not None and topic.endswith("events") and msg.kind == "run_started":
-            return True
-    return False
-
-
-def main_sim(args: argparse.Namespace) -> int:
-    from nodes.base_driver.core import DriverConfig, DriverCore  # pybullet: only when simulating
-
-    log = setup_logging(NAME, args.log_level)
-    world = load_world(args.world)
-    config = DriverConfig.from_rates(args.odom_hz, args.scan_hz, args.watchdog)
-    with open_node(NAME, args, log) as node:
-        publish = node.publish
-        people = ("sim/people",) if world.has_people else ()   # on this node's namespace
-        if world.robots:   # a fleet: each robot's share under its own namespace
-            publish = fleet_nodes(node, [r.name for r in world.robots], log)
-            node.declare_publishers(*people)
-            node.ready()   # <namespace>/alive/base_driver too: the process itself is up
-        else:
-            node.subscribe("events")
-            node.subscribe("cmd_vel")
-            node.declare_publishers(*PUBLISHES, *people, *(("sim/bodies",) if people else ()),
-                                    on_demand=ON_DEMAND)
-            node.ready()
-        log.info("waiting for run_started on %s (a launcher sends it; alone: papf goal X Y "
-                 "--start-run, or papf teleop --start-run with --realtime)", node.keys.events)
-        while wait_for_start(node):  # one run per run_started; run_ended waits for the next
-            with DriverCore(world, args.seed, config) as core:
-                log.info("run started: world %s, seed %d, %s", world.name, args.seed,
-                         "realtime" if args.realtime else "lockstep")
-                drive(node, DriverLoop(core, args.realtime, args.lockstep_timeout,
-                                       time.monotonic(), log), publish)
-                log.info("run stopped at sim t = %.3f s; collisions: %d", core.t_ns / 1e9,
-                         core.collision_count)
-        for share in getattr(node, "shares", ()):
-            share.close()
-    return 0
-
-
-def fleet_nodes(node: Node, names: list[str], log):
-    """One :class:`Node` per robot on ``node``'s session, its inputs queued to ``node``'s
-    inbox as ``<name>/<topic>``, its liveliness token ``<name>/alive/base_driver``; returns
-    ``publish(topic, msg)`` for the core's ``<name>/<suffix>`` topics."""
-    robots = {}
-    for name in names:
-        share = Node(NAME, node.session, Keys(name), log)
-        for topic in ("events", "cmd_vel"):
-            share.subscribe(topic, handler=lambda m, t=f"{name}/{topic}": node.inbox.put((t, m)))
-        share.declare_publishers(*PUBLISHES, "sim/bodies", on_demand=ON_DEMAND)
-        robots[name] = share
-    for share in robots.values():
-        share.ready()
-    node.shares = list(robots.values())   # closed with the session (kept referenced)
-
-    def publish(topic: str, msg) -> None:
-        if topic == "sim/people":   # the world's, not a robot's: on the driver's namespace
-            node.publish(topic, msg)
-            return
-        name, _, suffix = topic.partition("/")
-        if name in robots and suffix:
-            robots[name].publish(suffix, msg)
-        else:   # the loop's own (a lockstep fault's event): every robot's
-            for share in robots.values():
-                share.publish(topic, msg)
-    return publish
-
-
-def main_rosbot(args: argparse.Namespace) -> int:
-    from nodes.base_driver import rosbot_node  # imported only when asked: it pulls in rosbags
-
-    return rosbot_node.main(args) or 0
-
-
-def _opt(name: str):
-    return arg_type("--" + name.replace("_", "-"), OPTIONS[name])
+def simulator_argv(argv: list[str]) -> list[str] | None:
+    """The world simulator's command line when ``argv`` asks for ``--driver sim`` (explicitly,
+    or by default unless for ``--help``: then this driver's help), else None."""
+    pre = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    pre.add_argument("--driver", nargs="?", const="", default=None)
+    pre.add_argument("-h", "--help", action="store_true")
+    known, _ = pre.parse_known_args(argv)
+    if known.driver not in (None, "sim") or (known.driver is None and known.help):
+        return None   # the robot's driver, its help, or a mistake its parser names
+    rest, skip = [], False
+    for i, arg in enumerate(argv):
+        if skip:
+            skip = False
+        elif arg == "--driver" and i + 1 < len(argv):
+            skip = True
+        elif not arg.startswith("--driver="):
+            rest.append(arg)
+    return [sys.executable, "-m", SIMULATOR, *rest]
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = ArgumentParser(prog="python -m nodes.base_driver",
-                                     description=plain(__doc__.split("\n\n")[0]),
-                                     formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"
-                                     + describe(PORTS, VARIANTS))
+                            description=plain(__doc__.split("\n\n")[0]),
+                            formatter_class=argparse.RawDescriptionHelpFormatter,
+                            epilog=plain(__doc__.split("\n\n", 1)[1]) + "\n"
+                            + describe(PORTS, VARIANTS))
     parser.add_argument("--driver", choices=("sim", "rosbot"), default="sim",
-                        help="simulated ROSbot (default) or the real robot over the ROS 2 bridge")
-    parser.add_argument("--world", default="energy", help="world name or .toml path (sim)")
-    parser.add_argument("--seed", type=_opt("seed"), default=0,
-                        help="noise seed (sim; default 0)")
-    parser.add_argument("--realtime", action="store_true",
-                        help="pace sim time to the wall clock and never wait for commands")
-    parser.add_argument("--lockstep-timeout", type=_opt("lockstep_timeout"),
-                        default=2.0, metavar="S",
-                        help="wall seconds to wait for the cmd_vel of a scan (default 2.0)")
-    parser.add_argument("--scan-hz", type=_opt("scan_hz"),
-                        default=10.0, help="scan / lockstep rate (10)")
-    parser.add_argument("--odom-hz", type=_opt("odom_hz"),
-                        default=50.0, help="odometry rate (50)")
-    parser.add_argument("--watchdog", type=_opt("watchdog"),
-                        default=0.5, metavar="S",
-                        help="stop when no fresh command for S seconds (default 0.5)")
-    parser.add_argument("--log-level", default="INFO")
+                        help="the real robot (rosbot), or the world simulator (sim, the default: "
+                             "python -m nodes.world_sim)")
+    add_driver_args(parser, simulator=False)
     add_zenoh_args(parser)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--driver", default="sim")
-    known, _ = pre.parse_known_args(argv)
-    parser = build_parser()
-    if known.driver == "rosbot":  # the rosbot driver's own options (bridge keys, ...)
-        from nodes.base_driver import rosbot_node
+    argv = list(sys.argv[1:] if argv is None else argv)
+    simulator = simulator_argv(argv)
+    if simulator is not None:
+        if not {"-h", "--help"} & set(argv):   # a mistake named against this node's options
+            build_parser().parse_args(argv)     # (--drivr: did you mean --driver?), exit 2
+        sys.stdout.flush()
+        os.execv(sys.executable, simulator)   # no return: this process is the simulator now
+    from nodes.base_driver import rosbot_node  # imported only when asked: it pulls in rosbags
 
-        rosbot_node.add_arguments(parser)
+    parser = build_parser()
+    rosbot_node.add_arguments(parser)
     args = parser.parse_args(argv)
     try:
-        return main_rosbot(args) if args.driver == "rosbot" else main_sim(args)
+        return rosbot_node.main(args) or 0
     except PapfError as exc:
         print(f"base_driver: {exc}", file=sys.stderr)
         return 2

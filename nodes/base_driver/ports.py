@@ -1,17 +1,9 @@
-"""Ports of the base driver (see :mod:`common.ports`); ``--driver rosbot`` has its own."""
+"""Ports of the real ROSbot's base driver (see :mod:`common.ports`).
 
-SIM = (
-    ("in", "events", "Event"),           # run_started: a new run at t = 0; run_ended stops it
-    ("in", "cmd_vel", "Twist"),          # stamp_ns = the scan it answers (lockstep)
-    ("out", "sim/pose", "Odometry"),     # ground truth, every odometry instant
-    ("out", "odom", "Odometry"),         # odometry (= ground truth in sim)
-    ("out", "wheels", "WheelStates"),    # wheel speeds and motor torques
-    ("out", "clock", "Clock"),           # sim time
-    ("out", "events", "Event"),          # collision, watchdog_stop, node_fault
-    ("out", "sim/bodies", "Bodies"),     # a fleet or people: the others, before sim/pose
-    ("out", "sim/people", "People"),     # [[people]]: where they are, every instant
-)
-ROSBOT = (
+``--driver sim`` hands over to the world simulator (``python -m nodes.world_sim``), whose
+ports are its own (``nodes/world_sim/ports.py``)."""
+
+PORTS = (
     ("in", "cmd_vel", "Twist"),
     ("in", "events", "Event"),           # run_started starts the run clock, run_ended stops it
     ("in?", "scan", "Scan"),             # the robot's own scan: the collision monitor's view
@@ -26,5 +18,4 @@ ROSBOT = (
     ("out", "link", "LinkHealth"),       # the link as the robot measures it, every second of a run
     ("out", "cmd_vel/applied", "Twist"), # what went to the base (stamp = run time)
 )
-PORTS = SIM
-VARIANTS = {("--driver", "rosbot"): ROSBOT}
+VARIANTS: dict = {}

@@ -17,52 +17,16 @@ energy model (eq. 6, odometry only) is therefore the one to use on real data.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from common import robot, ros2
-from common.errors import ConfigError
 from schemas import Odometry, WheelStates
 from schemas.messages import WHEEL_NAMES
 
 WHEEL_RADIUS = robot.WHEEL_RADIUS_M          # [m]
 MASS = robot.MASS_KG                         # [kg]
 YAW_INERTIA = robot.YAW_INERTIA_KGM2         # [kg m^2]
-EFFECTIVE_TRACK = robot.EFFECTIVE_TRACK_M    # [m] (the sim driver reproduces the same)
-
-
-@dataclass(frozen=True)
-class BridgeTopics:
-    """Bridge keys of the robot's ROS 2 topics: ``[<namespace>/]<topic>``.
-
-    The bridge namespace is a setting of its own, distinct from our key namespace:
-    :meth:`check_separate` refuses any overlap with our msgpack keys (docs/architecture.md "The robot").
-    """
-
-    namespace: str = ""
-    cmd_vel: str = "cmd_vel"
-    odometry: str = "odometry/filtered"
-    battery: str = "battery"
-    scan: str = "scan"
-
-    def key(self, topic: str) -> str:
-        topic = topic.strip("/")
-        return f"{self.namespace.strip('/')}/{topic}" if self.namespace.strip("/") else topic
-
-    @property
-    def keys(self) -> dict[str, str]:
-        return {t: self.key(getattr(self, t)) for t in ("cmd_vel", "odometry", "battery", "scan")}
-
-    def check_separate(self, our_namespace: str) -> None:
-        """ConfigError if a bridge key falls under ``<our_namespace>/`` (or contains wildcards)."""
-        for name, key in self.keys.items():
-            if not key or "*" in key or "$" in key:
-                raise ConfigError(f"bridge {name} key {key!r} must be a plain key without wildcards")
-            if key == our_namespace or key.startswith(our_namespace + "/"):
-                raise ConfigError(
-                    f"bridge {name} key {key!r} overlaps our namespace {our_namespace!r}: the "
-                    "bridge carries CDR and our keys msgpack; give the bridge another namespace "
-                    "(--bridge-namespace) or none")
+EFFECTIVE_TRACK = robot.EFFECTIVE_TRACK_M    # [m] (the world simulator reproduces the same)
 
 
 # -- commands -----------------------------------------------------------------------------------

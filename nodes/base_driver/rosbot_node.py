@@ -1,6 +1,6 @@
 """Real-ROSbot base driver: ``python -m nodes.base_driver --driver rosbot [--ros rmw_zenoh]``.
 
-The same node contract as the simulated driver (liveliness ``<ns>/alive/base_driver``),
+The same node contract as the world simulator (``nodes/world_sim``: liveliness ``<ns>/alive/base_driver``),
 talking to the robot through ``zenoh-bridge-ros2dds`` (``--ros bridge``, the default) or as
 the ROS 2 node ``/papf_base_driver`` on rmw_zenoh (``--ros rmw_zenoh --ros-domain N``:
 rmw_zenoh's keys, liveliness tokens and attachments, :mod:`common.ros_link`);
@@ -54,10 +54,12 @@ from collections import Counter
 
 import schemas.messages as messages
 from common import ros2
+from common.drive import CommandGate, RosbotLimits
 from common.errors import SchemaError
 from common.params import arg_type
 from common.ros_link import (
     BridgeLink,
+    BridgeTopics,
     RosLink,
     add_ros_args,
     cmd_vel_type,
@@ -67,12 +69,10 @@ from common.ros_link import (
 from common.transport import Node, open_node, setup_logging
 from nodes.base_driver.follow import SPECS as FOLLOW_SPECS
 from nodes.base_driver.follow import FollowSettings
-from nodes.base_driver.limits import CommandGate, RosbotLimits
 from nodes.base_driver.link_drive import LinkDriving, world_pose
 from nodes.base_driver.monitor import SPECS as MONITOR_SPECS
 from nodes.base_driver.monitor import MonitorSettings
 from nodes.base_driver.rosbot import (
-    BridgeTopics,
     OdomFrame,
     Pose2D,
     cdr_to_robot_odom,

@@ -1,11 +1,12 @@
-"""Simulated LiDAR node: ``python -m nodes.lidar_sim --world W --seed N ...``.
+"""The LiDAR source node: ``python -m nodes.lidar_sim --world W --seed N ...`` (simulated) or
+``--source ros2`` (the robot's real RPLIDAR).
 
-Casts an RPLIDAR A3 scan (:mod:`nodes.lidar_sim.core`) at the robot pose of each
+Simulated, it casts an RPLIDAR A3 scan (:mod:`nodes.lidar_sim.core`) at the robot pose of each
 scan instant: when a pose arrives whose stamp is due (``stamp >= next_due``, the
 next multiple of the scan period; on the lockstep grid exactly ``stamp % period == 0``),
 it publishes ``scan`` with that stamp. A pose stamp going backwards (a new run)
-restarts the schedule. ``--source ros2`` hands over to the real sensor's bridge
-(``nodes.lidar_sim.ros2_source.main``).
+restarts the schedule. ``--source ros2`` hands over to the real sensor
+(:mod:`nodes.lidar_sim.ros2_source`: the robot's ``LaserScan`` as our ``scan``).
 
 Ports: :mod:`nodes.lidar_sim.ports` (``--help`` prints them).
 
@@ -31,6 +32,7 @@ from common.errors import PapfError
 from common.params import arg_type
 from common.ports import describe, plain
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
+from common.units import period_ns  # the time grid's one rate-to-period rule (the world sim's too)
 from nodes.lidar_sim.options import OPTIONS
 from nodes.lidar_sim.ports import EXTRAS, PORTS, VARIANTS
 from worlds import load_world
@@ -84,7 +86,6 @@ class BodyPairs:
 
 
 def main_sim(args: argparse.Namespace) -> int:
-    from nodes.base_driver.core import period_ns  # the driver owns the time grid
     from nodes.lidar_sim.core import LidarParams, LidarSim  # pybullet: only when simulating
 
     log = setup_logging(NAME, args.log_level)

@@ -1,4 +1,5 @@
-"""Simulated RPLIDAR A3 on the ROSbot: pybullet ray casting, no transport (pure core).
+"""The LiDAR's simulated source, an RPLIDAR A3 on the ROSbot: pybullet ray casting, no
+transport (pure core); the real one is ``ros2_source.py``.
 
 A 360 deg planar scan (docs/architecture.md "The robot"): ``beams`` rays (300 by default, the L of the
 PAPF paper's Table 1) at ``angle_min + i * angle_increment`` with ``angle_min = -pi``,
@@ -11,7 +12,7 @@ obstacle height).
 
 In a fleet, :meth:`LidarSim.place_bodies` puts the other robots (boxes of the ROSbot's
 200 x 235 x 220 mm body) and the people (discs in the scan plane) at their poses of the scan's instant
-(``Bodies``, from the sim driver) before the rays are cast; a person is a sphere centred on
+(``Bodies``, from the world simulator) before the rays are cast; a person is a sphere centred on
 the scan plane, whose section there is the person's disc (cheaper to cast against).
 
 Invalid readings: no return within ``range_max`` -> ``inf``; a return closer than

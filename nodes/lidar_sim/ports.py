@@ -1,7 +1,8 @@
-"""Ports of the LiDAR node (see :mod:`common.ports`): simulated, or the real sensor's bridge."""
+"""Ports of the LiDAR source (see :mod:`common.ports`): simulated (``PORTS``; ``ODOM`` in HIL), or
+the robot's real sensor (``ROS2``, ``--source ros2``)."""
 
 PORTS = (
-    ("in", "sim/pose", "Odometry"),      # ground-truth pose (--pose-source sim, default)
+    ("in", "sim/pose", "Odometry"),      # the world simulator's ground-truth pose (--pose-source sim, default)
     ("in?", "sim/bodies", "Bodies"),     # a fleet's other robots and people, per scan instant
     ("out", "scan", "Scan"),             # one per scan instant, stamped with the pose's stamp
 )
@@ -10,7 +11,7 @@ ODOM = (
     ("out", "scan", "Scan"),
 )
 ROS2 = (
-    ("in", "clock", "Clock"),            # the driver's run time, to stamp the scans
+    ("in", "clock", "Clock"),            # the robot driver's run time, to stamp the scans
     ("in", "bridge:scan", "sensor_msgs/LaserScan"),
     ("out", "scan", "Scan"),
 )

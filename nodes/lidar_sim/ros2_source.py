@@ -1,4 +1,4 @@
-"""The real RPLIDAR as our ``Scan``: ``python -m nodes.lidar_sim --source ros2 [--ros rmw_zenoh]``.
+"""The LiDAR's real source, the robot's RPLIDAR, as our ``Scan``: ``python -m nodes.lidar_sim --source ros2 [--ros rmw_zenoh]``.
 
 Reads ``sensor_msgs/LaserScan`` CDR from the bridge key ``[<bridge-ns>/]scan`` (the ROSbot's
 ``rplidar_ros``/``sllidar_ros2`` through ``zenoh-bridge-ros2dds``, docs/architecture.md "The
@@ -33,7 +33,7 @@ import numpy as np
 
 from common import robot, ros2
 from common.errors import SchemaError
-from common.ros_link import add_ros_args, open_link, ros_domain
+from common.ros_link import BridgeTopics, add_ros_args, open_link, ros_domain
 from schemas import Scan
 
 NAME = "lidar_sim"
@@ -114,7 +114,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from common.transport import open_node, setup_logging
-    from nodes.base_driver.rosbot import BridgeTopics
 
     log = setup_logging(NAME, getattr(args, "log_level", "INFO"))
     topics = BridgeTopics(getattr(args, "bridge_namespace", ""),

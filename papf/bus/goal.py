@@ -83,7 +83,7 @@ def send_goal(session: zenoh.Session, keys: Keys, x: float, y: float, tolerance:
 
     The same handshake as the launcher's (docs/architecture.md, "Start and end of a run"):
     publish ``<ns>/goal`` every 0.5 s until the planner answers ``planner/status`` ``ready``;
-    with ``start_run`` then publish ``events`` ``run_started`` (what a sim driver started alone
+    with ``start_run`` then publish ``events`` ``run_started`` (what a world simulator started alone
     waits for). Then, unless told not to wait, follow ``planner/status`` until ``reached``
     (exit 0), ``stagnated`` (3) or ``failed`` (6); a ``collision`` event gives 4,
     ``timeout_s`` without an outcome 5, and another goal on ``<ns>/goal`` (someone re-targeted

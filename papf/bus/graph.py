@@ -25,17 +25,25 @@ class NodePorts:
     variants: dict[str, tuple[Port, ...]]     # "" (default) or "--driver rosbot" -> ports
 
 
+# A liveliness name that more than one node package serves, each under the option that picks
+# it: on the bus the world simulator stands where the robot's base driver stands
+# (``<ns>/alive/base_driver``; ``python -m nodes.base_driver --driver sim`` hands over to it).
+SERVED_BY = {"base_driver": {"--driver sim": "world_sim", "--driver rosbot": "base_driver"}}
+
+
 def node_ports(name: str) -> NodePorts | None:
     """The declared ports of our node ``name`` (None: no ``nodes/<name>/ports.py``)."""
-    try:
-        mod = importlib.import_module(f"nodes.{name}.ports")
-    except ModuleNotFoundError:
-        return None
-    variants = {"": tuple(mod.PORTS)}
-    for (option, value), ports in getattr(mod, "VARIANTS", {}).items():
-        variants[f"{option} {value}"] = tuple(ports)
-    for flag, more in getattr(mod, "EXTRAS", {}).items():
-        variants[f"+{flag}"] = tuple(more)
+    variants: dict[str, tuple[Port, ...]] = {}
+    for label, package in SERVED_BY.get(name, {"": name}).items():
+        try:
+            mod = importlib.import_module(f"nodes.{package}.ports")
+        except ModuleNotFoundError:
+            return None
+        variants[label] = tuple(mod.PORTS)
+        for (option, value), ports in getattr(mod, "VARIANTS", {}).items():
+            variants[f"{label} {option} {value}".strip()] = tuple(ports)
+        for flag, more in getattr(mod, "EXTRAS", {}).items():
+            variants[f"{label} +{flag}".strip()] = tuple(more)
     return NodePorts(name, variants)
 
 

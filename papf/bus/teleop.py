@@ -1,7 +1,7 @@
 """``papf teleop``: drive the robot from the keyboard, like ``teleop_twist_keyboard``.
 
 The commands go where the planner's go (``<ns>/cmd_vel``), so the base driver's
-:class:`nodes.base_driver.limits.CommandGate` clamps, rate-limits and watchdogs them alike.
+:class:`common.drive.CommandGate` clamps, rate-limits and watchdogs them alike.
 :class:`TeleopState` is pure (keys -> speeds; tests drive it); :func:`run` owns the
 terminal. Used by ``papf teleop``.
 """

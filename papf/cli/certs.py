@@ -27,7 +27,7 @@ def register(sub) -> None:
 
 def cmd_make_certs(args) -> int:
     """``papf make-certs``: write the test CA, certificates and secure configs; the exit code."""
-    from nodes.base_driver.rosbot import BridgeTopics  # rosbags: only when writing configs
+    from common.ros_link import BridgeTopics  # rosbags: only when writing configs
     from papf.robot.certs import where_files_go, write_bundle
 
     domain = ros_domain(args)

@@ -20,7 +20,7 @@ from papf.cli.view import add_view_flag
 def register(sub) -> None:
     p = sub.add_parser("run", help="run the whole simulated stack once, to an outcome",
                        description="Start the processes of the `sim` launch profile (router, "
-                                   "lidar_sim, base_driver (sim), planner, energy_meter, and the "
+                                   "world_sim (as base_driver), lidar_sim, planner, energy_meter, and the "
                                    "recorder with --record); drive to the world's goal; print a "
                                    "summary. Exit code: 0 reached, 3 stagnated, 4 collision, "
                                    "5 timeout, 6 failed, 2 usage error.")

@@ -28,7 +28,7 @@ def register(sub) -> None:
     p.add_argument("--step-w", type=arg_type("--step-w", pos(robot.W_MAX_RAD_S, "rad/s")), default=0.2, help="[rad/s] per key press (0.2)")
     p.add_argument("--rate", type=arg_type("--rate", RATE_HZ), default=10.0, help="commands per second (10)")
     p.add_argument("--start-run", action="store_true",
-                   help="publish run_started first (a sim driver started alone waits for it)")
+                   help="publish run_started first (a world simulator started alone waits for it)")
     add_zenoh_args(p)
     p.set_defaults(func=cmd_teleop)
 

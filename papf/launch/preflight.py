@@ -142,7 +142,7 @@ def bridge_namespace(ns: str | None, ours: str) -> None:
     do not fall under our namespace (:meth:`BridgeTopics.check_separate`)."""
     if not ns or not ns.strip("/"):
         return
-    from nodes.base_driver.rosbot import BridgeTopics
+    from common.ros_link import BridgeTopics
 
     try:
         Keys(ns.strip("/"))

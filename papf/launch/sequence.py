@@ -62,7 +62,7 @@ class RunSequence:
                           "cmd_vel": monitor.on_cmd, pose_topic: monitor.on_pose,
                           "goal": monitor.on_goal}
         if pose_topic == "sim/pose":
-            # the sim driver puts sim/pose(t) just before clock(t), at every instant: the pose
+            # the world simulator puts sim/pose(t) just before clock(t), at every instant: the pose
             # samples carry the sim time, and the launcher is not woken for clock as well
             del self._handlers["clock"]
             self._handlers[pose_topic] = lambda msg: (monitor.on_pose(msg),

@@ -39,13 +39,13 @@ import numpy as np
 from common.crowd import Crowd
 from common.crowd_measures import CrowdMeter, box_box_distance, point_box_distance
 from common.crowd_social import collision_cause, extension
+from common.drive import CommandGate, RosbotLimits
 from common.quiet import import_quietly
-from nodes.base_driver.limits import CommandGate, RosbotLimits
-from nodes.base_driver.sim import SimParams
 from nodes.lidar_sim.core import LidarSim
 from nodes.planner.passing import Passing, PassingParams
 from nodes.planner.registry import make_planner
 from nodes.planner.road import Track
+from nodes.world_sim.physics import SimParams
 from papf.offline.result import PlanResult
 from papf.offline.unicycle import Drive, FootprintChecker, start_pose
 from schemas.messages import Bodies

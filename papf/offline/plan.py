@@ -4,8 +4,8 @@
 The real :class:`nodes.planner.core.Planner` in the one offline closed loop
 (:func:`papf.offline.unicycle.closed_loop`) with the stack's robot: scans from
 :class:`nodes.lidar_sim.core.LidarSim` (pybullet rays, seeded noise) every control period
-``dt`` (10 Hz, as the stack), the start pose jittered as the sim driver does for the same
-seed, the driver's :class:`~nodes.base_driver.limits.CommandGate` (|v| <= 0.9 m/s,
+``dt`` (10 Hz, as the stack), the start pose jittered as the world simulator does for the same
+seed, the driver's :class:`~common.drive.CommandGate` (|v| <= 0.9 m/s,
 |w| <= 3 rad/s, 1 m/s^2, 4 rad/s^2) and the footprint box of the driver's chassis
 (0.200 x 0.235 m) against the world's obstacles in pybullet (:mod:`worlds.bullet`); in 3-D
 worlds (spheres) the point robot of :mod:`papf.offline.point3d`.
@@ -17,11 +17,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from nodes.base_driver.limits import CommandGate, RosbotLimits
-from nodes.base_driver.sim import SimParams
+from common.drive import CommandGate, RosbotLimits
 from nodes.lidar_sim.core import LidarParams, LidarSim
 from nodes.planner.registry import make_planner
 from nodes.planner.road import Lanes
+from nodes.world_sim.physics import SimParams
 from papf.offline.car import road_figures
 from papf.offline.point3d import plan_3d
 from papf.offline.result import PlanResult

@@ -3,13 +3,13 @@ and paper-test experiments (offline) and the planner tests all drive through
 :func:`closed_loop`.
 
 Per control period ``dt``: a scan at the pose -> ``planner.step`` -> the command, through the
-driver's :class:`~nodes.base_driver.limits.CommandGate` if one is given (else applied as is),
-drives an ideal unicycle (:func:`~nodes.base_driver.limits.unicycle`, exact arcs every
+driver's :class:`~common.drive.CommandGate` if one is given (else applied as is),
+drives an ideal unicycle (:func:`~common.drive.unicycle`, exact arcs every
 :data:`SUBSTEP_S`, the driver's odometry period), with a clearance check at every substep.
 What senses and what collides is passed in: the stack's LiDAR (pybullet) and the robot's
 footprint box (:class:`FootprintChecker`) for ``papf plan``; exact numpy rays and a point
 (:mod:`worlds.geometry`) for the planner tests (:mod:`tests.support.toysim`, worlds from :mod:`worlds.toy`). The start pose of a
-seed is the sim driver's (:func:`start_pose`). No wheel slip or skid dynamics: that is what
+seed is the world simulator's (:func:`start_pose`). No wheel slip or skid dynamics: that is what
 the stack's pybullet driver adds.
 """
 
@@ -19,11 +19,11 @@ from collections.abc import Callable
 
 import numpy as np
 
+from common.drive import CommandGate, unicycle
 from common.quiet import import_quietly
 from common.robot import MOVING_SPEED
 from common.units import NS_PER_S as NS
-from nodes.base_driver.limits import CommandGate, unicycle
-from nodes.base_driver.sim import SimParams, jittered_start
+from nodes.world_sim.physics import SimParams, jittered_start
 from papf.offline.result import PlanResult
 from schemas.messages import Odometry, Scan
 from worlds import World
@@ -82,7 +82,7 @@ class FootprintChecker:
 
 def start_pose(world: World, seed: int) -> tuple[float, float, float]:
     """The world's start plus the stack driver's seeded hand-placement jitter (the same draws
-    as :class:`nodes.base_driver.sim.SimBase` for the same seed)."""
+    as :class:`nodes.world_sim.physics.SimBase` for the same seed)."""
     return jittered_start(world.start, np.random.default_rng(seed))
 
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from common.errors import ConfigError
-from nodes.base_driver.rosbot import BridgeTopics
+from common.ros_link import BridgeTopics
 from papf.robot.rmw_bundle import PAPF_PORT, rmw_configs
 
 LOCAL_PORT = 7447   # [-] TCP on the robot's loopback (robot nodes, the bridge)

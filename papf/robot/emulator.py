@@ -17,12 +17,12 @@ import queue
 import time
 
 from common import ros2
+from common.drive import CommandGate, RosbotLimits, unicycle
 from common.errors import SchemaError
 from common.outfiles import append_jsonl
-from common.ros_link import cmd_vel_type, open_link, ros_domain
+from common.ros_link import BridgeTopics, cmd_vel_type, open_link, ros_domain
 from common.transport import open_node, setup_logging
-from nodes.base_driver.limits import CommandGate, RosbotLimits, unicycle
-from nodes.base_driver.rosbot import ORIGIN, BridgeTopics, Pose2D, cdr_to_twist, compose
+from nodes.base_driver.rosbot import ORIGIN, Pose2D, cdr_to_twist, compose
 from schemas.messages import Event
 from worlds import load_world
 
@@ -40,7 +40,7 @@ class EmulatedRosbot:
 
     The body (:class:`EmulatedRosbot`, pure) is a unicycle whose commands pass the robot's own
     ``diff_drive_controller`` behaviour: the ROSbot limits of
-    :class:`nodes.base_driver.limits.RosbotLimits` (clamp, 1.0 m/s², 4.0 rad/s²) and its
+    :class:`common.drive.RosbotLimits` (clamp, 1.0 m/s², 4.0 rad/s²) and its
     ``cmd_vel_timeout`` (``--cmd-timeout``, 0.5 s; 0 disables it, to show that the base driver
     alone stops the robot). Odometry is exact (no slip, no noise) and starts at (0, 0, 0) like
     a freshly started EKF; with ``--world`` the robot really stands at the world's start pose
@@ -50,7 +50,7 @@ class EmulatedRosbot:
     Liveliness: ``<ns>/alive/rosbot_emulator`` (``--namespace``, ours, not the bridge's).
     With ``--world`` the body also touches the world's obstacles: each contact during a run
     (``run_started`` .. ``run_ended`` on our ``<ns>/events``) is a ``collision`` event there,
-    stamped on the run's clock, as the sim driver reports one (:class:`BodyContacts`).
+    stamped on the run's clock, as the world simulator reports one (:class:`BodyContacts`).
     """
 
     def __init__(self, cmd_timeout_s: float = 0.5, start: Pose2D = ORIGIN):
@@ -84,7 +84,7 @@ class EmulatedRosbot:
 
 
 class BodyContacts:
-    """The emulated body against the world's obstacles (what the sim driver's physics reports
+    """The emulated body against the world's obstacles (what the world simulator's physics reports
     as ``collision`` events): the ROSbot's footprint box (:mod:`common.robot`), sampled at
     its corners and edge midpoints, inside an obstacle's footprint = contact. One event per
     contact episode per obstacle; an episode ends after :data:`CONTACT_GAP_NS` without

@@ -12,8 +12,9 @@ import pytest
 import zenoh
 
 from common import runauth
+from common.ros_link import BridgeTopics
 from common.transport import wait_alive, zenoh_config
-from nodes.base_driver.rosbot import BridgeTopics, cdr_to_robot_odom, twist_to_cdr
+from nodes.base_driver.rosbot import cdr_to_robot_odom, twist_to_cdr
 from papf.launch.supervisor import free_port, wait_port
 from papf.robot.certs import Bundle, write_bundle
 from schemas import Keys, Twist

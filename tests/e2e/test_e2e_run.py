@@ -129,7 +129,7 @@ def test_interrupting_the_launcher_stops_everything(sig, ignored_at_start):
     try:
         assert wait_port(port, 60), "the run's router never came up"
         deadline = time.monotonic() + 60
-        while not pids_of("nodes.base_driver", port) and time.monotonic() < deadline:
+        while not pids_of("nodes.world_sim", port) and time.monotonic() < deadline:
             time.sleep(0.1)
         time.sleep(1.0)
         os.kill(proc.pid, sig)

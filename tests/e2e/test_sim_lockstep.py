@@ -1,4 +1,4 @@
-"""End to end: router + base_driver (sim) + lidar_sim as processes, a fake planner here.
+"""End to end: router + the world simulator + lidar_sim as processes, a fake planner here.
 
 The fake planner answers every scan with a Twist of the same stamp (the lockstep key).
 Checks the protocol of docs/architecture.md: nothing before ``run_started``; odom,
@@ -29,9 +29,10 @@ ODOM_NS = 20_000_000
 
 @contextmanager
 def stack(seed: int = 3, world: str = "energy", driver_args: tuple[str, ...] = (),
-          lines: list[tuple[str, str]] | None = None):
-    """Router + driver + lidar on a free port; yields (session, supervisor). ``lines``
-    collects every (node, log line)."""
+          lines: list[tuple[str, str]] | None = None,
+          simulator: tuple[str, ...] = ("nodes.world_sim",)):
+    """Router + world simulator + lidar on a free port; yields (session, supervisor). ``lines``
+    collects every (node, log line); ``simulator``: the module (and options) that starts it."""
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     keep = (lambda name, line: lines.append((name, line))) if lines is not None else None
@@ -39,8 +40,7 @@ def stack(seed: int = 3, world: str = "energy", driver_args: tuple[str, ...] = (
         sup.start("router", [PY, "-m", "papf.launch.router", "--listen", endpoint])
         assert wait_port(port, 15.0), "router did not start: " + tails(sup)
         common = ["--connect", endpoint, "--world", world, "--seed", str(seed)]
-        sup.start("base_driver", [PY, "-m", "nodes.base_driver", "--driver", "sim", *common,
-                                  *driver_args])
+        sup.start("base_driver", [PY, "-m", *simulator, *common, *driver_args])
         sup.start("lidar_sim", [PY, "-m", "nodes.lidar_sim", *common])
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             missing = wait_alive(session, KEYS, ["base_driver", "lidar_sim"], timeout_s=30,
@@ -190,8 +190,8 @@ def test_lockstep_run_and_garbage():
     assert last.yaw > 0.2                           # and turning at 0.2 rad/s
 
 
-def _run_once(seed: int, until_ns: int) -> list[tuple]:
-    with stack(seed=seed) as (session, sup):
+def _run_once(seed: int, until_ns: int, simulator=("nodes.world_sim",)) -> list[tuple]:
+    with stack(seed=seed, simulator=simulator) as (session, sup):
         planner = FakePlanner(session)
         try:
             start_run(session)
@@ -203,9 +203,10 @@ def _run_once(seed: int, until_ns: int) -> list[tuple]:
 
 
 def test_same_seed_same_trajectory_across_processes():
+    """Also through the old way in: ``nodes.base_driver --driver sim`` becomes the simulator."""
     a = _run_once(5, 1_500_000_000)
-    b = _run_once(5, 1_500_000_000)
-    assert a == b
+    b = _run_once(5, 1_500_000_000, simulator=("nodes.base_driver", "--driver", "sim"))
+    assert a and a == b
 
 
 LOCKSTEP_TIMEOUT_S = 4.0   # [s wall] the driver's wait for an answer in the test below

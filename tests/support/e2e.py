@@ -80,7 +80,7 @@ class Batteries:
             time.sleep(0.05)
 
 
-NODES = ("nodes.base_driver", "nodes.lidar_sim", "nodes.planner", "nodes.energy_meter",
+NODES = ("nodes.world_sim", "nodes.lidar_sim", "nodes.planner", "nodes.energy_meter",
          "papf.launch.router")
 
 

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from nodes.base_driver.rosbot import BridgeTopics
+from common.ros_link import BridgeTopics
 from papf.robot.certs import ROLES, access_control
 
 NS, BRIDGE = "t5sec", "bot"

@@ -6,10 +6,11 @@ import math
 
 import pytest
 
+from common.drive import CommandGate, RosbotLimits
 from common.errors import ConfigError
-from nodes.base_driver.core import CollisionMonitor, DriverConfig, DriverCore, period_ns
-from nodes.base_driver.limits import CommandGate, RosbotLimits
-from nodes.base_driver.sim import SimBase, SimParams
+from common.units import period_ns
+from nodes.world_sim.core import ContactEpisodes, WorldConfig, WorldCore
+from nodes.world_sim.physics import SimBase, SimParams
 from schemas.messages import WHEEL_NAMES, Clock, Event, Odometry, Twist, WheelStates
 from worlds import load_world, parse_world
 
@@ -155,9 +156,9 @@ def test_sim_rejects_bad_params_and_3d_worlds():
         SimBase(w3)
 
 
-# -- DriverCore ------------------------------------------------------------------
+# -- WorldCore ------------------------------------------------------------------
 def test_core_publishes_in_protocol_order_on_the_grid():
-    with DriverCore(world(), seed=0) as core:
+    with WorldCore(world(), seed=0) as core:
         topics = [t for t, _ in core.outputs()]
         assert topics == ["sim/pose", "odom", "wheels", "clock"]
         core.advance()
@@ -167,7 +168,7 @@ def test_core_publishes_in_protocol_order_on_the_grid():
 
 
 def test_core_matches_only_the_answer_to_this_scan():
-    with DriverCore(world(), seed=0) as core:
+    with WorldCore(world(), seed=0) as core:
         assert core.is_scan_instant() and core.command(Twist(stamp_ns=0, v=0.1, w=0.0))
         core.advance()
         assert not core.is_scan_instant()
@@ -179,14 +180,14 @@ def test_core_matches_only_the_answer_to_this_scan():
         assert core.command(Twist(stamp_ns=100_000_000, v=0.1, w=0.0))
 
 
-def events_of(core: DriverCore) -> list[Event]:
+def events_of(core: WorldCore) -> list[Event]:
     return [m for t, m in core.outputs() if t == "events"]
 
 
 def test_core_collision_event_once_per_episode():
     box = {"kind": "box", "center": [1.0, 0.0], "size": [0.4, 0.4]}
     events = []
-    with DriverCore(world(obstacles=[box]), seed=0) as core:
+    with WorldCore(world(obstacles=[box]), seed=0) as core:
         while core.t_ns < 4 * S:
             if core.is_scan_instant():
                 core.command(Twist(stamp_ns=core.t_ns, v=0.9, w=0.0))
@@ -199,7 +200,7 @@ def test_core_collision_event_once_per_episode():
 
 
 def test_collision_monitor_debounces():
-    mon = CollisionMonitor(gap_ns=100)
+    mon = ContactEpisodes(gap_ns=100)
     assert mon.update(0, [1]) == [1]
     assert mon.update(50, [1, 2]) == [2]
     assert mon.update(140, [1]) == []           # 90 ns gap: same episode
@@ -207,7 +208,7 @@ def test_collision_monitor_debounces():
 
 
 def test_core_watchdog_event_and_stop():
-    with DriverCore(world(), seed=0) as core:
+    with WorldCore(world(), seed=0) as core:
         core.command(Twist(stamp_ns=0, v=0.5, w=0.0))
         events = []
         while core.t_ns < 2 * S:
@@ -222,7 +223,7 @@ def test_core_watchdog_event_and_stop():
 @pytest.mark.parametrize("odom_hz,scan_hz", [(50, 3), (40, 10), (33, 10)])
 def test_config_rejects_rates_off_the_grid(odom_hz, scan_hz):
     with pytest.raises(ConfigError):
-        DriverConfig.from_rates(odom_hz, scan_hz)
+        WorldConfig.from_rates(odom_hz, scan_hz)
 
 
 def test_period_ns_exact():

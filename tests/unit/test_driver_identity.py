@@ -14,8 +14,8 @@ import random
 import pybullet as p
 import pytest
 
-from nodes.base_driver.limits import CommandGate, RosbotLimits
-from nodes.base_driver.sim import SimBase, _yaw
+from common.drive import CommandGate, RosbotLimits
+from nodes.world_sim.physics import SimBase, _yaw
 from worlds import parse_world
 
 

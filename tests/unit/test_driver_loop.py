@@ -1,11 +1,11 @@
-"""The simulated driver's lockstep / real-time schedule (nodes.base_driver.loop), in-process:
+"""The simulated driver's lockstep / real-time schedule (nodes.world_sim.loop), in-process:
 a fake core and wall time passed in — no processes, no sleeping."""
 
 from __future__ import annotations
 
 import pytest
 
-from nodes.base_driver.loop import DriverLoop
+from nodes.world_sim.loop import WorldLoop
 from schemas.messages import Clock, Event, Twist
 
 PERIOD_NS = 20_000_000      # 50 Hz odometry
@@ -13,7 +13,7 @@ SCAN_EVERY = 5              # 10 Hz scans
 
 
 class FakeCore:
-    """The DriverCore interface the loop uses: one clock message per instant."""
+    """The WorldCore interface the loop uses: one clock message per instant."""
 
     def __init__(self):
         self.t_ns, self.commands = 0, []
@@ -36,7 +36,7 @@ def cmd(stamp_ns: int) -> Twist:
     return Twist(stamp_ns=stamp_ns, v=0.1, w=0.0)
 
 
-def run_until(loop: DriverLoop, now: float):
+def run_until(loop: WorldLoop, now: float):
     """Step as the wrapper does with an empty inbox, until the loop waits beyond ``now``."""
     out = []
     while True:
@@ -52,7 +52,7 @@ def clocks(out) -> list[int]:
 
 def test_lockstep_waits_for_the_command_of_each_scan():
     core = FakeCore()
-    loop = DriverLoop(core, realtime=False, lockstep_timeout_s=2.0, now=100.0)
+    loop = WorldLoop(core, realtime=False, lockstep_timeout_s=2.0, now=100.0)
     out, until = loop.step(100.0)
     assert clocks(out) == [0] and until == 102.0 and not loop.ready   # scan at t=0: wait
     out, until = loop.step(101.9)                   # still nothing: keep waiting, publish nothing
@@ -71,7 +71,7 @@ def test_lockstep_waits_for_the_command_of_each_scan():
 
 def test_a_missing_command_is_a_fault_then_real_time_until_a_command_answers_again():
     core = FakeCore()
-    loop = DriverLoop(core, realtime=False, lockstep_timeout_s=2.0, now=0.0)
+    loop = WorldLoop(core, realtime=False, lockstep_timeout_s=2.0, now=0.0)
     loop.step(0.0)
     out, until = run_until(loop, 2.5)               # the wait is over: fault, free running
     faults = [m for t, m in out if t == "events" and m.kind == "node_fault"]
@@ -85,7 +85,7 @@ def test_a_missing_command_is_a_fault_then_real_time_until_a_command_answers_aga
 
 def test_realtime_never_waits_for_commands_and_run_ended_stops():
     core = FakeCore()
-    loop = DriverLoop(core, realtime=True, lockstep_timeout_s=2.0, now=10.0)
+    loop = WorldLoop(core, realtime=True, lockstep_timeout_s=2.0, now=10.0)
     out, until = loop.step(10.0)
     assert clocks(out) == [0] and until == 10.0     # scan instant, but nothing to wait for
     out, until = loop.step(10.0)

@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from nodes.base_driver.core import DriverCore
-from nodes.base_driver.sim import SimBase
 from nodes.lidar_sim.__main__ import BodyPairs
 from nodes.lidar_sim.core import LidarParams, LidarSim
+from nodes.world_sim.core import WorldCore
+from nodes.world_sim.physics import SimBase
 from papf.launch.fleet import FleetMeter, fleet_result
 from papf.launch.outcome import RunMonitor
 from papf.launch.profile import LaunchOptions, load_profile, resolve
@@ -29,12 +29,12 @@ def fleet_world(r2_start=(3.0, 0.0, math.pi), r2_planner=None):
         {"name": "r1", "start": [0.0, 0.0, 0.0], "goal": [3.0, 0.0]}, r2]})
 
 
-def answer(core: DriverCore, *robots: str) -> list[bool]:
+def answer(core: WorldCore, *robots: str) -> list[bool]:
     return [core.command(Twist(stamp_ns=core.t_ns, v=0.3, w=0.0), r) for r in robots]
 
 
 def test_lockstep_needs_every_robots_answer():
-    with DriverCore(fleet_world(), seed=0) as core:
+    with WorldCore(fleet_world(), seed=0) as core:
         out = core.outputs()
         topics = [t for t, _ in out]
         assert topics[:5] == ["r1/sim/bodies", "r1/sim/pose", "r1/odom", "r1/wheels", "r1/clock"]
@@ -58,7 +58,7 @@ def test_first_robot_of_a_fleet_starts_as_a_lone_robot():
 
 
 def test_robots_driving_into_each_other_collide_both():
-    with DriverCore(fleet_world(r2_start=(0.6, 0.0, math.pi)), seed=0) as core:
+    with WorldCore(fleet_world(r2_start=(0.6, 0.0, math.pi)), seed=0) as core:
         events = []
         while core.t_ns < 3 * S and not events:
             out = core.outputs()
@@ -171,7 +171,7 @@ def people_world(person: dict):
 
 
 def test_people_walk_in_the_driver_and_the_lidar_is_told():
-    with DriverCore(people_world({"start": [2.0, 1.0], "goal": [-2.0, 1.0]}), seed=0) as core:
+    with WorldCore(people_world({"start": [2.0, 1.0], "goal": [-2.0, 1.0]}), seed=0) as core:
         first = core.outputs()
         assert [t for t, _ in first][:3] == ["sim/people", "sim/bodies", "sim/pose"]
         assert dict(first)["sim/bodies"].person_x == (2.0,)
@@ -183,7 +183,7 @@ def test_people_walk_in_the_driver_and_the_lidar_is_told():
 
 def test_driving_into_a_person_is_a_collision():
     slow = {"start": [0.6, 0.0], "goal": [0.6, 0.0], "speed": 0.05}   # cannot get away
-    with DriverCore(people_world(slow), seed=0) as core:
+    with WorldCore(people_world(slow), seed=0) as core:
         collisions = []
         while core.t_ns < 3 * S and not collisions:
             if core.is_scan_instant():

@@ -1,6 +1,7 @@
 """The house plan (docs/architecture.md "Layers"): imports only point down, and no cycles.
 
-Bottom: ``schemas``, ``common``, ``worlds``. Middle: ``nodes``. Top: ``papf``, ``bench``.
+Bottom: ``schemas``, ``common``, ``worlds``. Middle: ``nodes``, whose packages never import
+one another (what two nodes share lies below them). Top: ``papf``, ``bench``.
 Every import counts — module-level and function-local alike — so a lazy import cannot
 hide an upward edge or a cycle. Read with :mod:`ast`, nothing is imported.
 """
@@ -64,6 +65,31 @@ def test_imports_only_point_down():
     upward = [f"{a} -> {b}" for a, edges in import_graph().items() for b in sorted(edges)
               if LAYER[b.split(".")[0]] > LAYER[a.split(".")[0]]]
     assert not upward, "upward imports:\n" + "\n".join(upward)
+
+
+def _node_of(module: str) -> str:
+    """The node package of a module of nodes/: ``nodes.planner.papf.strategy`` -> ``planner``."""
+    parts = module.split(".")
+    return parts[1] if parts[0] == "nodes" and len(parts) > 1 else ""
+
+
+def node_crossings(graph: dict[str, set[str]]) -> list[str]:
+    """Imports from one node's package into another's: two processes tied by code rather
+    than by the bus (docs/architecture.md "Layers")."""
+    return [f"{a} -> {b}" for a, edges in graph.items() if _node_of(a)
+            for b in sorted(edges) if _node_of(b) and _node_of(b) != _node_of(a)]
+
+
+def test_no_node_imports_another_node():
+    crossings = node_crossings(import_graph())
+    assert not crossings, ("nodes importing another node (move what they share to common/, "
+                           "worlds/ or schemas/):\n" + "\n".join(crossings))
+
+
+def test_the_node_check_sees_a_crossing_and_not_a_sub_package():
+    graph = {"nodes.lidar_sim.__main__": {"nodes.world_sim.core", "common.units"},
+             "nodes.planner.papf.strategy": {"nodes.planner.core"}, "papf.cli.x": {"nodes.planner"}}
+    assert node_crossings(graph) == ["nodes.lidar_sim.__main__ -> nodes.world_sim.core"]
 
 
 def find_cycles(graph: dict[str, set[str]]) -> list[list[str]]:

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from common.drive import unicycle
 from common.errors import ConfigError
 from common.linkstats import LinkStats, summary
 from nodes.base_driver.follow import (
@@ -18,7 +19,6 @@ from nodes.base_driver.follow import (
     age_scale,
     reference,
 )
-from nodes.base_driver.limits import unicycle
 from nodes.base_driver.link_drive import LinkDriving, scan_points
 from nodes.base_driver.monitor import CollisionMonitor, MonitorSettings
 from nodes.planner.registry import make_planner

@@ -87,7 +87,7 @@ def test_the_check_fails_on_a_missing_publisher():
     assert "hil-laptop:planner needs odom" in unpublished(hil, hil)
 
 
-@pytest.mark.parametrize("module", ["nodes.base_driver", "nodes.lidar_sim", "nodes.planner",
+@pytest.mark.parametrize("module", ["nodes.base_driver", "nodes.world_sim", "nodes.lidar_sim", "nodes.planner",
                                     "nodes.energy_meter", "nodes.recorder", "nodes.tracker"])
 def test_ports_are_well_formed_and_printed_by_help(module):
     import importlib

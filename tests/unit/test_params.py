@@ -13,10 +13,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from common.drive import DRIVER_OPTIONS
 from common.errors import ConfigError
 from common.params import Spec, check_value
-from nodes.base_driver.core import DriverConfig
-from nodes.base_driver.limits import OPTIONS as DRIVER_OPTIONS
 from nodes.energy_meter.battery import PackParams
 from nodes.energy_meter.core import EnergyMeter
 from nodes.energy_meter.models import MOTOR_SPECS, PAPER_SPECS
@@ -24,11 +23,12 @@ from nodes.lidar_sim.options import OPTIONS as LIDAR_OPTIONS
 from nodes.planner.loop import PlannerLoop
 from nodes.planner.registry import PLANNERS, check_setting, make_planner, settings_of
 from nodes.planner.settings import NODE as PLANNER_NODE
+from nodes.world_sim.core import WorldConfig
 
 
 def test_nodes_check_their_settings_again():
     with pytest.raises(ConfigError, match="watchdog"):
-        DriverConfig.from_rates(watchdog_s=float("inf"))
+        WorldConfig.from_rates(watchdog_s=float("inf"))
     with pytest.raises(ConfigError, match="stale_timeout"):
         PlannerLoop(make_planner("apf"), stale_timeout_s=float("nan"))
     with pytest.raises(ConfigError, match="initial_soc"):

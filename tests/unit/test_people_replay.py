@@ -135,10 +135,10 @@ def test_the_crowd_places_replayed_people_as_recorded(tmp_path):
 
 
 def test_the_driver_publishes_them_puts_them_in_the_physics_and_the_lidar(tmp_path):
-    from nodes.base_driver.core import DriverCore
+    from nodes.world_sim.core import WorldCore
 
     w = load_world(write_world(tmp_path))
-    with DriverCore(w, seed=0) as core:
+    with WorldCore(w, seed=0) as core:
         samples = []
         while core.t_ns <= 5 * S:
             out = core.outputs()
@@ -158,11 +158,11 @@ def test_the_driver_publishes_them_puts_them_in_the_physics_and_the_lidar(tmp_pa
 
 
 def test_a_replayed_person_walking_into_a_standing_robot_caused_the_collision(tmp_path):
-    from nodes.base_driver.core import DriverCore
+    from nodes.world_sim.core import WorldCore
 
     rows = "0 7 3.0 0.0\n100 7 -1.0 0.0\n"               # walks -x through the robot at 1 m/s
     w = load_world(write_world(tmp_path, rows, robot=(0.0, 0.0)))
-    with DriverCore(w, seed=0) as core:
+    with WorldCore(w, seed=0) as core:
         events = []
         while core.t_ns < 4 * S and not events:
             if core.is_scan_instant():

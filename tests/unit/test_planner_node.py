@@ -140,9 +140,9 @@ def test_lockstep_pair_timeout_outlasts_the_drivers_lockstep_timeout():
 
     from common.optional import tomllib
     from common.units import LOCKSTEP_PAIR_TIMEOUT_S
-    from nodes.base_driver.__main__ import build_parser
     from nodes.tracker.core import Tracker, TrackerParams
     from nodes.tracker.loop import TrackerLoop
+    from nodes.world_sim.__main__ import build_parser
 
     driver_default = build_parser().parse_args([]).lockstep_timeout
     profile = tomllib.loads((Path(__file__).resolve().parents[2] / "papf" / "launch" / "profiles" / "sim.toml").read_text())

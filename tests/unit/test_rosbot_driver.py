@@ -10,14 +10,14 @@ import queue
 import pytest
 
 from common import ros2
+from common.drive import RosbotLimits
 from common.errors import ConfigError
-from nodes.base_driver.limits import RosbotLimits
+from common.ros_link import BridgeTopics
 from nodes.base_driver.rosbot import (
     EFFECTIVE_TRACK,
     MASS,
     WHEEL_RADIUS,
     YAW_INERTIA,
-    BridgeTopics,
     OdomFrame,
     Pose2D,
     RobotOdom,

@@ -6,9 +6,9 @@ import numpy as np
 import pybullet as p
 import pytest
 
-from nodes.base_driver.core import DriverCore
-from nodes.base_driver.sim import SimBase
 from nodes.lidar_sim.core import LidarParams, LidarSim
+from nodes.world_sim.core import WorldCore
+from nodes.world_sim.physics import SimBase
 from papf.offline.run import simulate
 from worlds import parse_world
 from worlds.messages import truth_objects
@@ -44,7 +44,7 @@ def test_lidar_sees_the_heading_of_a_box_moving_sideways():
 
 def test_an_obstacle_driving_into_a_standing_robot_is_a_collision():
     w = world([[0.0, 3.0, 0.0], [2.0, 0.0, 0.0]])
-    with DriverCore(w, seed=1) as core:
+    with WorldCore(w, seed=1) as core:
         events = []
         while core.t_ns < 3 * S and not events:
             core.advance()

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from common import robot
-from nodes.base_driver.core import DriverCore
+from nodes.world_sim.core import WorldCore
 from schemas.messages import Bodies, Twist
 from worlds import parse_world
 from worlds.messages import truth_objects
@@ -27,7 +27,7 @@ def crowd_fleet():
 
 def test_truth_objects_hold_the_people_and_the_other_robots_of_the_instant():
     world = crowd_fleet()
-    with DriverCore(world, seed=0) as core:
+    with WorldCore(world, seed=0) as core:
         while core.t_ns < S or not core.is_scan_instant():
             if core.is_scan_instant():
                 core.command(Twist(stamp_ns=core.t_ns, v=0.0, w=0.0), "r1")

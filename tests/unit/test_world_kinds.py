@@ -142,7 +142,7 @@ def test_many_static_obstacles_are_merged_into_meshes_that_rays_and_contacts_see
     """Beyond MERGE_MIN static obstacles pybullet holds meshes, not a body each: the LiDAR's
     rays see the same obstacles (cylinders as circumscribed 16-gons) and a contact with a
     mesh names the obstacle touched."""
-    from nodes.base_driver.sim import SimBase
+    from nodes.world_sim.physics import SimBase
     from worlds.bullet import MERGE_MIN, MERGED, TILE_M
 
     rng = np.random.default_rng(3)

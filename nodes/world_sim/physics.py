@@ -1,4 +1,5 @@
-"""Simulated ROSbot 2.0 PRO base: pybullet rigid-body physics, no transport (pure core).
+"""The world simulator's physics: simulated ROSbot 2.0 PRO bases in pybullet (rigid bodies,
+the world's obstacles, people's bodies), no transport (pure core).
 
 The robot (docs/architecture.md "The robot"; geometry and masses from husarion/rosbot_ros
 ``rosbot_description``): a chassis box of 0.200 x 0.235 x 0.100 m (the footprint,

@@ -1,12 +1,13 @@
-"""The simulated driver's pure core: sim time grid, command gate, physics, events.
+"""The world simulator's pure core: the sim time grid, the robots' command gates, physics,
+people, collisions and the bodies each LiDAR sees.
 
-No zenoh here. :class:`DriverCore` advances a :class:`~nodes.base_driver.sim.SimBase`
+No zenoh here. :class:`WorldCore` advances a :class:`~nodes.world_sim.physics.SimBase`
 one publication instant at a time (docs/architecture.md "Time" and "Lockstep"):
 
 - ``outputs()`` -> the messages of instant ``t``, in the protocol's order:
   ``sim/pose``, ``odom``, ``wheels``, ``clock``, then any ``events`` that happened
   since the previous instant (collision, watchdog_stop);
-- ``command(twist)`` -> feeds the :class:`~nodes.base_driver.limits.CommandGate`
+- ``command(twist)`` -> feeds the robot's :class:`~common.drive.CommandGate`
   (the command counts as issued at ``min(stamp, t)``) and says whether it is *the*
   answer to the scan of instant ``t`` (``stamp_ns == t``);
 - ``advance()`` -> physics steps of 4 ms up to the next instant, the gate's
@@ -22,32 +23,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from common.drive import DRIVER_OPTIONS, CommandGate, RosbotLimits
 from common.errors import ConfigError
 from common.params import check_value
-from common.units import NS_PER_S
-from nodes.base_driver.limits import OPTIONS, CommandGate, RosbotLimits
-from nodes.base_driver.sim import SimBase, SimParams
+from common.units import NS_PER_S, period_ns
+from nodes.world_sim.physics import SimBase, SimParams
 from schemas.messages import Bodies, Clock, Event, People, Twist
 from worlds import World
 
-SOURCE = "base_driver"            # Event.source of this node's events
+# Event.source of this node's events: on the bus the simulator stands where the robot's base
+# driver stands (its liveliness token is base_driver too), so readers see a sim run and a robot
+# run alike
+SOURCE = "base_driver"
 COLLISION_GAP_NS = 200_000_000    # [ns] contact-free time that ends a contact episode (assumption)
 
 
-def period_ns(hz: float, what: str) -> int:
-    """An exact integer period [ns] for a rate [Hz]; ConfigError if 1 s is not a whole number of ns periods."""
-    if not (hz > 0) or hz != hz:
-        raise ConfigError(f"{what} = {hz!r} Hz must be > 0")
-    period = round(NS_PER_S / hz)
-    if period * hz != NS_PER_S:
-        raise ConfigError(f"{what} = {hz} Hz gives a period of {NS_PER_S / hz} ns, not an integer; "
-                          "use a rate that divides 1e9 ns (e.g. 10, 20, 25, 50 Hz)")
-    return period
-
-
 @dataclass(frozen=True)
-class DriverConfig:
-    """Time grid and limits of the simulated driver."""
+class WorldConfig:
+    """Time grid, the robots' command limits and the physics of the world simulator."""
 
     odom_period_ns: int = 20_000_000     # [ns] sim/pose, odom, wheels, clock (50 Hz)
     scan_period_ns: int = 100_000_000    # [ns] lockstep instants (10 Hz, the RPLIDAR A3 rate)
@@ -65,16 +58,16 @@ class DriverConfig:
 
     @classmethod
     def from_rates(cls, odom_hz: float = 50.0, scan_hz: float = 10.0, watchdog_s: float = 0.5,
-                   sim: SimParams | None = None) -> DriverConfig:
+                   sim: SimParams | None = None) -> WorldConfig:
         for name, value in (("odom_hz", odom_hz), ("scan_hz", scan_hz), ("watchdog", watchdog_s)):
-            check_value(name, value, OPTIONS[name])
+            check_value(name, value, DRIVER_OPTIONS[name])
         return cls(odom_period_ns=period_ns(odom_hz, "odometry rate"),
                    scan_period_ns=period_ns(scan_hz, "scan rate"),
                    limits=RosbotLimits(watchdog_ns=round(watchdog_s * NS_PER_S)),
                    sim=sim or SimParams())
 
 
-class CollisionMonitor:
+class ContactEpisodes:
     """Debounce contacts into one event per (obstacle, contact episode)."""
 
     def __init__(self, gap_ns: int = COLLISION_GAP_NS):
@@ -89,7 +82,7 @@ class CollisionMonitor:
         return new
 
 
-class DriverCore:
+class WorldCore:
     """Simulated ROSbots on the lockstep time grid (see module doc).
 
     One robot (``world.robots`` empty): topics are plain (``sim/pose``), under the node's
@@ -98,8 +91,8 @@ class DriverCore:
     robot's planner answered the scan (:meth:`command`).
     """
 
-    def __init__(self, world: World, seed: int, config: DriverConfig | None = None):
-        self.config = cfg = config or DriverConfig()
+    def __init__(self, world: World, seed: int, config: WorldConfig | None = None):
+        self.config = cfg = config or WorldConfig()
         self.world = world
         fleet = world.robots
         self.names = [r.name for r in fleet] or [""]
@@ -108,7 +101,7 @@ class DriverCore:
         n = len(self.names)
         self.gates = [CommandGate(cfg.limits) for _ in range(n)]
         self.gate = self.gates[0]
-        self.monitors = [CollisionMonitor() for _ in range(n)]
+        self.monitors = [ContactEpisodes() for _ in range(n)]
         self.collisions = self.monitors[0]
         self.collision_counts = [0] * n
         self._pending: list[list[Event]] = [[] for _ in range(n)]
@@ -262,7 +255,7 @@ class DriverCore:
     def close(self) -> None:
         self.sim.close()
 
-    def __enter__(self) -> DriverCore:
+    def __enter__(self) -> WorldCore:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -1,8 +1,12 @@
-"""ROSbot velocity-command safety, shared by the simulated and the real-robot driver.
+"""How a ROSbot takes a velocity command: the controller's gate and the arc it drives.
 
-Pure Python (no pybullet, no zenoh). :class:`CommandGate` does what the ROS 2
-``diff_drive_controller`` of the ROSbot does with ``/cmd_vel`` (docs/architecture.md "The robot",
-docs/architecture.md "Safety"):
+One gate for every ROSbot of the stack: the world simulator's robots
+(``nodes/world_sim``), the real robot's base driver (``nodes/base_driver``), the ROSbot
+emulator (``papf/robot/emulator.py``) and the offline runs (``papf/offline``), so a command
+is limited alike wherever it goes. Pure Python (no pybullet, no zenoh).
+
+:class:`CommandGate` does what the ROS 2 ``diff_drive_controller`` of the ROSbot does with
+``/cmd_vel`` (docs/architecture.md "The robot", docs/architecture.md "Safety"):
 
 1. non-finite ``v`` or ``w`` -> the whole command is treated as a stop (0, 0);
 2. velocity clamp ``|v| <= v_max``, ``|w| <= w_max``;
@@ -24,14 +28,41 @@ from typing import NamedTuple
 
 from common import robot
 from common.errors import ConfigError
-from common.params import SEED, Spec, pos
+from common.params import SEED, Spec, arg_type, pos
 
-# Declared ranges of the driver's options (common.params): checked when parsed and here.
+# Declared ranges of the drivers' options (common.params): the world simulator's and the
+# ROSbot driver's command lines share them; checked when parsed and again when used.
 # The watchdog is a safety setting: past 2 s a robot keeps driving on a lost command.
-OPTIONS: dict[str, Spec] = {
+DRIVER_OPTIONS: dict[str, Spec] = {
     "odom_hz": pos(1000.0, "Hz"), "scan_hz": pos(100.0, "Hz"),
     "watchdog": pos(2.0, "s", safety=True), "lockstep_timeout": pos(60.0, "s"), "seed": SEED,
 }
+
+
+def add_driver_args(parser, simulator: bool = True) -> None:
+    """The options of the world simulator, which the robot's driver takes too (one command
+    line serves both: ``python -m nodes.base_driver --driver sim`` hands it to the simulator);
+    ``simulator=False`` says which of them the robot leaves unused."""
+    def opt(name: str):
+        return arg_type("--" + name.replace("_", "-"), DRIVER_OPTIONS[name])
+
+    sim = "" if simulator else " (the simulator's: unused on the robot)"
+    parser.add_argument("--world", default="energy",
+                        help="world name or .toml path (default energy)" + ("" if simulator else
+                             ": its start is the robot's pose when a run starts"))
+    parser.add_argument("--seed", type=opt("seed"), default=0, help="noise seed (default 0)" + sim)
+    parser.add_argument("--realtime", action="store_true",
+                        help="pace sim time to the wall clock and never wait for commands" + sim)
+    parser.add_argument("--lockstep-timeout", type=opt("lockstep_timeout"), default=2.0,
+                        metavar="S", help="wall seconds to wait for the cmd_vel of a scan "
+                                          "(default 2.0)" + sim)
+    parser.add_argument("--scan-hz", type=opt("scan_hz"), default=10.0,
+                        help="scan / lockstep rate (10)" + sim)
+    parser.add_argument("--odom-hz", type=opt("odom_hz"), default=50.0,
+                        help="odometry, wheels and clock rate (50)")
+    parser.add_argument("--watchdog", type=opt("watchdog"), default=0.5, metavar="S",
+                        help="stop when no fresh command for S seconds (default 0.5)")
+    parser.add_argument("--log-level", default="INFO")
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""The simulated driver's schedule around a :class:`~nodes.base_driver.core.DriverCore`:
+"""The world simulator's schedule around a :class:`~nodes.world_sim.core.WorldCore`:
 lockstep or real time, pure — no zenoh, wall time passed in (docs/architecture.md, "Lockstep").
 
 Per sim instant ``t`` (the core's odometry grid):
@@ -13,10 +13,10 @@ Per sim instant ``t`` (the core's odometry grid):
 4. advance the core one instant.
 
 A fleet's core (``[[robots]]``) takes each robot's ``<name>/cmd_vel`` and says an instant
-is answered only when every robot's command for it came (``DriverCore.command``).
+is answered only when every robot's command for it came (``WorldCore.command``).
 
 ``run_ended`` on ``events`` ends the run. The process wrapper
-(``nodes/base_driver/__main__.py``) only wires this to the bus::
+(``nodes/world_sim/__main__.py``) only wires this to the bus::
 
     out, until = loop.step(now)    # publish out; then feed messages until `until`
     ...                            # (or until loop.ready) with loop.on_message(...)
@@ -27,12 +27,12 @@ from __future__ import annotations
 from common.units import NS_PER_S
 from schemas.messages import Event, Twist
 
-SOURCE = "base_driver"
+SOURCE = "base_driver"   # the core's SOURCE (not imported: the core pulls in pybullet)
 
 PACE, AWAIT, DRAIN = "pace", "await", "drain"
 
 
-class DriverLoop:
+class WorldLoop:
     def __init__(self, core, realtime: bool, lockstep_timeout_s: float, now: float, log=None):
         self.core, self.realtime, self.timeout_s, self.log = core, realtime, lockstep_timeout_s, log
         self.free_running = realtime       # True: pace to the wall clock, do not wait
