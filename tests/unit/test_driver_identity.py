@@ -1,7 +1,7 @@
 """The driver's per-step Python, made cheaper, is bit for bit the model it replaced.
 
-The tyre model (nodes/base_driver/sim.py) precomputes its per-wheel constants and the
-command gate (nodes/base_driver/limits.py) inlines its clamps; both run 25 times per 100 ms
+The tyre model (nodes/world_sim/physics.py) precomputes its per-wheel constants and the
+command gate (common/drive.py) inlines its clamps; both run 25 times per 100 ms
 of sim time. Here each runs beside the plain formula (the code before the change, kept
 below as the reference) on the same random inputs, and every float must be equal.
 """
