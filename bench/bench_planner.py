@@ -77,7 +77,7 @@ def road_tracks(x: float) -> list:
     return [Track(x + dx, y, 0.0, vx, 0.0, 0.5, 0.3, i) for i, (dx, y, vx) in enumerate(ROAD_VEHICLES)]
 
 
-CSV_FIELDS = ("date", "code", "case", "planner", "scene", "cycles", "max_top_quarks", "cmd_cpu_p50_us",
+CSV_FIELDS = ("date", "code", "case", "planner", "scene", "cycles", "max_debug_points", "cmd_cpu_p50_us",
               "cmd_cpu_p99_us", "cpu_p50_us", "cpu_p99_us", "cmd_p50_us", "cmd_p99_us", "p50_us",
               "p99_us", "load_start", "load_end")
 
@@ -106,9 +106,9 @@ def bench(planner_name: str, sets: list[str], scene: str, cycles: int) -> dict:
         cpu.append(time.thread_time_ns() - c0)
         cmd_times.append(t1 - t0)
         cmd_cpu.append(c1 - c0)
-        quarks = max(quarks, len(state.top_quarks))
+        quarks = max([quarks, *(len(d.points) for d in state.debug if d.kind == "points")])
     out = {"planner": planner_name, "settings": sets, "scene": scene, "cycles": cycles,
-           "beams": int(scans[0].ranges.size), "max_top_quarks": quarks,
+           "beams": int(scans[0].ranges.size), "max_debug_points": quarks,
            "load_start": round(load_start, 1), "load_end": round(os.getloadavg()[0], 1)}
     for prefix, wall, thread in (("", times, cpu), ("cmd_", cmd_times, cmd_cpu)):
         us, cpu_us = np.array(wall) / 1e3, np.array(thread) / 1e3

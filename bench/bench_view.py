@@ -35,7 +35,8 @@ import zenoh
 from bench.foxglove_ws import FoxgloveClient
 from common.cliparse import ArgumentParser
 from common.transport import wait_alive, zenoh_config
-from nodes.planner.registry import one_with_role
+from nodes.planner.debug import debug_values
+from nodes.planner.registry import PLANNERS, one_with_role
 from nodes.viewer.core import CHANNELS
 from papf.launch.supervisor import Supervisor, free_port, wait_port
 from schemas import Keys
@@ -50,6 +51,9 @@ def cpu_s(pid: int) -> float:
     with open(f"/proc/{pid}/stat") as f:
         fields = f.read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+PROPOSED = PLANNERS[one_with_role("papf-proposed")]   # PAPF: the busiest mind to draw
 
 
 def traffic(k: int, t_ns: int) -> list[tuple[str, object]]:
@@ -67,13 +71,21 @@ def traffic(k: int, t_ns: int) -> list[tuple[str, object]]:
                               range_min=0.2, range_max=25.0, ranges=ranges)),
                 ("cmd_vel", Twist(stamp_ns=t_ns, v=0.1, w=0.0)),
                 ("planner/state", PlannerState(
-                    stamp_ns=t_ns, algorithm=one_with_role("papf-proposed"), mode="drive", force=(1.0, 0.2),
+                    stamp_ns=t_ns, algorithm=PROPOSED.name, mode="drive", force=(1.0, 0.2),
                     temporary_goal=(x + 2, 0.4), predicted_path=line,
-                    abandoned_paths=(line[:30], line[:20], line[:10]),
-                    top_quarks=((1.0, 1.0), (1.5, 0.5), (2.0, -0.5)))),
+                    debug=sample_debug(PROPOSED, line))),
                 ("planner/status", PlannerStatus(stamp_ns=t_ns, state="driving",
                                                  distance_to_goal=3.0))]
     return out
+
+
+def sample_debug(cls, line: tuple) -> tuple:
+    """A busy cycle's debug values of planner ``cls``, one of each field it declares, by kind:
+    three points, three paths cut from ``line``, a point, a scalar, a count."""
+    by_kind = {"points": ((1.0, 1.0), (1.5, 0.5), (2.0, -0.5)),
+               "paths": (line[:30], line[:20], line[:10]), "point": (1.0, 1.0),
+               "scalar": 0.5, "count": 2}
+    return debug_values(cls.name, cls.DEBUG, {f.name: by_kind[f.kind] for f in cls.DEBUG})
 
 
 def percentiles(ms: list[float]) -> dict:

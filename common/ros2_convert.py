@@ -31,11 +31,11 @@ MARKER_ARRAY = "visualization_msgs/msg/MarkerArray"
 STRING = "std_msgs/msg/String"
 PACK_CAPACITY_AH = robot.CELL_CAPACITY_MAH / 1000.0   # [Ah] 3 cells in series: one cell's
 # The viewer's colours of the planner's mind (nodes/viewer/scene.MIND_COLOURS; a test keeps
-# them equal), r g b a in 0..1, and the drawn sizes [m].
-COLOURS = {"prediction": (0.42, 0.15, 0.75, 1.0), "abandoned": (0.5, 0.5, 0.5, 0.5),
-           "quark": (0.84, 0.15, 0.16, 0.9), "temporary_goal": (0.09, 0.75, 0.81, 1.0),
-           "force": (0.15, 0.15, 0.15, 1.0), "virtual_wall": (0.89, 0.47, 0.76, 1.0)}
-QUARK_DIAMETER_M, TEMP_GOAL_DIAMETER_M = 0.12, 0.16
+# them equal), r g b a in 0..1, and the drawn sizes [m]; a plug-in's own debug values carry
+# their own style (PlannerState.debug).
+COLOURS = {"prediction": (0.42, 0.15, 0.75, 1.0), "temporary_goal": (0.09, 0.75, 0.81, 1.0),
+           "force": (0.15, 0.15, 0.15, 1.0)}
+TEMP_GOAL_DIAMETER_M = 0.16
 FORCE_MIN_M, FORCE_MAX_M = 0.15, 0.8   # [m] drawn length of the force arrow (log-scaled |F|)
 MARKER_NS = "mind"
 
@@ -183,11 +183,12 @@ def path(state: PlannerState, frame_id: str = ODOM):
     return _cls(PATH)(header=header(state.stamp_ns, frame_id), poses=poses)
 
 
-def _marker(state: PlannerState, mid: int, kind: str, colour: str, width: float,
-            points=(), z: float = 0.0):
+def _marker(state: PlannerState, mid: int, kind: str, colour, width: float,
+            points=(), z: float = 0.0, ns: str = MARKER_NS):
+    """A marker of ``colour`` (a name of :data:`COLOURS`, or r, g, b, a)."""
     cls = _cls("visualization_msgs/msg/Marker")
-    r, g, b, a = COLOURS[colour]
-    return cls(header=header(state.stamp_ns, ODOM), ns=MARKER_NS, id=mid, type=getattr(cls, kind),
+    r, g, b, a = COLOURS[colour] if isinstance(colour, str) else colour
+    return cls(header=header(state.stamp_ns, ODOM), ns=ns, id=mid, type=getattr(cls, kind),
                action=cls.ADD, pose=_pose(0.0, 0.0, 0.0), scale=_vec3(width, width, width),
                color=_cls("std_msgs/msg/ColorRGBA")(r=r, g=g, b=b, a=a),
                lifetime=_cls("builtin_interfaces/msg/Duration")(sec=0, nanosec=0),
@@ -212,16 +213,15 @@ def _force_points(state: PlannerState, robot_xy):
 
 def markers(state: PlannerState, robot_xy: tuple[float, float] | None = None):
     """``visualization_msgs/msg/MarkerArray`` of the planner's mind this cycle, in ``odom``:
-    DELETEALL first (the previous cycle goes), then the top quarks, the temporary goal, the
-    abandoned predictions, the force arrow at ``robot_xy`` (log-scaled length) and the
-    virtual walls. Marker ids are stable by role; ``ns`` is ``mind``."""
+    DELETEALL first (the previous cycle goes), then the temporary goal and the force arrow at
+    ``robot_xy`` (log-scaled length) in ``ns`` ``mind``, and the plug-in's own debug values
+    by kind in their declared style, each in its own ``ns`` ``mind/<name>`` (RViz lists and
+    hides them one by one): points as a SPHERE_LIST, paths one LINE_STRIP each, scalars and
+    counts as text above the robot. Marker ids are stable by role."""
     cls = _cls("visualization_msgs/msg/Marker")
-    clear = _marker(state, 0, "SPHERE_LIST", "quark", 0.0)
+    clear = _marker(state, 0, "SPHERE_LIST", "temporary_goal", 0.0)
     clear.action = cls.DELETEALL
     out = [clear]
-    if state.top_quarks:
-        out.append(_marker(state, 1, "SPHERE_LIST", "quark", QUARK_DIAMETER_M,
-                           state.top_quarks, z=0.1))
     if len(state.temporary_goal) >= 2:
         out.append(_marker(state, 2, "SPHERE_LIST", "temporary_goal", TEMP_GOAL_DIAMETER_M,
                            [tuple(state.temporary_goal[:2])], z=0.08))
@@ -230,10 +230,21 @@ def markers(state: PlannerState, robot_xy: tuple[float, float] | None = None):
         m = _marker(state, 3, "ARROW", "force", 0.03, arrow, z=0.3)
         m.scale = _vec3(0.03, 0.06, 0.08)   # shaft diameter, head diameter, head length
         out.append(m)
-    out += [_marker(state, 100 + i, "LINE_STRIP", "abandoned", 0.015, p, z=0.02)
-            for i, p in enumerate(state.abandoned_paths) if len(p) > 1]
-    out += [_marker(state, 1000 + i, "LINE_STRIP", "virtual_wall", 0.05, w, z=0.05)
-            for i, w in enumerate(state.virtual_walls) if len(w) > 1]
+    lines = 0
+    for d in state.debug:
+        ns = f"{MARKER_NS}/{d.name}"
+        if d.kind in ("points", "point") and d.points:
+            out.append(_marker(state, 0, "SPHERE_LIST", d.colour, d.size, d.points, z=0.1, ns=ns))
+        elif d.kind == "paths":
+            z = 0.02 if d.size < 0.035 else 0.05   # thin ones beneath the prediction
+            out += [_marker(state, i, "LINE_STRIP", d.colour, d.size, p, z=z, ns=ns)
+                    for i, p in enumerate(d.paths) if len(p) > 1]
+        elif d.kind in ("scalar", "count") and not math.isnan(d.value) and robot_xy is not None:
+            m = _marker(state, 0, "TEXT_VIEW_FACING", d.colour, 0.1, ns=ns)
+            m.pose = _pose(robot_xy[0], robot_xy[1], 0.7 + 0.15 * lines)
+            m.text = d.words()
+            lines += 1
+            out.append(m)
     return _cls(MARKER_ARRAY)(markers=out)
 
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from schemas.base import Floats, Message, Paths, Points, Strs, field, message
+from schemas.base import Floats, Message, Points, Strs, field, message
+from schemas.planner_state import DEBUG_KINDS, DebugValue, PlannerState, PlannerStateV1
 
 WHEEL_NAMES = ("front_left", "front_right", "rear_left", "rear_right")
 
@@ -122,32 +123,6 @@ class Goal(Message):
                               "acts only on goals that carry it")
     cancel: bool = field(False, doc="drop the goal: the planner stops (zero commands) and "
                                     "idles until the next goal (a ROS 2 action's cancel)")
-
-
-@message("PlannerState", 1)
-class PlannerState(Message):
-    """What the planner computed this cycle (what the papers drew in RViz)."""
-
-    stamp_ns: int = field(unit="ns")
-    algorithm: str = field(doc="planner name, e.g. apf, papf")
-    mode: str = field("drive", doc="planner-specific mode, e.g. drive, bypass, stop")
-    force: Floats = field((0.0, 0.0), unit="N (APF units)", doc="resultant force F_w, world frame",
-                          length=2)
-    heading_ref: float = field(0.0, unit="rad", doc="reference orientation theta*")
-    v_ref: float = field(0.0, unit="m/s")
-    w_ref: float = field(0.0, unit="rad/s")
-    temporary_goal: Floats = field((), unit="m", doc="[x, y] or empty")
-    predicted_path: Points = field((), unit="m")
-    abandoned_paths: Paths = field((), unit="m")
-    top_quarks: Points = field((), unit="m")
-    virtual_walls: Paths = field((), unit="m", doc="polylines of virtual wall points")
-    virtual_obstacles: Points = field((), unit="m")
-    obstacle_count: int = field(0, doc="obstacle points (IAPF: tracks) used this cycle")
-    local_minimum_count: int = field(0, doc="IAPF eq. 24: predicted points near the solid line")
-    lane_goal_y: float = field(float("nan"), unit="m", nonfinite=True,
-                               doc="IAPF temporary lane goal y; nan when none")
-    v_target: float = field(0.0, unit="m/s", doc="speed the planner aims at (IAPF eq. 26)")
-    compute_ns: int = field(0, unit="ns", doc="wall time the cycle took (not deterministic)")
 
 
 PLANNER_STATES = ("idle", "ready", "driving", "reached", "stagnated", "failed")
@@ -289,8 +264,10 @@ ALL_MESSAGES: tuple[type[Message], ...] = (
     Scan, Odometry, Twist, WheelStates, BatteryState, BatteryVoltage, Goal, PlannerState,
     PlannerStatus, Clock, Event, Objects, Bodies, People, LinkHealth,
 )
-BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in ALL_MESSAGES}
+#: type name -> the class that decodes it; older versions decode into the current class
+#: (a recording made before still reads: schemas/planner_state.py)
+BY_TYPE: dict[str, type[Message]] = {m.TYPE: m for m in (*ALL_MESSAGES, PlannerStateV1)}
 
 __all__ = [m.__name__ for m in ALL_MESSAGES] + [
-    "ObjectTrack", "OBJECT_SOURCES", "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "LINK_SIDES", "PLANNER_STATES", "WHEEL_NAMES", "Points",
+    "ObjectTrack", "DebugValue", "DEBUG_KINDS", "OBJECT_SOURCES", "ALL_MESSAGES", "BY_TYPE", "EVENT_KINDS", "LINK_SIDES", "PLANNER_STATES", "WHEEL_NAMES", "Points",
 ]

@@ -20,6 +20,7 @@ import numpy as np
 
 from common.robot import GOAL_TOLERANCE_MIN_M
 from common.units import NS_PER_S
+from nodes.planner.debug import DebugField, check_declarations, debug_values
 from nodes.planner.field import APFParams, heading_ref, speed_ref, turn_rate, wrap_angle
 from nodes.planner.road import Lanes, Track
 from nodes.planner.rollout import rollout, stop_plan
@@ -68,23 +69,22 @@ def _beam_offsets(increment: float, beams: int, _sign: float) -> np.ndarray:
 
 @dataclass
 class Plan:
-    """A strategy's answer: the force to steer by and what to show (world frame, 2-D)."""
+    """A strategy's answer: the force to steer by and what to show (world frame, 2-D).
+
+    The named fields are what every planner has; a plug-in's own output goes in ``debug``
+    (name -> value of a field its ``DEBUG`` declares: :mod:`nodes.planner.debug`).
+    """
 
     force: np.ndarray
     mode: str = "drive"
     temporary_goal: tuple = ()
     predicted_path: np.ndarray | tuple = ()
-    abandoned_paths: list = field(default_factory=list)
-    top_quarks: np.ndarray | tuple = ()
-    virtual_walls: list = field(default_factory=list)
-    virtual_obstacles: np.ndarray | tuple = ()
+    debug: dict = field(default_factory=dict)   # the plug-in's declared fields -> this cycle's values
     stagnated: str = ""     # non-empty: the strategy declares stagnation, with this reason
     searching: bool = False  # the strategy found something new this cycle (e.g. placed a top quark)
-    heading: float | None = None  # [rad] the strategy's own heading reference (IAPF eq. 21)
-    v_ref: float | None = None    # [m/s] the strategy's own speed (IAPF eq. 26) instead of eq. 5
-    local_count: int = 0          # IAPF eq. 24
-    lane_goal_y: float = math.nan  # [m] IAPF temporary lane goal
-    obstacles_used: int = 0       # obstacles (tracks) that shaped the field this cycle
+    heading: float | None = None  # [rad] the strategy's own heading reference (e.g. IAPF eq. 21)
+    v_ref: float | None = None    # [m/s] the strategy's own speed instead of eq. 5 (e.g. IAPF eq. 26)
+    obstacles_used: int | None = None   # obstacles that shaped the field; None: the scan's points
 
 
 @dataclass(frozen=True)
@@ -113,6 +113,7 @@ class Strategy:
     planar_only: ClassVar[bool] = False      # reads the planar scan's beams, not just points
     car_variants: ClassVar[dict] = {}        # car-scale name -> (label, Params changes, colour)
     uses_numba: bool = False                 # runs numba kernels (the scan view compiles too)
+    DEBUG: ClassVar[tuple[DebugField, ...]] = ()   # its own debug output (nodes/planner/debug.py)
 
     def __init__(self, params=None):
         self.params = params if params is not None else self.Params()
@@ -151,13 +152,6 @@ def _norm(v) -> float:
     return math.sqrt(a.dot(a))
 
 
-def _paths(paths) -> tuple:
-    """Sequence of (K, >=2) arrays (or one (N, K, >=2) array) -> tuple of :func:`_points`."""
-    if isinstance(paths, np.ndarray) and paths.ndim == 3:   # one conversion for all of them
-        return tuple(tuple(map(tuple, p)) for p in np.asarray(paths[:, :, :2], dtype=float).tolist())
-    return tuple(map(_points, paths))
-
-
 class Planner:
     """Goal, motion law, status and messages around one :class:`Strategy`.
 
@@ -171,6 +165,7 @@ class Planner:
     """
 
     def __init__(self, strategy: Strategy, apf: APFParams | None = None):
+        check_declarations(strategy.name, strategy.DEBUG)
         self.strategy = strategy
         # the scan view compiled only where the strategy runs numba anyway (PAPF, IAPF): a
         # planner without kernels never imports numba (nodes/planner/lazy.py); same values
@@ -191,7 +186,7 @@ class Planner:
 
     # -- inputs beyond scan and odometry -------------------------------------
     def set_objects(self, tracks) -> None:
-        """The latest obstacle tracks (:class:`nodes.planner.iapf.fields.Track`)."""
+        """The latest obstacle tracks (:class:`nodes.planner.road.Track`)."""
         self.objects = tuple(tracks)
 
     def set_road(self, road: Lanes | None) -> None:
@@ -329,20 +324,17 @@ class Planner:
 
     def _state(self, t, plan: Plan, view, theta_ref, v, w, compute_ns: int) -> PlannerState:
         force = np.asarray(plan.force, dtype=float)
+        strategy = self.strategy
+        used = (plan.obstacles_used if plan.obstacles_used is not None else
+                0 if view is None else view.points.shape[0])
         # every value below is already in the message's own form (Python floats, tuples):
         # from_normal skips the constructor's second pass over the paths
         return PlannerState.from_normal(
-            stamp_ns=int(t), algorithm=self.strategy.name, mode=str(plan.mode),
+            stamp_ns=int(t), algorithm=strategy.name, mode=str(plan.mode),
             force=(float(force[0]), float(force[1])), heading_ref=float(theta_ref),
             v_ref=float(v), w_ref=float(w),
             temporary_goal=tuple(float(x) for x in plan.temporary_goal),
-            predicted_path=_points(plan.predicted_path),
-            abandoned_paths=_paths(plan.abandoned_paths),
-            top_quarks=_points(plan.top_quarks),
-            virtual_walls=_paths(plan.virtual_walls),
-            virtual_obstacles=_points(plan.virtual_obstacles),
-            obstacle_count=(int(plan.obstacles_used) if plan.v_ref is not None else
-                            0 if view is None else int(view.points.shape[0])),
-            local_minimum_count=int(plan.local_count), lane_goal_y=float(plan.lane_goal_y),
+            predicted_path=_points(plan.predicted_path), obstacle_count=int(used),
             v_target=float(plan.v_ref) if plan.v_ref is not None else float(v),
-            compute_ns=compute_ns)
+            compute_ns=compute_ns,
+            debug=debug_values(strategy.name, strategy.DEBUG, plan.debug))

@@ -21,6 +21,7 @@ from common.optional import tomllib
 from common.params import Spec, check_all, check_value, unknown_name
 from common.syntax import toml_problem
 from nodes.planner.core import NoParams, Planner, Strategy
+from nodes.planner.debug import check_declarations
 from nodes.planner.field import APFParams
 from nodes.planner.settings import APF as APF_SPECS
 from nodes.planner.settings import check_strength
@@ -53,6 +54,7 @@ def _discover() -> dict[str, type[Strategy]]:
         unknown = set(cls.roles) - set(ROLES)
         if unknown:
             raise TypeError(f"planner {cls.name!r}: unknown roles {sorted(unknown)}; valid: {ROLES}")
+        check_declarations(cls.name, cls.DEBUG)    # its debug output, declared as data
         out[cls.name] = cls
     return out
 

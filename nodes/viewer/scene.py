@@ -17,7 +17,6 @@ from common.robot import BODY_HEIGHT_M, BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.viewer.convert import (
     BASE,
     LINE_LIST,
-    LINE_STRIP,
     WORLD,
     arrow,
     colour,
@@ -32,19 +31,16 @@ from nodes.viewer.convert import (
 from schemas.messages import Bodies, Objects, PlannerState
 from worlds import World
 
-# (r, g, b, a) 0..1; the matplotlib pictures use the same.
+# (r, g, b, a) 0..1; the matplotlib pictures use the same. A planner's own debug output
+# carries its own colours (PlannerState.debug: the plug-in's declared style).
 MIND_COLOURS = {
     "obstacle": (0.35, 0.35, 0.35, 1.0),
     "start": (0.17, 0.63, 0.17, 1.0),
     "goal": (0.84, 0.15, 0.16, 1.0),
     "robot": (0.12, 0.47, 0.71, 0.6),
     "prediction": (0.42, 0.15, 0.75, 1.0),
-    "abandoned": (0.5, 0.5, 0.5, 0.5),
-    "quark": (0.84, 0.15, 0.16, 0.9),
     "temporary_goal": (0.09, 0.75, 0.81, 1.0),
     "force": (0.15, 0.15, 0.15, 1.0),
-    "virtual_wall": (0.89, 0.47, 0.76, 1.0),
-    "virtual_obstacle": (0.89, 0.47, 0.76, 0.9),
     "moving": (0.8, 0.4, 0.0, 1.0),
     "track": (0.0, 0.6, 0.6, 0.7),
     "road": (0.95, 0.85, 0.2, 1.0),
@@ -53,9 +49,7 @@ MIND_COLOURS = {
 }
 ROAD_MARGIN_M = 5.0      # [m] road lines drawn this far beyond the world's extent along x
 DASH_M = 0.5             # [m] dash and gap of a broken road line
-QUARK_DIAMETER_M = 0.12
 TEMP_GOAL_DIAMETER_M = 0.16
-VIRTUAL_OBSTACLE_DIAMETER_M = 0.1
 FORCE_MIN_M, FORCE_MAX_M = 0.15, 0.8   # [m] drawn length of the force arrow (log-scaled |F|)
 
 
@@ -179,21 +173,34 @@ def _force_arrow(state: PlannerState, robot_xy: tuple[float, float] | None) -> l
 
 
 def mind_scene(state: PlannerState, robot_xy: tuple[float, float] | None = None) -> dict:
-    """One planner cycle as entity ``mind`` (replaces the previous cycle's)."""
-    lines = [line(p, c("abandoned"), 0.015) for p in state.abandoned_paths if len(p) > 1]
+    """One planner cycle as entity ``mind`` (replaces the previous cycle's): the generic parts
+    every planner has, and the plug-in's own fields drawn by kind in their declared style."""
+    lines, spheres, words = _debug_primitives(state.debug)
     if len(state.predicted_path) > 1:
         lines.append(line(state.predicted_path, c("prediction"), 0.035, z=0.03))
-    lines += [line(w, c("virtual_wall"), 0.05, z=0.05, kind=LINE_STRIP)
-              for w in state.virtual_walls if len(w) > 1]
-    spheres = [sphere(q[0], q[1], 0.1, QUARK_DIAMETER_M, c("quark")) for q in state.top_quarks]
-    spheres += [sphere(o[0], o[1], 0.1, VIRTUAL_OBSTACLE_DIAMETER_M, c("virtual_obstacle"))
-                for o in state.virtual_obstacles]
     if len(state.temporary_goal) >= 2:
         tg = state.temporary_goal
         spheres.append(sphere(tg[0], tg[1], 0.08, TEMP_GOAL_DIAMETER_M, c("temporary_goal")))
     texts = []
     if robot_xy is not None:
-        texts.append(text(robot_xy[0], robot_xy[1], 0.55, f"{state.algorithm}: {state.mode}",
-                          {**c("force"), "a": 1.0}, 0.12))
+        caption = " · ".join([f"{state.algorithm}: {state.mode}", *words])
+        texts.append(text(robot_xy[0], robot_xy[1], 0.55, caption, {**c("force"), "a": 1.0}, 0.12))
     return scene_update([entity(state.stamp_ns, WORLD, "mind", lines=lines, spheres=spheres,
                                 arrows=_force_arrow(state, robot_xy), texts=texts)])
+
+
+def _debug_primitives(debug) -> tuple[list, list, list[str]]:
+    """(lines, spheres, caption words) of a plan's debug values, by kind: points and a point
+    as spheres of the style's diameter, paths as lines of its thickness (thin ones beneath
+    the prediction), scalars and counts as words beside the mode."""
+    lines, spheres, words = [], [], []
+    for d in debug:
+        rgba = colour(*d.colour)
+        if d.kind in ("points", "point"):
+            spheres += [sphere(p[0], p[1], 0.1, d.size, rgba) for p in d.points]
+        elif d.kind == "paths":
+            z = 0.02 if d.size < 0.035 else 0.05
+            lines += [line(p, rgba, d.size, z=z) for p in d.paths if len(p) > 1]
+        elif not math.isnan(d.value):
+            words.append(d.words())
+    return lines, spheres, words

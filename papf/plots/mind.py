@@ -1,14 +1,16 @@
 """The planner's mind on a matplotlib axes: what the PAPF paper drew in RViz.
 
 - :func:`draw_footprint` — the ROSbot's chassis rectangle at a pose (``common.robot``);
-- :func:`draw_mind` — one ``PlannerState``: predicted path, abandoned predictions, top
-  quarks, temporary goal, AR-APF's virtual walls and obstacles;
-- :func:`snapshot_index` — the most telling cycle of a run (most quarks and abandoned
-  predictions, then the longest prediction) for a still picture;
+- :func:`draw_mind` — one ``PlannerState``: predicted path, temporary goal, and the
+  plug-in's own debug values (PAPF's top quarks and abandoned predictions, AR-APF's
+  virtual walls, ...) drawn by kind in their declared style;
+- :func:`snapshot_index` — the most telling cycle of a run (most debug points and paths,
+  then the longest prediction) for a still picture;
 - :func:`plot_plan` — ``papf plan --plot``: world, path, footprints along it, the mind at the
   snapshot cycle.
 
-Colours are the live view's (:data:`nodes.viewer.scene.MIND_COLOURS`).
+Colours are the live view's (:data:`nodes.viewer.scene.MIND_COLOURS`; the plug-in's own,
+declared, for its debug values).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M  # noqa: E402
@@ -81,31 +84,17 @@ def draw_moving(ax, world: World, t_s: float) -> list:
 
 
 def draw_mind(ax, state: PlannerState, labels: bool = True) -> list:
-    """Every piece of one planner cycle on ``ax``; returns the artists (to remove later)."""
-    out = []
+    """Every piece of one planner cycle on ``ax``: the prediction and temporary goal every
+    planner has, and the plug-in's own debug values by kind in their declared style;
+    returns the artists (to remove later)."""
     lab = (lambda s: s) if labels else (lambda s: None)
-    for i, path in enumerate(state.abandoned_paths):
-        p = np.asarray(path)
-        if len(p) > 1:
-            out += ax.plot(p[:, 0], p[:, 1], color=rgba("abandoned"), lw=0.9, ls="--", zorder=4,
-                           label=lab("abandoned prediction") if i == 0 else None)
+    out = []
     if len(state.predicted_path) > 1:
         p = np.asarray(state.predicted_path)
         out += ax.plot(p[:, 0], p[:, 1], color=rgba("prediction"), lw=2.0, zorder=5,
                        label=lab("prediction"))
-    for i, wall in enumerate(state.virtual_walls):
-        p = np.asarray(wall)
-        if len(p) > 1:
-            out += ax.plot(p[:, 0], p[:, 1], color=rgba("virtual_wall"), lw=3.0, zorder=5,
-                           label=lab("virtual wall") if i == 0 else None)
-    if len(state.virtual_obstacles):
-        p = np.asarray(state.virtual_obstacles)
-        out += ax.plot(p[:, 0], p[:, 1], "s", color=rgba("virtual_obstacle"), ms=6, zorder=7,
-                       label=lab("virtual obstacle"))
-    if len(state.top_quarks):
-        p = np.asarray(state.top_quarks)
-        out += ax.plot(p[:, 0], p[:, 1], "o", color=rgba("quark"), ms=7, mec="k", mew=0.5,
-                       zorder=7, label=lab("top quark"))
+    for d in state.debug:
+        out += _draw_debug(ax, d, lab)
     if len(state.temporary_goal) >= 2:
         tg = state.temporary_goal
         out += ax.plot(tg[0], tg[1], "D", color=rgba("temporary_goal"), ms=8, mec="k", mew=0.5,
@@ -113,12 +102,49 @@ def draw_mind(ax, state: PlannerState, labels: bool = True) -> list:
     return out
 
 
+PT_PER_M = 60.0   # a debug style's size [m] in points: line widths and marker sizes alike
+
+
+def _draw_debug(ax, d, lab) -> list:
+    """One debug value by kind: points as dots, paths as lines (dashed if declared so),
+    scalars and counts as words in the corner; the legend names it by its label."""
+    out = []
+    if d.kind in ("points", "point") and d.points:
+        p = np.asarray(d.points)
+        out += ax.plot(p[:, 0], p[:, 1], "o", color=d.colour, ms=max(3.0, d.size * PT_PER_M),
+                       mec="k", mew=0.5, zorder=7, label=lab(d.caption))
+    elif d.kind == "paths":
+        drawn = [np.asarray(p) for p in d.paths if len(p) > 1]
+        for i, p in enumerate(drawn):
+            out += ax.plot(p[:, 0], p[:, 1], color=d.colour, lw=max(0.5, d.size * PT_PER_M),
+                           ls="--" if d.dashed else "-", zorder=4 if d.dashed else 5,
+                           label=lab(d.caption) if i == 0 else None)
+    elif d.kind in ("scalar", "count") and not math.isnan(d.value):
+        shown = sum(1 for a in ax.texts if getattr(a, "_papf_debug", False))
+        t = ax.text(0.01, 0.01 + 0.045 * shown, d.words(), transform=ax.transAxes, fontsize=8,
+                    color=d.colour[:3], zorder=8)
+        t._papf_debug = True
+        out.append(t)
+    return out
+
+
+def debug_handle(d):
+    """A legend entry for debug value ``d`` as :func:`draw_mind` draws it (None: words only)."""
+    if d.kind in ("points", "point"):
+        return Line2D([], [], marker="o", ls="", color=d.colour, mec="k",
+                      ms=max(3.0, d.size * PT_PER_M), label=d.caption)
+    if d.kind == "paths":
+        return Line2D([], [], color=d.colour, lw=max(0.5, d.size * PT_PER_M),
+                      ls="--" if d.dashed else "-", label=d.caption)
+    return None
+
+
 def snapshot_index(states: Sequence[PlannerState]) -> int | None:
-    """Index of the cycle showing most: quarks + abandoned predictions + virtual walls first,
-    then the longest prediction (the earliest of equals); None if no cycle shows anything."""
+    """Index of the cycle showing most: the plug-in's debug points and paths first, then the
+    longest prediction (the earliest of equals); None if no cycle shows anything."""
     best, best_score = None, (0, 0)
     for i, s in enumerate(states):
-        score = (len(s.top_quarks) + len(s.abandoned_paths) + len(s.virtual_walls),
+        score = (sum(len(d.points) + len(d.paths) for d in s.debug),
                  len(s.predicted_path) + (len(s.temporary_goal) >= 2))
         if score > best_score:
             best, best_score = i, score

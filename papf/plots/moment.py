@@ -1,7 +1,8 @@
 """The planner's mind at the moment it acted, and traffic over time (the report's pictures).
 
-- :func:`planner_events` — the cycles where the planner *did* something: a quark placed,
-  the temporary goal moved, a lane change, a prediction abandoned, a virtual wall raised;
+- :func:`planner_events` — the cycles where the planner *did* something: the temporary
+  goal set or moved, or one of its own debug values changed (by kind: a point added — PAPF's
+  top quark —, a path added — AR-APF's virtual wall —, a scalar changed — IAPF's lane goal);
 - :func:`telling_moment` — the first of those once the robot moves (None: nothing to show);
 - :func:`draw_traffic` — road lines and every moving obstacle over ``[0, t_end]``: its
   track, outlines every :data:`TRAFFIC_EVERY_S` fading with time, where it was at the end;
@@ -28,7 +29,14 @@ import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from papf.plots.mind import draw_footprint, draw_mind, draw_moving, draw_road, rgba  # noqa: E402
+from papf.plots.mind import (  # noqa: E402
+    debug_handle,
+    draw_footprint,
+    draw_mind,
+    draw_moving,
+    draw_road,
+    rgba,
+)
 from papf.plots.world import colour_for, draw_obstacle, draw_world, saved_png  # noqa: E402
 from schemas.messages import PlannerState  # noqa: E402
 from worlds import World  # noqa: E402
@@ -45,7 +53,8 @@ PANEL_W_IN = 5.2          # [in] width of one run's panel in mind.png
 class Event:
     index: int     # into the states
     t_s: float     # [s] the cycle's stamp
-    what: str      # "a quark placed", "temporary goal moved", …
+    what: str      # "new top quark", "temporary goal moved", …
+    rank: int = 5      # lower = more telling (RANKS); 5: after every planner change
 
 
 def _xy(p) -> tuple[float, float] | None:
@@ -56,43 +65,53 @@ def planner_events(states: Sequence[PlannerState]) -> list[Event]:
     """Every cycle where the planner changed its mind, in time order (see module doc)."""
     out, prev = [], None
     for i, s in enumerate(states):
-        what = _change(prev, s)
+        rank, what = _change(prev, s)
         if what:
-            out.append(Event(i, s.stamp_ns / 1e9, what))
+            out.append(Event(i, s.stamp_ns / 1e9, what, rank))
         prev = s
     return out
 
 
-def _change(prev: PlannerState | None, s: PlannerState) -> str:
-    before = prev if prev is not None else PlannerState(stamp_ns=0, algorithm=s.algorithm)
-    if len(s.top_quarks) > len(before.top_quarks):
-        return "a quark placed"
-    lane, lane0 = s.lane_goal_y, before.lane_goal_y
-    if math.isfinite(lane) and not (math.isfinite(lane0) and abs(lane - lane0) < 1e-6):
-        return f"lane change to y = {lane:.1f} m"
-    tg, tg0 = _xy(s.temporary_goal), _xy(before.temporary_goal)
+#: what a change of each kind says and how telling it is (lower first): one of the plug-in's
+#: points added, a scalar of it changed, the temporary goal (or a point of it) moved, one of
+#: its paths added, the temporary goal set
+RANKS = {"points": 0, "scalar": 1, "moved": 2, "paths": 3, "set": 4}
+
+
+def _change(prev: PlannerState | None, s: PlannerState) -> tuple[int, str]:
+    """(rank, words) of the most telling change from ``prev`` to ``s``; (0, '') for none."""
+    found = [(RANKS[kind], what) for kind, what in _debug_changes(prev, s)]
+    tg = _xy(s.temporary_goal)
+    tg0 = _xy(prev.temporary_goal) if prev is not None else None
     if tg is not None and (tg0 is None or math.dist(tg, tg0) > GOAL_MOVE_M):
-        return "temporary goal moved" if tg0 is not None else "temporary goal set"
-    if len(s.virtual_walls) > len(before.virtual_walls):
-        return "a virtual wall raised"
-    if len(s.abandoned_paths) > len(before.abandoned_paths):
-        return "a prediction abandoned"
-    return ""
+        found.append((RANKS["moved"], "temporary goal moved") if tg0 is not None else
+                     (RANKS["set"], "temporary goal set"))
+    return min(found) if found else (0, "")
 
 
-PRIORITY = ("a quark placed", "lane change", "temporary goal moved", "a virtual wall raised",
-            "a prediction abandoned", "temporary goal set")
+def _debug_changes(prev: PlannerState | None, s: PlannerState):
+    """(kind of change, words) of each of the plug-in's debug values that changed, by kind
+    (a count changing is not an event: it changes every cycle)."""
+    before = {d.name: d for d in prev.debug} if prev is not None else {}
+    for d in s.debug:
+        b = before.get(d.name)
+        if d.kind == "points" and len(d.points) > (len(b.points) if b else 0):
+            yield "points", f"new {d.caption}"
+        elif d.kind == "paths" and len(d.paths) > (len(b.paths) if b else 0):
+            yield "paths", f"new {d.caption}"
+        elif d.kind == "scalar" and math.isfinite(d.value) and not (
+                b is not None and math.isfinite(b.value) and abs(d.value - b.value) < 1e-6):
+            yield "scalar", f"{d.words()}"
+        elif d.kind == "point" and d.points and (
+                b is None or not b.points or math.dist(d.points[0], b.points[0]) > GOAL_MOVE_M):
+            yield "moved", f"{d.caption} moved"
 
 
 def telling_moment(states: Sequence[PlannerState], t_moving_s: float) -> Event | None:
-    """The first event of the most telling kind (:data:`PRIORITY`) at or after the robot's
+    """The first event of the most telling kind (:data:`RANKS`) at or after the robot's
     first motion ``t_moving_s`` [s]; None when the planner did none of them."""
     events = [e for e in planner_events(states) if e.t_s >= t_moving_s]
-    for kind in PRIORITY:
-        for e in events:
-            if e.what.startswith(kind):
-                return e
-    return None
+    return min(events, key=lambda e: (e.rank, e.t_s), default=None)
 
 
 def slowest_moment(states: Sequence[PlannerState], t_moving_s: float,
@@ -204,8 +223,7 @@ def _road_ys(world: World) -> list[float]:
 
 def _mind_points(s: PlannerState) -> np.ndarray:
     parts = [np.asarray(s.predicted_path, float).reshape(-1, 2),
-             np.asarray(s.top_quarks, float).reshape(-1, 2),
-             np.asarray(s.virtual_obstacles, float).reshape(-1, 2)]
+             *(np.asarray(d.points, float).reshape(-1, 2) for d in s.debug)]
     if len(s.temporary_goal) >= 2:
         parts.append(np.asarray(s.temporary_goal[:2], float).reshape(1, 2))
     return np.vstack(parts)
@@ -270,13 +288,13 @@ def _tracks(ax, world: World, t_end_s: float) -> None:
                     zorder=3)
 
 
-def _legend_handles(world: World | None) -> list:
+def _legend_handles(world: World | None, debug=()) -> list:
+    """The legend: what every panel shows, and the planners' own debug values drawn
+    (``debug``: one of each name, in their declared style)."""
     handles = [Line2D([], [], color="0.3", lw=1.8, label="path so far (faint: after)"),
                Patch(facecolor=rgba("robot"), edgecolor=rgba("robot", 1.0), label="robot then"),
                Line2D([], [], color=rgba("prediction"), lw=2.0, label="prediction"),
-               Line2D([], [], color=rgba("abandoned"), lw=0.9, ls="--",
-                      label="abandoned prediction"),
-               Line2D([], [], marker="o", ls="", color=rgba("quark"), mec="k", label="top quark"),
+               *(h for h in map(debug_handle, debug) if h is not None),
                Line2D([], [], marker="D", ls="", color=rgba("temporary_goal"), mec="k",
                       label="temporary goal"),
                Patch(color="0.35", label="obstacle")]
@@ -301,6 +319,8 @@ def moment_png(panels: Sequence[MomentPanel], world: World | None, out_png: str 
     with saved_png(fig, out_png) as out:
         for ax, p, v in zip(axes[0], panels, views, strict=False):
             _draw_panel(ax, p, world, v)
-        fig.legend(handles=_legend_handles(world), loc="outside lower center",
+        drawn = {d.name: d for p, v in zip(panels, views, strict=False) if v.event is not None
+                 and p.states for d in p.states[v.event.index].debug}
+        fig.legend(handles=_legend_handles(world, tuple(drawn.values())), loc="outside lower center",
                    ncol=min(4, 2 + n), fontsize=8, frameon=False)
     return out

@@ -1,13 +1,14 @@
-"""What PAPF did on a run, from its recording: how far it moved its temporary goal, how many
-top quarks it placed (issue 14: does an energy world make PAPF's mechanisms work?).
+"""What a planner did on a run, from its recording: how far it moved its temporary goal, how
+many points it placed (issue 14: does an energy world make PAPF's mechanisms work?).
 
 - **temporary-goal offset** [m]: per cycle, the distance of ``planner/state``'s temporary
   goal from the straight line through the robot (latest odometry) towards the global goal
   (the sideways move eq. 8 makes); the maximum over the run.
-- **quarks away from the goal**: distinct top quarks (1 cm grid) placed farther than
-  :data:`NEAR_GOAL_M` from the goal. Quarks closer than that mark the prediction
-  oscillating about the goal itself (the literal reading predicts past the goal, so its
-  stagnation check fires there) and do not steer round obstacles.
+- **points away from the goal**: distinct points (1 cm grid) of the plug-in's own ``points``
+  debug values (PAPF's: its top quarks) placed farther than :data:`NEAR_GOAL_M` from the
+  goal. Quarks closer than that mark the prediction oscillating about the goal itself (the
+  literal reading predicts past the goal, so its stagnation check fires there) and do not
+  steer round obstacles.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ NEAR_GOAL_M = 1.25   # [m] lambda + lambda_stag of Table 1
 @dataclass(frozen=True)
 class Activity:
     max_goal_offset_m: float
-    quarks_away: int
+    quarks_away: int    # points away from the goal (PAPF: top quarks)
 
 
 def papf_activity(path: str | Path) -> Activity:
@@ -44,7 +45,7 @@ def papf_activity(path: str | Path) -> Activity:
         if key.endswith("/odom"):
             pos = np.array([msg.x, msg.y])
             continue
-        for q in msg.top_quarks:
+        for q in (p for d in msg.debug if d.kind == "points" for p in d.points):
             if math.dist(q[:2], goal) > NEAR_GOAL_M:
                 quarks.add((round(q[0], 2), round(q[1], 2)))
         if pos is None or not msg.temporary_goal:

@@ -29,6 +29,7 @@ from common.errors import ConfigError  # noqa: E402
 from common.outfiles import check_output, output
 from papf.console.progress import DecileProgress  # noqa: E402
 from papf.plots.mind import (  # noqa: E402
+    debug_handle,
     draw_footprint,
     draw_mind,
     draw_moving,
@@ -153,6 +154,11 @@ class Animator:
                                                zorder=5)))
         return out
 
+    def _debug_handles(self) -> list:
+        """Legend entries of the planner's own debug values (one per field it declared)."""
+        seen = {d.name: d for s in self.track.states for d in s.debug}
+        return [h for h in map(debug_handle, seen.values()) if h is not None]
+
     def _legend(self) -> None:
         """What the top view's marks are (static: the frames' artists come and go)."""
         handles = [Line2D([], [], color=rgba("robot", 1.0), lw=1.6, label="path so far"),
@@ -160,9 +166,7 @@ class Animator:
                    Line2D([], [], marker="o", ls="", ms=3, color=LIDAR_COLOUR,
                           label="LiDAR points"),
                    Line2D([], [], color=rgba("prediction"), lw=2.0, label="prediction"),
-                   Line2D([], [], color=rgba("abandoned"), lw=0.9, ls="--", label="abandoned"),
-                   Line2D([], [], marker="o", ls="", color=rgba("quark"), mec="k",
-                          label="top quark"),
+                   *self._debug_handles(),
                    Line2D([], [], marker="D", ls="", color=rgba("temporary_goal"), mec="k",
                           label="temporary goal")]
         if self.track.others:

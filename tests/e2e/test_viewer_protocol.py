@@ -35,6 +35,7 @@ from schemas.messages import (
     Scan,
     Twist,
 )
+from tests.support.messages import planner_debug
 
 KEYS = Keys("rosbot")
 
@@ -59,8 +60,10 @@ def _stack_messages(t_ns: int):
         ("planner/state", PlannerState(
             stamp_ns=t_ns, algorithm="papf", mode="drive", force=(1.0, 0.5),
             temporary_goal=(2.0, 2.0), predicted_path=((1.0, 0.5), (1.5, 0.8), (2.0, 1.2)),
-            abandoned_paths=(((1.0, 0.5), (0.5, 1.5)),), top_quarks=((1.8, 1.0),),
-            virtual_walls=(((0.0, 2.0), (1.0, 2.0)),), virtual_obstacles=((0.5, 2.0),))),
+            debug=planner_debug("papf", abandoned_paths=[[(1.0, 0.5), (0.5, 1.5)]],
+                                top_quarks=[(1.8, 1.0)])
+            + planner_debug("arapf", virtual_walls=[[(0.0, 2.0), (1.0, 2.0)]],
+                            virtual_obstacles=[(0.5, 2.0)]))),
         ("planner/status", PlannerStatus(stamp_ns=t_ns, state="driving", distance_to_goal=4.0)),
         ("cmd_vel", Twist(stamp_ns=t_ns, v=0.1, w=0.05)),
         ("battery", BatteryState(stamp_ns=t_ns, voltage=12.1, current=0.8, power=9.7,

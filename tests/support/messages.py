@@ -23,3 +23,13 @@ def scan_63(t: int) -> Scan:
     what the stamp tests of the node intake and the planner loop feed."""
     return Scan(stamp_ns=t, angle_min=0.0, angle_increment=0.1, range_min=0.1, range_max=10.0,
                 ranges=np.full(63, np.inf, np.float32))
+
+
+def planner_debug(planner: str, **values) -> tuple:
+    """``PlannerState.debug`` of registered ``planner`` with these values of its declared
+    fields (the others empty), for states built by hand."""
+    from nodes.planner.debug import debug_values
+    from nodes.planner.registry import PLANNERS
+
+    cls = PLANNERS[planner]
+    return debug_values(cls.name, cls.DEBUG, values)

@@ -4,6 +4,7 @@ stand-in for a run through the stack that writes one (:class:`FakeRuns`)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ from nodes.energy_meter.models import WHEEL_RADIUS_M
 from nodes.recorder.writer import RunWriter
 from schemas import BatteryState, Clock, Event, Keys, Odometry, PlannerStatus, WheelStates
 from schemas.keys import TOPICS
+from schemas.messages import DebugValue
 
 VALUES = {"int": 123, "float": 1.5, "bool": True, "floats": (1.0, 2.0),
           "points": ((1.0, 2.0), (3.0, 4.0)), "paths": (((0.0, 1.0), (2.0, 3.0)),),
@@ -36,6 +38,8 @@ def sample(msg_type, stamp_ns: int = 1_000_000):
             kwargs[name] = tuple(float(i) for i in range(md["length"]))
         else:
             kwargs[name] = VALUES[kind]
+    if msg_type is DebugValue:   # one payload, the kind's; colours in 0..1
+        kwargs.update(kind="points", paths=(), value=math.nan, colour=(0.0, 0.5, 1.0, 1.0))
     return msg_type(**kwargs)
 
 

@@ -29,6 +29,7 @@ from schemas.messages import (
     Scan,
     Twist,
 )
+from tests.support.messages import planner_debug
 from tests.support.worlds import traffic_world
 
 NS = 1_000_000_000
@@ -59,7 +60,8 @@ def recording(tmp_path_factory):
                     ObjectTrack(id=1, x=2.0 - x, y=0.0, vx=-0.1, length=0.4, width=0.3),)))
                 w.write_message("rosbot/planner/state", PlannerState(
                     stamp_ns=t, algorithm="papf", force=(1.0, 0.0),
-                    predicted_path=((x, 0.0), (x + 1, 0.5)), top_quarks=((0.5, 0.9),),
+                    predicted_path=((x, 0.0), (x + 1, 0.5)),
+                    debug=planner_debug("papf", top_quarks=[(0.5, 0.9)]),
                     temporary_goal=(x + 1, 0.5)))
                 w.write_message("rosbot/planner/status", PlannerStatus(stamp_ns=t,
                                                                        state="driving"))

@@ -147,13 +147,13 @@ def test_new_ar_places_wall_side_and_obstacle():
     v = view_of((1.0, -0.5, 1.0, 0.7))                            # right end is nearer: go right
     plan = strat.plan(np.zeros(2), 0.0, GOAL, v, APF)
     assert plan.mode == "augmented" and strat.go_left is False
-    wall = np.asarray(plan.virtual_walls[0])
+    wall = np.asarray(plan.debug["virtual_walls"][0])
     assert wall.shape == (10, 2)
     np.testing.assert_allclose(wall[[0, -1]], [[1.0, -0.5], [1.0, 0.7]], atol=0.03)
-    np.testing.assert_allclose(plan.virtual_obstacles, [[0.0, 0.25]])   # on the left, s_min / 2
+    np.testing.assert_allclose(plan.debug["virtual_obstacles"], [[0.0, 0.25]])   # on the left, s_min / 2
     field = APFParams(k_vo_l=5.0)
     expected = apf_force(np.zeros(2), GOAL, v.points, field,
-                         (Repulsors(wall, K_VIRTUAL, field.d_o), Repulsors(plan.virtual_obstacles, K_VIRTUAL)))
+                         (Repulsors(wall, K_VIRTUAL, field.d_o), Repulsors(plan.debug["virtual_obstacles"], K_VIRTUAL)))
     np.testing.assert_allclose(plan.force, expected, rtol=1e-12)      # eq. 4
 
 
@@ -208,10 +208,10 @@ def test_closed_loop_bypasses_a_dead_end_and_abandons_ar(segments):
     first = modes.index("augmented")
     assert "drive" in modes[first:]                               # abandoned before the goal
     aug = [s for s in r.states if s.mode == "augmented"]
-    assert all(len(s.virtual_walls[0]) == 10 and len(s.virtual_obstacles) == 1 for s in aug)
-    obstacles = {s.virtual_obstacles[0] for s in aug}
+    assert all(len(s.get("virtual_walls")[0]) == 10 and len(s.get("virtual_obstacles")) == 1 for s in aug)
+    obstacles = {s.get("virtual_obstacles")[0] for s in aug}
     assert len(obstacles) > 1                                     # kept beside the robot ...
-    assert aug[-1].virtual_obstacles == aug[-2].virtual_obstacles  # ... then left in place
+    assert aug[-1].get("virtual_obstacles") == aug[-2].get("virtual_obstacles")  # ... then left in place
 
 
 # -- the paper's tests (offline: pybullet LiDAR, ROSbot command limits, footprint collisions)

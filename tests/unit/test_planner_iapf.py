@@ -239,7 +239,7 @@ def test_registry_and_planner_step_with_road_and_tracks():
     assert len(state.predicted_path) == IAPFParams().f_step and state.obstacle_count == 1
     # the slow track ahead (0.1 m/s < 0.5 V_c) and a free left lane: a lane change starts;
     # the command is the planned speed along the robot's heading
-    assert state.mode == "lane-goal" and state.lane_goal_y == pytest.approx(0.75)
+    assert state.mode == "lane-goal" and state.get("lane_goal_y") == pytest.approx(0.75)
     assert cmd.v == pytest.approx(state.v_target * math.cos(state.heading_ref))
 
 

@@ -164,7 +164,7 @@ def test_motion_force_is_eq7_with_the_temporary_goal():
     view = scan_view(s, Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     strat = PAPFStrategy()
     plan = strat.plan(np.zeros(2), 0.0, np.array([6.0, 0.0]), view, APF)
-    quarks = Repulsors(np.asarray(plan.top_quarks).reshape(-1, 2), 5 * APF.k_vo, APF.d_o)
+    quarks = Repulsors(np.asarray(plan.debug["top_quarks"]).reshape(-1, 2), 5 * APF.k_vo, APF.d_o)
     expected = apf_force(np.zeros(2), plan.temporary_goal, view.points, APF, extra=(quarks,))
     np.testing.assert_allclose(plan.force, expected, rtol=1e-12)
     assert len(plan.predicted_path) == 34 and len(plan.temporary_goal) == 2
@@ -177,7 +177,7 @@ def test_unresolved_cycle_drives_by_eq7_with_the_global_goal():
     strat, goal = PAPFStrategy(), np.array([3.0, 0.0])
     plan = strat.plan(np.zeros(2), 0.0, goal, view, APF)
     assert plan.mode == "unresolved" and plan.temporary_goal == (3.0, 0.0)
-    expected = apf_force(np.zeros(2), goal, RING, APF) + quark_force(np.zeros(2), plan.top_quarks,
+    expected = apf_force(np.zeros(2), goal, RING, APF) + quark_force(np.zeros(2), plan.debug["top_quarks"],
                                                                       APF, PP)
     np.testing.assert_allclose(plan.force, expected, rtol=1e-12)
 
@@ -187,10 +187,10 @@ def test_quarks_persist_and_reset_on_new_goal():
     view = scan_view(cast_scan(toy_world(segments=((1.0, -1.0, 1.0, 1.0),)), 0.0, 0.0, 0.0),
                      Odometry(stamp_ns=0, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
     first = strat.plan(np.zeros(2), 0.0, np.array([8.0, 0.0]), view, APF)
-    assert len(first.top_quarks) >= 1 and strat.quarks is not None
+    assert len(first.debug["top_quarks"]) >= 1 and strat.quarks is not None
     again = strat.plan(np.zeros(2), 0.0, np.array([8.0, 0.0]), view, APF)
-    np.testing.assert_array_equal(np.asarray(again.top_quarks)[: len(first.top_quarks)],
-                                  first.top_quarks)
+    np.testing.assert_array_equal(np.asarray(again.debug["top_quarks"])[: len(first.debug["top_quarks"])],
+                                  first.debug["top_quarks"])
     strat.reset()
     assert strat.quarks is None
 
@@ -221,7 +221,7 @@ def test_planner_state_carries_the_prediction_every_cycle():
     r = simulate(make_planner("papf"), world, goal=(5.0, 0.0), max_time_s=120, keep_states=True)
     driving = [s for s in r.states[:-1]]
     assert all(len(s.predicted_path) >= 2 and len(s.temporary_goal) == 2 for s in driving)
-    assert any(s.top_quarks for s in driving) and any(s.abandoned_paths for s in driving)
+    assert any(s.get("top_quarks") for s in driving) and any(s.get("abandoned_paths") for s in driving)
     assert {s.algorithm for s in r.states} == {"papf"}
 
 
@@ -284,4 +284,4 @@ def test_papf_planner_messages_identical_with_and_without_numba():
                      keep_states=True) for sets in ([], ["use_numba=false"])]
     fast, slow = ([dataclasses.replace(s, compute_ns=0).to_bytes() for s in r.states] for r in runs)
     assert fast == slow and np.array_equal(runs[0].path, runs[1].path)
-    assert any(s.top_quarks for s in runs[0].states)
+    assert any(s.get("top_quarks") for s in runs[0].states)

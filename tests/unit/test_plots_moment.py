@@ -6,6 +6,7 @@ import numpy as np
 
 from papf.plots.moment import MomentPanel, moment_png, planner_events, telling_moment
 from schemas.messages import PlannerState
+from tests.support.messages import planner_debug
 from worlds import load_world
 
 S = 1_000_000_000
@@ -18,17 +19,18 @@ def _state(t_s: float, **kw) -> PlannerState:
 STATES = [_state(0.0, temporary_goal=(1.0, 0.0)),            # set at start: not telling
           _state(1.0, temporary_goal=(1.02, 0.0)),           # moved 2 cm: not a move
           _state(2.0, temporary_goal=(1.5, 0.3)),            # moved
-          _state(3.0, temporary_goal=(1.5, 0.3), top_quarks=((2.0, 0.5),)),   # a quark placed
-          _state(4.0, temporary_goal=(1.5, 0.3), top_quarks=((2.0, 0.5),))]
+          _state(3.0, temporary_goal=(1.5, 0.3),                             # a quark placed
+                 debug=planner_debug("papf", top_quarks=[(2.0, 0.5)])),
+          _state(4.0, temporary_goal=(1.5, 0.3), debug=planner_debug("papf", top_quarks=[(2.0, 0.5)]))]
 
 
 def test_events_are_what_the_planner_did():
     assert [(e.t_s, e.what) for e in planner_events(STATES)] == [
-        (0.0, "temporary goal set"), (2.0, "temporary goal moved"), (3.0, "a quark placed")]
+        (0.0, "temporary goal set"), (2.0, "temporary goal moved"), (3.0, "new top quark")]
 
 
 def test_the_quark_beats_the_goal_move_and_nothing_before_motion_counts():
-    assert telling_moment(STATES, t_moving_s=0.5).what == "a quark placed"
+    assert telling_moment(STATES, t_moving_s=0.5).what == "new top quark"
     assert telling_moment(STATES[:3], t_moving_s=0.5).t_s == 2.0
     assert telling_moment(STATES[:2], t_moving_s=0.5) is None
 

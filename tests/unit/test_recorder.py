@@ -106,7 +106,7 @@ def test_key_helpers():
     assert not key_matches("rosbot/*", "rosbot/planner/state")
     assert key_matches("*/scan", "r2/scan") and not key_matches("rosbot/scan", "r2/scan")
     assert key_matches("rosbot/**/state", "rosbot/planner/state")
-    assert type_for_key("lab/r1/planner/state").TYPE == "papf/PlannerState/v1"
+    assert type_for_key("lab/r1/planner/state").TYPE == "papf/PlannerState/v2"
     assert type_for_key("rosbot/sim/pose") is Odometry and type_for_key("scan") is None
     assert type_for_key("rosbot/nothing") is None
 

@@ -13,6 +13,7 @@ from common import robot
 from common import ros2_convert as rc
 from common.urdf import rosbot_urdf
 from schemas.messages import BatteryState, Odometry, PlannerState, Scan, Twist
+from tests.support.messages import planner_debug
 
 # decoded by a store built here, not by the module's own
 STORE = get_typestore(Stores.ROS2_JAZZY)
@@ -31,8 +32,10 @@ def stamp(header) -> int:
 
 STATE = PlannerState(stamp_ns=3_250_000_000, algorithm="papf", mode="bypass", force=(3.0, -4.0),
                      temporary_goal=(1.5, 0.5), predicted_path=((0.0, 0.0), (1.0, 0.0), (1.0, 1.0)),
-                     abandoned_paths=(((0.0, 0.0), (0.5, 0.5)), ((0.0, 0.0), (0.5, -0.5))),
-                     top_quarks=((2.0, 1.0), (2.5, 1.5)), virtual_walls=(((3.0, 0.0), (3.0, 1.0)),))
+                     debug=planner_debug("papf", abandoned_paths=[[(0.0, 0.0), (0.5, 0.5)],
+                                                                  [(0.0, 0.0), (0.5, -0.5)]],
+                                         top_quarks=[(2.0, 1.0), (2.5, 1.5)])
+                     + planner_debug("arapf", virtual_walls=[[(3.0, 0.0), (3.0, 1.0)]]))
 
 
 def test_store_is_jazzy():
@@ -111,24 +114,44 @@ def test_markers_carry_the_mind():
     m = back(rc.markers(STATE, robot_xy=(0.5, 0.25)), rc.MARKER_ARRAY).markers
     cls = STORE.types["visualization_msgs/msg/Marker"]
     assert m[0].action == cls.DELETEALL
-    by_id = {k.id: k for k in m[1:]}
-    assert all(k.ns == "mind" and k.header.frame_id == "odom" and k.action == cls.ADD
-               for k in m[1:])
-    assert [(p.x, p.y) for p in by_id[1].points] == list(STATE.top_quarks)
-    assert by_id[1].type == cls.SPHERE_LIST
-    assert [(p.x, p.y) for p in by_id[2].points] == [STATE.temporary_goal]
-    arrow = by_id[3]
+    by_id = {(k.ns, k.id): k for k in m[1:]}
+    assert all(k.header.frame_id == "odom" and k.action == cls.ADD for k in m[1:])
+    assert [(p.x, p.y) for p in by_id["mind", 2].points] == [STATE.temporary_goal]
+    arrow = by_id["mind", 3]
     assert arrow.type == cls.ARROW and (arrow.points[0].x, arrow.points[0].y) == (0.5, 0.25)
     dx, dy = arrow.points[1].x - 0.5, arrow.points[1].y - 0.25
     assert math.atan2(dy, dx) == pytest.approx(math.atan2(-4.0, 3.0))
     assert rc.FORCE_MIN_M <= math.hypot(dx, dy) <= rc.FORCE_MAX_M
-    assert [[(p.x, p.y) for p in by_id[i].points] for i in (100, 101)] == \
-        [list(p) for p in STATE.abandoned_paths]
-    assert [(p.x, p.y) for p in by_id[1000].points] == list(STATE.virtual_walls[0])
-    assert by_id[1000].type == cls.LINE_STRIP
-    assert len(m) == 1 + 6
+    # the plug-ins' own values, by kind, each in its own ns, in its declared style
+    quarks = by_id["mind/top_quarks", 0]
+    assert [(p.x, p.y) for p in quarks.points] == list(STATE.get("top_quarks"))
+    assert quarks.type == cls.SPHERE_LIST
+    style = STATE.value("top_quarks")
+    assert (quarks.color.r, quarks.color.a, quarks.scale.x) == pytest.approx(
+        (style.colour[0], style.colour[3], style.size))
+    assert [[(p.x, p.y) for p in by_id["mind/abandoned_paths", i].points] for i in (0, 1)] == \
+        [list(p) for p in STATE.get("abandoned_paths")]
+    wall = by_id["mind/virtual_walls", 0]
+    assert [(p.x, p.y) for p in wall.points] == list(STATE.get("virtual_walls")[0])
+    assert wall.type == cls.LINE_STRIP
+    assert len(m) == 1 + 6       # no virtual obstacle: nothing drawn for it
     # no robot position: no force arrow
-    assert 3 not in {k.id for k in back(rc.markers(STATE), rc.MARKER_ARRAY).markers}
+    assert ("mind", 3) not in {(k.ns, k.id) for k in back(rc.markers(STATE), rc.MARKER_ARRAY).markers}
+
+
+def test_markers_show_scalars_and_counts_as_text_above_the_robot():
+    state = PlannerState(stamp_ns=1, algorithm="iapf", debug=planner_debug(
+        "iapf", lane_goal_y=0.75, local_minimum_count=-2))
+    m = back(rc.markers(state, robot_xy=(1.0, 2.0)), rc.MARKER_ARRAY).markers
+    cls = STORE.types["visualization_msgs/msg/Marker"]
+    texts = {k.ns: k for k in m if k.type == cls.TEXT_VIEW_FACING}
+    assert texts["mind/lane_goal_y"].text == "lane goal y 0.75 m"
+    assert texts["mind/local_minimum_count"].text == "local minima ahead -2"
+    assert (texts["mind/lane_goal_y"].pose.position.x, texts["mind/lane_goal_y"].pose.position.y) \
+        == (1.0, 2.0)
+    none = PlannerState(stamp_ns=1, algorithm="iapf", debug=planner_debug("iapf"))
+    assert not [k for k in back(rc.markers(none, robot_xy=(1.0, 2.0)), rc.MARKER_ARRAY).markers
+                if k.ns == "mind/lane_goal_y"]     # nan: no lane goal, no text
 
 
 def test_marker_colours_are_the_viewers():

@@ -28,6 +28,7 @@ from schemas.messages import (
     Twist,
     WheelStates,
 )
+from tests.support.messages import planner_debug
 
 STEP = 100_000_000   # [ns] 10 Hz
 N = 20
@@ -65,7 +66,8 @@ def write_run(path, namespaces=("rosbot",)):
                 w.write_message(f"{ns}/planner/state", PlannerState(
                     stamp_ns=t, algorithm="papf", force=(1.0, 0.5), temporary_goal=(x + 1, y),
                     predicted_path=((x, y), (x + 0.5, y), (x + 1.0, y + 0.2)),
-                    abandoned_paths=(((x, y), (x + 0.5, y - 0.5)),), top_quarks=((x + 2, y),)))
+                    debug=planner_debug("papf", abandoned_paths=[[(x, y), (x + 0.5, y - 0.5)]],
+                                        top_quarks=[(x + 2, y)])))
             w.write_message(f"{namespaces[0]}/events", Event(stamp_ns=t, kind="info",
                                                             source="test"))
 
@@ -117,8 +119,9 @@ def test_read_back_with_rosbags(exported):
     assert seen["/battery"][0][1].current == pytest.approx(-1.5)
     assert len(seen["/plan"][5][1].poses) == 3
     markers = seen["/markers"][5][1].markers
-    assert markers[0].action == 3 and {m.id for m in markers[1:]} == {1, 2, 3, 100}
-    arrow = next(m for m in markers if m.id == 3)
+    assert markers[0].action == 3 and {(m.ns, m.id) for m in markers[1:]} == {
+        ("mind", 2), ("mind", 3), ("mind/top_quarks", 0), ("mind/abandoned_paths", 0)}
+    arrow = next(m for m in markers if (m.ns, m.id) == ("mind", 3))
     assert (arrow.points[0].x, arrow.points[0].y) == (pytest.approx(0.25), 0.0)   # at the robot
     js = seen["/joint_states"][2][1]   # 10 rad/s for 0.2 s: every wheel turned by 2 rad
     assert list(js.name)[0] == "front_left_wheel_joint" and js.position[0] == pytest.approx(2.0)

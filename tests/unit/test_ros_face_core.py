@@ -15,10 +15,12 @@ from common.errors import SchemaError
 from nodes.ros_face.core import FACE_TOPICS, GOAL_TOPIC, POSE_STAMPED, FaceCore
 from schemas import Goal
 from schemas.messages import BatteryState, Odometry, PlannerState, Scan, Twist
+from tests.support.messages import planner_debug
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 STATE = PlannerState(stamp_ns=2_000_000_000, algorithm="papf", force=(1.0, 0.0),
-                     predicted_path=((0.0, 0.0), (1.0, 0.0)), top_quarks=((2.0, 1.0),))
+                     predicted_path=((0.0, 0.0), (1.0, 0.0)),
+                     debug=planner_debug("papf", top_quarks=[(2.0, 1.0)]))
 
 
 def decoded(outputs):

@@ -24,6 +24,7 @@ from schemas.messages import (
     Scan,
     Twist,
 )
+from tests.support.messages import planner_debug
 from tests.support.worlds import traffic_world
 from worlds import load_world, packaged_worlds, parse_world
 
@@ -103,15 +104,23 @@ def test_road_and_moving_obstacles():
 def test_mind_scene_draws_every_part():
     state = PlannerState(stamp_ns=7, algorithm="papf", mode="bypass", force=(3.0, -4.0),
                          temporary_goal=(1.0, 2.0), predicted_path=((0, 0), (1, 1), (2, 1)),
-                         abandoned_paths=(((0, 0), (0, 1)), ((0, 0), (1, -1))),
-                         top_quarks=((0.5, 0.5), (0.7, 0.2)), virtual_walls=(((3, 0), (3, 1)),),
-                         virtual_obstacles=((4.0, 4.0),))
+                         debug=planner_debug("papf", abandoned_paths=[[(0, 0), (0, 1)], [(0, 0), (1, -1)]],
+                                             top_quarks=[(0.5, 0.5), (0.7, 0.2)])
+                         + planner_debug("arapf", virtual_walls=[[(3, 0), (3, 1)]],
+                                         virtual_obstacles=[(4.0, 4.0)]))
     ent = valid("/planner/scene", mind_scene(state, (0.0, 0.0)))["entities"][0]
     assert len(ent["lines"]) == 4            # 2 abandoned + prediction + 1 wall
     assert len(ent["spheres"]) == 4          # 2 quarks + 1 virtual obstacle + temporary goal
     assert ent["arrows"][0]["pose"]["orientation"]["z"] == pytest.approx(
         math.sin(math.atan2(-4.0, 3.0) / 2))
     assert ent["texts"][0]["text"] == "papf: bypass"
+    quark = next(sp for sp in ent["spheres"] if sp["pose"]["position"]["x"] == 0.5)
+    style = state.value("top_quarks")     # the plug-in's declared style
+    assert quark["size"]["x"] == style.size and quark["color"]["r"] == style.colour[0]
+    iapf = PlannerState(stamp_ns=7, algorithm="iapf", mode="lane-goal",
+                        debug=planner_debug("iapf", lane_goal_y=0.75, local_minimum_count=3))
+    words = valid("/planner/scene", mind_scene(iapf, (0.0, 0.0)))["entities"][0]["texts"][0]
+    assert words["text"] == "iapf: lane-goal · local minima ahead 3 · lane goal y 0.75 m"
     empty = valid("/planner/scene", mind_scene(PlannerState(stamp_ns=0, algorithm="apf")))
     assert empty["entities"][0]["arrows"] == [] and empty["entities"][0]["lines"] == []
 

@@ -17,6 +17,7 @@ import numpy as np
 from common.errors import ConfigError
 from nodes.planner.arapf.settings import AR_REPULSION_MIN, ARAPF
 from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.debug import DebugField, Style
 from nodes.planner.field import APFParams, Repulsors, apf_force, coulomb_sum, wrap_angle
 from nodes.planner.settings import require_product
 
@@ -185,6 +186,14 @@ class ARAPFStrategy(Strategy):
     #: passage measured bound to bound (docs/planners.md, "Presets").
     PAPER_PRESET = {"range_limited": False, "wall_range_limited": False, "follow": False,
                     "passage_width": "gap"}
+    DEBUG = (
+        DebugField("virtual_walls", "paths", unit="m", label="virtual wall",
+                   doc="the virtual wall's points across the passage (eq. 3, k_RW)",
+                   style=Style((0.89, 0.47, 0.76, 1.0), 0.05)),
+        DebugField("virtual_obstacles", "points", unit="m", label="virtual obstacle",
+                   doc="the virtual obstacle beside the goal line (eq. 4, k_RD)",
+                   style=Style((0.89, 0.47, 0.76, 0.9), 0.1)),
+    )
 
 
     @classmethod
@@ -248,8 +257,8 @@ class ARAPFStrategy(Strategy):
                 force = apf_force(pos, goal, view.points, field)
         if self.wall is None:
             return Plan(force=force)
-        return Plan(force=force, mode="augmented", virtual_walls=[self.wall],
-                    virtual_obstacles=self.obstacle)
+        return Plan(force=force, mode="augmented",
+                    debug={"virtual_walls": [self.wall], "virtual_obstacles": self.obstacle})
 
     def _virtual(self, field: APFParams) -> tuple[Repulsors, ...]:
         """Eq. 3-4 terms: wall points (k_RW, within d_o by default) and the obstacle (k_RD, no range)."""

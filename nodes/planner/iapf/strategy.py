@@ -16,6 +16,7 @@ import numpy as np
 from common.robot import BODY_LENGTH_M, BODY_WIDTH_M
 from nodes.planner import lazy
 from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.debug import DebugField, Style
 from nodes.planner.field import APFParams
 from nodes.planner.iapf.algorithm import PAPER_PRESET, HostState, IAPFCore, IAPFParams, scaled
 from nodes.planner.iapf.settings import IAPF
@@ -40,6 +41,13 @@ class IAPFStrategy(Strategy):
     Params = IAPFParams
     SPECS = IAPF
     PAPER_PRESET = PAPER_PRESET
+    DEBUG = (
+        DebugField("local_minimum_count", "count", label="local minima ahead",
+                   doc="eq. 24: signed count of the predicted points near the solid line"),
+        DebugField("lane_goal_y", "scalar", unit="m", label="lane goal y",
+                   doc="the temporary lane goal (Steps 4-6); nan when none",
+                   style=Style((0.09, 0.75, 0.81, 1.0))),
+    )
 
     def __init__(self, params: IAPFParams | None = None):
         self.params = params or IAPFParams()
@@ -91,7 +99,8 @@ class IAPFStrategy(Strategy):
              apf: APFParams) -> Plan:
         """One IAPF step on the observed tracks and road: heading [rad] (eq. 21) and speed [m/s] (eq. 26)."""
         if self.lanes is None:
-            return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw)
+            return Plan(force=np.zeros(2), mode="no-road", v_ref=0.0, heading=yaw,
+                        obstacles_used=0)
         core = self.core_for(self.lanes)
         if self.v is None:   # the planned speed starts at the robot's own
             self.v = max(0.0, self.v_odom)
@@ -105,6 +114,6 @@ class IAPFStrategy(Strategy):
             temp = (state.x + LANE_GOAL_AHEAD * core.p.v_cruise, info.temp_goal_y)
         return Plan(force=np.array(info.force), mode="lane-goal" if temp else "drive",
                     temporary_goal=temp, predicted_path=np.array(info.predicted).reshape(-1, 2),
-                    heading=new.yaw, v_ref=new.v, local_count=info.local_count,
-                    lane_goal_y=math.nan if info.temp_goal_y is None else info.temp_goal_y,
-                    obstacles_used=info.active)
+                    heading=new.yaw, v_ref=new.v, obstacles_used=info.active,
+                    debug={"local_minimum_count": info.local_count,
+                           "lane_goal_y": math.nan if info.temp_goal_y is None else info.temp_goal_y})

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nodes.planner.core import Plan, ScanView, Strategy
+from nodes.planner.debug import DebugField, Style
 from nodes.planner.field import EPS_M, APFParams
 from nodes.planner.lazy import lazy_module
 from nodes.planner.papf.params import kernel_params
@@ -192,6 +193,14 @@ class PAPFStrategy(Strategy):
     Params = PAPFParams
     SPECS = PAPF
     PAPER_PRESET = PAPER_PRESET
+    DEBUG = (
+        DebugField("top_quarks", "points", unit="m", label="top quark",
+                   doc="top quarks in use (Sec. III-B; their push: eq. 7)",
+                   style=Style((0.84, 0.15, 0.16, 0.9), 0.12)),
+        DebugField("abandoned_paths", "paths", unit="m", label="abandoned prediction",
+                   doc="this cycle's predictions that stagnated (Algorithm 1)",
+                   style=Style((0.5, 0.5, 0.5, 0.5), 0.015, dashed=True)),
+    )
 
     def __init__(self, params: PAPFParams | None = None):
         self.params = params or PAPFParams()
@@ -237,8 +246,9 @@ class PAPFStrategy(Strategy):
         force = (kernels.field_force(pos, target, obstacles, kp, pp.use_numba)
                  + quark_force(pos, pred.quarks, apf, pp))
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
-                    predicted_path=pred.path, abandoned_paths=pred.abandoned,
-                    top_quarks=pred.quarks, searching=bool(pred.abandoned) and pp.quark_restarts_watch)
+                    predicted_path=pred.path,
+                    debug={"top_quarks": pred.quarks, "abandoned_paths": pred.abandoned},
+                    searching=bool(pred.abandoned) and pp.quark_restarts_watch)
 
     def _plan_compiled(self, pos, goal, obstacles, apf: APFParams, kept) -> Plan:
         """:meth:`plan` in two kernel calls (:func:`nodes.planner.papf.compiled.plan_compiled`)."""
@@ -251,5 +261,5 @@ class PAPFStrategy(Strategy):
         else:
             mode = "unresolved"
         return Plan(force=force, mode=mode, temporary_goal=tuple(target[:2]),
-                    predicted_path=path, abandoned_paths=abandoned, top_quarks=quarks,
+                    predicted_path=path, debug={"top_quarks": quarks, "abandoned_paths": abandoned},
                     searching=len(abandoned) > 0 and pp.quark_restarts_watch)
