@@ -1,4 +1,7 @@
-"""papf topic / goal / teleop over a real router."""
+"""papf topic / goal / teleop over a real router. Every topic tool that would run until Ctrl-C
+stops alike on ``--once``, ``--count N`` and ``--duration S``; ``papf topic echo`` under a flood
+of large messages keeps its memory bounded and says what it dropped; keys and node names a peer
+chose are printed escaped."""
 
 from __future__ import annotations
 
@@ -11,9 +14,11 @@ import threading
 import time
 
 import pytest
+import zenoh
 
 from common import ros2
 from common.errors import ConfigError
+from common.transport import zenoh_config
 from papf.bus import topics
 from papf.bus.goal import send_goal
 from papf.bus.teleop import TeleopState
@@ -21,6 +26,12 @@ from papf.bus.teleop import run as teleop_run
 from schemas import Goal, Keys, PlannerStatus, Scan, Twist
 
 KEYS = Keys("rosbot")
+
+
+EVIL = "\x1b]0;owned\x07\x1b[2J"
+
+
+CMD = [sys.executable, "-m", "papf", "topic"]
 
 
 def _scan(stamp: int = 100) -> Scan:
@@ -236,7 +247,6 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
         assert "Traceback" not in r.stderr
 
 
-
 def test_tls_without_credentials_names_the_authentication():
     from papf.launch.supervisor import free_port
 
@@ -244,3 +254,130 @@ def test_tls_without_credentials_names_the_authentication():
                         f"tls/127.0.0.1:{free_port()}"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     assert "authenticates its clients" in r.stderr and "--zenoh-config" in r.stderr, r.stderr
+
+
+def test_echo_under_a_flood_of_large_messages_stays_bounded(router, session):
+    """A peer puts 1 MB messages as fast as it can while the printer is slow."""
+    inbox = topics.Inbox(session, "flood/**", max_items=50, max_bytes=8 * 1024 * 1024)
+    stop, peak = threading.Event(), {"items": 0, "bytes": 0}
+
+    def flood():
+        with zenoh.open(zenoh_config("client", [router])) as s:
+            payload = b"\x00" * (1024 * 1024)
+            for _ in range(300):
+                s.put("flood/big", payload)
+        stop.set()
+
+    t = threading.Thread(target=flood, daemon=True)
+    t.start()
+    try:
+        while not stop.is_set() or len(inbox):
+            peak["items"] = max(peak["items"], len(inbox))
+            peak["bytes"] = max(peak["bytes"], inbox._bytes)
+            if inbox.get(0.05) is not None:
+                time.sleep(0.02)           # a slow terminal
+    finally:
+        t.join(30)
+        inbox.close()
+    assert peak["items"] <= 50 and peak["bytes"] <= 8 * 1024 * 1024
+    assert inbox.dropped > 0
+
+
+def test_topic_list_shows_a_peers_escape_sequences_never_runs_them(router, session):
+    keys = Keys("rosbot")
+    lines: list[str] = []
+    with zenoh.open(zenoh_config("client", [router])) as s:
+        token = s.liveliness().declare_token(keys.alive(f"{EVIL}node"))
+        pub_key = f"rosbot/{EVIL}topic"
+
+        def put_some():
+            for _ in range(20):
+                s.put(pub_key, b"\x80")
+                time.sleep(0.02)
+
+        t = threading.Thread(target=put_some, daemon=True)
+        t.start()
+        topics.topic_list(session, keys, 0.5, lines.append)
+        t.join(5)
+        token.undeclare()
+    text = "\n".join(lines)
+    assert "\x1b" not in text and "\x07" not in text
+    assert "\\x1b]0;owned" in text      # shown, escaped: the node name and the key
+
+
+def _topic(*args, router: str) -> subprocess.CompletedProcess:
+    return subprocess.run([*CMD, *args, "--connect", router], capture_output=True, text=True,
+                          timeout=90, stdin=subprocess.DEVNULL)
+
+
+@pytest.fixture
+def scans(router, session):
+    stop = threading.Event()
+    th = _publish_for(session, 300.0, stop)   # 20 Hz until stopped
+    yield router
+    stop.set()
+    th.join()
+
+
+def test_echo_duration_prints_what_came_and_stops(scans):
+    t0 = time.monotonic()
+    r = _topic("echo", "scan", "--duration", "3", router=scans)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.count("# rosbot/scan") >= 5           # 20 Hz for 3 s, under any load
+    assert time.monotonic() - t0 < 60
+
+
+def test_echo_duration_with_nothing_published_is_exit_5(router):
+    r = _topic("echo", "nothing/here", "--duration", "1", router=router)
+    assert r.returncode == 5 and "no message on nothing/here within 1 s" in r.stderr
+
+
+def test_hz_takes_count_and_once(scans):
+    r = _topic("hz", "scan", "--count", "5", router=scans)
+    assert r.returncode == 0 and "rosbot/scan" in r.stdout and " Hz (" in r.stdout
+    r = _topic("hz", "scan", "--once", router=scans)
+    assert r.returncode == 0 and r.stdout.count("rosbot/scan") == 1
+
+
+def test_pub_takes_count_and_duration(router, session):
+    got: list[Twist] = []
+    sub = session.declare_subscriber(KEYS.cmd_vel,
+                                     lambda s: got.append(Twist.from_bytes(s.payload.to_bytes())))
+    try:
+        r = _topic("pub", "cmd_vel", "{v: 0.1, w: 0.0}", "--count", "3", "--rate", "20", router=router)
+        assert r.returncode == 0, r.stderr
+        deadline = time.monotonic() + 10
+        while len(got) < 3 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert len(got) == 3 and got[-1].v == pytest.approx(0.1)
+        got.clear()
+        r = _topic("pub", "cmd_vel", "{v: 0.2, w: 0.0}", "--duration", "1", "--rate", "10", router=router)
+        assert r.returncode == 0, r.stderr
+        assert 1 <= len(got) <= 11
+    finally:
+        sub.undeclare()
+
+
+@pytest.mark.parametrize("tool", [["echo", "scan"], ["hz", "scan"], ["pub", "cmd_vel", "{}"]])
+def test_every_tool_has_the_three_stops(tool):
+    for flag in ("--once", "--count", "--duration"):
+        r = subprocess.run([*CMD, *tool, "--help"], capture_output=True, text=True, timeout=60)
+        assert flag in r.stdout, (tool, flag)
+
+
+def test_topic_list_on_a_narrow_terminal_keeps_every_cell_whole(scans, session):
+    """Issue #35, tables that fit: `papf topic list` on a terminal is a table that fits it."""
+    import io
+
+    from rich.console import Console
+
+    from papf.bus.topics import topic_list
+    from papf.console.tables import print_table
+
+    out = io.StringIO()
+    console = Console(file=out, force_terminal=True, width=60, color_system=None)
+    topic_list(session, KEYS, 1.0, lambda line: out.write(line + "\n"),
+               table=lambda t: print_table(t, console))
+    text = out.getvalue()
+    assert all(len(line) <= 60 for line in text.splitlines())
+    assert "KEY: rosbot/scan" in text and "TYPE:     papf/Scan/v1" in text

@@ -13,20 +13,7 @@ import zenoh
 from common.transport import zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Clock, Keys
-from tests.support.e2e import papf_run, pids_of, start_papf_run
-
-NODES = ("nodes.world_sim", "nodes.lidar_sim", "nodes.planner", "nodes.energy_meter",
-         "papf.launch.router")
-
-
-def assert_no_orphans(port):
-    deadline = time.monotonic() + 30     # bounds a hang: a loaded machine reaps slowly
-    while time.monotonic() < deadline:
-        left = {m: pids_of(m, port) for m in NODES}
-        if not any(left.values()):
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"processes left behind: {left}")
+from tests.support.e2e import assert_no_orphans, papf_run, pids_of, start_papf_run
 
 
 def test_open_world_reaches_goal_in_a_straight_line():

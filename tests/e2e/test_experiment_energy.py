@@ -8,7 +8,7 @@ import pytest
 from rich.console import Console
 
 from papf.experiments.energy import EnergyExperiment, run_experiment
-from tests.e2e.test_report import SHORT_WORLD
+from tests.support.worlds import SHORT_WORLD
 
 
 @pytest.mark.slow   # the slow tier: make test-slow (CI's second step)

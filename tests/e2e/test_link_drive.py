@@ -29,7 +29,8 @@ from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from papf.recording.reader import open_recording
 from schemas import Clock, Event, Keys, Odometry, Twist
-from tests.e2e.test_link_split import CORRIDOR, _leftovers, split_run
+from tests.support.e2e import leftovers as _leftovers
+from tests.support.link import CORRIDOR, split_run
 from tests.support.worlds import write_world
 
 PY = sys.executable

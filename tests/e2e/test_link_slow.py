@@ -14,7 +14,9 @@ from pathlib import Path
 import pytest
 
 from common.robot import A_MAX_M_S2, V_MAX_M_S, W_MAX_RAD_S
-from tests.e2e.test_link_split import CORRIDOR, _commands, _leftovers, split_run
+from tests.support.e2e import leftovers as _leftovers
+from tests.support.link import CORRIDOR, split_run
+from tests.support.link import commands as _commands
 from tests.support.worlds import write_world
 
 LINKS = {"100ms-50": "delay=50,jitter=100",      # 50-150 ms: 100 ms ± 50 ms

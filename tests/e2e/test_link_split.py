@@ -21,23 +21,14 @@ import pytest
 from common.outcomes import OUTCOMES
 from tests.support.cli import stderr_until
 from tests.support.e2e import leftovers as _leftovers
-from tests.support.worlds import SHORT, box_world, write_world
+from tests.support.link import CORRIDOR, RUN_TIMEOUT_S, split_run
+from tests.support.link import commands as _commands
+from tests.support.worlds import SHORT, write_world
 
 PY = sys.executable
-CORRIDOR = box_world("corridor", "2.5 m ahead, a box beside the path", 2.5, (1.2, 0.7))
 SLOW = ["--set", "v_max=0.3"]      # the corridor takes ~9 s: an outage at 3 s hits a drive
 BRAKING_S = 0.75                   # [s] after the link went: the robot is told to slow down
 STANDSTILL_S = 1.2                 # [s] ... and to stand
-RUN_TIMEOUT_S = 300                # [s wall] one split run, start-up on a loaded machine included
-
-
-def split_run(world: Path, ns: str, link: str, *extra: str) -> tuple[int, dict, str]:
-    """``papf run --link LINK --json``: exit code, JSON, stderr."""
-    out = subprocess.run([PY, "-m", "papf", "run", "--world", str(world), "--planner", "apf",
-                          "--namespace", ns, "--link", link, "--json", "--timeout", "60", *extra],
-                         capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
-    assert out.stdout.strip(), out.stderr[-3000:]
-    return out.returncode, json.loads(out.stdout.strip().splitlines()[-1]), out.stderr
 
 
 @pytest.fixture
@@ -55,10 +46,6 @@ def test_a_split_run_over_a_lan_reaches_its_goal(corridor):
     assert link["directions"]["back"]["bytes"] > 10_000     # scans and odometry came through
     assert link["directions"]["out"]["chunks"] > 0          # commands went
     assert not _leftovers(ns), "processes left after papf run --link"
-
-
-def _commands(trace: Path) -> list[dict]:
-    return [json.loads(line) for line in trace.read_text().splitlines() if line.endswith("}")]
 
 
 def test_a_10_s_outage_stops_the_robot_and_the_run_goes_on_after_it(corridor, tmp_path):

@@ -4,41 +4,15 @@ from __future__ import annotations
 
 import os
 import signal
-import sys
 import time
 
 import msgpack
 
-from common.transport import wait_alive
 from papf.recording import Recording, recover
 from schemas import Keys, Twist
 from schemas.messages import ALL_MESSAGES
+from tests.support.recorder import recovered_count, start_recorder, wait_until
 from tests.support.recordings import key_of, sample
-
-ALIVE_TIMEOUT_S = 30.0
-
-
-def start_recorder(spawn, router, ns, out, session, *extra):
-    child = spawn("recorder", [sys.executable, "-m", "nodes.recorder", "--connect", router,
-                               "--namespace", ns, "--out", str(out), "--meta", "world=test",
-                               *extra])
-    assert not wait_alive(session, Keys(ns), ["recorder"], timeout_s=ALIVE_TIMEOUT_S,
-                          abort=lambda: child.proc.poll() is not None), "recorder not alive"
-    return child
-
-
-def wait_until(pred, timeout_s: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while not pred():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
-
-
-def recovered_count(path, tmp_path) -> int:
-    """Messages a crash right now would leave (the file is still being written)."""
-    return recover(path, tmp_path / "probe.mcap", force=True).messages   # a probe: replaced each time
 
 
 def test_sigkill_loses_at_most_the_last_second(router, spawn, session, tmp_path):

@@ -11,7 +11,7 @@ import zenoh
 from common.transport import zenoh_config
 from papf.recording import replay
 from schemas import Clock, Odometry
-from tests.e2e.test_recorder_process import recovered_count, start_recorder, wait_until
+from tests.support.recorder import recovered_count, start_recorder, wait_until
 
 MS = 1_000_000  # [ns]
 

@@ -7,19 +7,10 @@ import math
 from papf.recording.reader import Recording
 from papf.report import build_report, remeter_file, run_metrics
 from schemas import BatteryState
+from tests.support.worlds import SHORT_WORLD
+
 
 # -- a real run through the whole process stack -------------------------------------------------
-SHORT_WORLD = """
-name = "short"
-description = "1 m straight ahead (tests)"
-[robot]
-start = [0.0, 0.0, 0.0]
-[goal]
-position = [1.0, 0.0]
-tolerance = 0.1
-"""
-
-
 def test_remetering_a_real_run_reproduces_the_live_meter_exactly(tmp_path):
     from papf.launch.run import RunConfig, run
     from papf.launch.supervisor import free_port

@@ -80,6 +80,21 @@ class Batteries:
             time.sleep(0.05)
 
 
+NODES = ("nodes.world_sim", "nodes.lidar_sim", "nodes.planner", "nodes.energy_meter",
+         "papf.launch.router")
+
+
+def assert_no_orphans(port):
+    """No process of a `papf run` on ``port`` (its nodes, its router) is left after it ends."""
+    deadline = time.monotonic() + 30     # bounds a hang: a loaded machine reaps slowly
+    while time.monotonic() < deadline:
+        left = {m: pids_of(m, port) for m in NODES}
+        if not any(left.values()):
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"processes left behind: {left}")
+
+
 @contextmanager
 def metered_bus(spawn, ns: str):
     """A router and a fresh energy-meter process (motor model) in namespace ``ns``, started

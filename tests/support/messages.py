@@ -18,6 +18,13 @@ def scan(t: int, n: int = 16) -> Scan:
                 range_max=10.0, ranges=np.full(n, np.inf, dtype=np.float32))
 
 
+def scan_63(t: int) -> Scan:
+    """A scan at ``t`` [ns] of 63 beams 0.1 rad apart from angle 0 that see nothing (all inf):
+    what the stamp tests of the node intake and the planner loop feed."""
+    return Scan(stamp_ns=t, angle_min=0.0, angle_increment=0.1, range_min=0.1, range_max=10.0,
+                ranges=np.full(63, np.inf, np.float32))
+
+
 def planner_debug(planner: str, **values) -> tuple:
     """``PlannerState.debug`` of registered ``planner`` with these values of its declared
     fields (the others empty), for states built by hand."""

@@ -1,5 +1,6 @@
 """Test data shared by the tiers: a valid sample of every message type and its key
-(recorder tests), and a synthetic run's recording (report and energy-experiment tests)."""
+(recorder tests), a synthetic run's recording (report and energy-experiment tests), and a
+stand-in for a run through the stack that writes one (:class:`FakeRuns`)."""
 
 from __future__ import annotations
 
@@ -129,3 +130,28 @@ def write_ros_topics(path: Path) -> Path:
                 w.add_message(c, log_time=i, publish_time=i, data=b"\x00\x01\x00\x00abc")
         w.finish()
     return path
+
+
+class FakeRuns:
+    """Stands in for papf.launch.run.run: writes a synthetic recording, returns its summary."""
+
+    def __init__(self, charge_error: float = 0.0, cut_first: int = 0):
+        self.configs = []
+        self.charge_error = charge_error
+        self.cut_first = cut_first   # this many first recordings lose their end
+
+    def __call__(self, cfg):
+        from papf.launch.outcome import RunResult
+        from papf.report import run_metrics
+
+        self.configs.append(cfg)
+        speed = (0.4 if cfg.planner == "apf" else 0.5) + 0.01 * cfg.seed
+        write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed)
+        m = run_metrics(cfg.record)
+        if len(self.configs) <= self.cut_first:  # the live run was whole; the file is not
+            Path(cfg.record).unlink()            # (recordings are never overwritten)
+            write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed, total_k=80,
+                            outcome=None, meta={"timeout_s": "300"})
+        return RunResult(m.outcome, cfg.planner, "energy", cfg.seed, m.duration_s,
+                         m.path_length_m, m.charge_mAh + self.charge_error, m.energy_J, 0,
+                         m.t_end_s, 0.1)

@@ -8,6 +8,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+# 1 m straight ahead, nothing in the way: a real run through the whole stack in seconds
+SHORT_WORLD = """
+name = "short"
+description = "1 m straight ahead (tests)"
+[robot]
+start = [0.0, 0.0, 0.0]
+[goal]
+position = [1.0, 0.0]
+tolerance = 0.1
+"""
 FAST = ["--set", "v_max=0.5"]    # the paper's 0.1 m/s would make a test of a short world slow
 
 

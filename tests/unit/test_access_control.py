@@ -92,3 +92,35 @@ def test_make_certs_for_rmw_zenoh_writes_rmw_zenohs_config_files(tmp_path):
     p = subprocess.run([sys.executable, "-m", "papf", "make-certs", str(out), "--robot-host",
                         "10.0.0.2", "--force"], capture_output=True, text=True, timeout=60)
     assert p.returncode == 0 and not (out / "rmw_zenohd.json5").exists()   # a bridge bundle now
+
+
+def test_make_certs_never_writes_secrets_through_a_planted_symlink(tmp_path):
+    import os
+    import stat
+
+    from common.errors import ConfigError
+    from papf.robot.certs import write_bundle
+
+    out = tmp_path / "bundle"
+    out.mkdir(mode=0o700)
+    stolen = tmp_path / "stolen.txt"
+    (out / "credentials.txt").symlink_to(stolen)          # dangling: exists() said "no bundle"
+    with pytest.raises(ConfigError, match="already holds a bundle"):
+        write_bundle(out, ["10.0.0.1"])
+    write_bundle(out, ["10.0.0.1"], force=True)
+    assert not stolen.exists() and not (out / "credentials.txt").is_symlink()
+    for f in out.iterdir():
+        assert stat.S_IMODE(f.stat().st_mode) & 0o077 == 0, f.name
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    os.chmod(shared, 0o777)
+    with pytest.raises(ConfigError, match="every user may write in it"):
+        write_bundle(shared, ["10.0.0.1"])
+
+
+def test_the_observer_may_not_query():
+    acl = access_control()
+    policies = {p["id"]: p["rules"] for p in acl["policies"]}
+    rules = {r["id"]: r for r in acl["rules"]}
+    assert "query" not in policies["observer"] and "query" in policies["planner"]
+    assert all("query" not in rules[r]["messages"] for r in policies["observer"])

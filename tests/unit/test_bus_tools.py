@@ -5,17 +5,25 @@ from __future__ import annotations
 import math
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from common import ros2
 from common.errors import ConfigError
 from papf.bus import topics
-from papf.bus.decode import CDR, MSGPACK, RAW, as_text, decode, ros_type_for_key
+from papf.bus.decode import CDR, MSGPACK, RAW, as_text, decode, ros_type_for_key, safe_text
 from papf.bus.stats import HzStats, stamp_rate
 from papf.bus.teleop import TeleopState, parse_keys
+from papf.bus.topics import Inbox, _echo
+from papf.cli import main
 from papf.console.progress import DecileProgress
 from schemas import Keys, Scan
+from tests.support.cli import papf
 
 KEYS = Keys("rosbot")
+
+
+SETTINGS = settings(max_examples=60, deadline=None)
 
 
 def _scan(stamp: int = 100) -> Scan:
@@ -118,3 +126,55 @@ def test_teleop_keys_and_limits():
     assert st.quit and (st.v, st.w) == (0.0, 0.0)
     with pytest.raises(ConfigError, match="0.9"):
         TeleopState(max_v=2.0)
+
+
+@SETTINGS
+@given(st.lists(st.integers(0, 3000), min_size=1, max_size=300))
+def test_inbox_stays_within_its_bounds_and_keeps_the_newest(sizes):
+    inbox = Inbox(None, "x", max_items=50, max_bytes=20_000)
+    for i, n in enumerate(sizes):
+        inbox.put(f"k{i}", b"x" * n, float(i))
+        assert len(inbox) <= 50
+        assert len(inbox) == 1 or sum(len(d) for _, d, _ in inbox._items) <= 20_000
+    assert inbox.dropped + len(inbox) == len(sizes)
+    assert inbox._items[-1][0] == f"k{len(sizes) - 1}"   # the newest is never the one dropped
+
+
+def test_echo_under_a_flood_says_it_dropped_and_how_many():
+    inbox = Inbox(None, "x", max_items=10)
+    for i in range(1000):
+        inbox.put("rosbot/odom", b"\x80", float(i))
+    printed, notes = [], []
+    shown = _echo(inbox, printed.append, 0, 0.0, None, 8, False, lambda: len(printed) >= 10,
+                  notes.append)
+    assert shown == 10 and inbox.dropped == 990
+    assert len(notes) == 1 and "dropped" in notes[0]
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.text(max_size=400))
+def test_echoed_text_has_no_control_characters_and_is_bounded(text):
+    shown = safe_text(text)
+    assert shown.isprintable() and len(shown) <= 200 * 10 + 40
+    line = as_text({"k\x1b": text})
+    assert "\x1b" not in line and "\x07" not in line
+
+
+@pytest.mark.parametrize("argv", [["goal", "nan", "0"], ["goal", "1e308", "0"],
+                                  ["goal", "0", "inf"], ["goal", "1", "1", "--tolerance", "-1"],
+                                  ["param", "set", "planner", "d_o"], ["param", "list", "viewr"]])
+def test_goals_and_param_calls_that_go_nowhere_are_refused_at_once(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        rc = main(argv)
+        raise SystemExit(rc)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+
+
+def test_a_broken_topic_pub_value_names_its_column():
+    res = papf("topic", "pub", "cmd_vel", "{v: 0.1, w: 0.0", "--once")
+    assert res.returncode == 2
+    assert res.stderr.startswith("papf topic pub: VALUE '{v: 0.1, w: 0.0' is not YAML/JSON: "
+                                 "column 16: expected ',' or '}'")

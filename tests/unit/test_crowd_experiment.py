@@ -106,3 +106,26 @@ def test_a_replay_scene_crosses_a_foreign_files_span(tmp_path):
     w, _ = replay_scene(f, 0)
     assert w.start[:2] == (-1.0, 5.5) and w.goal == (5.0, 5.5) and not w.obstacles
     assert replay_scene(f, 1)[0].people_replay[0].from_s == 20.0
+
+
+def test_crowd_keeps_each_finished_run_and_resumes_after_an_interrupt(tmp_path, monkeypatch):
+    from papf.experiments import crowd
+
+    real, calls = crowd.run_crowd_job, []
+
+    def interrupted_second(job):
+        calls.append(job.people)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(job)
+
+    monkeypatch.setattr(crowd, "run_crowd_job", interrupted_second)
+    with pytest.raises(KeyboardInterrupt):
+        crowd.run_crowd(tmp_path, planners=["apf"], people=[0, 2], seeds=[0], timeout_s=5)
+    assert len(list((tmp_path / "runs").glob("*.json"))) == 1
+    calls.clear()
+    monkeypatch.setattr(crowd, "run_crowd_job", lambda job: calls.append(job.people) or real(job))
+    crowd.run_crowd(tmp_path, planners=["apf"], people=[0, 2], seeds=[0], timeout_s=5)
+    assert calls == [2]                  # the finished run was taken from its file
+    rows = (tmp_path / "crowd.csv").read_text().splitlines()
+    assert len(rows) == 3 and rows[1].split(",")[4] == "0"   # in job order (people)

@@ -1,4 +1,6 @@
-"""`papf experiment energy`: plan, settings checks, orchestration (with a stand-in run)."""
+"""`papf experiment energy`: plan (a paper preset run only where it differs), settings checks,
+orchestration (with a stand-in run), and a journal that keeps a run's figures exact (a resumed
+experiment must not call its own runs mismatches)."""
 
 from __future__ import annotations
 
@@ -10,11 +12,23 @@ import pytest
 from rich.console import Console
 
 from common.errors import ConfigError
-from papf.experiments.energy import EnergyExperiment, plan, print_summary, run_experiment
+from papf.experiments.energy import (
+    EXACT_FIGURES,
+    EnergyExperiment,
+    RunSpec,
+    _resumed,
+    _spec_key,
+    journal_entry,
+    plan,
+    print_summary,
+    run_experiment,
+    validate,
+)
+from papf.experiments.journal import Journal
 from papf.launch.outcome import RunResult
 from papf.launch.run import resolve_run
-from papf.report import run_metrics
-from tests.support.recordings import write_synthetic
+from papf.report.metrics import differences_from_live
+from tests.support.recordings import FakeRuns
 
 
 def test_plan_names_files_and_seeds(tmp_path):
@@ -34,28 +48,6 @@ def test_bad_settings_are_refused_before_any_run(tmp_path, change, match):
     exp = replace(EnergyExperiment(out=tmp_path), **change)
     with pytest.raises(ConfigError, match=match):
         run_experiment(exp, Console(file=io.StringIO()), run_fn=pytest.fail)
-
-
-class FakeRuns:
-    """Stands in for papf.launch.run.run: writes a synthetic recording, returns its summary."""
-
-    def __init__(self, charge_error: float = 0.0, cut_first: int = 0):
-        self.configs = []
-        self.charge_error = charge_error
-        self.cut_first = cut_first   # this many first recordings lose their end
-
-    def __call__(self, cfg) -> RunResult:
-        self.configs.append(cfg)
-        speed = (0.4 if cfg.planner == "apf" else 0.5) + 0.01 * cfg.seed
-        write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed)
-        m = run_metrics(cfg.record)
-        if len(self.configs) <= self.cut_first:  # the live run was whole; the file is not
-            Path(cfg.record).unlink()            # (recordings are never overwritten)
-            write_synthetic(Path(cfg.record), cfg.planner, cfg.seed, speed=speed, total_k=80,
-                            outcome=None, meta={"timeout_s": "300"})
-        return RunResult(m.outcome, cfg.planner, "energy", cfg.seed, m.duration_s,
-                         m.path_length_m, m.charge_mAh + self.charge_error, m.energy_J, 0,
-                         m.t_end_s, 0.1)
 
 
 def test_experiment_records_every_run_and_reports(tmp_path):
@@ -128,3 +120,40 @@ def test_a_report_the_experiment_did_not_make_is_refused_before_any_run(tmp_path
         run_experiment(EnergyExperiment(out=out, runs=1, planners=("apf",)),
                        Console(file=io.StringIO()), run_fn=FakeRuns())
         assert (out / "report.html").is_file() and (out / "report.md").is_file()
+
+
+def _result() -> RunResult:
+    return RunResult("reached", "papf", "energy", 0, duration_s=99.680000123456,
+                     path_length_m=9.950115123456789, charge_mAh=23.946955456789,
+                     energy_J=1066.4321987654, collisions=0, sim_time_s=99.78000001,
+                     wall_time_s=3.14159265, run_id="00ff")
+
+
+def test_a_resumed_run_has_the_figures_it_ended_with(tmp_path):
+    exp = EnergyExperiment(out=tmp_path)
+    spec = RunSpec("papf", 1, 0, tmp_path / "papf-1.mcap")
+    spec.path.write_bytes(b"")                       # its recording is there
+    live = _result()
+    Journal(tmp_path).put(_spec_key(exp, spec), journal_entry(live))
+    resumed = _resumed(Journal(tmp_path), exp, spec)
+    assert resumed is not None
+    assert {k: getattr(resumed, k) for k in EXACT_FIGURES} == \
+        {k: getattr(live, k) for k in EXACT_FIGURES}
+    assert differences_from_live("papf-1", resumed, live) == []
+
+
+def test_the_json_alone_would_have_been_a_mismatch():
+    """Why: the run's JSON rounds to 6 decimals, 1e-7 apart from the file's figure."""
+    live = _result()
+    rounded = RunResult(**{**live.__dict__, **{k: v for k, v in live.to_json().items()
+                                               if k in EXACT_FIGURES}})
+    assert differences_from_live("papf-1", rounded, live) != []
+
+
+def test_energy_experiment_runs_a_paper_variant_only_where_it_differs(tmp_path):
+    exp = EnergyExperiment(out=tmp_path, runs=2, planners=("apf", "papf"), presets=("default", "paper"))
+    names = [s.path.name for s in plan(exp)]
+    assert names == ["apf-1.mcap", "apf-2.mcap", "papf-1.mcap", "papf-2.mcap",
+                     "papf-paper-1.mcap", "papf-paper-2.mcap"]
+    with pytest.raises(ConfigError, match="presets"):
+        validate(EnergyExperiment(out=tmp_path, presets=("fast",)))

@@ -1,5 +1,6 @@
 """Driving over a slow link, robot side: the plan follower, the collision monitor, the link
-statistics and their join (docs/link-driving.md). Pure cores, time passed in."""
+statistics and their join (docs/link-driving.md); the laptop's link watch, which names the link
+in the reason of a run that ended after an outage. Pure cores, time passed in."""
 
 from __future__ import annotations
 
@@ -22,10 +23,14 @@ from nodes.base_driver.link_drive import LinkDriving, scan_points
 from nodes.base_driver.monitor import CollisionMonitor, MonitorSettings
 from nodes.planner.registry import make_planner
 from nodes.planner.rollout import rollout
+from papf.launch.linkwatch import LinkWatch
 from schemas import Odometry, Scan, Twist
 
 MS = 1_000_000
 W = 500 * MS          # the driver's watchdog
+
+
+S = 1_000_000_000   # [ns]
 
 
 def straight_plan(stamp_ns: int, v: float = 0.5, x0: float = 0.0, steps: int = 15,
@@ -357,3 +362,22 @@ def test_the_drivers_link_settings_refuse_values_that_would_switch_safety_off(op
     out = subprocess.run([sys.executable, "-m", "nodes.base_driver", "--driver", "rosbot",
                           option], capture_output=True, text=True, timeout=60)
     assert out.returncode == 2 and option.split("=")[0] in out.stderr, out.stderr
+
+
+def test_a_run_ended_after_an_outage_the_laptop_heard_names_the_link():
+    watch = LinkWatch()
+    watch.heard(0)
+    watch.heard(20 * S)
+    watch.tick(21 * S + 100)                                      # silent since 20 s: lost
+    watch.heard(41 * S)                                           # back after 21 s
+    reason = watch.blame("stagnated", "no progress", 42 * S, 42.0)
+    assert reason is not None and reason.startswith("the link: nothing from the robot for 21.0 s")
+    assert "(what the run saw: no progress)" in reason
+
+
+def test_a_short_blip_is_not_blamed():
+    watch = LinkWatch()
+    watch.heard(0)
+    watch.tick(2 * S)                                             # 2 s lost of a 100 s run
+    watch.heard(2 * S + 100)
+    assert watch.blame("stagnated", "no progress", 100 * S, 100.0) is None

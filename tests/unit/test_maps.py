@@ -14,6 +14,7 @@ from common.errors import WorldError
 from common.quiet import import_quietly
 from papf.cli import main
 from papf.offline import map_gen
+from tests.support.cli import papf
 from worlds import load_world
 from worlds.bullet import build_world
 from worlds.geometry import cast_rays, signed_distance
@@ -212,3 +213,23 @@ def test_packaged_maps_are_what_map_gen_draws():
                        ("warehouse", map_gen.warehouse), ("campus", map_gen.campus)):
         grid = load_map(folder / f"{name}.yaml")
         assert np.array_equal(grid.data, draw(grid.resolution)), name
+
+
+def test_export_map_never_writes_through_a_dangling_link_and_checks_its_directory(tmp_path, capsys):
+    from papf.cli import main
+
+    target = tmp_path / "target.pgm"
+    (tmp_path / "m.pgm").symlink_to(target)
+    assert main(["export", "map", "energy", str(tmp_path / "m.yaml")]) == 2
+    assert not target.exists() and "exists" in capsys.readouterr().err
+    assert main(["export", "map", "energy", str(tmp_path / "no" / "m.yaml")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_broken_map_yaml_names_line_and_column(tmp_path):
+    bad = tmp_path / "map.yaml"
+    bad.write_text("image: x.pgm\nresolution: [0.05\norigin: [0, 0, 0]\n")
+    res = papf("plan", "--world", str(bad), "--start", "0,0", "--goal", "1,1")
+    assert res.returncode == 2
+    assert ("is not valid YAML: line 3, column 7: expected ',' or ']', but got ':' (while "
+            "parsing a flow sequence started at line 2, column 13)") in res.stderr

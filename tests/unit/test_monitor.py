@@ -1,9 +1,11 @@
 """Run outcome and figures are decided at an exact sim time (papf.launch.outcome)."""
 
+import json
 import math
+import tracemalloc
 from unittest.mock import MagicMock
 
-from papf.launch.outcome import NS, RunMonitor
+from papf.launch.outcome import NS, RunMonitor, RunResult
 from papf.launch.sequence import RunSequence
 from schemas import BatteryState, Clock, Event, Keys, Odometry, PlannerStatus, Twist
 
@@ -129,3 +131,78 @@ def test_every_reached_claim_is_judged_even_when_a_later_one_came_first():
         t = 9 * NS + k * 20_000_000
         m.on_pose(Odometry(stamp_ns=t, x=0.95, y=0.0, yaw=0.0, v=0.0, w=0.0))
     assert m.outcome == "reached" and m.t_end_ns == 9 * NS
+
+
+def pose_at(t_s, x, y=0.0, v=0.2):
+    return Odometry(stamp_ns=round(t_s * NS), x=x, y=y, yaw=0.0, v=v, w=0.0)
+
+
+def battery_at(t_s, mah):
+    return BatteryState(stamp_ns=round(t_s * NS), voltage=12.0, current=1.0, power=12.0,
+                        charge_used_mAh=mah, energy_J=mah * 43.2)
+
+
+def test_reached_is_judged_from_ground_truth_not_the_planners_word():
+    m = RunMonitor(timeout_s=100, goal=(5.0, 0.0, 0.1))
+    m.on_pose(pose_at(0.0, 0.0))
+    m.on_status(PlannerStatus(stamp_ns=0, state="reached"))   # forged: the robot is at 0 m
+    assert not m.done and m.refuted_claims == 1
+    m.on_pose(pose_at(1.0, 4.95))
+    m.on_status(PlannerStatus(stamp_ns=NS, state="reached"))   # true: 5 cm from the goal
+    assert m.outcome == "reached" and m.t_end_ns == NS
+
+
+def test_a_reached_claim_waits_for_the_pose_of_its_instant():
+    m = RunMonitor(timeout_s=100, goal=(1.0, 0.0, 0.1))
+    m.on_pose(pose_at(0.98, 0.5))
+    m.on_status(PlannerStatus(stamp_ns=NS, state="reached"))
+    assert not m.done                      # the pose of t = 1 s has not arrived yet
+    m.on_pose(pose_at(1.0, 0.95))
+    assert m.outcome == "reached"
+
+
+def test_figures_freeze_at_a_nodes_death_and_keep_the_timeout():
+    m = RunMonitor(timeout_s=60)
+    for i in range(200):                    # the meter dies after 12 s; the sim runs on
+        m.on_pose(pose_at(i * 0.1, i * 0.01))
+        if i <= 120:
+            m.on_battery(battery_at(i * 0.1, i * 0.01))
+    m.clock_ns = round(210.7 * NS)
+    m.fail("energy_meter exited with code -9", at_ns=m.last_stamp("battery"))
+    r = m.result("apf", "energy", 0, 1.0)
+    assert r.outcome == "failed" and math.isclose(r.sim_time_s, 12.0)
+    assert math.isclose(r.path_length_m, 1.2) and math.isclose(r.charge_mAh, 1.2)
+    m2 = RunMonitor(timeout_s=60)
+    m2.clock_ns = round(210.7 * NS)
+    m2.fail("recorder exited with code 1")
+    assert m2.t_end_ns == 60 * NS           # never past the timeout
+
+
+def test_json_has_null_not_nan_for_a_missing_figure():
+    m = RunMonitor(timeout_s=10)
+    m.fail("planner exited with code 2")
+    text = json.dumps(m.result("apf", "open", 0, 1.0).to_json(), allow_nan=False)
+    assert json.loads(text)["charge_mAh"] is None and json.loads(text)["energy_J"] is None
+    assert RunResult("failed", "apf", "w", 0, 0.0, 0.0, math.nan, math.inf, 0, 0.0, 0.0
+                     ).to_json()["energy_J"] is None
+
+
+def test_launcher_memory_stays_constant_over_a_long_run():
+    m = RunMonitor(timeout_s=1e6, goal=(1e3, 0.0, 0.1))
+
+    def feed(n0, n1):
+        for i in range(n0, n1):
+            t = i * 0.02
+            m.on_pose(pose_at(t, t * 0.1))
+            m.on_battery(battery_at(t, t))
+
+    tracemalloc.start()
+    feed(0, 20_000)                          # fill the windows (traced: what leaves is seen)
+    before = tracemalloc.take_snapshot()
+    feed(20_000, 120_000)                    # 2000 s more of sim time
+    after = tracemalloc.take_snapshot()
+    tracemalloc.stop()
+    growth = sum(s.size_diff for s in after.compare_to(before, "filename"))
+    assert growth < 64 * 1024, growth        # was ~34 KB per sim second: 68 MB here
+    m._decide("timeout", round(2399.98 * NS), "")
+    assert math.isclose(m.path_length_m(), 239.998, rel_tol=1e-6)

@@ -1,6 +1,7 @@
 """The papers' test worlds load and are sane; the experiment tables and CLI wiring work."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +129,14 @@ def test_plan_and_experiment_commands_parse():
     assert args.plot == "x.png" and args.func.__name__ == "cmd_plan"
     args = parser.parse_args(["experiment", "energy", "--runs", "2"])
     assert args.experiment == "energy" and args.runs == 2 and args.func.__name__ == "cmd_energy"
+
+
+def test_new_worlds_load():
+    from worlds import load_world
+
+    for name in ("energy-empty", "energy-blocking", "papf-horizon", "wang-table1-fig5", "wang-table1-fig7"):
+        w = load_world(name)
+        assert w.goal[:2] in ((10.0, 0.0), (7.0, 0.0), (10.5, 8.0))
+    assert len(load_world("wang-table1-fig5").obstacles) == 20
+    assert not load_world("energy-empty").obstacles
+    assert Path(__file__).parent.joinpath("..", "..", "worlds", "energy-blocking.toml").exists()

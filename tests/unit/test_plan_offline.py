@@ -208,3 +208,40 @@ def test_plot_is_a_valid_png(tmp_path):
     assert out.read_bytes()[:8] == PNG_MAGIC
     img = mpimg.imread(out)
     assert img.ndim == 3 and img.shape[0] > 100 and img.shape[1] > 100
+
+
+def test_plan_refuses_its_outputs_before_the_run(tmp_path, capsys):
+    import os
+    import time
+
+    from papf.cli import main
+    from worlds import world_path
+
+    world = tmp_path / "w.toml"
+    world.write_text(world_path("papf-test-1").read_text())
+    link = tmp_path / "w.csv"
+    os.link(world, link)                 # --out a hard link of the world: never, even forced
+    mine = tmp_path / "mine.png"
+    mine.write_bytes(b"user's")
+    for argv, match in ((["--out", str(link), "--force"], "is the input"),
+                        (["--plot", str(mine)], "already exists"),
+                        (["--out", str(tmp_path / "p.txt")], ".csv or .json"),
+                        (["--plot", str(tmp_path / "no" / "p.png")], "does not exist")):
+        t0 = time.monotonic()
+        assert main(["plan", "--world", str(world), *argv]) == 2
+        assert time.monotonic() - t0 < 5.0        # before the run, not after it
+        assert match in capsys.readouterr().err
+    assert mine.read_bytes() == b"user's" and world.read_text() == link.read_text()
+
+
+def test_a_forced_plot_replaces_a_symlink_never_its_target(tmp_path):
+    from papf.cli import main
+
+    precious = tmp_path / "run.mcap"
+    precious.write_bytes(b"recording")
+    plot = tmp_path / "p.png"
+    plot.symlink_to(precious)
+    assert main(["plan", "--world", "papf-test-1", "--timeout", "3", "--plot", str(plot),
+                 "--force"]) in (0, 5)
+    assert precious.read_bytes() == b"recording"
+    assert not plot.is_symlink() and plot.read_bytes()[:4] == b"\x89PNG"

@@ -181,3 +181,41 @@ def test_point_robot_open_field_is_deterministic():
     a = simulate(make_planner("apf"), toy_world(), goal=(2.0, 1.0), max_time_s=60)
     b = simulate(make_planner("apf"), toy_world(), goal=(2.0, 1.0), max_time_s=60)
     assert a.status == "reached" and np.array_equal(a.path, b.path)
+
+
+@pytest.mark.parametrize("tolerance", [0.0, 1e-300, -5.0])
+def test_a_bus_goal_with_a_tolerance_below_the_floor_is_reached_at_the_floor(tolerance):
+    import math
+
+    import numpy as np
+
+    from common.robot import GOAL_TOLERANCE_MIN_M
+    from nodes.planner.apf.strategy import APFStrategy
+    from nodes.planner.core import Planner
+    from schemas.messages import Goal, Odometry, Scan
+
+    pl = Planner(APFStrategy())
+    pl.set_goal(Goal(stamp_ns=1, x=1.0, y=0.0, tolerance=tolerance))
+    scan = Scan(stamp_ns=2, angle_min=0.0, angle_increment=2 * math.pi / 8, range_min=0.2,
+                range_max=10.0, ranges=np.full(8, np.inf, dtype=np.float32))
+    near = 1.0 - 0.9 * GOAL_TOLERANCE_MIN_M
+    status = pl.step(scan, Odometry(stamp_ns=2, x=near, y=0.0, yaw=0.0, v=0.0, w=0.0))[2]
+    assert status.state == "reached"
+
+
+def test_scans_of_ever_new_lengths_keep_the_planner_memory_bounded():
+    import math
+
+    import numpy as np
+
+    from nodes.planner.apf.strategy import APFStrategy
+    from nodes.planner.core import Planner
+    from schemas.messages import Goal, Odometry, Scan
+
+    pl = Planner(APFStrategy())
+    pl.set_goal(Goal(stamp_ns=1, x=5.0, y=0.0))
+    for n in range(1, 300):
+        scan = Scan(stamp_ns=n, angle_min=0.0, angle_increment=2 * math.pi / n, range_min=0.2,
+                    range_max=10.0, ranges=np.full(n, 3.0, dtype=np.float32))
+        pl.step(scan, Odometry(stamp_ns=n, x=0.0, y=0.0, yaw=0.0, v=0.0, w=0.0))
+    assert len(pl._apf_for_l) <= 16

@@ -1,19 +1,33 @@
 """Planner process logic: lockstep pairing and staleness (pure), the node's help and usage errors."""
 
+import json
+import logging
 import subprocess
 import sys
 
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from common import runauth
+from common.transport import Node
 from nodes.planner.loop import PlannerLoop
+from nodes.planner.params import answer, current
 from nodes.planner.registry import make_planner
 from nodes.planner.road import Lanes
+from schemas import Keys, PlannerStatus
 from schemas.messages import (
     Goal,
     Objects,
     ObjectTrack,
 )
 from tests.support.messages import odom, scan
+from tests.support.messages import odom as _odom
+from tests.support.messages import scan_63 as _scan
 
 MS = 1_000_000
+
+
+KEY = bytes.fromhex(runauth.new_key())
 
 
 def loop(**kw):
@@ -135,3 +149,84 @@ def test_lockstep_pair_timeout_outlasts_the_drivers_lockstep_timeout():
     assert LOCKSTEP_PAIR_TIMEOUT_S > max(driver_default, float(profile["defaults"]["lockstep_timeout"]))
     assert loop().pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
     assert TrackerLoop(Tracker(TrackerParams())).pair_timeout_s == LOCKSTEP_PAIR_TIMEOUT_S
+
+
+def _ask(planner, request: dict, check) -> dict:
+    return answer("papf", planner, json.dumps(request).encode(), check)[0]
+
+
+def test_a_keyed_planner_lists_to_anyone_but_changes_only_for_its_key():
+    planner = make_planner("papf")
+    check = runauth.RequestCheck(KEY)
+    before = current("papf", planner)
+    assert _ask(planner, {}, check)["params"] == before            # reading is open
+    reply = _ask(planner, {"set": ["apf.d_o=0.6"]}, check)          # unsigned
+    assert "not signed" in reply["error"] and current("papf", planner) == before
+    other = runauth.sign_request({"set": ["apf.d_o=0.6"]}, bytes(16))
+    assert "not signed" in _ask(planner, other, check)["error"]
+    signed = runauth.sign_request({"set": ["apf.d_o=0.6"]}, KEY)
+    assert _ask(planner, signed, check)["error"] == ""
+    assert current("papf", planner)["apf.d_o"] == 0.6
+    assert "not signed" in _ask(planner, signed, check)["error"]    # a replay: nonce seen
+    low = runauth.sign_request({"set": ["apf.d_o=1e-9"]}, KEY)      # signed, still checked
+    assert "must be" in _ask(planner, low, check)["error"]
+    assert current("papf", planner)["apf.d_o"] == 0.6
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.binary(max_size=300))
+def test_garbage_queries_change_nothing(payload):
+    planner = make_planner("apf")
+    before = current("apf", planner)
+    reply, changed = answer("apf", planner, payload, runauth.RequestCheck(KEY))
+    assert changed == [] and current("apf", planner) == before and "params" in reply
+
+
+def test_planner_ignores_an_extreme_stamp_pair():
+    """The reproduction: odom + scan at 2**64-1 made the planner stagnate at once."""
+    node = Node("planner", None, Keys("t"), logging.getLogger("p"))
+    loop = PlannerLoop(make_planner("apf"))
+    out = loop.on_message("goal", Goal(stamp_ns=0, x=5.0, y=0.0), 0.0)
+    for t in (0, 100_000_000):
+        for topic, msg in (("odom", _odom(t)), ("scan", _scan(t))):
+            out += loop.on_message(topic, node.accept(topic, msg.to_bytes()), 0.0)
+    for stamp in (2**64 - 1, -2**63):
+        for topic, msg in (("odom", _odom(stamp)), ("scan", _scan(stamp))):
+            got = node.accept(topic, msg.to_bytes())
+            assert got is None
+    statuses = [m.state for t, m in out if t == "planner/status"]
+    assert statuses == ["ready", "driving", "driving"]
+    assert sum(node.bad_messages.values()) == 4
+
+
+def test_planner_state_neither_built_nor_returned_when_nobody_listens():
+    """want_state false: the same commands and statuses, no planner/state (debug) at all."""
+    def run(want: bool) -> list:
+        loop = PlannerLoop(make_planner("apf"), want_state=lambda: want)
+        out = loop.on_message("goal", Goal(stamp_ns=0, x=5.0, y=0.0), 0.0)
+        for t in (0, 100_000_000, 200_000_000):
+            out += loop.on_message("odom", _odom(t), 0.0) + loop.on_message("scan", _scan(t), 0.0)
+        out += loop.on_message("scan", _scan(900_000_000), 0.0) + loop.poll(10.0)  # stale
+        out += loop.on_message("goal", Goal(stamp_ns=0, x=0.05, y=0.0), 0.0)  # within reach
+        t = 1_000_000_000
+        return out + loop.on_message("odom", _odom(t), 0.0) + loop.on_message("scan", _scan(t), 0.0)
+
+    full, lean = run(True), run(False)
+    assert [t for t, _ in full].count("planner/state") == 5
+    assert [m.state for t, m in lean if t == "planner/status"][-1] == "reached"
+    assert any(m.mode == "stale" for t, m in full if t == "planner/state")
+    assert [(t, m) for t, m in full if t != "planner/state"] == lean
+
+
+def test_planner_accepts_a_goal_only_from_the_run_that_set_it():
+    key = bytes.fromhex(runauth.new_key())
+    loop = PlannerLoop(make_planner("apf"), run_key=key)
+    forged = Goal(stamp_ns=0, x=-5.0, y=3.0)
+    assert loop.on_message("goal", forged, 0.0) == [] and loop.rejected_goals == 1
+    assert loop.planner.goal is None
+    other_run = runauth.sign(Goal(stamp_ns=0, x=-5.0, y=3.0), bytes.fromhex(runauth.new_key()))
+    assert loop.on_message("goal", other_run, 0.0) == [] and loop.rejected_goals == 2
+    ours = runauth.sign(Goal(stamp_ns=0, x=5.0, y=0.0), key)
+    (topic, status), = loop.on_message("goal", ours, 0.0)
+    assert status.state == "ready" and runauth.verify(status, key)   # the answer is signed
+    assert not runauth.verify(PlannerStatus(stamp_ns=0, state="reached"), key)

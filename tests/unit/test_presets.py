@@ -1,4 +1,5 @@
-"""Planner presets (``--preset paper|default``) and PAPF's deviations, each switchable alone."""
+"""Planner presets (``--preset paper|default``) and PAPF's deviations, each switchable alone (and
+``papf experiment deviations``' variants, each switching one setting)."""
 
 import dataclasses
 from pathlib import Path
@@ -11,6 +12,7 @@ from nodes.planner.core import scan_view
 from nodes.planner.field import APFParams
 from nodes.planner.papf.strategy import PAPER_PRESET, PAPFParams, PAPFStrategy, predict, quark_force
 from nodes.planner.registry import PLANNERS, load_params, preset_sets, preset_settings
+from papf.experiments.paper_study import DEVIATIONS, READINGS, _turning, _variants
 from papf.experiments.trials import variants
 from schemas.messages import Odometry
 from tests.support.toysim import cast_scan, toy_world
@@ -137,3 +139,15 @@ def test_one_energy_model_by_default_everywhere():
     assert build_parser().parse_args(["experiment", "energy"]).energy_model == DEFAULT_MODEL
     assert RunConfig(world="open").energy_model == DEFAULT_MODEL
     assert EnergyExperiment(out=Path(".")).energy_model == DEFAULT_MODEL
+
+
+def test_deviation_variants_switch_one_setting_each():
+    v = dict(_variants(both=True))
+    assert len(_variants()) == 2 + len(READINGS) + len(DEVIATIONS)
+    assert v["paper"] == ["preset=paper"] and v["default"] == []
+    for name, value, _what in READINGS:
+        assert v[f"paper with {name}={value}"] == ["preset=paper", f"{name}={value}"]
+    for name, on, off, _what in DEVIATIONS:
+        assert v[f"paper + {name}"] == ["preset=paper", f"{name}={on}"]
+        assert v[f"default - {name}"] == [f"{name}={off}"]
+    assert _turning(np.array([0.0, 0.5, 0.0, 3.1, -3.1])) == pytest.approx(1.0 + 3.1 + 2 * np.pi - 6.2)

@@ -7,6 +7,8 @@ import pytest
 from common.errors import RecordingError
 from papf.recording import Recording, RunWriter, remap_key, replay
 from schemas import Odometry, Twist
+from tests.support.cli import papf
+from tests.support.recordings import write_ros_topics
 
 MS = 1_000_000  # [ns]
 
@@ -74,3 +76,31 @@ def test_replay_stop_progress_and_bad_input(tmp_path):
     (tmp_path / "cut.mcap").write_bytes(path.read_bytes()[:500])
     with pytest.raises(RecordingError, match="papf recover"):
         replay(tmp_path / "cut.mcap", print)
+
+
+def test_the_replay_guard_takes_the_namespaces_of_the_keys(tmp_path):
+    from nodes.recorder.writer import RunWriter
+    from papf.recording.reader import Recording
+    from papf.recording.replay import target_namespaces
+    from schemas import Twist
+
+    path = tmp_path / "r.mcap"
+    with RunWriter(path, {"namespace": "elsewhere"}) as w:
+        w.write_message("rosbot/cmd_vel", Twist(stamp_ns=1, v=0.1, w=0.0))
+        w.write_message("lab/r1/scan", Twist(stamp_ns=2, v=0.0, w=0.0))
+    with Recording(path) as rec:
+        assert target_namespaces(rec) == {"rosbot", "lab/r1"}
+        assert target_namespaces(rec, namespace="elsewhere") == {"rosbot", "lab/r1"}
+        assert target_namespaces(rec, namespace="x") == {"rosbot", "lab/r1"}
+
+
+@pytest.fixture
+def ros_recording(tmp_path):
+    return write_ros_topics(tmp_path / "ros.mcap")
+
+
+def test_replay_bad_rate_and_no_router_are_one_line(ros_recording):
+    for args in (("--rate", "nan"), ("--rate", "inf"), ("--rate", "-1"),
+                 ("--connect", "tcp/127.0.0.1:1")):
+        p = papf("replay", ros_recording, *args)
+        assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1, (args, p.stderr)

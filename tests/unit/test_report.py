@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+import json
+import math
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ from common.units import NS_PER_S as NS
 from nodes.energy_meter.core import EnergyMeter
 from nodes.energy_meter.models import B_W, F_V_NM, MASS_KG, P_S_W, WHEEL_RADIUS_M
 from nodes.recorder.writer import RunWriter
+from papf.cli.report import finite
 from papf.recording.reader import Recording
 from papf.report import build_report, remeter_file, run_metrics
 from papf.report.metrics import NO_OUTCOME, heading_oscillations, smoothness
@@ -211,3 +214,82 @@ def test_report_takes_the_live_model_and_names_unknown_seed_and_odometry(tmp_pat
     assert {p.name for p in again.files} >= {"charge-motor.png", "trajectories-motor.png"}
     assert "re-metered; the live meter ran paper" in (tmp_path / "out" / "report-motor.md").read_text()
     assert report.runs[0].charge_mAh != again.runs[0].charge_mAh
+
+
+def test_report_refuses_to_replace_an_earlier_report_unless_forced(tmp_path):
+    from common.outfiles import OutputError
+    from papf.report import build_report
+    from tests.support.recordings import write_synthetic
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    write_synthetic(runs / "apf-1.mcap", "apf", seed=1, speed=0.4)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "report.md").write_text("the user's notes")
+    with pytest.raises(OutputError, match=r"already holds a report \(report.md\); use --force"):
+        build_report([runs], out)
+    assert sorted(p.name for p in out.iterdir()) == ["report.md"]     # nothing moved
+    assert (out / "report.md").read_text() == "the user's notes"
+    (out / "charge.png").symlink_to(runs / "apf-1.mcap")   # a name that is an input
+    with pytest.raises(OutputError, match="is the input"):
+        build_report([runs], out, force=True)
+    (out / "charge.png").unlink()
+    build_report([runs], out, force=True)
+    assert (out / "report.md").read_text() != "the user's notes"
+
+
+def test_report_json_has_no_nan():
+    assert json.dumps(finite({"a": math.nan, "b": [math.inf, 1.0]}), allow_nan=False) == \
+        '{"a": null, "b": [null, 1.0]}'
+
+
+def _runs(tmp_path):
+    from tests.support.recordings import write_synthetic
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    for planner in ("apf", "papf"):
+        write_synthetic(runs / f"{planner}-1.mcap", planner, seed=1)
+    return runs
+
+
+def test_report_refuses_an_existing_report_before_computing_anything(tmp_path, monkeypatch, capsys):
+    from papf.cli import main
+    from papf.report import report as report_module
+
+    runs = _runs(tmp_path)
+    (runs / "report.md").write_text("the user's own notes\n")
+
+    def no_work(*_a, **_k):
+        raise AssertionError("computed before the output check")
+
+    monkeypatch.setattr(report_module, "collect", no_work)
+    assert main(["report", str(runs)]) == 2
+    err = capsys.readouterr().err
+    assert f"{runs} already holds a report (report.md); use --force" in err
+    assert (runs / "report.md").read_text() == "the user's own notes\n"
+    assert sorted(p.name for p in runs.iterdir()) == ["apf-1.mcap", "papf-1.mcap", "report.md"]
+
+
+def test_report_writes_one_self_contained_html_file(tmp_path):
+    import re
+
+    from papf.report import build_report
+
+    runs = _runs(tmp_path)
+    report = build_report([runs], tmp_path / "out")
+    page = (tmp_path / "out" / "report.html")
+    assert page in report.files
+    text = page.read_text(encoding="utf-8")
+    assert text.startswith("<!DOCTYPE html>") and "<table>" in text and "PAPF vs APF" in text
+    sources = re.findall(r'<img src="([^"]*)"', text)
+    assert len(sources) == 4 and all(s.startswith("data:image/png;base64,") for s in sources)
+    assert "<script" not in text
+
+
+def test_report_html_shows_a_recorded_text_as_text(tmp_path):
+    from papf.report.html import report_html
+
+    page = report_html("# r\n\nworld <script>alert(1)</script>\n", {}, "t<b>")
+    assert "<script>" not in page and "&lt;script&gt;" in page and "<title>t&lt;b&gt;</title>" in page

@@ -21,6 +21,7 @@ from papf.recording.rosbag import (
 from papf.report.metrics import BAG, run_metrics
 from schemas.messages import BY_TYPE, BatteryVoltage, Odometry, Scan, Twist, WheelStates
 from tests.support.bags import TOPICS, VOLTAGE, write_bag
+from tests.support.cli import papf
 
 
 @pytest.fixture(scope="module")
@@ -201,3 +202,19 @@ def test_our_recordings_are_not_bags(tmp_path):
     assert not is_rosbag(tmp_path / "ours.mcap") and not is_rosbag(tmp_path)
     with open_run(tmp_path / "ours.mcap") as rec:
         assert isinstance(rec, Recording)
+
+
+def test_a_bag_with_other_names_gets_the_exact_topics_option(tmp_path):
+    from tests.support.bags import write_bag
+
+    bag = tmp_path / "bag"
+    write_bag(bag, names={"odom": "/wheel_odom"})   # neither the ROSbot's name nor the face's
+    res = papf("report", str(bag))
+    assert res.returncode == 2 and \
+        res.stderr.strip().endswith("Read it with --topics odom=/wheel_odom")
+    assert "chars)" not in res.stderr
+    res = papf("report", str(bag), "--topics", "odom=/wheel_odom")
+    assert res.returncode == 0, res.stderr
+    res = papf("info", str(bag))   # info still lists what the bag holds
+    assert res.returncode == 0 and "/wheel_odom" in res.stdout and \
+        "--topics odom=/wheel_odom" in res.stderr

@@ -1,5 +1,10 @@
 """`papf run` usage errors: a broken world file is one line and exit 2, before anything starts."""
 
+import socket
+
+import pytest
+
+from tests.support.cli import papf
 from tests.support.e2e import papf_run
 
 
@@ -37,3 +42,60 @@ def test_a_dry_run_is_preflighted_like_the_run():
                         "--set", "d_o=0.01"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2 and p.stdout == "" and "d_o" in p.stderr
     assert len(p.stderr.strip().splitlines()) == 1
+
+
+def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
+    from types import SimpleNamespace
+
+    from papf.cli.run import print_summary
+
+    result = SimpleNamespace(outcome="failed", world="energy", planner="apf", seed=0,
+                             duration_s=1.0, path_length_m=1.0, charge_mAh=1.0, energy_J=1.0,
+                             collisions=0, sim_time_s=1.0, wall_time_s=1.0, fleet=(),
+                             min_separation_m=None,
+                             reason="planner: \x1b]0;owned\x07[link=http://e]click[/link]")
+    print_summary(result, "motor")
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "[link=http://e]click" in out
+    assert "1.00 mAh (motor model)" in out          # the charge names the meter's model
+
+
+@pytest.mark.parametrize("args,says", [
+    (["--planner", "papff"], "did you mean 'papf'"),
+    (["--planner", "PAPF"], "did you mean 'papf'"),
+    (["--set", "unknown=1"], "unknown apf setting 'unknown'"),
+    (["--set", "vmax=0.3"], "did you mean 'v_max'"),
+    (["--set", "d_o=nan"], "d_o=nan: must be a finite number in [0.25, 25] m"),
+    (["--seed", "-1"], "--seed=-1: must be an integer in [0, 4294967295]"),
+    (["--params", "/bin/ls"], "is not a readable TOML file"),
+    (["--params", "/nonexistent.toml"], "no such file"),
+    (["--record", "/nonexistent/x.mcap"], "does not exist"),
+    (["--timeout", "nan"], "--timeout=nan: must be a finite number"),
+    (["--timeout", "inf"], "--timeout=inf"), (["--timeout", "0"], "--timeout=0"),
+    (["--timeout", "-5"], "--timeout=-5"),
+    (["--port", "-1"], "--port=-1: must be an integer in [1, 65535]"),
+    (["--port", "70000"], "--port=70000"),
+    (["--namespace", ""], "namespace"), (["--namespace", "*"], "namespace"),
+    (["--namespace", "a//b"], "namespace"),
+])
+def test_bad_run_arguments_are_refused_before_anything_starts(args, says):
+    p = papf("run", "--world", "open", "--json", *args)
+    assert p.returncode == 2, (args, p.stdout, p.stderr)
+    assert p.stdout == "" and says in p.stderr, (args, p.stderr)
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+
+
+def test_a_port_held_by_another_listener_is_refused():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        p = papf("run", "--world", "open", "--port", port)
+    assert p.returncode == 2 and "already listens" in p.stderr and p.stdout == ""
+
+
+def test_plan_refuses_a_negative_seed_and_a_3d_world_is_refused_by_run():
+    p = papf("plan", "--world", "open", "--seed", "-1")
+    assert p.returncode == 2 and "--seed=-1" in p.stderr and "Traceback" not in p.stderr
+    p = papf("run", "--world", "wang-3d-fig9", "--json")
+    assert p.returncode == 2 and "is 3-D" in p.stderr and p.stdout == ""

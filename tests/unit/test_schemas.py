@@ -6,10 +6,25 @@ import jsonschema
 import msgpack
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import schemas as s
 from common.errors import SchemaError
 from schemas.base import Message
+from schemas.keys import Keys
+from schemas.messages import ALL_MESSAGES
+
+SETTINGS = settings(max_examples=60, deadline=None)
+FAST = settings(max_examples=150, deadline=None,
+                suppress_health_check=[HealthCheck.too_slow])
+# msgpack-able values, including the awkward ones: huge ints, nan/inf, bytes, nesting
+scalars = st.one_of(st.none(), st.booleans(), st.integers(-2**63, 2**64 - 1),
+                    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=20),
+                    st.binary(max_size=64))
+values = st.recursive(scalars, lambda inner: st.one_of(
+    st.lists(inner, max_size=6), st.dictionaries(st.text(max_size=8), inner, max_size=6)),
+    max_leaves=20)
 
 
 def samples() -> list[Message]:
@@ -193,3 +208,49 @@ def test_objects_nest_tracks_and_name_a_bad_one():
         s.Objects.from_wire(wire)
     schema = s.Objects.json_schema()["properties"]["tracks"]
     assert schema["items"]["title"] == "papf/ObjectTrack/v1"
+
+
+@SETTINGS
+@given(st.text(min_size=1, max_size=300))
+def test_a_namespace_taken_is_a_plain_printable_key(ns):
+    from schemas import Keys
+
+    try:
+        Keys(ns)
+    except ValueError:
+        return
+    assert ns.isprintable() and len(ns) <= 200 and "//" not in ns and not set(ns) & set("*$?# ")
+
+
+def test_namespaces_must_make_valid_keys():
+    for bad in ("", "*", "a//b", "/a", "a/", "a$b", "a?b", "a#b", "a b"):
+        with pytest.raises(ValueError):
+            Keys(bad)
+    assert Keys("lab/r1").scan == "lab/r1/scan"
+
+
+@FAST
+@given(msg_type=st.sampled_from(ALL_MESSAGES), data=st.binary(max_size=512))
+def test_any_bytes_decode_to_a_message_or_a_schema_error(msg_type, data):
+    try:
+        msg = msg_type.from_bytes(data)
+    except SchemaError:
+        return
+    assert isinstance(msg, msg_type)
+
+
+@FAST
+@given(msg_type=st.sampled_from(ALL_MESSAGES), fields=st.dictionaries(st.text(max_size=12), values,
+                                                                       max_size=8),
+       overrides=st.data())
+def test_any_map_of_the_right_type_decodes_or_is_refused(msg_type, fields, overrides):
+    # start from the message's own field names so that deep validation is reached
+    wire = {name: overrides.draw(values) for name, _, _ in msg_type._FIELDS}
+    wire.update(fields)
+    wire["_type"] = msg_type.TYPE
+    data = msgpack.packb(wire, use_bin_type=True)
+    try:
+        msg = msg_type.from_bytes(data)
+    except SchemaError:
+        return
+    assert msg == msg_type.from_bytes(msg.to_bytes())   # a decoded message round-trips

@@ -1,14 +1,17 @@
 """The one stagnation rule (nodes/planner/stagnation.py): the planner core's and the offline
-3-D point robot's."""
+3-D point robot's; a gap without scans (a link outage) is not time without progress."""
 
 import numpy as np
 
 from common.units import NS_PER_S
 from nodes.planner.field import APFParams
-from nodes.planner.stagnation import StagnationWatch
+from nodes.planner.stagnation import INPUT_GAP_NS, StagnationWatch
 
 APF = APFParams(stagnation_window_s=2.0, stagnation_progress_m=0.1, stagnation_roam_m=0.5,
                 stagnation_max_s=5.0)
+
+
+S = 1_000_000_000   # [ns]
 
 
 def _run(points, dist=3.0, dt_s=0.5, searching=False) -> tuple[int, str]:
@@ -44,3 +47,30 @@ def test_progress_resets_both_clocks_and_a_new_goal_resets_the_watch():
         assert w.check(round(k * 0.5 * NS_PER_S), 10.0 - 0.2 * k, APF, np.zeros(2)) == ""
     w.reset()
     assert w.best == float("inf") and w.anchor is None
+
+
+def _watch_over(times_s, dist=lambda t: 5.0):
+    apf, watch = APFParams(), StagnationWatch()
+    return [watch.check(int(t * S), dist(t), apf, (0.0, 0.0)) for t in times_s]
+
+
+def test_a_gap_without_scans_is_not_time_without_progress():
+    window = APFParams().stagnation_window_s
+    steered = [k * 0.1 for k in range(int(5 / 0.1))]              # 5 s of scans, standing
+    after = [25.0 + k * 0.1 for k in range(10)]                   # then 20 s of nothing
+    assert not any(_watch_over(steered + after))                  # judged on 6 s steered
+    assert window < 25.0
+
+
+def test_without_a_gap_the_same_standstill_stagnates():
+    times = [k * 0.1 for k in range(int(26 / 0.1))]
+    assert any(_watch_over(times))
+
+
+def test_short_gaps_count_as_ever():
+    gap = INPUT_GAP_NS / S - 0.2                                  # below the gap: still counted
+    times, t = [], 0.0
+    while t < 26:
+        times.append(t)
+        t += gap
+    assert any(_watch_over(times))

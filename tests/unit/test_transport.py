@@ -1,11 +1,24 @@
 """Transport configuration: defaults, command-line arguments, bad config files."""
 
 import argparse
+import logging
 
+import msgpack
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from common.errors import ConfigError
-from common.transport import add_zenoh_args, zenoh_config
+from common.transport import Node, add_zenoh_args, zenoh_config
+from common.units import MAX_STAMP_NS
+from schemas import Keys
+from schemas.keys import TOPICS
+from schemas.messages import Odometry
+from tests.support.messages import odom as _odom
+from tests.support.messages import scan_63 as _scan
+
+FAST = settings(max_examples=150, deadline=None,
+                suppress_health_check=[HealthCheck.too_slow])
 
 
 def test_config_defaults_to_embedded_router_client():
@@ -29,3 +42,37 @@ def test_bad_config_file_is_a_config_error(tmp_path):
         zenoh_config(config_file=str(bad))
     with pytest.raises(ConfigError, match="mode"):
         zenoh_config(mode="satellite")
+
+
+@pytest.mark.parametrize("stamp", [-2**63, -1, MAX_STAMP_NS + 1, 2**64 - 1])
+def test_extreme_stamp_is_dropped_and_counted(stamp):
+    node = Node("probe", None, Keys("t"), logging.getLogger("probe"))
+    assert node.accept("odom", _odom(stamp).to_bytes()) is None
+    assert node.accept("scan", _scan(stamp).to_bytes()) is None
+    assert node.bad_messages == {"odom": 1, "scan": 1}
+
+
+def _node() -> Node:
+    return Node("probe", None, Keys("t"), logging.getLogger("probe"))
+
+
+@FAST
+@given(topic=st.sampled_from(sorted(TOPICS)), data=st.binary(max_size=256))
+def test_node_turns_any_payload_into_a_message_or_a_counted_drop(topic, data):
+    node = _node()
+    msg = node.accept(topic, data)
+    if msg is None:
+        assert node.bad_messages[topic] == 1
+    else:
+        assert isinstance(msg, TOPICS[topic]) and not node.bad_messages
+
+
+@FAST
+@given(stamp=st.integers(-2**63, 2**64 - 1))
+def test_a_message_is_acted_on_only_with_a_stamp_in_range(stamp):
+    node = _node()
+    payload = msgpack.packb({"_type": Odometry.TYPE, "stamp_ns": stamp, "x": 0.0, "y": 0.0,
+                             "yaw": 0.0, "v": 0.0, "w": 0.0})
+    msg = node.accept("odom", payload)
+    assert (msg is not None) == (0 <= stamp <= MAX_STAMP_NS)
+    assert node.bad_messages["odom"] == (msg is None)

@@ -197,3 +197,33 @@ def test_objects_scene():
     ent = valid("/objects", out[0][1])["entities"][0]
     assert len(ent["cubes"]) == 2 and len(ent["arrows"]) == 1
     assert ent["cubes"][0]["size"]["x"] == 0.5 and ent["texts"][0]["text"] == "tracker 3"
+
+
+def test_view_layout_refuses_an_existing_file_and_follows_no_symlink(tmp_path, capsys):
+    from papf.cli import main
+
+    target = tmp_path / "user.json"
+    target.write_text("mine")
+    link = tmp_path / "layout.json"
+    link.symlink_to(target)
+    assert main(["view", "--layout", str(link)]) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert main(["view", "--layout", str(link), "--force"]) == 0
+    assert target.read_text() == "mine" and not link.is_symlink()
+
+
+@pytest.mark.parametrize("host,goals,params,ok", [
+    ("127.0.0.1", "accept", "accept", True), ("localhost", "accept", "accept", True),
+    ("::1", "accept", "accept", True), ("0.0.0.0", "accept", "accept", False),
+    ("0.0.0.0", "refuse", "accept", False), ("192.168.1.5", "accept", "refuse", False),
+    ("robot.lan", "refuse", "refuse", True), ("0.0.0.0", "refuse", "refuse", True)])
+def test_the_viewer_steers_only_from_this_host(host, goals, params, ok):
+    from common.errors import ConfigError
+    from nodes.viewer.__main__ import check_exposure, parse_args
+
+    args = parse_args(["--host", host, "--goals", goals, "--params", params])
+    if ok:
+        check_exposure(args)
+    else:
+        with pytest.raises(ConfigError, match="no authentication"):
+            check_exposure(args)

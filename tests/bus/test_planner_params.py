@@ -1,13 +1,10 @@
-"""Issue 20 over a real router: the live parameter path fuzzed by an unauthenticated peer,
-and the replay guard fed a recording whose metadata hides where its keys go."""
+"""The planner's parameter service (nodes/planner/params.py) over a real router: an
+unauthenticated peer changes nothing, the run key's holder changes settings within their ranges."""
 
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import threading
-import time
 
 import pytest
 import zenoh
@@ -18,8 +15,6 @@ from common import runauth
 from common.transport import zenoh_config
 from nodes.planner.params import answer, current
 from nodes.planner.registry import make_planner
-from nodes.recorder.writer import RunWriter
-from schemas import Keys, Twist
 
 KEY = bytes.fromhex(runauth.new_key())
 
@@ -70,26 +65,3 @@ def test_the_run_key_holder_changes_within_the_ranges(keyed_planner):
     assert ok["error"] == "" and current("papf", planner)["apf.d_o"] == 0.6
     low = _get(session, json.dumps(runauth.sign_request({"set": ["apf.d_o=1e-9"]}, KEY)).encode())
     assert "must be" in low["error"] and current("papf", planner)["apf.d_o"] == 0.6
-
-
-def test_the_replay_guard_is_not_fooled_by_the_metadata(tmp_path, router):
-    """Metadata namespace 'elsewhere', keys under 'rosbot' where a planner is alive: refused,
-    and not one cmd_vel reaches the live namespace."""
-    path = tmp_path / "foreign.mcap"
-    with RunWriter(path, {"namespace": "elsewhere"}) as w:
-        for i in range(1000):
-            w.write_message("rosbot/cmd_vel", Twist(stamp_ns=i, v=0.5, w=0.0))
-    got = []
-    with zenoh.open(zenoh_config("client", [router])) as s:
-        token = s.liveliness().declare_token(Keys("rosbot").alive("base_driver"))
-        sub = s.declare_subscriber("rosbot/cmd_vel", lambda sample: got.append(1))
-        for extra in ([], ["--namespace", "r2"]):
-            p = subprocess.run([sys.executable, "-m", "papf", "replay", str(path), "--rate", "0",
-                                "--connect", router, *extra], capture_output=True, text=True,
-                               timeout=120, stdin=subprocess.DEVNULL)
-            assert p.returncode == 2 and "live stack runs in namespace 'rosbot'" in p.stderr, p.stderr
-            assert len(p.stderr.strip().splitlines()) == 1
-        time.sleep(0.3)
-        assert got == []
-        sub.undeclare()
-        token.undeclare()

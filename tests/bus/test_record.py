@@ -1,5 +1,6 @@
-"""papf record by hand says what it records: the namespace's nodes alive, or that it waits for
-the stack, and when the first messages came (no silent wait)."""
+"""``papf record`` by hand over a real router: it says what it records (the namespace's nodes
+alive, or that it waits for the stack, and when the first messages came: no silent wait), and
+``--duration S`` stops it by itself with a complete file (a bad value is one line before the bus)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import subprocess
 import sys
 import time
 
+from papf.recording.reader import open_recording
 from schemas import Clock, Keys
 from tests.support.cli import stderr_until
 
@@ -38,3 +40,19 @@ def test_record_before_the_stack_waits_aloud_then_says_when_messages_come(router
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=30)
     assert proc.returncode == 0 and "Traceback" not in err, err
+
+
+def test_record_stops_after_its_duration_with_a_complete_file(router, tmp_path):
+    out = tmp_path / "r.mcap"
+    res = subprocess.run([sys.executable, "-m", "papf", "record", str(out), "--duration", "1",
+                          "--connect", router], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr[-2000:]
+    with open_recording(out) as rec:   # the footer is there: it reads back
+        assert rec.run_metadata.get("namespace") == "rosbot"
+
+
+def test_a_bad_duration_is_one_line():
+    res = subprocess.run([sys.executable, "-m", "papf", "record", "x.mcap", "--duration", "nan"],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert "--duration" in res.stderr
