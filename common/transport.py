@@ -266,18 +266,24 @@ class StopRequested:
             cls._on_signal()
 
     def request(self, why: str = "") -> None:
-        """Stop (from a signal handler or any thread); arms the bound once."""
+        """Stop (from a signal handler or any thread); arms the bound once.
+
+        The kernel's bound is armed first, before anything that takes a lock or needs another
+        thread: SIGALRM's default action ends the process even when a Zenoh call holds the
+        interpreter while it waits for a runtime thread that waits for the interpreter — then
+        neither the timer below nor this very call (its ``Thread.start`` waits for the new
+        thread) could go on. Seen: a planner whose launcher was SIGKILLed, every thread in a
+        futex wait, alive 15 s later because the alarm came after the timer's start."""
+        bounded = self.bound_s is not None and self._timer is None and os.environ.get(NODE_ENV)
+        if bounded:
+            signal.alarm(int(self.bound_s) + ALARM_EXTRA_S)
         self.event.set()
         if self._wake is not None:
             self._wake()
-        if self.bound_s is not None and self._timer is None and os.environ.get(NODE_ENV):
+        if bounded and self._timer is None:
             self._timer = threading.Timer(self.bound_s, _bounded_exit, args=(self.bound_s, why))
             self._timer.daemon = True
             self._timer.start()
-            # and a bound no lock can hold up: SIGALRM's default action ends the process in the
-            # kernel, even when a Zenoh call holds the interpreter while it waits for a runtime
-            # thread that waits for the interpreter (the timer above could never run then)
-            signal.alarm(int(self.bound_s) + ALARM_EXTRA_S)
 
     def wait(self, timeout_s: float) -> bool:
         """Sleep up to ``timeout_s`` or until stopped (a signal wakes it at once); stopped?"""

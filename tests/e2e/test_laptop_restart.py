@@ -32,7 +32,7 @@ KILL_X = 0.8          # [m]
 LAPTOP_NODES = ("nodes.planner", "nodes.energy_meter", "nodes.recorder")
 
 
-def _cmdlines(tag: str) -> list[str]:
+def _cmdlines(tag: str, with_pid: bool = False) -> list:
     out = []
     for pid in filter(str.isdigit, os.listdir("/proc")):
         try:
@@ -41,8 +41,24 @@ def _cmdlines(tag: str) -> list[str]:
         except OSError:
             continue
         if tag in cmd and state != "Z" and int(pid) != os.getpid():
-            out.append(cmd)
+            out.append((int(pid), cmd) if with_pid else cmd)
     return out
+
+
+def _describe(pid: int) -> str:
+    """A process that should be gone, as /proc sees it: its parent, and each thread's name,
+    state and kernel wait channel (where a stuck stop is stuck)."""
+    try:
+        ppid = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
+        threads = []
+        for tid in sorted(os.listdir(f"/proc/{pid}/task")):
+            task = Path(f"/proc/{pid}/task/{tid}")
+            comm = (task / "comm").read_text().strip()
+            state = (task / "stat").read_text().rsplit(")", 1)[1].split()[0]
+            threads.append(f"{comm}:{state}:{(task / 'wchan').read_text().strip()}")
+    except OSError as exc:
+        return f"{pid}: {exc}"
+    return f"{pid} (parent {ppid}): {' '.join(threads)}"
 
 
 def _laptop_nodes(ns: str, endpoint: str) -> list[str]:
@@ -129,7 +145,10 @@ def _kill_laptop_mid_run(split: Split, record: Path) -> float:
     deadline = time.monotonic() + 15
     while _laptop_nodes(split.ns, split.laptop_ep) and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert not _laptop_nodes(split.ns, split.laptop_ep), "a node outlived its launcher"
+    left = [(pid, cmd) for pid, cmd in _cmdlines(split.laptop_ep, with_pid=True)
+            if split.ns in cmd and any(m in cmd for m in LAPTOP_NODES)]
+    assert not left, "a node outlived its launcher: " + "; ".join(
+        f"{cmd.split(' -m ')[-1][:40]} {_describe(pid)}" for pid, cmd in left)
     return x
 
 

@@ -2,12 +2,20 @@
 
 import argparse
 import logging
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
 
 import msgpack
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from common import transport
 from common.errors import ConfigError
 from common.transport import Node, add_zenoh_args, zenoh_config
 from common.units import MAX_STAMP_NS
@@ -76,3 +84,22 @@ def test_a_message_is_acted_on_only_with_a_stamp_in_range(stamp):
     msg = node.accept("odom", payload)
     assert (msg is not None) == (0 <= stamp <= MAX_STAMP_NS)
     assert node.bad_messages["odom"] == (msg is None)
+
+
+def test_a_node_whose_stop_cannot_start_its_timer_still_ends_by_the_kernels_alarm():
+    """The bound on a node's stop holds even when the stop request itself is stuck (a thread
+    that never starts: the interpreter held by a Zenoh call): the alarm is armed first."""
+    code = textwrap.dedent("""
+        import threading, time
+        from common import transport
+        threading.Timer.start = lambda self: time.sleep(3600)   # the stuck thread start
+        transport.StopRequested(bound_s=1.0).request("test")
+        print("request returned")
+    """)
+    env = {**os.environ, "PAPF_NODE_PROCESS": "1"}
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                          timeout=30, cwd=Path(__file__).resolve().parents[2])
+    assert proc.returncode == -signal.SIGALRM, proc.stderr[-2000:]
+    assert "request returned" not in proc.stdout
+    assert time.monotonic() - t0 < 1.0 + transport.ALARM_EXTRA_S + 10.0
