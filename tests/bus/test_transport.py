@@ -1,6 +1,7 @@
 """Transport helpers over a real router: typed pub/sub, bad payloads dropped, liveliness."""
 
 import logging
+import threading
 import time
 
 import pytest
@@ -106,6 +107,13 @@ def test_batched_topics_come_in_step_checked_and_with_ticks(router, session):
             session.put(keys.key("wheels"), WheelStates(stamp_ns=t, speed=(0.0,) * 4,
                                                         torque=(0.0,) * 4).to_bytes())
         session.put(keys.odom, b"\x00garbage")
+        # a marker put last, heard on the node's session: samples of one session come in
+        # order, so when it is heard every sample above waits in its channel (draining while
+        # the wheels were still on their way would take odom(2) before wheels(2) came)
+        heard = threading.Event()
+        marker = s2.declare_subscriber(keys.key("marker"), lambda _sample: heard.set())
+        assert wait_for(lambda: (session.put(keys.key("marker"), b"") or heard.wait(0.2)))
+        marker.undeclare()
         got, ticks = [], 0
         deadline = time.monotonic() + 30
         for topic, msg in node.messages(tick_s=0.05):
