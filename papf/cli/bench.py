@@ -32,6 +32,7 @@ BENCHES = {
     "link": "papf link's own cost: added one-way latency (p50/p99) at delay 0, throughput (MB/s)",
     "world-scale": "driver + LiDAR against world size: N obstacles, W x W m maps (x real time, "
                    "start-up, CPU per cycle, memory)",
+    "suite": ".ci/run's steps on a fresh clone of a commit: wall and CPU of each, CPU per test file",
 }
 
 

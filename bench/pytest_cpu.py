@@ -1,0 +1,39 @@
+"""A pytest plugin for ``papf bench suite``: each test's CPU seconds and wall time.
+
+CPU is the test process's own plus every child process it reaped (``RUSAGE_SELF`` +
+``RUSAGE_CHILDREN``), so a test that runs the stack is charged with the stack's processes.
+Each worker (pytest-xdist) writes ``$PAPF_CPU_PER_TEST.<worker>.tsv``: ``cpu_s wall_s nodeid``.
+A measurement, never a judgement: nothing here fails a test.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import time
+
+import pytest
+
+_rows: list[tuple[str, float, float]] = []
+
+
+def _cpu_s() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    reaped = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + reaped.ru_utime + reaped.ru_stime
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    cpu0, wall0 = _cpu_s(), time.monotonic()
+    yield
+    _rows.append((item.nodeid, _cpu_s() - cpu0, time.monotonic() - wall0))
+
+
+def pytest_sessionfinish(session):
+    out = os.environ.get("PAPF_CPU_PER_TEST")
+    if not out or not _rows:
+        return
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+    with open(f"{out}.{worker}.tsv", "w") as fh:
+        fh.writelines(f"{cpu:.3f}\t{wall:.3f}\t{nodeid}\n" for nodeid, cpu, wall in _rows)

@@ -1,0 +1,30 @@
+"""``papf bench suite`` (bench/bench_suite.py): its sums and its checks before the work."""
+
+from __future__ import annotations
+
+from papf.cli import main
+
+
+def test_per_test_rows_are_summed_per_file_and_tier(tmp_path):
+    from bench.bench_suite import per_file
+
+    (tmp_path / "cpu.gw0.tsv").write_text(
+        "1.5\t2.0\ttests/unit/test_a.py::test_x\n0.5\t1.0\ttests/unit/test_a.py::test_y\n")
+    (tmp_path / "cpu.gw1.tsv").write_text("3.0\t1.0\ttests/e2e/test_b.py::test_z[1]\n")
+    (tmp_path / "cpu-slow.gw0.tsv").write_text("9.0\t5.0\ttests/e2e/test_b.py::test_long\n")
+    rows = {(r["tier"], r["file"]): r for r in per_file(tmp_path)}
+    assert rows[("unit", "tests/unit/test_a.py")] == {
+        "tier": "unit", "file": "tests/unit/test_a.py", "tests": 2, "cpu_s": 2.0, "wall_s": 3.0}
+    assert rows[("e2e", "tests/e2e/test_b.py")]["cpu_s"] == 3.0
+    assert rows[("slow", "tests/e2e/test_b.py")]["tests"] == 1
+    assert [r["cpu_s"] for r in per_file(tmp_path)] == [9.0, 3.0, 2.0]   # the costliest first
+
+
+def test_a_foreign_csv_or_a_wrong_commit_is_refused_before_the_clone(tmp_path, capsys):
+    foreign = tmp_path / "mine.csv"
+    foreign.write_text("a,b\n1,2\n")
+    assert main(["bench", "suite", "--csv", str(foreign)]) == 2
+    assert "is not this benchmark's CSV" in capsys.readouterr().err
+    assert foreign.read_text() == "a,b\n1,2\n"
+    assert main(["bench", "suite", "--commit", "no-such-commit"]) == 2
+    assert "is not a commit" in capsys.readouterr().err
