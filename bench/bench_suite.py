@@ -60,7 +60,8 @@ def run_step(name: str, cmd: list[str], cwd: Path, env: dict) -> dict:
 
 def per_file(work: Path) -> list[dict]:
     """The plugin's per-test rows summed per test file and tier (``slow`` for ``make
-    test-slow``'s, else the test's folder: unit, bus, e2e)."""
+    test-slow``'s, else the test's folder: unit, bus, e2e); first each tier's sum (file
+    ``(all)``), then the files, the costliest first."""
     sums: dict[tuple[str, str], list[float]] = collections.defaultdict(lambda: [0, 0.0, 0.0])
     for tsv in work.glob("cpu*.tsv"):
         for line in tsv.read_text().splitlines():
@@ -70,9 +71,14 @@ def per_file(work: Path) -> list[dict]:
             acc[0] += 1
             acc[1] += float(cpu)
             acc[2] += float(wall)
+    for (tier, _f), (n, c, w) in list(sums.items()):   # each tier's sum: file "(all)"
+        acc = sums[(tier, "(all)")]
+        acc[0] += n
+        acc[1] += c
+        acc[2] += w
     rows = [{"tier": tier, "file": f, "tests": n, "cpu_s": round(c, 1), "wall_s": round(w, 1)}
             for (tier, f), (n, c, w) in sums.items()]
-    return sorted(rows, key=lambda r: -r["cpu_s"])
+    return sorted(rows, key=lambda r: (r["file"] != "(all)", -r["cpu_s"]))
 
 
 def main(argv: list[str] | None = None) -> int:

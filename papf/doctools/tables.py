@@ -24,7 +24,9 @@ def _parse(spec: str) -> tuple[str, list[tuple[str, str, str]], dict[str, str]]:
     parts = [p.strip() for p in spec.split("|")]
     cols, where = [], {}
     for part in parts[1:]:
-        if part.startswith("where "):
+        if re.fullmatch(r"first \d+", part):
+            where[" first"] = part.split()[1]   # not a column: the rows kept (_rows)
+        elif part.startswith("where "):
             for pair in part[6:].split(","):
                 k, _, v = pair.partition("=")
                 where[k.strip()] = v.strip()
@@ -37,6 +39,7 @@ def _parse(spec: str) -> tuple[str, list[tuple[str, str, str]], dict[str, str]]:
 
 def _rows(base: Path, file: str, where: dict[str, str]) -> tuple[list[str], list[dict]]:
     path = base / file
+    first = int(where.pop(" first", 0)) or None
     try:
         with path.open(newline="") as fh:
             reader = csv.DictReader(fh)
@@ -47,7 +50,7 @@ def _rows(base: Path, file: str, where: dict[str, str]) -> tuple[list[str], list
     bad = [k for k in where if k not in fields]
     if bad:
         raise ConfigError(f"docs table {file}: no column {bad}; columns: {fields}")
-    return fields, [r for r in rows if all(r[k] == v for k, v in where.items())]
+    return fields, [r for r in rows if all(r[k] == v for k, v in where.items())][:first]
 
 
 def _cell(value: str, fmt: str) -> str:
@@ -92,7 +95,8 @@ def render(text: str, base: Path) -> str:
     - a table ``<!-- table data/x.csv | col | col = Header | col = Header : .2f | where k=v,k2=v2 -->``
       followed by the generated table and ``<!-- /table -->``: the rows of ``data/x.csv`` (path
       relative to the Markdown file) that match every ``where`` pair, the listed columns (all
-      when none are listed) with an optional header and Python format spec;
+      when none are listed) with an optional header and Python format spec; ``| first N``
+      keeps the first N matching rows (a CSV sorted by what matters, e.g. CPU);
     - a number ``<!-- v data/x.csv | col : .2f | where k=v -->23.83<!-- /v -->``: the one
       matching row's cell.
 

@@ -17,7 +17,9 @@ def test_per_test_rows_are_summed_per_file_and_tier(tmp_path):
         "tier": "unit", "file": "tests/unit/test_a.py", "tests": 2, "cpu_s": 2.0, "wall_s": 3.0}
     assert rows[("e2e", "tests/e2e/test_b.py")]["cpu_s"] == 3.0
     assert rows[("slow", "tests/e2e/test_b.py")]["tests"] == 1
-    assert [r["cpu_s"] for r in per_file(tmp_path)] == [9.0, 3.0, 2.0]   # the costliest first
+    assert rows[("unit", "(all)")]["tests"] == 2 and rows[("slow", "(all)")]["cpu_s"] == 9.0
+    assert [(r["file"] == "(all)", r["cpu_s"]) for r in per_file(tmp_path)] == [
+        (True, 9.0), (True, 3.0), (True, 2.0), (False, 9.0), (False, 3.0), (False, 2.0)]
 
 
 def test_a_foreign_csv_or_a_wrong_commit_is_refused_before_the_clone(tmp_path, capsys):

@@ -32,6 +32,16 @@ def test_render_fills_tables_and_values_from_the_csv(tmp_path):
     assert "PAPF used <!-- v data/t.csv | charge : .2f | where name=papf,preset=default -->23.83<!-- /v --> mAh." in text
 
 
+def test_a_table_keeps_the_first_n_matching_rows(tmp_path):
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "t.csv").write_text(CSV)
+    text = render("<!-- table data/t.csv | name | charge | where name=papf | first 1 -->\n"
+                  "<!-- /table -->", tmp_path)
+    assert "| papf | 23.8311 |" in text and "30.1" not in text
+    assert "| apf |" in render("<!-- table data/t.csv | name | first 2 -->\n<!-- /table -->",
+                               tmp_path)
+
+
 def test_check_fails_when_a_number_in_the_prose_differs_from_its_csv(tmp_path):
     f = _write(tmp_path)
     assert check([f]) == []
