@@ -58,6 +58,9 @@ SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
                                        # collisions and stagnations are examples too)
     ("make-certs",): (["--force"], {0}),
     ("report",): (["--force"], {0}),   # a block's report after its experiment wrote one
+    # fewer, smaller frames (6.8 s of CPU each at the defaults; tests/e2e/test_progress_piped.py
+    # draws an animation at the default size frame by frame)
+    ("animate",): (["--speed", "16", "--dpi", "50"], {0}),
 }
 WHY_MINUTES = "takes minutes (tests/e2e/test_progress_piped.py runs its first steps)"
 HELP: dict[tuple[str, ...], str] = {

@@ -26,6 +26,18 @@ MS = 1_000_000
 KEYS = Keys("rosbot")
 
 
+def _take(inbox: queue.Queue, n: int, after: str, timeout_s: float = 30.0) -> list:
+    """``n`` samples from ``inbox``; a failure names the step and what did come."""
+    got = []
+    try:
+        while len(got) < n:
+            got.append(inbox.get(timeout=timeout_s))
+    except queue.Empty:
+        pytest.fail(f"after {after}: {len(got)} of {n} samples within {timeout_s:g} s: "
+                    f"{[k for k, _ in got]}")
+    return got
+
+
 @pytest.mark.parametrize("algorithm", ["apf", "papf"])
 def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm):
     keys = Keys(f"plnode_{algorithm}")
@@ -37,11 +49,11 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
             for k in ("cmd_vel", "planner/state", "planner/status")]
     try:
         session.put(keys.goal, Goal(stamp_ns=5, x=2.0, y=0.0).to_bytes())
-        k, data = inbox.get(timeout=30)
+        k, data = _take(inbox, 1, "the goal")[0]
         assert k == "planner/status" and PlannerStatus.from_bytes(data).state == "ready"
         session.put(keys.scan, scan(100 * MS).to_bytes())
         session.put(keys.odom, odom(100 * MS).to_bytes())
-        got = dict(inbox.get(timeout=30) for _ in range(3))   # keys may interleave
+        got = dict(_take(inbox, 3, "the first scan"))   # keys may interleave
         cmd = Twist.from_bytes(got["cmd_vel"])
         assert cmd.stamp_ns == 100 * MS and cmd.v == pytest.approx(0.2)
         state = PlannerState.from_bytes(got["planner/state"])
@@ -50,7 +62,7 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
         session.put(keys.scan, b"garbage")                            # dropped, node lives on
         session.put(keys.scan, scan(200 * MS).to_bytes())
         session.put(keys.odom, odom(200 * MS, x=1.95).to_bytes())
-        got = dict(inbox.get(timeout=30) for _ in range(3))
+        got = dict(_take(inbox, 3, "the second scan"))
         assert PlannerStatus.from_bytes(got["planner/status"]).state == "reached"
     finally:
         for s in subs:
