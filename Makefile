@@ -13,13 +13,21 @@ WARM_UP = import sys; from nodes.planner.registry import PLANNERS, make_planner;
 	[make_planner(n).warm_up() for n in PLANNERS if (n in a) != ('--others' in a)]; \
 	'--tracker' in a and Tracker(TrackerParams()).warm_up()
 
-.PHONY: demo test test-slow lint coverage setup clean docs docs-check
+.PHONY: demo test test-slow lint coverage setup bytecode clean docs docs-check
 setup: $(VENV)/.installed
+
+# Bytecode of our packages, compiled where it is stale: where PYTHONDONTWRITEBYTECODE is set
+# (this machine sets it) no import writes any, and each of the hundreds of Python processes a
+# run or the tests start would compile every module it imports from source again
+# (docs/performance.md "The test suite's time"); the dependencies' is compiled at install.
+PACKAGES = common nodes papf schemas worlds bench
+bytecode: setup
+	@$(PY) -m compileall -q -j 0 $(PACKAGES) > /dev/null
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet uv   # uv installs the rest: 5 s where pip took 34 (docs/performance.md)
-	$(PY) -m uv pip install --quiet --python $(PY) -e '.[dev,fast]'
+	$(PY) -m uv pip install --quiet --compile-bytecode --python $(PY) -e '.[dev,fast]'
 	@echo "compiling the numba kernels once (cached; the first run would do it otherwise), on 2 cores"
 	$(PY) -c "$(WARM_UP)" papf --tracker & warm=$$!; \
 	$(PY) -c "$(WARM_UP)" papf --others && wait $$warm
@@ -31,7 +39,7 @@ PORT_RANGE ?=
 # PORT=7500: the embedded router's port; PORT_RANGE=7500-7510: every port the stack listens
 # on inside it (router and nodes; docs/robot.md "Ports and firewalls") — papf run's options
 DEMO_PORTS = $(if $(PORT),--port $(PORT)) $(if $(PORT_RANGE),--port-range $(PORT_RANGE))
-demo: setup   # VIEW=1: at the wall clock's pace, with a live Foxglove view on ws://127.0.0.1:8765
+demo: bytecode   # VIEW=1: at the wall clock's pace, with a live Foxglove view on ws://127.0.0.1:8765
 	@echo "papf run --world $(WORLD) --planner $(PLANNER): the whole stack, as separate processes"
 ifeq ($(VIEW),)
 	@echo "watch it live: make demo VIEW=1, then open ws://127.0.0.1:8765 in Foxglove with the layout docs/foxglove-layout.json"
@@ -45,10 +53,10 @@ endif
 # The tests on parallel workers (pytest-xdist; each worker its own ports and runtime dir,
 # tests/conftest.py), the slow tier left out: `make test-slow` runs it (CI does, second).
 TEST_WORKERS ?= 4
-test: setup
+test: bytecode
 	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m "not slow"
 
-test-slow: setup   # the slow tier: long end-to-end cases (marker `slow`), CI's second step
+test-slow: bytecode   # the slow tier: long end-to-end cases (marker `slow`), CI's second step
 	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m slow
 
 lint: setup

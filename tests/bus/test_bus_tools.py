@@ -208,6 +208,7 @@ def test_goal_superseded_by_another_goal_exits_6(router, session):
     from common.transport import zenoh_config
 
     timers: list[threading.Timer] = []
+    answered = threading.Event()   # the planner's answer to the re-targeting goal is out
 
     def on_goal(sample) -> None:
         g = Goal.from_bytes(sample.payload.to_bytes())
@@ -216,6 +217,8 @@ def test_goal_superseded_by_another_goal_exits_6(router, session):
             timers.append(threading.Timer(0.3, lambda: session.put(KEYS.goal, Goal(
                 stamp_ns=0, x=5.0, y=0.0).to_bytes())))
             timers[-1].start()
+        else:
+            answered.set()
 
     sub = session.declare_subscriber(KEYS.goal, on_goal)
     try:
@@ -223,9 +226,13 @@ def test_goal_superseded_by_another_goal_exits_6(router, session):
             res = send_goal(s2, KEYS, 1.0, 2.0, out=[].append, timeout_s=20.0)
         assert res.outcome == "superseded" and res.exit_code == 6 and "(5, 0)" in res.reason
     finally:
-        sub.undeclare()
-        for t in list(timers):   # done putting before the session closes ("Already borrowed")
+        # done putting before the session closes: a put in flight on the timer's thread or in
+        # the callback (Zenoh's thread) makes the close fail ("Already borrowed")
+        for t in list(timers):
             t.join(30)
+        if timers:
+            answered.wait(10)
+        sub.undeclare()
 
 
 def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypatch, router):
