@@ -49,8 +49,10 @@ def run_step(name: str, cmd: list[str], cwd: Path, env: dict) -> dict:
     proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True)
     wall, cpu = time.perf_counter() - t0, _cpu_children_s() - cpu0
     if proc.returncode != 0:
-        tail = (proc.stdout + proc.stderr).strip().splitlines()[-15:]
-        raise SystemExit(f"step {name!r} failed (exit {proc.returncode}):\n" + "\n".join(tail))
+        lines = (proc.stdout + proc.stderr).strip().splitlines()
+        named = [x for x in lines if x.startswith(("FAILED ", "ERROR "))]   # pytest's summary
+        raise SystemExit(f"step {name!r} failed (exit {proc.returncode}):\n" +
+                         "\n".join([*named, *lines[-5:]]))
     passed = re.findall(r"(\d+) passed", proc.stdout)
     return {"step": name, "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
             "cpu_over_wall": round(cpu / wall, 2) if wall else "",
