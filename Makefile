@@ -26,7 +26,7 @@ bytecode: setup
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet uv   # uv installs the rest: 5 s where pip took 34 (docs/performance.md)
+	$(PY) -m pip install --quiet uv   # uv installs the rest, faster than pip (docs/performance.md, setup rows)
 	$(PY) -m uv pip install --quiet --compile-bytecode --python $(PY) -e '.[dev,fast]'
 	@echo "compiling the numba kernels once (cached; the first run would do it otherwise), on 2 cores"
 	$(PY) -c "$(WARM_UP)" papf --tracker & warm=$$!; \

@@ -1,8 +1,8 @@
 """Where the test suite's time goes: ``papf bench suite [--commit REV] [--label L] [--csv F]``.
 
 Clones this repository at ``REV`` into a new directory and runs what ``.ci/run`` runs there,
-one step at a time — ``make setup`` (a new venv; empty pip, uv and numba caches unless
-``--warm``), ``make test`` (the README's test command), ``make test-slow`` (CI's second step),
+one step at a time — ``make setup`` (a new venv; empty pip and uv caches unless ``--warm``;
+numba's cache is the new clone's own), ``make test`` (the README's test command), ``make test-slow`` (CI's second step),
 ``make lint`` — timing each: wall seconds, and CPU seconds of the step and every process it
 reaped (``RUSAGE_CHILDREN``). The tests' steps run with the plugin :mod:`bench.pytest_cpu`, which
 charges each test with its CPU; ``--files-csv`` writes the sums per test file and tier. Run it on a

@@ -16,9 +16,9 @@ __version__ = "0.3.0"
 # One BLAS thread per process, set before numpy loads (every entry point imports `common`
 # first: papf/__init__.py, nodes/__init__.py, schemas). The stack's arrays are small (a scan
 # of ≤ 720 beams, a few dozen obstacles) and its parallelism is one process per node, so
-# OpenBLAS's pool of a thread per core only costs: ~60 ms of CPU at every process start
-# (docs/performance.md "Start-up of a process") and threads that spin between calls beside the
-# other nodes. A value the user set is kept.
+# OpenBLAS's pool of a thread per core only costs: CPU at every process start and threads
+# beside the other nodes (docs/performance.md "The test suite's time"). A value the user set
+# is kept.
 import os as _os
 
 _os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

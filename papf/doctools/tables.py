@@ -20,12 +20,14 @@ TABLE = re.compile(r"(<!-- table (?P<spec>.*?) -->\n)(?P<body>.*?)(<!-- /table -
 VALUE = re.compile(r"(<!-- v (?P<spec>.*?) -->)(?P<body>.*?)(<!-- /v -->)", re.S)
 
 
-def _parse(spec: str) -> tuple[str, list[tuple[str, str, str]], dict[str, str]]:
+def _parse(spec: str) -> tuple[str, list[tuple[str, str, str]], dict[str, str], int | None]:
+    """A marker's spec: its CSV, columns (name, header, format), ``where`` pairs and
+    ``first`` (how many matching rows a table keeps; None: all)."""
     parts = [p.strip() for p in spec.split("|")]
-    cols, where = [], {}
+    cols, where, first = [], {}, None
     for part in parts[1:]:
         if re.fullmatch(r"first \d+", part):
-            where[" first"] = part.split()[1]   # not a column: the rows kept (_rows)
+            first = int(part.split()[1])
         elif part.startswith("where "):
             for pair in part[6:].split(","):
                 k, _, v = pair.partition("=")
@@ -34,12 +36,11 @@ def _parse(spec: str) -> tuple[str, list[tuple[str, str, str]], dict[str, str]]:
             name, _, fmt = part.partition(":")
             name, _, header = name.partition("=")
             cols.append((name.strip(), header.strip() or name.strip(), fmt.strip()))
-    return parts[0], cols, where
+    return parts[0], cols, where, first
 
 
 def _rows(base: Path, file: str, where: dict[str, str]) -> tuple[list[str], list[dict]]:
     path = base / file
-    first = int(where.pop(" first", 0)) or None
     try:
         with path.open(newline="") as fh:
             reader = csv.DictReader(fh)
@@ -50,7 +51,7 @@ def _rows(base: Path, file: str, where: dict[str, str]) -> tuple[list[str], list
     bad = [k for k in where if k not in fields]
     if bad:
         raise ConfigError(f"docs table {file}: no column {bad}; columns: {fields}")
-    return fields, [r for r in rows if all(r[k] == v for k, v in where.items())][:first]
+    return fields, [r for r in rows if all(r[k] == v for k, v in where.items())]
 
 
 def _cell(value: str, fmt: str) -> str:
@@ -63,8 +64,9 @@ def _cell(value: str, fmt: str) -> str:
 
 
 def _table(base: Path, spec: str) -> str:
-    file, cols, where = _parse(spec)
+    file, cols, where, first = _parse(spec)
     fields, rows = _rows(base, file, where)
+    rows = rows[:first]
     cols = cols or [(f, f, "") for f in fields]
     missing = [c[0] for c in cols if c[0] not in fields]
     if missing:
@@ -76,7 +78,7 @@ def _table(base: Path, spec: str) -> str:
 
 
 def _value(base: Path, spec: str) -> str:
-    file, cols, where = _parse(spec)
+    file, cols, where, _first = _parse(spec)
     _fields, rows = _rows(base, file, where)
     if len(cols) != 1 or len(rows) != 1:
         raise ConfigError(f"docs value {spec!r}: needs one column and one matching row "
