@@ -52,17 +52,12 @@ endif
 
 # The tests on parallel workers (pytest-xdist; each worker its own ports and runtime dir,
 # tests/conftest.py), the slow tier left out: `make test-slow` runs it (CI does, second).
-# PYTHONDONTWRITEBYTECODE emptied for pytest: it caches the test modules it rewrote for its
-# asserts only where bytecode may be written; without, every worker of every run parsed and
-# rewrote all 200 test files again (half of a worker's collection; docs/performance.md "The
-# test suite's time").
 TEST_WORKERS ?= 4
-PYTEST = PYTHONDONTWRITEBYTECODE= $(PY) -m pytest
 test: bytecode
-	$(PYTEST) -n $(TEST_WORKERS) --dist worksteal -m "not slow"
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m "not slow"
 
 test-slow: bytecode   # the slow tier: long end-to-end cases (marker `slow`), CI's second step
-	$(PYTEST) -n $(TEST_WORKERS) --dist worksteal -m slow
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m slow
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -15,6 +15,13 @@ import zenoh
 from common.transport import zenoh_config
 from papf.launch.supervisor import Supervisor, free_port, wait_port
 
+# pytest caches the test modules it rewrote for its asserts only where bytecode may be written;
+# where PYTHONDONTWRITEBYTECODE is set (this machine sets it) every worker of every run parsed
+# and rewrote all the test files again: half of a worker's collection (docs/performance.md
+# "The test suite's time"). Allowed here, in pytest's own process only: the processes the
+# tests start keep the environment's setting.
+sys.dont_write_bytecode = False
+
 
 def pytest_configure(config):
     """The launchers' run keys and namespace locks (common.runauth, papf.launch.claim) of this
