@@ -72,7 +72,7 @@ FIELDS = ("label", "robots", "people", "planner", "sim_s", "wall_s", "sim_over_w
 PASSING_FIELDS = ("label", "world", "robots", "planner", "passing", "reached", "collisions",
                   "min_separation_m", "duration_s", "sim_s", "wall_s", "sim_over_wall",
                   "cpu_ms_per_robot_cycle", *(f"{p}_ms" for p in PARTS.values()),
-                  "load_avg_1min")
+                  "load_avg_1min", "startup_s", "sim_over_wall_running")
 CYCLE_S = 0.1     # [s] the lockstep cycle: one scan, one command per robot
 LANE_M = 1.2      # [m] between the robots' lanes
 
@@ -174,16 +174,37 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
 
 
 def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dict:
-    """One fleet world to its outcome with the passing layer ``passing``: the row."""
-    robots = len(load_world(world).robots)
+    """One fleet world to its outcome with the passing layer ``passing``: the row.
+
+    Besides ``sim_over_wall`` over the whole run (start-up included), the run is watched on
+    its bus: ``startup_s`` = wall time from the launch to the first robot's first pose,
+    ``sim_over_wall_running`` = sim time over wall time between that robot's first and last
+    pose (the real-time factor while the world runs, as simulators quote it)."""
+    fleet = load_world(world).robots
+    robots, first = len(fleet), fleet[0].name
     load = os.getloadavg()[0]
+    port, poses = free_port(), []   # (wall [s], sim [s]) of the first and the latest pose
+
+    def on_pose(sample) -> None:   # Zenoh's thread
+        mark = (time.perf_counter(), Odometry.from_bytes(sample.payload.to_bytes()).stamp_ns / 1e9)
+        if poses:
+            poses[1:] = [mark]
+        else:
+            poses.append(mark)
+
     with TreeCPU() as tree:
+        launched = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", world,
                                  "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
-                                 "--passing", passing, "--port", str(free_port())],
+                                 "--passing", passing, "--port", str(port)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
-            out, err = proc.communicate(timeout=max(900.0, timeout_s * 30))
+            if not wait_port(port, 60.0):
+                raise SystemExit(f"papf run on {world}: no router on port {port}")
+            with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as session:
+                sub = session.declare_subscriber(f"{first}/sim/pose", on_pose)
+                out, err = proc.communicate(timeout=max(900.0, timeout_s * 30))
+                sub.undeclare()
         finally:
             stop(proc)
         cpu = cpu_by_kind(tree)
@@ -202,7 +223,17 @@ def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dic
             "cpu_ms_per_robot_cycle": round(cpu["total"] / cycles * 1e3, 2) if cycles else None,
             **{f"{col}_ms": round(cpu[col] / cycles * 1e3, 2) if cycles else None
                for col in PARTS.values()},
-            "load_avg_1min": round(load, 1)}
+            "load_avg_1min": round(load, 1), **_running(launched, poses)}
+
+
+def _running(launched: float, poses: list) -> dict:
+    """``startup_s`` and ``sim_over_wall_running`` from the first robot's first and latest
+    pose (``outcome_row``); empty when fewer than two came."""
+    if len(poses) < 2 or poses[1][0] <= poses[0][0]:
+        return {"startup_s": None, "sim_over_wall_running": None}
+    (w0, s0), (w1, s1) = poses
+    return {"startup_s": round(w0 - launched, 2),
+            "sim_over_wall_running": round((s1 - s0) / (w1 - w0), 2)}
 
 
 def main_worlds(args) -> None:
