@@ -15,6 +15,11 @@ is limited alike wherever it goes. Pure Python (no pybullet, no zenoh).
 4. acceleration rate limit towards the target (like the controller's
    ``SpeedLimiter``): ``|dv/dt| <= a_max``, ``|dw/dt| <= alpha_max``, so a watchdog
    stop decelerates at the limit too, as on the robot.
+5. a late step (``speed_up_dt_max_s``, the real robot's driver: its loop stalled on a busy
+   computer): slowing down may use the whole time since the last step, speeding up only
+   ``speed_up_dt_max_s`` of it, so a stall never ends in a jump of speed — the robot keeps
+   its limits, and a stop after the stall is not delayed by them. A step no longer than
+   that takes rule 4 as it is, to the bit (the simulator's steps always do).
 
 Usage: ``gate.command(v, w, t_ns)`` whenever a command arrives, then
 ``v, w, stopped = gate.output(t_ns, dt_s)`` every control step.
@@ -104,8 +109,13 @@ def _clamp(x: float, limit: float) -> float:
 class CommandGate:
     """Clamp, rate-limit and watchdog a stream of (v, w) commands (see module doc)."""
 
-    def __init__(self, limits: RosbotLimits | None = None):
+    def __init__(self, limits: RosbotLimits | None = None, speed_up_dt_max_s: float | None = None):
         self.limits = limits or RosbotLimits()
+        if speed_up_dt_max_s is not None and not (math.isfinite(speed_up_dt_max_s)
+                                                  and speed_up_dt_max_s > 0):
+            raise ConfigError(f"speed_up_dt_max_s = {speed_up_dt_max_s!r} must be a finite "
+                              "number > 0 (or None)")
+        self.speed_up_dt_max_s = speed_up_dt_max_s   # [s] module doc, rule 5
         self._target = (0.0, 0.0)
         self._last_cmd_ns: int | None = None
         self._out = (0.0, 0.0)
@@ -128,6 +138,16 @@ class CommandGate:
         self._last_cmd_ns = t_ns
         return True
 
+    @property
+    def last_output(self) -> tuple[float, float]:
+        """The (v, w) of the last :meth:`output`: what the robot was last commanded."""
+        return self._out
+
+    def stop_time_s(self) -> float:
+        """[s] the longest a stop at the limits takes from the last output."""
+        v, w = self._out
+        return max(abs(v) / self.limits.a_max, abs(w) / self.limits.alpha_max)
+
     def stopped_by_watchdog(self, t_ns: int) -> bool:
         """True when a command was once received but none is fresh at ``t_ns``."""
         return (self._last_cmd_ns is not None
@@ -140,11 +160,29 @@ class CommandGate:
         stopped = last is not None and t_ns - last > lim.watchdog_ns
         v_t, w_t = (0.0, 0.0) if stopped else self._target
         v0, w0 = self._out
-        dv, dw = lim.a_max * dt_s, lim.alpha_max * dt_s
-        v = v0 + max(-dv, min(dv, v_t - v0))      # _clamp, inline
-        w = w0 + max(-dw, min(dw, w_t - w0))
+        cap = self.speed_up_dt_max_s
+        if cap is None or dt_s <= cap:
+            dv, dw = lim.a_max * dt_s, lim.alpha_max * dt_s
+            v = v0 + max(-dv, min(dv, v_t - v0))      # _clamp, inline
+            w = w0 + max(-dw, min(dw, w_t - w0))
+        else:   # a late step (rule 5)
+            v = _late_ramp(v0, v_t, lim.a_max * dt_s, lim.a_max * cap)
+            w = _late_ramp(w0, w_t, lim.alpha_max * dt_s, lim.alpha_max * cap)
         self._out = (v, w)
         return GateOutput(v, w, stopped)
+
+
+def _late_ramp(x0: float, target: float, down: float, up: float) -> float:
+    """``x0`` moved towards ``target`` after a late step: by up to ``down`` towards zero
+    (slowing down) and by up to ``up`` (<= ``down``) away from it, either way (speeding up,
+    also past zero into reverse)."""
+    if x0 >= 0:
+        hi = x0 + up
+        lo = x0 - down if x0 - down >= 0 else -min(up, down - x0)
+    else:
+        lo = x0 - up
+        hi = x0 + down if x0 + down <= 0 else min(up, down + x0)
+    return max(lo, min(hi, target))
 
 
 def unicycle(x: float, y: float, yaw: float, v: float, w: float, dt: float):

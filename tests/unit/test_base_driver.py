@@ -46,6 +46,36 @@ def test_gate_rate_limits_acceleration():
     assert v == pytest.approx(0.2) and w == pytest.approx(0.8)
 
 
+def test_gate_after_a_late_step_speeds_up_by_its_cap_and_slows_down_by_the_whole_time():
+    gate = CommandGate(RosbotLimits(), speed_up_dt_max_s=0.04)
+    gate.command(0.9, 3.0, 0)
+    v, w, _ = gate.output(0, 0.3)                  # a loop stalled 300 ms: no jump of speed
+    assert (v, w) == (pytest.approx(0.04), pytest.approx(0.16))
+    for _ in range(50):
+        v, w, _ = gate.output(0, 0.02)
+    gate.command(0.0, -3.0, 0)                     # stop; turn the other way
+    v, w, _ = gate.output(0, 0.3)                  # braking takes the whole 300 ms
+    assert v == pytest.approx(0.9 - 0.3)
+    assert w == pytest.approx(3.0 - 1.2)           # 4 rad/s^2 for 300 ms
+    gate.command(-0.2, 0.0, 0)
+    v, _, _ = gate.output(0, 0.7)
+    assert v == pytest.approx(-0.04)               # 0.6 -> 0 by braking, then -0.04 at most
+
+
+def test_gate_steps_within_the_cap_are_the_uncapped_gate_to_the_bit():
+    capped, plain = CommandGate(RosbotLimits(), speed_up_dt_max_s=0.04), CommandGate(RosbotLimits())
+    rng = __import__("random").Random(7)
+    for k in range(2000):
+        if k % 7 == 0:
+            v, w = rng.uniform(-1.2, 1.2), rng.uniform(-4, 4)
+            capped.command(v, w, k)
+            plain.command(v, w, k)
+        dt = rng.choice((0.004, 0.02, 0.025, 0.04))
+        assert capped.output(k, dt) == plain.output(k, dt)
+    with pytest.raises(ConfigError, match="speed_up_dt_max_s"):
+        CommandGate(speed_up_dt_max_s=math.nan)
+
+
 @pytest.mark.parametrize("bad", [(math.nan, 0.5), (0.5, math.inf), (-math.inf, math.nan)])
 def test_gate_non_finite_command_is_a_stop(bad):
     gate = CommandGate(RosbotLimits(watchdog_ns=10 * S))

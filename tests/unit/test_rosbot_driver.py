@@ -150,6 +150,27 @@ def test_watchdog_zero_then_silence():
     assert len(node.of("events")) == 1
 
 
+def test_a_stopping_driver_brings_a_moving_robot_to_rest_at_its_limits(monkeypatch):
+    node, d = _driver()
+    clock = [0]
+    monkeypatch.setattr("nodes.base_driver.rosbot_node.time.monotonic_ns", lambda: clock[0])
+    monkeypatch.setattr("nodes.base_driver.rosbot_node.time.sleep",
+                        lambda s: clock.__setitem__(0, clock[0] + round(s * 1e9)))
+    for t in range(0, 800 * MS, 20 * MS):       # commanded every tick (no watchdog)
+        d.on_command(Twist(stamp_ns=t, v=0.5, w=-1.0), t)
+        d.on_tick(t)
+    clock[0] = 780 * MS                  # the last tick's time
+    assert node.pub.puts[-1] == (pytest.approx(0.5), pytest.approx(-1.0))
+    n = len(node.pub.puts)
+    d.stop_robot()                       # the node is stopping while the robot drives
+    ramp = node.pub.puts[n - 1:]
+    steps = [abs(b[0] - a[0]) for a, b in zip(ramp, ramp[1:], strict=False)]
+    assert max(steps) <= 1.0 * 0.020 + 1e-9                       # a_max, a tick at a time
+    assert ramp[-1] == (0.0, 0.0) and ramp[-4] == (0.0, 0.0)      # then the exit's zeros
+    assert clock[0] - 780 * MS <= 600 * MS                        # 0.5 s at 1 m/s^2, bounded
+    assert [e.kind for e in node.of("events")] == []              # not a lost command
+
+
 def test_run_clock_odometry_wheels_and_late_commands():
     node, d = _driver()
     d.on_bridge("odometry", ros2.encode(ros2.odometry(1, 3.0, 4.0, math.pi, 0.1, 0.0),
