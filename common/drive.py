@@ -175,14 +175,12 @@ class CommandGate:
 def _late_ramp(x0: float, target: float, down: float, up: float) -> float:
     """``x0`` moved towards ``target`` after a late step: by up to ``down`` towards zero
     (slowing down) and by up to ``up`` (<= ``down``) away from it, either way (speeding up,
-    also past zero into reverse)."""
-    if x0 >= 0:
-        hi = x0 + up
-        lo = x0 - down if x0 - down >= 0 else -min(up, down - x0)
-    else:
-        lo = x0 - up
-        hi = x0 + down if x0 + down <= 0 else min(up, down + x0)
-    return max(lo, min(hi, target))
+    also past zero into reverse). Written for ``x0 >= 0``; reverse is its mirror (negation is
+    exact in floating point)."""
+    if x0 < 0:
+        return -_late_ramp(-x0, -target, down, up)
+    lo = x0 - down if x0 - down >= 0 else -min(up, down - x0)
+    return max(lo, min(x0 + up, target))
 
 
 def unicycle(x: float, y: float, yaw: float, v: float, w: float, dt: float):
