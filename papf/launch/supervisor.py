@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import TextIO
 
 from common.text import safe_line
-from papf.launch import portrange
+from papf.launch import forkserver, portrange
 
 _PR_SET_PDEATHSIG = 1
 PUMP_JOIN_S = 5.0   # [s wall] at most, after stop(), for the children's last output lines
@@ -36,7 +36,7 @@ def _die_with_parent() -> None:  # runs in the child between fork and exec
 @dataclass
 class Child:
     name: str
-    proc: subprocess.Popen
+    proc: subprocess.Popen | forkserver.ForkedProc
     tail: deque = field(default_factory=lambda: deque(maxlen=40))
     pump: threading.Thread | None = None   # copies its output to the log stream until EOF
 
@@ -74,16 +74,20 @@ class Supervisor:
         self.show = show
         self.env = env or {}       # added to every child's environment (e.g. the run key)
         self._lock = threading.Lock()
+        self._forks: forkserver.ForkServer | None = None   # started with the first node
+        self._fork = forkserver.enabled()
 
     def start(self, name: str, argv: list[str], env: dict | None = None) -> Child:
-        """Start ``argv`` (e.g. ``[python, -m, nodes.planner, ...]``) as node ``name``."""
-        proc = subprocess.Popen(
+        """Start ``argv`` (e.g. ``[python, -m, nodes.planner, ...]``) as node ``name``: a
+        ``python -m`` of this interpreter forked by the run's fork server
+        (:mod:`papf.launch.forkserver`), any other command as it is."""
+        env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONSAFEPATH": "1",
+               "PAPF_NODE_PROCESS": "1", **self.env,   # a bounded stop (common.transport)
+               **(env or {})}
+        proc = self._forked(argv, env) or subprocess.Popen(
             safe_argv(argv), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-            start_new_session=True, preexec_fn=_die_with_parent, text=True, bufsize=1,
-            env={**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONSAFEPATH": "1",
-                 "PAPF_NODE_PROCESS": "1", **self.env,   # a bounded stop (common.transport)
-                 **(env or {})},
-        )
+            start_new_session=True, preexec_fn=_die_with_parent, text=True, errors="replace",
+            bufsize=1, env=env)
         child = Child(name, proc)
         self.children.append(child)
         child.pump = threading.Thread(target=self._pump, args=(child,), daemon=True,
@@ -98,6 +102,35 @@ class Supervisor:
             if self.show(child.name, line):
                 with self._lock:
                     print(f"[{child.name}] {safe_line(line)}", file=self.log_stream, flush=True)
+
+    def _forked(self, argv: list[str], env: dict):
+        """``argv`` forked by the fork server, or None: not a ``python -m``, one the server
+        cannot fork (``ForkServer.can_fork``: this one is started as a process of its own),
+        the server off or gone (so is every later one)."""
+        if not (self._fork and len(argv) > 2 and argv[0] == sys.executable and argv[1] == "-m"):
+            return None
+        try:
+            if self._forks is None:
+                self._forks = forkserver.ForkServer(
+                    safe_argv([sys.executable, "-m", "papf.launch.forkserver"]), env,
+                    stderr=self.log_stream_fd(), preexec_fn=_die_with_parent)
+            if self._forks.gone:
+                raise OSError(f"it has exited with code {self._forks.proc.poll()}")
+            if not self._forks.can_fork(argv[2:], env):
+                return None
+            return self._forks.spawn(argv[2:], env)
+        except OSError as e:
+            print(f"[launcher] nodes started without the fork server: {safe_line(str(e))}",
+                  file=self.log_stream, flush=True)
+            self._fork = False
+            return None
+
+    def log_stream_fd(self):
+        """Where the fork server's own warnings go: the log stream when it is a file."""
+        try:
+            return self.log_stream.fileno()
+        except (AttributeError, OSError, ValueError):
+            return subprocess.DEVNULL
 
     def dead(self) -> list[Child]:
         """Children that have exited."""
@@ -129,6 +162,9 @@ class Supervisor:
             _stop_stage(stage, grace_s)
         for child in self.children:  # a group may outlive its leader
             _signal_group(child.proc, signal.SIGKILL)
+        if self._forks is not None:
+            self._forks.close()
+            self._forks = None
         deadline = time.monotonic() + PUMP_JOIN_S   # every last line printed before we return
         for child in self.children:
             if child.pump is not None:

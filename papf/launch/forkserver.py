@@ -1,0 +1,377 @@
+"""A warm process that forks the nodes: each node's interpreter and imports paid once per run.
+
+A node started as ``python -m nodes.planner …`` pays for its interpreter, numpy, Zenoh,
+the messages and its own imports — 0.15–0.25 s of CPU — and a PAPF planner also loads
+numba and its compiled kernels, about 0.5 s more. A fleet of 16 planners paid that 16 times
+over on two cores. The launcher's :class:`~papf.launch.supervisor.Supervisor` starts one
+fork server per run instead (``python -m papf.launch.forkserver``): it imports what every
+node shares, and each node's own modules once, before forking the first node of that kind;
+what a node's ``__main__`` imports at its top is read from its source (never run in the
+server), and a node's package may say what else to load ahead (``preload(argv)`` in its
+``preload.py``: imports it makes later and compiled kernels, nothing else — the PAPF kernels). Every node is still a process of its
+own, with its own Zenoh session and everything else a ``python -m`` start gives it:
+
+- its own session and process group (a stop reaches all it spawns), its standard output
+  and error one pipe the launcher reads, standard input ``/dev/null``, the environment,
+  working directory and argv of the request, and that command line in ``/proc/<pid>/cmdline``
+  (``ps``, ``pgrep -f``), written over the server's own, which is padded to make room;
+- the same exit as ``python -m``: an exception is printed and exits 1, ``sys.exit(n)``
+  exits ``n``, and the interpreter's own shutdown runs;
+- the server's child: the server reaps it and reports its exit code to the launcher on the
+  control socket (:class:`ForkedProc` reads it as ``Popen.poll`` would). A node dies with the
+  server (``PR_SET_PDEATHSIG``), which dies with the launcher, or leaves when the launcher
+  closes the socket.
+
+The server is single-threaded when it forks (nothing it imports starts a thread: OpenBLAS
+is held to one by ``common``) and it never opens a Zenoh session, so a node's runtime
+starts fresh in the node. A node whose interpreter-start variables (``STARTUP_VARS``) differ
+from the server's, or whose command line does not fit the room, is started by ``python -m``
+as before; so is every node with ``PAPF_FORK_SERVER=0``, and everywhere but Linux.
+"""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import ctypes
+import gc
+import importlib
+import importlib.util
+import io
+import json
+import logging
+import os
+import runpy
+import selectors
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+ENV = "PAPF_FORK_SERVER"          # "0": no fork server (nodes started by python -m)
+MAX_REQUEST = 1 << 20             # [bytes] one request: argv, environment, working directory
+GONE_CODE = 255                   # a node's exit code where its server died before it did
+TITLE_ROOM = 4096                 # [bytes] the server's padded command line: a node's fits in it
+SHARED = ("common", "numpy", "zenoh", "common.transport", "schemas.messages")
+# variables read when the interpreter or a library starts (the server's own start): a node
+# whose values differ is started by python -m instead
+STARTUP_VARS = ("PYTHON", "NUMBA_", "OPENBLAS_", "OMP_", "MKL_", "LD_", "MALLOC_")
+_PR_SET_PDEATHSIG = 1
+
+
+def enabled() -> bool:
+    """Whether nodes are forked (Linux, and not turned off by ``PAPF_FORK_SERVER=0``)."""
+    return sys.platform.startswith("linux") and os.environ.get(ENV, "1") != "0"
+
+
+def _startup_vars(env: dict) -> dict:
+    return {k: v for k, v in env.items() if k.startswith(STARTUP_VARS)}
+
+
+def _title(argv: list[str]) -> bytes:
+    """The NUL-separated command line of ``python -m argv…``, as the kernel shows it."""
+    return b"".join(os.fsencode(a) + b"\0" for a in [sys.executable, "-m", *argv])
+
+
+# -- the launcher's side -----------------------------------------------------------------
+
+class ForkedProc:
+    """A forked node, as the launcher sees it: the parts of ``subprocess.Popen`` the
+    supervisor uses (``pid``, ``stdout``, ``poll``, ``wait``, ``returncode``); the exit code
+    is the one the server reports."""
+
+    def __init__(self, pid: int, stdout: io.TextIOBase, server: ForkServer):
+        self.pid, self.stdout, self._server = pid, stdout, server
+        self.returncode: int | None = None
+
+    def poll(self) -> int | None:
+        if self.returncode is None:
+            self._server.check_gone(self)
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Its exit code; ``subprocess.TimeoutExpired`` after ``timeout`` [s] (None: forever)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while self.poll() is None:
+            left = None if deadline is None else deadline - time.monotonic()
+            if left is not None and left <= 0:
+                raise subprocess.TimeoutExpired(f"pid {self.pid}", timeout)
+            self._server.wait_any(0.5 if left is None else min(left, 0.5))
+        return self.returncode   # type: ignore[return-value]
+
+
+class ForkServer:
+    """The launcher's handle on its fork server: :meth:`spawn` a node, :meth:`close`."""
+
+    def __init__(self, argv: list[str], env: dict, stderr=None, preexec_fn=None):
+        """Start the server: ``argv`` runs this module (``python -m papf.launch.forkserver``;
+        the control socket's fd and the title's room are appended), with environment ``env``."""
+        self._sock, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        self._startup = _startup_vars(env)
+        self._lock = threading.Lock()            # one request at a time
+        self._cond = threading.Condition()       # the answers and exits the reader files
+        self._answers: list[dict] = []
+        self._live: dict[int, ForkedProc] = {}   # by pid: the nodes still running
+        self._early: dict[int, int] = {}         # exit codes that came before their node's answer
+        self._gone = False
+        self.proc = subprocess.Popen(
+            [*argv, str(theirs.fileno()), " " * TITLE_ROOM], stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL, stderr=stderr, pass_fds=(theirs.fileno(),),
+            start_new_session=True, preexec_fn=preexec_fn, env=env)
+        theirs.close()
+        threading.Thread(target=self._read, daemon=True, name="forkserver-reader").start()
+
+    @property
+    def gone(self) -> bool:
+        """Whether the server has closed its end (exited)."""
+        return self._gone
+
+    def can_fork(self, argv: list[str], env: dict) -> bool:
+        """Whether ``python -m argv…`` with environment ``env`` can be forked: the variables
+        read at an interpreter's or a library's start are the server's (``STARTUP_VARS``)
+        and its command line fits the room."""
+        return (_startup_vars(env) == self._startup
+                and len(_title(argv)) <= TITLE_ROOM)
+
+    def spawn(self, argv: list[str], env: dict) -> ForkedProc:
+        """Fork ``python -m argv[0] argv[1:]`` with environment ``env`` in this process's
+        working directory. OSError when the server cannot (it has gone)."""
+        request = json.dumps({"argv": argv, "env": env, "cwd": os.getcwd()}).encode()
+        if len(request) > MAX_REQUEST:
+            raise OSError(f"a fork request of {len(request)} bytes (at most {MAX_REQUEST})")
+        r, w = os.pipe()
+        try:
+            with self._lock:
+                socket.send_fds(self._sock, [request], [w])
+                answer = self._answer()
+        finally:
+            os.close(w)
+        if "pid" not in answer:
+            os.close(r)
+            raise OSError(answer.get("error", "no answer"))
+        stdout = io.TextIOWrapper(io.FileIO(r, "r"), encoding="utf-8", errors="replace",
+                                  line_buffering=True)
+        proc = ForkedProc(int(answer["pid"]), stdout, self)
+        with self._cond:   # an exit reported before this line is the node's own
+            proc.returncode = self._early.pop(proc.pid, None)
+            if proc.returncode is None:
+                self._live[proc.pid] = proc
+        return proc
+
+    def _answer(self) -> dict:
+        with self._cond:
+            self._cond.wait_for(lambda: self._answers or self._gone)
+            return self._answers.pop(0) if self._answers else {"error": "the fork server has gone"}
+
+    def _read(self) -> None:
+        """The server's messages: answers to requests, and its nodes' exits."""
+        while True:
+            try:
+                data = self._sock.recv(4096)
+            except OSError:
+                data = b""
+            with self._cond:
+                if not data:
+                    self._gone = True
+                    self._cond.notify_all()
+                    return
+                message = json.loads(data)
+                if "exit" in message:
+                    pid, code = int(message["exit"]), int(message["code"])
+                    if pid in self._live:
+                        self._live.pop(pid).returncode = code
+                    else:
+                        self._early[pid] = code
+                else:
+                    self._answers.append(message)
+                self._cond.notify_all()
+
+    def check_gone(self, proc: ForkedProc) -> None:
+        """Where the server has gone, its nodes died with it (``PR_SET_PDEATHSIG``) and
+        nobody reports their exit codes: one that has left /proc gets ``GONE_CODE``."""
+        with self._cond:
+            if self._gone and proc.returncode is None and not os.path.exists(f"/proc/{proc.pid}"):
+                self._live.pop(proc.pid, None)
+                proc.returncode = GONE_CODE
+
+    def wait_any(self, timeout: float) -> None:
+        """Until the server reports something (an exit), or ``timeout`` [s]."""
+        with self._cond:
+            self._cond.wait(min(timeout, 0.05) if self._gone else timeout)
+
+    def close(self, timeout_s: float = 2.0) -> None:
+        """End the server (and any node still running: they die with it)."""
+        with contextlib.suppress(OSError):
+            self._sock.shutdown(socket.SHUT_RDWR)
+        try:
+            self.proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        with contextlib.suppress(OSError):
+            self._sock.close()
+
+
+# -- the server ------------------------------------------------------------------------
+
+def top_imports(module: str) -> list[str]:
+    """The modules ``python -m module`` imports at its top: those of its ``__main__``'s (or
+    the module's) first level, found by reading the source (ast), never by running it."""
+    spec = importlib.util.find_spec(module)
+    if spec is not None and spec.submodule_search_locations is not None:
+        spec = importlib.util.find_spec(f"{module}.__main__")
+    if spec is None or not spec.origin or not spec.origin.endswith(".py"):
+        return []
+    with open(spec.origin, encoding="utf-8") as f:
+        tree = ast.parse(f.read(), spec.origin)
+    package = spec.parent or ""
+    names = []
+    for stmt in tree.body:
+        if isinstance(stmt, ast.Import):
+            names += [alias.name for alias in stmt.names]
+        elif isinstance(stmt, ast.ImportFrom) and stmt.module != "__future__":
+            base = "." * stmt.level + (stmt.module or "")
+            names.append(importlib.util.resolve_name(base, package) if stmt.level else base)
+    return names
+
+
+def _preload(module: str, args: list[str], log: logging.Logger) -> None:
+    """Load ahead what the node ``python -m module args…`` will: the modules its top
+    imports (:func:`top_imports`), then ``preload(args)`` of its package's ``preload`` module
+    if it has one (what it imports later, or compiles: the PAPF kernels). A failure is logged and left for the
+    node to meet (it imports the same)."""
+    try:
+        for name in top_imports(module):
+            importlib.import_module(name)
+        spec = importlib.util.find_spec(module)
+        if spec is not None and spec.submodule_search_locations is not None \
+                and importlib.util.find_spec(f"{module}.preload") is not None:
+            importlib.import_module(f"{module}.preload").preload(args)
+    except Exception as e:   # noqa: BLE001 - the node reports it itself when it starts
+        log.warning("preload of %s: %s: %s", module, type(e).__name__, e)
+
+
+def serve(sock: socket.socket) -> dict:
+    """Answer fork requests and report the nodes' exits until the launcher closes its end
+    (then exit). Returns only in a forked node, with its request (its fds in place)."""
+    log = logging.getLogger("forkserver")
+    for name in SHARED:
+        try:
+            importlib.import_module(name)
+        except Exception as e:   # noqa: BLE001 - each node imports it again and says why
+            log.warning("import of %s: %s: %s", name, type(e).__name__, e)
+    wake_r, wake_w = os.pipe()
+    os.set_blocking(wake_w, False)
+    signal.set_wakeup_fd(wake_w)
+    signal.signal(signal.SIGCHLD, lambda *_: None)   # a handler, so that the wake-up fd hears it
+    sel = selectors.DefaultSelector()
+    sel.register(sock, selectors.EVENT_READ)
+    sel.register(wake_r, selectors.EVENT_READ)
+    while True:
+        for key, _ in sel.select():
+            if key.fileobj == wake_r:
+                with contextlib.suppress(BlockingIOError):
+                    os.read(wake_r, 512)
+                _report_exits(sock)
+                continue
+            try:
+                data, fds, _flags, _addr = socket.recv_fds(sock, MAX_REQUEST, 1)
+            except OSError:
+                data, fds = b"", []
+            if not data:
+                sys.exit(0)
+            request = _fork(sock, data, fds, log)
+            if request is not None:   # the node
+                sel.close()
+                signal.set_wakeup_fd(-1)
+                for fd in (wake_r, wake_w):
+                    os.close(fd)
+                return request
+
+
+def _report_exits(sock: socket.socket) -> None:
+    while True:
+        try:
+            pid, status = os.waitpid(-1, os.WNOHANG)
+        except ChildProcessError:
+            return
+        if pid == 0:
+            return
+        with contextlib.suppress(OSError):
+            sock.send(json.dumps({"exit": pid, "code": os.waitstatus_to_exitcode(status)}).encode())
+
+
+def _fork(sock: socket.socket, data: bytes, fds: list[int], log: logging.Logger) -> dict | None:
+    """Fork the node of one request: its request in the node, None in the server (which
+    has answered with the node's pid, or why not)."""
+    try:
+        request = json.loads(data)
+        _preload(request["argv"][0], request["argv"][1:], log)
+        gc.freeze()   # what is loaded stays out of every node's collections (and shared)
+        pid = os.fork()
+    except Exception as e:   # noqa: BLE001 - the launcher starts it another way
+        for fd in fds:
+            os.close(fd)
+        sock.send(json.dumps({"error": f"{type(e).__name__}: {e}"}).encode())
+        return None
+    if pid == 0:
+        request["server"] = os.getppid()
+        sock.close()
+        os.dup2(fds[0], 1)
+        os.dup2(fds[0], 2)
+        os.close(fds[0])
+        return request
+    os.close(fds[0])
+    sock.send(json.dumps({"pid": pid}).encode())
+    return None
+
+
+def _set_cmdline(title: bytes) -> None:
+    """Write ``title`` over this process's command line (``/proc/self/cmdline``), NUL-padded
+    to the room it has: where it does not fit, the command line stays the server's."""
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        with open("/proc/self/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        start, end = int(fields[45]), int(fields[46])   # arg_start, arg_end (proc(5): 48, 49)
+        if start and end - start >= len(title):
+            ctypes.memmove(start, title.ljust(end - start, b"\0"), end - start)
+
+
+def become(request: dict) -> None:
+    """In the forked node: its own session, dying with the server, the request's environment,
+    directory, argv, command line and fresh standard streams."""
+    os.setsid()
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    if os.getppid() != request["server"]:   # the server died meanwhile
+        os._exit(1)
+    with open(os.devnull, "rb") as null:
+        os.dup2(null.fileno(), 0)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    for sig in (signal.SIGTERM, signal.SIGCHLD, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+    os.chdir(request["cwd"])
+    os.environ.clear()
+    os.environ.update(request["env"])
+    sys.stdin = io.TextIOWrapper(io.FileIO(0, "r", closefd=False), encoding="utf-8")
+    sys.stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), encoding="utf-8",
+                                  errors="backslashreplace", line_buffering=True, write_through=True)
+    sys.stderr = io.TextIOWrapper(io.FileIO(2, "w", closefd=False), encoding="utf-8",
+                                  errors="backslashreplace", line_buffering=True, write_through=True)
+    sys.__stdout__, sys.__stderr__, sys.__stdin__ = sys.stdout, sys.stderr, sys.stdin
+    logging.root.handlers.clear()
+    sys.argv = list(request["argv"])
+    _set_cmdline(_title(request["argv"]))
+
+
+def main() -> None:
+    sock = socket.socket(fileno=int(sys.argv[-2]))
+    request = serve(sock)
+    become(request)
+    runpy.run_module(request["argv"][0], run_name="__main__", alter_sys=True)
+
+
+if __name__ == "__main__":
+    main()
