@@ -199,7 +199,9 @@ def _clear_scan(stamp: int) -> bytes:
 
 
 class Attacker:
-    """A keyless client of the run's router: listens for the run, then attacks until stopped."""
+    """A keyless client of the run's router: attacks from its first moment on the bus until
+    stopped — before the run starts, all through it and after — so that a run that starts
+    fast on a loaded machine cannot begin before the attack does; ``started``: it saw the run."""
 
     def __init__(self, endpoint: str, flood: bool = True):
         self.endpoint, self.flood = endpoint, flood
@@ -222,7 +224,6 @@ class Attacker:
 
             subs = [s.declare_subscriber(KEYS.goal, on_goal),
                     s.declare_subscriber(KEYS.key("sim/pose"), on_pose)]
-            self.started.wait(120)
             big = os.urandom(FLOOD_BYTES)
             clock = 0
             while not self.stop.is_set():
@@ -268,6 +269,7 @@ def _attacked_run(world: str, record, *, flood: bool = True) -> tuple[int, dict,
         assert wait_port(port, 60), "the run's router never came up"
         with Attacker(f"tcp/127.0.0.1:{port}", flood) as attacker:
             out, err = proc.communicate(timeout=240)
+        assert attacker.started.is_set(), "the attacker never saw the run"
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
