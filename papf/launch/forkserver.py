@@ -98,7 +98,7 @@ class ForkedProc:
             left = None if deadline is None else deadline - time.monotonic()
             if left is not None and left <= 0:
                 raise subprocess.TimeoutExpired(f"pid {self.pid}", timeout)
-            self._server.wait_any(0.5 if left is None else min(left, 0.5))
+            self._server.wait_exit(self, 0.5 if left is None else min(left, 0.5))
         return self.returncode   # type: ignore[return-value]
 
 
@@ -196,10 +196,11 @@ class ForkServer:
                 self._live.pop(proc.pid, None)
                 proc.returncode = GONE_CODE
 
-    def wait_any(self, timeout: float) -> None:
-        """Until the server reports something (an exit), or ``timeout`` [s]."""
-        with self._cond:
-            self._cond.wait(min(timeout, 0.05) if self._gone else timeout)
+    def wait_exit(self, proc: ForkedProc, timeout: float) -> None:
+        """Until the server reports an exit (``proc``'s or another's), or ``timeout`` [s]."""
+        with self._cond:   # its exit code is filed under this lock: no wake-up is missed
+            if proc.returncode is None:
+                self._cond.wait(min(timeout, 0.05) if self._gone else timeout)
 
     def close(self, timeout_s: float = 2.0) -> None:
         """End the server (and any node still running: they die with it)."""

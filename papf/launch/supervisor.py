@@ -113,7 +113,7 @@ class Supervisor:
             if self._forks is None:
                 self._forks = forkserver.ForkServer(
                     safe_argv([sys.executable, "-m", "papf.launch.forkserver"]), env,
-                    stderr=self.log_stream_fd(), preexec_fn=_die_with_parent)
+                    stderr=self._log_stream_fd(), preexec_fn=_die_with_parent)
             if self._forks.gone:
                 raise OSError(f"it has exited with code {self._forks.proc.poll()}")
             if not self._forks.can_fork(argv[2:], env):
@@ -125,7 +125,7 @@ class Supervisor:
             self._fork = False
             return None
 
-    def log_stream_fd(self):
+    def _log_stream_fd(self):
         """Where the fork server's own warnings go: the log stream when it is a file."""
         try:
             return self.log_stream.fileno()
