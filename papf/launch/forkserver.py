@@ -23,8 +23,10 @@ own, with its own Zenoh session and everything else a ``python -m`` start gives 
   closes the socket.
 
 The server is single-threaded when it forks (nothing it imports starts a thread: OpenBLAS
-is held to one by ``common``) and it never opens a Zenoh session, so a node's runtime
-starts fresh in the node. A node whose interpreter-start variables (``STARTUP_VARS``) differ
+is held to one by ``common``; a server that finds a second thread forks nothing more, and
+the launcher starts the rest by ``python -m``) and it never opens a Zenoh session, so a
+node's runtime starts fresh in the node. Its control socket is an unnamed socket pair whose
+other end only the launcher holds: nothing else can ask it for a process. A node whose interpreter-start variables (``STARTUP_VARS``) differ
 from the server's, or whose command line does not fit the room, is started by ``python -m``
 as before; so is every node with ``PAPF_FORK_SERVER=0``, and everywhere but Linux.
 """
@@ -310,6 +312,10 @@ def _fork(sock: socket.socket, data: bytes, fds: list[int], log: logging.Logger)
     try:
         request = json.loads(data)
         _preload(request["argv"][0], request["argv"][1:], log)
+        threads = len(os.listdir("/proc/self/task"))
+        if threads > 1:   # a fork keeps only this thread: locks the others held stay held
+            raise RuntimeError(f"it has {threads} threads after loading {request['argv'][0]} "
+                               "(something it imported started one): a fork of it is unsafe")
         gc.freeze()   # what is loaded stays out of every node's collections (and shared)
         pid = os.fork()
     except Exception as e:   # noqa: BLE001 - the launcher starts it another way

@@ -183,3 +183,25 @@ def test_a_run_is_the_same_run_with_and_without_the_fork_server(monkeypatch):
         assert (code, res["outcome"]) == (5, "timeout"), err[-2000:]
         results.append({k: v for k, v in res.items() if k not in ("wall_time_s", "run_id")})
     assert results[0] == results[1]
+
+
+def test_a_server_that_has_started_a_thread_forks_nothing_more(probe):
+    threaded = probe / "threaded"
+    threaded.mkdir()
+    (threaded / "__init__.py").write_text("")
+    (threaded / "__main__.py").write_text("print('threaded node', flush=True)\n")
+    (threaded / "preload.py").write_text(
+        "import threading, time\n"
+        "def preload(argv):\n"
+        "    threading.Thread(target=time.sleep, args=(60,), daemon=True).start()\n")
+    out = __import__("io").StringIO()
+    with Supervisor(log_stream=out, show=lambda *_: False, env={"PYTHONPATH": str(probe)}) as sup:
+        first = sup.start("first", [sys.executable, "-m", "probe", "0"])
+        bad = sup.start("threaded", [sys.executable, "-m", "threaded"])
+        later = sup.start("later", [sys.executable, "-m", "probe", "7"])
+        assert isinstance(first.proc, forkserver.ForkedProc)
+        assert isinstance(bad.proc, subprocess.Popen) and isinstance(later.proc, subprocess.Popen)
+        assert "threaded node" in _lines(bad) and bad.returncode == 0
+        assert _lines(later) and later.returncode == 7
+        _lines(first)
+    assert "a fork of it is unsafe" in out.getvalue()
