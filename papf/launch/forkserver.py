@@ -5,11 +5,13 @@ the messages and its own imports — 0.15–0.25 s of CPU — and a PAPF planner
 numba and its compiled kernels, about 0.5 s more. A fleet of 16 planners paid that 16 times
 over on two cores. The launcher's :class:`~papf.launch.supervisor.Supervisor` starts one
 fork server per run instead (``python -m papf.launch.forkserver``): it imports what every
-node shares, and each node's own modules once, before forking the first node of that kind;
-what a node's ``__main__`` imports at its top is read from its source (never run in the
-server), and a node's package may say what else to load ahead (``preload(argv)`` in its
-``preload.py``: imports it makes later and compiled kernels, nothing else — the PAPF kernels). Every node is still a process of its
-own, with its own Zenoh session and everything else a ``python -m`` start gives it:
+node shares, and each node's top imports before forking the first node of that kind (read
+from its ``__main__``'s source, never run in the server). A node's package may say what
+else to load ahead (``preload(argv)`` in its ``preload.py``: imports it makes later and
+compiled kernels, nothing else — the PAPF kernels): the server loads that before the second
+node of the kind, so the first loads it itself, side by side with the others' start.
+Every node is still a process of its own, with its own Zenoh session and everything else a
+``python -m`` start gives it:
 
 - its own session and process group (a stop reaches all it spawns), its standard output
   and error one pipe the launcher reads, standard input ``/dev/null``, the environment,
@@ -240,20 +242,24 @@ def top_imports(module: str) -> list[str]:
     return names
 
 
-def _preload(module: str, args: list[str], log: logging.Logger) -> None:
+def _preload(module: str, args: list[str], seen: set[str], log: logging.Logger) -> None:
     """Load ahead what the node ``python -m module args…`` will: the modules its top
-    imports (:func:`top_imports`), then ``preload(args)`` of its package's ``preload`` module
-    if it has one (what it imports later, or compiles: the PAPF kernels). A failure is logged and left for the
-    node to meet (it imports the same)."""
+    imports (:func:`top_imports`), and from the second node of its kind on (``seen``: the
+    kinds forked before) ``preload(args)`` of its package's ``preload`` module if it has one
+    (what it imports later, or compiles: the PAPF kernels). The first node of a kind loads
+    that itself, on the other core while the server goes on forking: a run of one robot
+    starts as fast as before, a fleet loads it twice, not once per robot. A failure is
+    logged and left for the node to meet (it imports the same)."""
     try:
         for name in top_imports(module):
             importlib.import_module(name)
         spec = importlib.util.find_spec(module)
-        if spec is not None and spec.submodule_search_locations is not None \
+        if module in seen and spec is not None and spec.submodule_search_locations is not None \
                 and importlib.util.find_spec(f"{module}.preload") is not None:
             importlib.import_module(f"{module}.preload").preload(args)
     except Exception as e:   # noqa: BLE001 - the node reports it itself when it starts
         log.warning("preload of %s: %s: %s", module, type(e).__name__, e)
+    seen.add(module)
 
 
 def serve(sock: socket.socket) -> dict:
@@ -269,6 +275,7 @@ def serve(sock: socket.socket) -> dict:
     os.set_blocking(wake_w, False)
     signal.set_wakeup_fd(wake_w)
     signal.signal(signal.SIGCHLD, lambda *_: None)   # a handler, so that the wake-up fd hears it
+    seen: set[str] = set()   # the kinds of node forked so far
     sel = selectors.DefaultSelector()
     sel.register(sock, selectors.EVENT_READ)
     sel.register(wake_r, selectors.EVENT_READ)
@@ -285,7 +292,7 @@ def serve(sock: socket.socket) -> dict:
                 data, fds = b"", []
             if not data:
                 sys.exit(0)
-            request = _fork(sock, data, fds, log)
+            request = _fork(sock, data, fds, seen, log)
             if request is not None:   # the node
                 sel.close()
                 signal.set_wakeup_fd(-1)
@@ -306,12 +313,13 @@ def _report_exits(sock: socket.socket) -> None:
             sock.send(json.dumps({"exit": pid, "code": os.waitstatus_to_exitcode(status)}).encode())
 
 
-def _fork(sock: socket.socket, data: bytes, fds: list[int], log: logging.Logger) -> dict | None:
+def _fork(sock: socket.socket, data: bytes, fds: list[int], seen: set[str],
+          log: logging.Logger) -> dict | None:
     """Fork the node of one request: its request in the node, None in the server (which
     has answered with the node's pid, or why not)."""
     try:
         request = json.loads(data)
-        _preload(request["argv"][0], request["argv"][1:], log)
+        _preload(request["argv"][0], request["argv"][1:], seen, log)
         threads = len(os.listdir("/proc/self/task"))
         if threads > 1:   # a fork keeps only this thread: locks the others held stay held
             raise RuntimeError(f"it has {threads} threads after loading {request['argv'][0]} "

@@ -27,6 +27,7 @@ print("ppid", os.getppid(), flush=True)
 print("session", os.getsid(0) == os.getpid(), flush=True)
 print("cmdline", open("/proc/self/cmdline").read().replace("\\0", " ").strip(), flush=True)
 print("preloaded", probe_pre.LOADED_IN != os.getpid(), flush=True)
+print("hooked", "probe_hook" in sys.modules, flush=True)
 print("main", __name__, flush=True)
 sys.stdout.buffer.write(b"bytes \\xff\\n"); sys.stdout.flush()
 what = sys.argv[1]
@@ -41,13 +42,15 @@ sys.exit(int(what))
 
 @pytest.fixture
 def probe(tmp_path):
-    """A package ``probe`` (run as ``python -m probe``) whose ``preload.preload`` imports
-    ``probe_pre`` in the server; the directory to put on PYTHONPATH."""
+    """A package ``probe`` (run as ``python -m probe``) that imports ``probe_pre`` at its
+    top and whose ``preload.preload`` imports ``probe_hook``; the directory to put on
+    PYTHONPATH."""
     pkg = tmp_path / "probe"
     pkg.mkdir()
     (pkg / "__main__.py").write_text(NODE)   # runs at import: the server must never import it
     (pkg / "__init__.py").write_text("")
-    (pkg / "preload.py").write_text("def preload(argv):\n    import probe_pre  # noqa: F401\n")
+    (pkg / "preload.py").write_text("def preload(argv):\n    import probe_hook  # noqa: F401\n")
+    (tmp_path / "probe_hook.py").write_text("")
     (tmp_path / "probe_pre.py").write_text("import os\nLOADED_IN = os.getpid()\n")
     return tmp_path
 
@@ -71,6 +74,7 @@ def _wait_for(child, text, timeout=30):
 def test_a_forked_node_is_what_python_m_would_start(probe, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with Supervisor(show=lambda *_: False, env={"PYTHONPATH": str(probe)}) as sup:
+        first = sup.start("first", [sys.executable, "-m", "probe", "0"])
         child = sup.start("probe", [sys.executable, "-m", "probe", "3", "x y"],
                           env={"PROBE_VALUE": "seen"})
         assert isinstance(child.proc, forkserver.ForkedProc)
@@ -83,7 +87,9 @@ def test_a_forked_node_is_what_python_m_would_start(probe, tmp_path, monkeypatch
     assert f"ppid {server}" in lines               # the server's child, reaped by it
     assert "session True" in lines
     assert f"cmdline {sys.executable} -m probe 3 x y" in lines
-    assert "preloaded True" in lines               # imported ahead, in the server
+    assert "preloaded True" in lines               # its top imports: imported ahead, in the server
+    assert "hooked True" in lines                  # its preload: for the second of its kind...
+    assert "hooked False" in _lines(first)         # ...the first loads its own
     assert "main __main__" in lines
     assert "bytes \ufffd" in lines                 # undecodable output replaced, not fatal
 
@@ -159,6 +165,7 @@ def test_the_fork_server_can_be_turned_off(probe, monkeypatch):
         assert isinstance(child.proc, subprocess.Popen)
         lines = _lines(child)
     assert child.returncode == 4 and "preloaded False" in lines and sup._forks is None
+    assert "hooked False" in lines
     assert "bytes \ufffd" in lines   # the pipe of a process of its own decodes the same way
 
 
@@ -196,8 +203,8 @@ def test_a_server_that_has_started_a_thread_forks_nothing_more(probe):
         "    threading.Thread(target=time.sleep, args=(60,), daemon=True).start()\n")
     out = __import__("io").StringIO()
     with Supervisor(log_stream=out, show=lambda *_: False, env={"PYTHONPATH": str(probe)}) as sup:
-        first = sup.start("first", [sys.executable, "-m", "probe", "0"])
-        bad = sup.start("threaded", [sys.executable, "-m", "threaded"])
+        first = sup.start("first", [sys.executable, "-m", "threaded"])   # loads its own
+        bad = sup.start("threaded", [sys.executable, "-m", "threaded"])  # the server loads it
         later = sup.start("later", [sys.executable, "-m", "probe", "7"])
         assert isinstance(first.proc, forkserver.ForkedProc)
         assert isinstance(bad.proc, subprocess.Popen) and isinstance(later.proc, subprocess.Popen)
