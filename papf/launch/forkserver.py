@@ -318,6 +318,8 @@ def _fork(sock: socket.socket, data: bytes, fds: list[int], seen: set[str],
     """Fork the node of one request: its request in the node, None in the server (which
     has answered with the node's pid, or why not)."""
     try:
+        if len(fds) != 1:
+            raise ValueError(f"a request comes with one descriptor, its output; this one had {len(fds)}")
         request = json.loads(data)
         _preload(request["argv"][0], request["argv"][1:], seen, log)
         threads = len(os.listdir("/proc/self/task"))

@@ -212,3 +212,15 @@ def test_a_server_that_has_started_a_thread_forks_nothing_more(probe):
         assert _lines(later) and later.returncode == 7
         _lines(first)
     assert "a fork of it is unsafe" in out.getvalue()
+
+
+def test_a_request_without_its_output_descriptor_is_refused_and_the_server_goes_on(probe):
+    env = {**os.environ, "PYTHONPATH": str(probe)}
+    server = forkserver.ForkServer([sys.executable, "-m", "papf.launch.forkserver"], env)
+    try:
+        server._sock.send(b'{"argv": ["probe", "0"], "env": {}, "cwd": "/"}')   # no fd
+        assert "one descriptor" in server._answer()["error"]
+        node = server.spawn(["probe", "8"], env)
+        assert node.wait(timeout=30) == 8 and "argv ['8']" in node.stdout.read()
+    finally:
+        server.close()
