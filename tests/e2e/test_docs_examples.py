@@ -115,8 +115,9 @@ class Session:
 
     def argv(self, ex: Example) -> list[str] | None:
         """The command to run for ``ex`` (None: not a program this test runs)."""
-        text = ex.text.replace("7447", str(self.port)).replace("8786", str(self.dask_port))
-        text = text.replace("7448", str(self.link_port))
+        # in one pass: a free port put in for one of them may hold the digits of another
+        ports = {"7447": self.port, "8786": self.dask_port, "7448": self.link_port}
+        text = re.sub("7447|8786|7448", lambda m: str(ports[m.group()]), ex.text)
         text = text.replace("10.0.0.5", "127.0.0.1")   # the sweep's scheduler host: this one
         argv = concrete(Example(ex.file, ex.line, text, ex.block, ex.background))
         name = Path(argv[0]).name
