@@ -5,8 +5,7 @@ one step at a time — ``make setup`` (a new venv; empty pip and uv caches unles
 numba's cache is the new clone's own), ``make test`` (the README's test command), ``make test-slow`` (CI's second step),
 ``make lint`` — timing each: wall seconds, and CPU seconds of the step and every process it
 reaped (``RUSAGE_CHILDREN``). The tests' steps run with the plugin :mod:`bench.pytest_cpu`, which
-charges each test with its CPU; ``--files-csv`` writes the sums per test file and tier,
-``--tests-csv`` each test's own (``tests/durations.csv``: the workers take the longest first). Run it on a
+charges each test with its CPU; ``--files-csv`` writes the sums per test file and tier. Run it on a
 quiet machine: the suite is CPU-bound on 2 cores, so the load of other jobs is its time too
 (the 1-minute load before and after each step is in the CSV). Speed is reported, never asserted;
 a failing step is reported and ends the measurement (exit 1).
@@ -15,7 +14,6 @@ a failing step is reported and ends the measurement (exit 1).
 from __future__ import annotations
 
 import collections
-import csv
 import json
 import os
 import re
@@ -87,26 +85,6 @@ def per_file(work: Path) -> list[dict]:
     return sorted(rows, key=lambda r: (r["file"] != "(all)", -r["cpu_s"]))
 
 
-def per_test(work: Path) -> dict[str, tuple[float, float]]:
-    """Each test's (wall, CPU) seconds from the plugin's rows of both test steps."""
-    tests = {}
-    for tsv in work.glob("cpu*.gw*.tsv"):
-        for line in tsv.read_text().splitlines():
-            cpu, wall, nodeid = line.split("\t", 2)
-            tests[nodeid] = (float(wall), float(cpu))
-    return tests
-
-
-def write_tests(path: Path, tests: dict[str, tuple[float, float]]) -> None:
-    """``nodeid,wall_s,cpu_s`` per test, by node id."""
-    with path.open("w", newline="") as fh:
-        out = csv.writer(fh)
-        out.writerow(("nodeid", "wall_s", "cpu_s"))
-        for nodeid in sorted(tests):
-            wall, cpu = tests[nodeid]
-            out.writerow((nodeid, round(wall, 2), round(cpu, 2)))
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = ArgumentParser(prog="papf bench suite", description=__doc__.split("\n\n")[0])
     ap.add_argument("--commit", default="HEAD", help="the commit to measure (default HEAD)")
@@ -115,9 +93,6 @@ def main(argv: list[str] | None = None) -> int:
                     help="keep this user's pip and uv caches (default: empty ones, as a new machine)")
     ap.add_argument("--csv", type=Path, help="the steps' rows (this label's rows are replaced)")
     ap.add_argument("--files-csv", type=Path, help="CPU per test file and tier")
-    ap.add_argument("--tests-csv", type=Path,
-                    help="each test's wall and CPU seconds (tests/durations.csv: the order the "
-                         "workers take the tests in, tests/support/order.py)")
     args = ap.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", "--short", args.commit], cwd=REPO, text=True,
                             capture_output=True).stdout.strip()
@@ -158,8 +133,6 @@ def main(argv: list[str] | None = None) -> int:
         if args.files_csv:
             files = [{"date": date, "commit": commit, **r} for r in per_file(work)]
             replace_label(args.files_csv, FILE_FIELDS, label, files)
-        if args.tests_csv:
-            write_tests(args.tests_csv, per_test(work))
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0

@@ -14,7 +14,6 @@ import zenoh
 
 from common.transport import zenoh_config
 from papf.launch.supervisor import Supervisor, free_port, wait_port
-from tests.support.order import longest_first, read_durations
 
 # pytest caches the test modules it rewrote for its asserts only where bytecode may be written;
 # where PYTHONDONTWRITEBYTECODE is set (this machine sets it) every worker of every run parsed
@@ -29,7 +28,6 @@ def pytest_configure(config):
     test run go to a directory of its own: never the user's, never another test run's (two
     suites at once each launch in the namespace ``rosbot``)."""
     config.papf_runtime = tempfile.mkdtemp(prefix="papf-tests-")
-    config.pluginmanager.register(LongestFirst(), "papf-longest-first")
     os.environ["XDG_RUNTIME_DIR"] = config.papf_runtime
 
 
@@ -85,23 +83,9 @@ def tiny_disk(tmp_path):
 TIERS = ("unit", "bus", "e2e")
 
 
-@pytest.hookimpl(tryfirst=True)   # before -m selects by them
 def pytest_collection_modifyitems(items):
     """Markers follow the folders: a test in ``tests/<tier>/`` carries the marker ``<tier>``."""
     for item in items:
         tier = item.path.parent.name
         if tier in TIERS:
             item.add_marker(getattr(pytest.mark, tier))
-
-
-class LongestFirst:
-    """On parallel workers the longest tests go first, spread over the workers
-    (tests/support/order.py); last, on what ``-m`` kept. Every worker orders its collection
-    the same way."""
-
-    @pytest.hookimpl(trylast=True)
-    def pytest_collection_modifyitems(self, items):
-        workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0") or 0)
-        if workers > 1:
-            by_id = {item.nodeid: item for item in items}
-            items[:] = [by_id[n] for n in longest_first(list(by_id), read_durations(), workers)]
