@@ -65,6 +65,13 @@ STARTUP_VARS = ("PYTHON", "NUMBA_", "OPENBLAS_", "OMP_", "MKL_", "LD_", "MALLOC_
 _PR_SET_PDEATHSIG = 1
 
 
+def die_with_parent() -> None:
+    """This process gets SIGTERM when its parent (thread) dies (``PR_SET_PDEATHSIG``): a
+    node of the supervisor (between fork and exec), the fork server, a forked node."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+
+
 def enabled() -> bool:
     """Whether nodes are forked (Linux, and not turned off by ``PAPF_FORK_SERVER=0``)."""
     return sys.platform.startswith("linux") and os.environ.get(ENV, "1") != "0"
@@ -243,20 +250,22 @@ def top_imports(module: str) -> list[str]:
 
 
 def _preload(module: str, args: list[str], seen: set[str], log: logging.Logger) -> None:
-    """Load ahead what the node ``python -m module args…`` will: the modules its top
-    imports (:func:`top_imports`), and from the second node of its kind on (``seen``: the
-    kinds forked before) ``preload(args)`` of its package's ``preload`` module if it has one
-    (what it imports later, or compiles: the PAPF kernels). The first node of a kind loads
-    that itself, on the other core while the server goes on forking: a run of one robot
-    starts as fast as before, a fleet loads it twice, not once per robot. A failure is
-    logged and left for the node to meet (it imports the same)."""
+    """Load ahead what the node ``python -m module args…`` will. Before the first node of
+    its kind (``seen``: the kinds forked before): the modules its top imports
+    (:func:`top_imports`). From the second on: ``preload(args)`` of its package's
+    ``preload`` module if it has one (what it imports later, or compiles: the PAPF kernels);
+    the first loads that itself, on the other core while the server goes on forking, so a
+    run of one robot starts as fast as before and a fleet loads it twice, not once per
+    robot. A failure is logged and left for the node to meet (it imports the same)."""
     try:
-        for name in top_imports(module):
-            importlib.import_module(name)
-        spec = importlib.util.find_spec(module)
-        if module in seen and spec is not None and spec.submodule_search_locations is not None \
-                and importlib.util.find_spec(f"{module}.preload") is not None:
-            importlib.import_module(f"{module}.preload").preload(args)
+        if module not in seen:
+            for name in top_imports(module):
+                importlib.import_module(name)
+        else:
+            spec = importlib.util.find_spec(module)
+            if spec is not None and spec.submodule_search_locations is not None \
+                    and importlib.util.find_spec(f"{module}.preload") is not None:
+                importlib.import_module(f"{module}.preload").preload(args)
     except Exception as e:   # noqa: BLE001 - the node reports it itself when it starts
         log.warning("preload of %s: %s: %s", module, type(e).__name__, e)
     seen.add(module)
@@ -360,8 +369,7 @@ def become(request: dict) -> None:
     """In the forked node: its own session, dying with the server, the request's environment,
     directory, argv, command line and fresh standard streams."""
     os.setsid()
-    with contextlib.suppress(OSError, AttributeError):
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    die_with_parent()
     if os.getppid() != request["server"]:   # the server died meanwhile
         os._exit(1)
     with open(os.devnull, "rb") as null:

@@ -8,7 +8,6 @@ and, on Linux, gets SIGTERM from the kernel if the supervisor itself dies
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import os
 import random
 import signal
@@ -24,13 +23,7 @@ from typing import TextIO
 from common.text import safe_line
 from papf.launch import forkserver, portrange
 
-_PR_SET_PDEATHSIG = 1
 PUMP_JOIN_S = 5.0   # [s wall] at most, after stop(), for the children's last output lines
-
-
-def _die_with_parent() -> None:  # runs in the child between fork and exec
-    with contextlib.suppress(Exception):
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 @dataclass
@@ -86,7 +79,7 @@ class Supervisor:
                **(env or {})}
         proc = self._forked(argv, env) or subprocess.Popen(
             safe_argv(argv), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-            start_new_session=True, preexec_fn=_die_with_parent, text=True, errors="replace",
+            start_new_session=True, preexec_fn=forkserver.die_with_parent, text=True, errors="replace",
             bufsize=1, env=env)
         child = Child(name, proc)
         self.children.append(child)
@@ -113,7 +106,7 @@ class Supervisor:
             if self._forks is None:
                 self._forks = forkserver.ForkServer(
                     safe_argv([sys.executable, "-m", "papf.launch.forkserver"]), env,
-                    stderr=self._log_stream_fd(), preexec_fn=_die_with_parent)
+                    stderr=self._log_stream_fd(), preexec_fn=forkserver.die_with_parent)
             if self._forks.gone:
                 raise OSError(f"it has exited with code {self._forks.proc.poll()}")
             if not self._forks.can_fork(argv[2:], env):
