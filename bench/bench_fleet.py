@@ -29,6 +29,9 @@ run (sim time over ``wall_time_s``) and the CPU split as above over the whole ru
                      [--timeout 120] [--csv docs/data/fleet-passing.csv --label L]
     papf bench fleet --driver-split 8,16 [--long-s 20] [--csv F --label L]
 
+``--odom-hz HZ`` runs with ``papf run --odom-hz HZ`` (a fleet's odometry rate; by default the
+scan rate, 10 Hz, in a fleet without people: docs/performance.md "A fleet's odometry rate").
+
 ``--driver-split R1,R2`` splits the world simulator's own CPU per robot-cycle (physics, tyre
 forces, contacts, command gates, messages) in-process: :mod:`bench.fleet_driver`.
 """
@@ -130,7 +133,7 @@ def cpu_by_kind(tree: TreeCPU) -> dict[str, float]:
 
 
 def measure(world: Path, robots: int, planner: str, short_s: float, long_s: float,
-            passing: str | None = None) -> dict:
+            passing: str | None = None, odom_hz: float | None = None) -> dict:
     """One ``papf run --json``, watched on its bus: the wall time and CPU between the first
     robot's pose samples at ``short_s`` and at ``long_s`` of sim time (module doc)."""
     port = free_port()
@@ -139,7 +142,7 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", str(world),
                                  "--planner", planner, "--timeout", f"{long_s + 0.5:g}",
                                  "--json", "--continue-on-collision", "--port", str(port),
-                                 *(["--passing", passing] if passing else [])],
+                                 *(["--passing", passing] if passing else []), *odom(odom_hz)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             if not wait_port(port, 60.0):
@@ -173,7 +176,13 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
             "collisions": result["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
 
 
-def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dict:
+def odom(odom_hz: float | None) -> list[str]:
+    """``papf run --odom-hz`` when given (else the run's default: 50, a fleet's the scan rate)."""
+    return [] if odom_hz is None else ["--odom-hz", f"{odom_hz:g}"]
+
+
+def outcome_row(world: str, planner: str, passing: str, timeout_s: float,
+                odom_hz: float | None = None) -> dict:
     """One fleet world to its outcome with the passing layer ``passing``: the row.
 
     Besides ``sim_over_wall`` over the whole run (start-up included), the run is watched on
@@ -196,7 +205,7 @@ def outcome_row(world: str, planner: str, passing: str, timeout_s: float) -> dic
         launched = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", world,
                                  "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
-                                 "--passing", passing, "--port", str(port)],
+                                 "--passing", passing, "--port", str(port), *odom(odom_hz)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             if not wait_port(port, 60.0):
@@ -242,7 +251,7 @@ def main_worlds(args) -> None:
     for world in [w for w in args.worlds.split(",") if w]:
         for passing in [m for m in args.passing.split(",") if m]:
             row = outcome_row(world, args.planner or one_with_role("papf-proposed"), passing,
-                              args.timeout)
+                              args.timeout, args.odom_hz)
             print(json.dumps(row), flush=True)
             rows.append({"label": args.label or "", **row})
     if args.csv:
@@ -266,6 +275,8 @@ def parse(argv=None) -> argparse.Namespace:
     parser.add_argument("--passing", help="the passing layer: with --worlds the modes to compare "
                         "(default off,orca), else the one of every run (default the run's: orca "
                         "with two or more robots)")
+    parser.add_argument("--odom-hz", type=float,
+                        help="papf run --odom-hz (default: the run's, 50; a fleet's the scan rate)")
     parser.add_argument("--timeout", type=float, default=120.0,
                         help="with --worlds: sim seconds at most (120)")
     parser.add_argument("--driver-split", metavar="R1,R2",
@@ -330,7 +341,7 @@ def main(argv=None) -> None:
                 world = fleet_world(Path(tmp), robots, people)
                 row = {"robots": robots, "people": people, "planner": args.planner,
                        **measure(world, robots, args.planner, args.short_s, args.long_s,
-                                 args.passing)}
+                                 args.passing, args.odom_hz)}
                 print(json.dumps(row), flush=True)
                 rows.append({"label": args.label or "", **row})
     if args.csv:

@@ -9,7 +9,7 @@ keys), so every other node sees a simulated run as a real one;
 Ports: :mod:`nodes.world_sim.ports` (``--help`` prints them).
 
 Settings: ``--world`` (packaged name or .toml path), ``--seed`` (noise), ``--odom-hz``
-(50), ``--scan-hz`` (10, lockstep instants), ``--watchdog`` (0.5 s of sim time),
+(50; a fleet's without people: the scan rate), ``--scan-hz`` (10, lockstep instants), ``--watchdog`` (0.5 s of sim time),
 ``--lockstep-timeout`` (2.0 wall s, then a ``node_fault`` event and free running in
 real time until a command answers the latest scan again), ``--realtime`` (pace sim
 time to the wall clock, never wait for commands), plus the Zenoh options.
@@ -24,7 +24,7 @@ import sys
 import time
 
 from common.cliparse import ArgumentParser
-from common.drive import add_driver_args
+from common.drive import add_driver_args, odom_rate
 from common.errors import PapfError
 from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
@@ -75,7 +75,9 @@ def run(args: argparse.Namespace) -> int:
 
     log = setup_logging(NAME, args.log_level)
     world = load_world(args.world)
-    config = WorldConfig.from_rates(args.odom_hz, args.scan_hz, args.watchdog)
+    fleet = bool(world.robots) and not world.has_people   # people step on the odometry tick
+    config = WorldConfig.from_rates(odom_rate(args.odom_hz, args.scan_hz, fleet),
+                                    args.scan_hz, args.watchdog)
     with open_node(NAME, args, log) as node:
         publish = node.publish
         people = ("sim/people",) if world.has_people else ()   # on this node's namespace

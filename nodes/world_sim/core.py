@@ -51,10 +51,12 @@ class WorldConfig:
         step = self.sim.step_ns
         if self.odom_period_ns <= 0 or self.odom_period_ns % step:
             raise ConfigError(f"odometry period {self.odom_period_ns} ns must be a positive "
-                              f"multiple of the {step} ns physics step")
+                              f"multiple of the {step} ns physics step (--odom-hz: e.g. 50, 25, "
+                              "10)")
         if self.scan_period_ns <= 0 or self.scan_period_ns % self.odom_period_ns:
             raise ConfigError(f"scan period {self.scan_period_ns} ns must be a positive multiple "
-                              f"of the odometry period {self.odom_period_ns} ns")
+                              f"of the odometry period {self.odom_period_ns} ns (--odom-hz: a "
+                              "multiple of the scan rate, e.g. 50, 25, 10)")
 
     @classmethod
     def from_rates(cls, odom_hz: float = 50.0, scan_hz: float = 10.0, watchdog_s: float = 0.5,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+from common.drive import DRIVER_OPTIONS
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from common.ros_link import add_face_args, face_distro, face_domain
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
@@ -57,6 +58,9 @@ def register(sub) -> None:
     p.add_argument("--passing", choices=("orca", "off"),
                    help="a fleet's robots pass each other: orca (default with two or more "
                         "robots; each planner gets the others as --objects) or off")
+    p.add_argument("--odom-hz", type=arg_type("--odom-hz", DRIVER_OPTIONS["odom_hz"]),
+                   metavar="HZ", help="the sim's odometry, wheels and battery rate (default 50; a "
+                   "fleet's without people: the scan rate, 10; docs/performance.md \"A fleet's odometry rate\")")
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
@@ -96,7 +100,7 @@ def run_config(args):
                      energy_model=args.energy_model,
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
-                     passing=args.passing,
+                     passing=args.passing, odom_hz=args.odom_hz,
                      ros_face=face_domain(args), progress=None if not args.json else False,
                      link=args.link, robot_trace=args.robot_trace,
                      robot_record=args.robot_record,

@@ -66,6 +66,7 @@ class RunConfig:
     robot_trace: str | None = None     # --link: the emulated robot's command trace (JSON lines)
     robot_record: str | None = None    # --link: the robot side's own recording (its black box)
     passing: str | None = None         # a fleet's: orca | off; None: orca (profile._passing)
+    odom_hz: float | None = None       # the sim's odometry tick; None: 50, a fleet's the scan rate
 
 
 def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
@@ -77,6 +78,7 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
               "realtime": "1" if cfg.realtime else None,
               "objects": cfg.objects, "view": cfg.view, "passing": cfg.passing,
+              "odom_hz": None if cfg.odom_hz is None else f"{cfg.odom_hz:g}",
               "ros_face": None if cfg.ros_face is None else "1",
               "ros_face_domain": cfg.ros_face,
               "ros_face_distro": cfg.ros_face_distro if cfg.ros_face is not None else None}
@@ -119,6 +121,10 @@ def preflight(cfg: RunConfig) -> World:
     check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace,
               None if bag else cfg.record, cfg.planner_args, force=cfg.force,
               view=cfg.view)
+    if cfg.odom_hz is not None:   # on the physics step's grid, the scans on its own
+        from nodes.world_sim.core import WorldConfig   # pybullet: only when asked
+
+        WorldConfig.from_rates(cfg.odom_hz)
     return world
 
 
