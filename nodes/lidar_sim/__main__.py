@@ -17,9 +17,8 @@ also publishes the ground truth (pose, velocity, size of every obstacle, person 
 robot within the LiDAR's range) as ``Objects`` with the scan's stamp, just before the scan: the sim's
 answer to ``--objects truth`` (also in HIL, for the virtual obstacles).
 
-One process may serve a whole fleet or a part of it (``--robots r1,r2,...``, names of the
-world's ``[[robots]]``; the launch profile's ``fleet = "one"``, in ``shares`` processes named
-``lidar_sim``, ``lidar_sim_2``, ... by ``--node-name``): one pybullet world holding every
+One process may serve a whole fleet (``--robots r1,r2,...``, names of the world's
+``[[robots]]``; the launch profile's ``fleet = "one"``): one pybullet world holding every
 robot's box, each robot's ``sim/pose`` and ``sim/bodies`` taken on its own namespace and its
 ``scan`` (and ``objects``) put there, its token ``<robot>/alive/lidar_sim`` — the same
 messages, bit for bit, as a LiDAR process per robot, without a process, a session and a copy
@@ -27,8 +26,8 @@ of the world per robot.
 
 Settings: ``--world``, ``--seed`` (noise), ``--beams`` (300), ``--scan-hz`` (10),
 ``--noise-sd`` (0.01 m), ``--noise-rel`` (0), ``--pose-source sim|odom``,
-``--truth-objects``, ``--robots``, ``--node-name``, plus the Zenoh options. Liveliness
-token: ``<ns>/alive/lidar_sim`` (``--node-name``'s with ``--robots``).
+``--truth-objects``, ``--robots``, plus the Zenoh options. Liveliness token:
+``<ns>/alive/lidar_sim``.
 """
 
 from __future__ import annotations
@@ -98,7 +97,7 @@ class BodyPairs:
 def main_sim(args: argparse.Namespace) -> int:
     from nodes.lidar_sim.core import LidarParams, LidarSim  # pybullet: only when simulating
 
-    log = setup_logging(args.node_name, args.log_level)
+    log = setup_logging(NAME, args.log_level)
     world = load_world(args.world)
     params = LidarParams(beams=args.beams, noise_sd=args.noise_sd, noise_rel=args.noise_rel)
     period = period_ns(args.scan_hz, "scan rate")
@@ -162,7 +161,7 @@ def main_fleet(args: argparse.Namespace, world, params, period: int, log) -> int
     index = {r.name: i for i, r in enumerate(world.robots)}   # each robot's noise: its index
     objects = ("objects",) if args.truth_objects else ()
     with LidarSim(world, params, args.seed, fleet=tuple(index)) as lidar, \
-            open_node(args.node_name, args, log) as node:
+            open_node(NAME, args, log) as node:
         shares, pairs = {}, {}
         for name in names:
             share = shares[name] = Node(NAME, node.session, Keys(name), log)
@@ -178,7 +177,7 @@ def main_fleet(args: argparse.Namespace, world, params, period: int, log) -> int
             share.declare_publishers("scan", *objects)
         for share in shares.values():
             share.ready()
-        node.ready()   # <namespace>/alive/<--node-name> too: the process itself is up
+        node.ready()   # <namespace>/alive/lidar_sim too: the process itself is up
         count = 0
         for topic, msg in node.messages():
             if topic is None:
@@ -238,21 +237,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--robots", metavar="R1,R2,...",
                         help="one process for these robots of the world's [[robots]], each on "
                              "its own namespace (sim)")
-    parser.add_argument("--node-name", type=node_name, default=NAME,
-                        help="with --robots: this process's own name on the run's namespace "
-                             f"(token, health; default {NAME}; a fleet's second share "
-                             f"{NAME}_2, ...)")
     parser.add_argument("--log-level", default="INFO")
     add_zenoh_args(parser)
     return parser
-
-
-def node_name(text: str) -> str:
-    """``--node-name``: ``lidar_sim`` or ``lidar_sim_<n>`` (a share of a fleet's LiDARs)."""
-    head, _, n = text.partition(NAME + "_")
-    if text != NAME and (head or not n.isdigit() or not n.isascii() or int(n) < 2):
-        raise argparse.ArgumentTypeError(f"{text!r}: {NAME} or {NAME}_<n>, n >= 2")
-    return text
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,8 +37,6 @@ OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks c
 OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth
 FLEET_NODES = ("energy_meter", "planner", "tracker", "lidar_sim")   # one per robot of [[robots]]
 FLEET = ("each", "one")   # a robot node's processes in a fleet: one per robot, or one for all
-SHAREABLE = ("lidar_sim",)   # nodes whose fleet = "one" may be split in shares (--node-name)
-MAX_SHARES = 8               # [-] processes of one such node
 PASSING = ("orca", "off")   # a fleet's passing layer (nodes.planner.passing); orca by default
 
 
@@ -71,8 +69,6 @@ class NodeSpec:
     fleet: str = "each"                     # a FLEET_NODES node in a fleet: a process per robot
                                             # (each), or one serving every robot (one:
                                             # --robots r1,r2,...) when their arguments agree
-    shares: int = 1                         # with fleet = "one": that many processes, each
-                                            # serving a contiguous part of the robots
 
 
 @dataclass(frozen=True)
@@ -121,18 +117,6 @@ class Resolved:
                            "processes": [p.to_json() for p in self.processes]}, indent=1)
 
 
-def _check_shares(path: Path, n: NodeSpec) -> None:
-    """``shares``: an integer in 1..MAX_SHARES, above 1 only for a node that can share
-    (:data:`SHAREABLE`) with ``fleet = "one"``."""
-    if type(n.shares) is not int or not 1 <= n.shares <= MAX_SHARES:
-        raise ConfigError(f"launch profile {str(path)!r}: node {n.name}: shares = {n.shares!r}; "
-                          f"an integer in 1..{MAX_SHARES}")
-    if n.shares > 1 and (n.fleet != "one" or n.name not in SHAREABLE):
-        raise ConfigError(f"launch profile {str(path)!r}: node {n.name}: shares > 1 needs "
-                          f"fleet = \"one\" on a node that can share its robots: "
-                          f"{', '.join(SHAREABLE)}")
-
-
 def packaged_profiles() -> list[str]:
     root = resources.files("papf.launch") / "profiles"
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
@@ -156,15 +140,12 @@ def load_profile(name_or_path: str) -> Profile:
         text = path.read_text(encoding="utf-8")
         data = tomllib.loads(text)
         nodes = tuple(NodeSpec(n["name"], n["module"], tuple(n.get("args", ())), n.get("needs"),
-                               dict(n.get("if_set", {})), str(n.get("fleet", "each")),
-                               n.get("shares", 1))
+                               dict(n.get("if_set", {})), str(n.get("fleet", "each")))
                       for n in data.get("nodes", ()))
         bad = [n.name for n in nodes if n.fleet not in FLEET]
         if bad:
             raise ConfigError(f"launch profile {str(path)!r}: node {bad[0]}: fleet must be one of "
                               f"{', '.join(FLEET)}")
-        for n in nodes:
-            _check_shares(path, n)
         prof = Profile(data.get("name", path.stem), data.get("description", ""), nodes,
                        data.get("host", "local"), data.get("partner"),
                        bool(data.get("router", False)), tuple(data.get("listen", ())),
@@ -308,37 +289,14 @@ def _per_robot(spec: NodeSpec, fleet: tuple, values: dict, prof: Profile, opt: L
     if spec.fleet == "one":
         alike = {tuple(_argv(spec, m, prof, opt, []) or ()) for m in mine.values()}
         if len(alike) == 1:
-            return _shares(spec, list(mine), next(iter(mine.values())), prof, opt,
-                           common(opt.namespace))
+            argv = _argv(spec, next(iter(mine.values())), prof, opt,
+                         [*common(opt.namespace), "--robots", ",".join(mine)])
+            return [Process(spec.name, prof.host, tuple(argv))] if argv else []
     procs = []
     for robot in fleet:
         argv = _argv(spec, mine[robot.name], prof, opt, common(robot.name))
         if argv:
             procs.append(Process(f"{robot.name}/{spec.name}", prof.host, tuple(argv)))
-    return procs
-
-
-def share_kind(name: str) -> str:
-    """The node a process is a share of: ``lidar_sim`` for ``lidar_sim_2`` (:func:`_shares`),
-    else ``name`` — the name its robots' tokens carry."""
-    head, sep, n = name.rpartition("_")
-    return head if sep and n.isdigit() and head in SHAREABLE else name
-
-
-def _shares(spec: NodeSpec, robots: list[str], values: dict, prof: Profile, opt: LaunchOptions,
-            common: list[str]) -> list[Process]:
-    """A ``fleet = "one"`` node as ``spec.shares`` processes (fewer with fewer robots), each
-    serving a contiguous part of ``robots``: the first ``<node>``, the others
-    ``<node>_2``, ``<node>_3``, ... (``--node-name``: their own token on the run's namespace)."""
-    k = min(spec.shares, len(robots))
-    procs = []
-    for g in range(k):
-        part = robots[len(robots) * g // k:len(robots) * (g + 1) // k]
-        name = spec.name if g == 0 else f"{spec.name}_{g + 1}"
-        argv = _argv(spec, values, prof, opt, [*common, "--robots", ",".join(part),
-                                               *(["--node-name", name] if g else [])])
-        if argv:
-            procs.append(Process(name, prof.host, tuple(argv)))
     return procs
 
 

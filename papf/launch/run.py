@@ -25,7 +25,7 @@ from papf.launch import portrange
 from papf.launch.fleet import FleetMeter, fleet_result, progress_figures
 from papf.launch.outcome import RunMonitor, RunResult
 from papf.launch.preflight import bag_path, check_run
-from papf.launch.profile import LaunchOptions, Resolved, load_profile, resolve, share_kind
+from papf.launch.profile import LaunchOptions, Resolved, load_profile, resolve
 from papf.launch.sequence import CHECK_S, COALESCE_S, STALL_S, RunSequence
 from papf.launch.supervisor import Supervisor, free_port, port_in_use
 from schemas import Keys, People
@@ -219,16 +219,14 @@ def _run_fleet(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Sess
 
 def _alive_groups(commands: dict[str, list[str]]) -> dict[str, list[str]]:
     """Liveliness names per namespace: each process's ``--namespace``, its name's last part;
-    a process serving several robots (``--robots r1,r2``) in each of theirs too (a share's
-    under the name of the node it is a share of)."""
+    a process serving several robots (``--robots r1,r2``) in each of theirs too."""
     groups: dict[str, list[str]] = {}
     for name, argv in commands.items():
         node = name.rpartition("/")[2]
         ns = argv[len(argv) - 1 - argv[::-1].index("--namespace") + 1]
         served = argv[argv.index("--robots") + 1].split(",") if "--robots" in argv else []
-        groups.setdefault(ns, []).append(node)
-        for n in served:   # a share (lidar_sim_2) serves its robots as the node it is a share of
-            groups.setdefault(n, []).append(share_kind(node))
+        for n in (ns, *served):
+            groups.setdefault(n, []).append(node)
     return groups
 
 

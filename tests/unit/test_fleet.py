@@ -4,7 +4,6 @@ per-robot processes of a launch, the separation and the fleet's figures."""
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 import pytest
@@ -108,34 +107,18 @@ def test_launch_gives_each_robot_its_nodes_and_planner(tmp_path):
     graph = resolve(load_profile("sim"), LaunchOptions("sim", values={"world": str(path),
                                                                        "planner": "apf"}))
     nodes = graph.nodes
-    # the meters serve every robot from one process (fleet = "one"), the LiDARs from two
-    # (shares = 2: half the robots each)
-    assert {"r1/planner", "r2/planner", "lidar_sim", "lidar_sim_2", "energy_meter",
-            "base_driver"} == set(nodes)
+    # the LiDARs and the meters serve every robot from one process each (fleet = "one")
+    assert {"r1/planner", "r2/planner", "lidar_sim", "energy_meter", "base_driver"} == set(nodes)
 
     def arg(name, flag):
         argv = nodes[name]
         return argv[argv.index(flag) + 1]
     assert (arg("r1/planner", "--planner"), arg("r2/planner", "--planner")) == ("apf", "papf")
     assert (arg("r1/planner", "--namespace"), arg("r2/planner", "--namespace")) == ("r1", "r2")
-    assert arg("energy_meter", "--robots") == "r1,r2"
-    assert (arg("lidar_sim", "--robots"), arg("lidar_sim_2", "--robots")) == ("r1", "r2")
-    assert arg("lidar_sim_2", "--node-name") == "lidar_sim_2" and "--node-name" not in nodes["lidar_sim"]
-    assert _alive_groups(nodes) == {
-        "rosbot": ["energy_meter", "lidar_sim", "lidar_sim_2", "base_driver"],
-        "r1": ["energy_meter", "planner", "lidar_sim"],
-        "r2": ["energy_meter", "planner", "lidar_sim"]}   # a share's robots: the node's name
-
-
-def test_a_shared_node_splits_the_robots_in_contiguous_parts(tmp_path):
-    path = tmp_path / "f.toml"
-    path.write_text("name = \"f\"\n" + "".join(
-        f'[[robots]]\nname = "r{i}"\nstart = [{i}, 0]\ngoal = [{i}, 5]\n' for i in range(1, 6)))
-    nodes = resolve(load_profile("sim"), LaunchOptions("sim", values={"world": str(path),
-                                                                       "planner": "apf"})).nodes
-    robots = {n: nodes[n][nodes[n].index("--robots") + 1] for n in ("lidar_sim", "lidar_sim_2")}
-    assert robots == {"lidar_sim": "r1,r2", "lidar_sim_2": "r3,r4,r5"}
-    assert "lidar_sim_3" not in nodes
+    assert arg("lidar_sim", "--robots") == arg("energy_meter", "--robots") == "r1,r2"
+    assert _alive_groups(nodes) == {"rosbot": ["energy_meter", "lidar_sim", "base_driver"],
+                                    "r1": ["energy_meter", "planner", "lidar_sim"],
+                                    "r2": ["energy_meter", "planner", "lidar_sim"]}
 
 
 def test_a_fleet_node_whose_robots_differ_runs_per_robot(tmp_path):
@@ -156,25 +139,6 @@ def test_a_profile_names_how_a_node_serves_a_fleet(tmp_path):
     path.write_text('name = "p"\n[[nodes]]\nname = "lidar_sim"\nmodule = "nodes.lidar_sim"\n'
                     'fleet = "shared"\n')
     with pytest.raises(ConfigError, match="fleet must be one of each, one"):
-        load_profile(str(path))
-
-
-@pytest.mark.parametrize("lines, says", [
-    ('fleet = "one"\nshares = 0\n', "shares = 0; an integer in 1..8"),
-    ('fleet = "one"\nshares = 2.5\n', "shares = 2.5; an integer in 1..8"),
-    ('fleet = "one"\nshares = true\n', "shares = True; an integer in 1..8"),
-    ('fleet = "each"\nshares = 2\n', 'shares > 1 needs fleet = "one"'),
-])
-def test_shares_are_a_small_count_on_a_node_that_serves_the_fleet_in_one(tmp_path, lines, says):
-    path = tmp_path / "p.toml"
-    path.write_text('name = "p"\n[[nodes]]\nname = "lidar_sim"\nmodule = "nodes.lidar_sim"\n'
-                    + lines)
-    with pytest.raises(ConfigError, match=re.escape(says)):
-        load_profile(str(path))
-    meter = path.read_text().replace("lidar_sim", "energy_meter").replace("shares = 0", "shares = 2")
-    path.write_text(meter.replace("shares = 2.5", "shares = 2").replace("shares = true",
-                                                                         "shares = 2"))
-    with pytest.raises(ConfigError, match="on a node that can share its robots: lidar_sim"):
         load_profile(str(path))
 
 
@@ -371,17 +335,3 @@ def test_papf_launch_refuses_a_fleet_world_papf_run_drives_it():
     with pytest.raises(ConfigError, match="papf run drives a fleet"):
         check_launch(LaunchOptions("sim", values={"world": "fleet-corridor-swap"}),
                      load_profile("sim"))
-
-
-@pytest.mark.parametrize("name, ok", [("lidar_sim", True), ("lidar_sim_2", True),
-                                      ("lidar_sim_12", True), ("lidar_sim_1", False),
-                                      ("lidar_sim_", False), ("x_lidar_sim_2", False),
-                                      ("lidar_sim_\u0662", False), ("planner", False)])
-def test_a_lidar_share_is_named_lidar_sim_n(name, ok):
-    from nodes.lidar_sim.__main__ import build_parser
-
-    if ok:
-        assert build_parser().parse_args(["--node-name", name]).node_name == name
-    else:
-        with pytest.raises(SystemExit):
-            build_parser().parse_args(["--node-name", name])
