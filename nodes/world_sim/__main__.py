@@ -9,7 +9,8 @@ keys), so every other node sees a simulated run as a real one;
 Ports: :mod:`nodes.world_sim.ports` (``--help`` prints them).
 
 Settings: ``--world`` (packaged name or .toml path), ``--seed`` (noise), ``--odom-hz``
-(50; a fleet's without people: the scan rate), ``--scan-hz`` (10, lockstep instants), ``--watchdog`` (0.5 s of sim time),
+(50; a fleet's without people: the scan rate), ``--scan-hz`` (10, lockstep instants),
+``--watchdog`` (0.5 s of sim time),
 ``--lockstep-timeout`` (2.0 wall s, then a ``node_fault`` event and free running in
 real time until a command answers the latest scan again), ``--realtime`` (pace sim
 time to the wall clock, never wait for commands), plus the Zenoh options.

@@ -122,7 +122,7 @@ def preflight(cfg: RunConfig) -> World:
               None if bag else cfg.record, cfg.planner_args, force=cfg.force,
               view=cfg.view)
     if cfg.odom_hz is not None:   # on the physics step's grid, the scans on its own
-        from nodes.world_sim.core import WorldConfig   # pybullet: only when asked
+        from nodes.world_sim.core import WorldConfig  # pybullet: only when asked
 
         WorldConfig.from_rates(cfg.odom_hz)
     return world

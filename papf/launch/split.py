@@ -165,6 +165,9 @@ def resolve_split(cfg: RunConfig) -> str:
 def _check(cfg: RunConfig, spec: LinkSpec, ports: SplitPorts) -> None:
     """Both profiles' preflight, before anything starts (ConfigError: exit 2, one line)."""
     load_world(cfg.world)
+    if cfg.odom_hz is not None:   # the robot side is the ROSbot's (its emulator): its own rate
+        raise ConfigError("--odom-hz: the simulator's odometry rate; with --link the "
+                          "robot side is the ROSbot's emulator at its own 50 Hz: drop --odom-hz")
     check_launch(robot_options(cfg, ports), load_profile("robot"))
     laptop = laptop_options(cfg, ports, spec)
     check_launch(laptop, load_profile("laptop"))

@@ -74,6 +74,7 @@ def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
     (["--odom-hz", "nan"], "--odom-hz=nan: must be a finite number in (0, 1000] Hz"),
     (["--odom-hz", "30"], "use a rate that divides 1e9 ns"),
     (["--odom-hz", "20"], "must be a positive multiple of the 4000000 ns physics step"),
+    (["--link", "lan", "--odom-hz", "10"], "with --link the robot side is the ROSbot's emulator"),
     (["--timeout", "inf"], "--timeout=inf"), (["--timeout", "0"], "--timeout=0"),
     (["--timeout", "-5"], "--timeout=-5"),
     (["--port", "-1"], "--port=-1: must be an integer in [1, 65535]"),
