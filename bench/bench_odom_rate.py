@@ -4,7 +4,9 @@ rate (``papf run --odom-hz``), one row per robot.
 A fleet's planners read odometry only at the scan instants, so the drive is the same at any
 rate that divides the scan period (tests/unit/test_odom_rate.py); what the rate changes is
 the energy meter's integration step, the outcome's time resolution and the path length's
-chords. ``default`` is the run's own rate (a fleet's without people: the scan rate).
+chords. ``default`` is the run's own rate (a fleet's without people: the scan rate). After
+each run's robots, a ``(fleet)`` row: how many reached, the longest duration, the closest
+approach, the sums of the charges and of the path lengths.
 
     python bench/bench_odom_rate.py [--worlds fleet-ring-16] [--rates default,50]
         [--planner papf] [--timeout 120] [--csv docs/data/fleet-odom-energy.csv --label L]
@@ -40,10 +42,16 @@ def run_rows(world: str, planner: str, rate: str, timeout_s: float) -> list[dict
         raise SystemExit(f"bench odom rate: {world} at {rate}: no JSON (exit {proc.returncode}): "
                          f"{proc.stderr.strip().splitlines()[-1:]}")
     r = json.loads(lines[-1])
-    return [{"world": world, "planner": planner, "odom_hz": rate, "robot": x["name"],
+    each = [{"world": world, "planner": planner, "odom_hz": rate, "robot": x["name"],
              "outcome": x["outcome"], "duration_s": x["duration_s"], "charge_mAh": x["charge_mAh"],
              "path_length_m": x["path_length_m"], "min_separation_m": x["min_separation_m"],
              "wall_s": round(r["wall_time_s"], 2)} for x in r["robots"]]
+    reached = sum(x["outcome"] == "reached" for x in r["robots"])
+    fleet = {**each[0], "robot": "(fleet)", "outcome": f"{reached}/{len(each)} reached",
+             "duration_s": r["duration_s"], "min_separation_m": r["min_separation_m"],
+             "charge_mAh": round(sum(x["charge_mAh"] or 0.0 for x in each), 6),
+             "path_length_m": round(sum(x["path_length_m"] for x in each), 6)}
+    return [*each, fleet]
 
 
 def main(argv=None) -> None:
