@@ -55,7 +55,7 @@ sys.path.insert(0, str(ROOT))
 
 import zenoh  # noqa: E402
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import emit, replace_label  # noqa: E402
 from bench.proc_cpu import TreeCPU  # noqa: E402
 from common.errors import PapfError  # noqa: E402
 from common.ports import plain  # noqa: E402
@@ -252,8 +252,7 @@ def main_worlds(args) -> None:
         for passing in [m for m in args.passing.split(",") if m]:
             row = outcome_row(world, args.planner or one_with_role("papf-proposed"), passing,
                               args.timeout, args.odom_hz)
-            print(json.dumps(row), flush=True)
-            rows.append({"label": args.label or "", **row})
+            emit(rows, row, args.label)
     if args.csv:
         replace_label(args.csv, PASSING_FIELDS, args.label, rows)
 
@@ -320,8 +319,7 @@ def main_split(args) -> None:
         for robots in args.robot_counts:
             row = {**split(fleet_world(Path(tmp), robots, 0), args.long_s),
                    "load_avg_1min": round(os.getloadavg()[0], 1)}
-            print(json.dumps(row), flush=True)
-            rows.append({"label": args.label or "", **row})
+            emit(rows, row, args.label)
     if args.csv:
         replace_label(args.csv, SPLIT_FIELDS, args.label, rows)
 
@@ -342,8 +340,7 @@ def main(argv=None) -> None:
                 row = {"robots": robots, "people": people, "planner": args.planner,
                        **measure(world, robots, args.planner, args.short_s, args.long_s,
                                  args.passing, args.odom_hz)}
-                print(json.dumps(row), flush=True)
-                rows.append({"label": args.label or "", **row})
+                emit(rows, row, args.label)
     if args.csv:
         replace_label(args.csv, FIELDS, args.label, rows)
 

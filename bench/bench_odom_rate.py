@@ -22,7 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import emit, replace_label  # noqa: E402
 from common.cliparse import ArgumentParser  # noqa: E402
 from common.ports import plain  # noqa: E402
 from papf.launch.supervisor import free_port  # noqa: E402
@@ -69,8 +69,7 @@ def main(argv=None) -> None:
     for world in [w for w in args.worlds.split(",") if w]:
         for rate in [r for r in args.rates.split(",") if r]:
             for row in run_rows(world, args.planner, rate, args.timeout):
-                print(json.dumps(row), flush=True)
-                rows.append({"label": args.label or "", **row})
+                emit(rows, row, args.label)
     if args.csv:
         replace_label(args.csv, FIELDS, args.label, rows)
 

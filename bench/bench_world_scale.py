@@ -16,7 +16,6 @@ load average of each row is written with it.
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import tempfile
@@ -32,7 +31,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 import zenoh  # noqa: E402
 
-from bench.csvrows import check_csv, replace_label  # noqa: E402
+from bench.csvrows import check_csv, emit, replace_label  # noqa: E402
 from common.ports import plain  # noqa: E402
 from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
@@ -162,8 +161,7 @@ def main() -> None:
         cases += [(path, 0, cells) for path, cells in (hall_world(folder, w) for w in widths)]
         for world, n, cells in cases:
             row = {"world": world.stem, "obstacles": n, "cells": cells, **run(world, args.sim_s)}
-            print(json.dumps(row), flush=True)
-            rows.append({"label": args.label or "", **row})
+            emit(rows, row, args.label)
     if args.csv:
         replace_label(args.csv, FIELDS, args.label, rows)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -70,3 +71,10 @@ def replace_label(path: Path, fields: Sequence[str], label: str, rows: Iterable[
         with Path(path).open(newline="") as fh:
             kept = [r for r in csv.DictReader(fh) if r.get("label", "") != label]
     write_rows(path, fields, kept + [{**r, "label": label} for r in rows])
+
+
+def emit(rows: list[dict], row: dict, label: str | None) -> None:
+    """A benchmark's row as it comes: printed as one JSON line (progress on long work), and
+    kept in ``rows`` under ``label`` for :func:`replace_label`."""
+    print(json.dumps(row), flush=True)
+    rows.append({"label": label or "", **row})
