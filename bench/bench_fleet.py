@@ -142,7 +142,7 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", str(world),
                                  "--planner", planner, "--timeout", f"{long_s + 0.5:g}",
                                  "--json", "--continue-on-collision", "--port", str(port),
-                                 *(["--passing", passing] if passing else []), *odom(odom_hz)],
+                                 *(["--passing", passing] if passing else []), *odom_args(odom_hz)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             if not wait_port(port, 60.0):
@@ -176,7 +176,7 @@ def measure(world: Path, robots: int, planner: str, short_s: float, long_s: floa
             "collisions": result["collisions"], "load_avg_1min": round(os.getloadavg()[0], 1)}
 
 
-def odom(odom_hz: float | None) -> list[str]:
+def odom_args(odom_hz: float | None) -> list[str]:
     """``papf run --odom-hz`` when given (else the run's default: 50, a fleet's the scan rate)."""
     return [] if odom_hz is None else ["--odom-hz", f"{odom_hz:g}"]
 
@@ -205,7 +205,7 @@ def outcome_row(world: str, planner: str, passing: str, timeout_s: float,
         launched = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "papf", "run", "--world", world,
                                  "--planner", planner, "--timeout", f"{timeout_s:g}", "--json",
-                                 "--passing", passing, "--port", str(port), *odom(odom_hz)],
+                                 "--passing", passing, "--port", str(port), *odom_args(odom_hz)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             if not wait_port(port, 60.0):

@@ -35,20 +35,7 @@ from common import robot
 from common.errors import ConfigError
 from common.params import SEED, Spec, arg_type, pos
 
-ODOM_HZ = 50.0   # [Hz] the odometry tick of one robot, real or simulated (a fleet's: odom_rate)
-
-
-def odom_rate(given: float | None, scan_hz: float, fleet: bool) -> float:
-    """The simulator's odometry tick [Hz]: ``given`` when set; else :data:`ODOM_HZ` for one
-    robot and the scan rate for a ``fleet`` (robots without people: people take their steps
-    on this tick). A fleet's planners read odometry only at the scan instants (the same
-    samples at either rate: the same drive, bit for bit); the tick changes the meter's
-    integration step and the outcome's time resolution, and the 50 Hz streams were three
-    quarters of a fleet's messages (docs/performance.md "A fleet's odometry rate")."""
-    if given is not None:
-        return given
-    return scan_hz if fleet else ODOM_HZ
-
+ODOM_HZ = 50.0   # [Hz] the odometry tick of a robot, real or simulated (a fleet's: world_sim.core.odom_rate)
 
 # Declared ranges of the drivers' options (common.params): the world simulator's and the
 # ROSbot driver's command lines share them; checked when parsed and again when used.

@@ -25,7 +25,7 @@ import sys
 import time
 
 from common.cliparse import ArgumentParser
-from common.drive import add_driver_args, odom_rate
+from common.drive import add_driver_args
 from common.errors import PapfError
 from common.ports import describe, plain
 from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
@@ -72,13 +72,12 @@ def wait_for_start(node: Node) -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
-    from nodes.world_sim.core import WorldConfig, WorldCore  # pybullet: only when simulating
+    from nodes.world_sim.core import WorldConfig, WorldCore, odom_rate  # pybullet: when simulating
 
     log = setup_logging(NAME, args.log_level)
     world = load_world(args.world)
-    fleet = bool(world.robots) and not world.has_people   # people step on the odometry tick
-    config = WorldConfig.from_rates(odom_rate(args.odom_hz, args.scan_hz, fleet),
-                                    args.scan_hz, args.watchdog)
+    config = WorldConfig.from_rates(odom_rate(world, args.odom_hz, args.scan_hz), args.scan_hz,
+                                    args.watchdog)
     with open_node(NAME, args, log) as node:
         publish = node.publish
         people = ("sim/people",) if world.has_people else ()   # on this node's namespace

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from common.drive import DRIVER_OPTIONS, CommandGate, RosbotLimits
+from common.drive import DRIVER_OPTIONS, ODOM_HZ, CommandGate, RosbotLimits
 from common.errors import ConfigError
 from common.params import check_value
 from common.units import NS_PER_S, period_ns
@@ -51,15 +51,15 @@ class WorldConfig:
         step = self.sim.step_ns
         if self.odom_period_ns <= 0 or self.odom_period_ns % step:
             raise ConfigError(f"odometry period {self.odom_period_ns} ns must be a positive "
-                              f"multiple of the {step} ns physics step (--odom-hz: e.g. 50, 25, "
+                              f"multiple of the {step} ns physics step (--odom-hz: e.g. 250, 50, "
                               "10)")
         if self.scan_period_ns <= 0 or self.scan_period_ns % self.odom_period_ns:
             raise ConfigError(f"scan period {self.scan_period_ns} ns must be a positive multiple "
                               f"of the odometry period {self.odom_period_ns} ns (--odom-hz: a "
-                              "multiple of the scan rate, e.g. 50, 25, 10)")
+                              "multiple of the scan rate, e.g. 250, 50, 10)")
 
     @classmethod
-    def from_rates(cls, odom_hz: float = 50.0, scan_hz: float = 10.0, watchdog_s: float = 0.5,
+    def from_rates(cls, odom_hz: float = ODOM_HZ, scan_hz: float = 10.0, watchdog_s: float = 0.5,
                    sim: SimParams | None = None) -> WorldConfig:
         for name, value in (("odom_hz", odom_hz), ("scan_hz", scan_hz), ("watchdog", watchdog_s)):
             check_value(name, value, DRIVER_OPTIONS[name])
@@ -67,6 +67,19 @@ class WorldConfig:
                    scan_period_ns=period_ns(scan_hz, "scan rate"),
                    limits=RosbotLimits(watchdog_ns=round(watchdog_s * NS_PER_S)),
                    sim=sim or SimParams())
+
+
+def odom_rate(world: World, given: float | None, scan_hz: float) -> float:
+    """The odometry tick [Hz] of a run of ``world``: ``given`` when set; else the scan rate
+    for a fleet without people, :data:`~common.drive.ODOM_HZ` otherwise (one robot; people
+    take their steps on this tick). A fleet's planners read odometry only at the scan
+    instants (the same samples at either rate: the same drive, bit for bit); the tick
+    changes the meter's integration step and the outcome's time resolution, and the 50 Hz
+    streams were three quarters of a fleet's messages (docs/performance.md "A fleet's
+    odometry rate")."""
+    if given is not None:
+        return given
+    return scan_hz if world.robots and not world.has_people else ODOM_HZ
 
 
 class ContactEpisodes:

@@ -28,9 +28,10 @@ The server is single-threaded when it forks (nothing it imports starts a thread:
 is held to one by ``common``; a server that finds a second thread forks nothing more, and
 the launcher starts the rest by ``python -m``) and it never opens a Zenoh session, so a
 node's runtime starts fresh in the node. Its control socket is an unnamed socket pair whose
-other end only the launcher holds: nothing else can ask it for a process. A node whose interpreter-start variables (``STARTUP_VARS``) differ
-from the server's, or whose command line does not fit the room, is started by ``python -m``
-as before; so is every node with ``PAPF_FORK_SERVER=0``, and everywhere but Linux.
+other end only the launcher holds: nothing else can ask it for a process. A node whose
+interpreter-start variables (``STARTUP_VARS``) differ from the server's, or whose command
+line does not fit the room, is started by ``python -m`` as before; so is every node with
+``PAPF_FORK_SERVER=0``, and everywhere but Linux.
 """
 
 from __future__ import annotations

@@ -1,23 +1,29 @@
-"""A fleet's odometry tick (common.drive.odom_rate): the scan rate by default, and the drive
+"""A fleet's odometry tick (nodes.world_sim.core.odom_rate): the scan rate by default, and the drive
 the same at either rate — what a planner reads at a scan instant does not depend on it."""
 
 from __future__ import annotations
 
 import math
 
-from common.drive import ODOM_HZ, odom_rate
-from nodes.world_sim.core import WorldConfig, WorldCore
+from common.drive import ODOM_HZ
+from nodes.world_sim.core import WorldConfig, WorldCore, odom_rate
 from schemas.messages import Twist
 from worlds import parse_world
 
 S = 1_000_000_000  # ns per s
 
 
+ROBOTS = [{"name": "r1", "start": [0, 0], "goal": [3, 0]}, {"name": "r2", "start": [3, 1], "goal": [0, 1]}]
+
+
 def test_one_robot_ticks_at_50_hz_a_fleet_at_the_scan_rate_and_a_given_rate_wins():
-    assert odom_rate(None, 10.0, fleet=False) == ODOM_HZ == 50.0
-    assert odom_rate(None, 10.0, fleet=True) == 10.0
-    assert odom_rate(50.0, 10.0, fleet=True) == 50.0
-    assert odom_rate(25.0, 10.0, fleet=False) == 25.0
+    one, fleet = parse_world({"goal": {"position": [3, 0]}}), parse_world({"robots": ROBOTS})
+    crowd = parse_world({"robots": ROBOTS, "people": [{"start": [1, 2], "goal": [1, -2]}]})
+    assert odom_rate(one, None, 10.0) == ODOM_HZ == 50.0
+    assert odom_rate(fleet, None, 10.0) == 10.0
+    assert odom_rate(crowd, None, 10.0) == ODOM_HZ   # people step on the tick
+    assert odom_rate(fleet, 50.0, 10.0) == 50.0
+    assert odom_rate(one, 25.0, 10.0) == 25.0
 
 
 def _scan_instants(odom_hz: float, seconds: float) -> list[tuple]:
