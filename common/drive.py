@@ -34,6 +34,7 @@ from typing import NamedTuple
 from common import robot
 from common.errors import ConfigError
 from common.params import SEED, Spec, arg_type, pos
+from common.units import LOCKSTEP_TIMEOUT_S
 
 ODOM_HZ = 50.0   # [Hz] the odometry tick of a robot, real or simulated (a fleet's: world_sim.core.odom_rate)
 
@@ -60,9 +61,10 @@ def add_driver_args(parser, simulator: bool = True) -> None:
     parser.add_argument("--seed", type=opt("seed"), default=0, help="noise seed (default 0)" + sim)
     parser.add_argument("--realtime", action="store_true",
                         help="pace sim time to the wall clock and never wait for commands" + sim)
-    parser.add_argument("--lockstep-timeout", type=opt("lockstep_timeout"), default=2.0,
-                        metavar="S", help="wall seconds to wait for the cmd_vel of a scan "
-                                          "(default 2.0)" + sim)
+    parser.add_argument("--lockstep-timeout", type=opt("lockstep_timeout"),
+                        default=LOCKSTEP_TIMEOUT_S, metavar="S",
+                        help="wall seconds to wait for the cmd_vel of a scan "
+                             f"(default {LOCKSTEP_TIMEOUT_S:g})" + sim)
     parser.add_argument("--scan-hz", type=opt("scan_hz"), default=10.0,
                         help="scan / lockstep rate (10)" + sim)
     parser.add_argument("--odom-hz", type=opt("odom_hz"), default=None if simulator else ODOM_HZ,

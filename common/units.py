@@ -16,6 +16,7 @@ from common.errors import ConfigError
 
 NS_PER_S = 1_000_000_000       # [ns/s]
 MAX_STAMP_NS = 2**62           # [ns] largest stamp any node accepts (see module doc)
+LOCKSTEP_TIMEOUT_S = 2.0       # [s wall] the simulator's wait for a scan's command (default)
 # [s] wall time a lockstep scan waits for its partners (odometry, pose, objects) in the
 # planner and the tracker. Longer than the driver's lockstep timeout (2 s): on a slow or
 # overloaded machine a late partner is waited for, so an answer never depends on the
@@ -23,6 +24,12 @@ MAX_STAMP_NS = 2**62           # [ns] largest stamp any node accepts (see module
 # older); a lost partner shows first as the driver's `node_fault` in the run's figures,
 # and the fallback after this timeout then keeps the node answering.
 LOCKSTEP_PAIR_TIMEOUT_S = 3.0
+
+
+def pair_timeout_s(lockstep_timeout_s: float) -> float:
+    """The planner's and tracker's pair timeout [s] beside a driver's lockstep timeout: the
+    default (:data:`LOCKSTEP_PAIR_TIMEOUT_S`), or a second longer than a longer timeout."""
+    return max(LOCKSTEP_PAIR_TIMEOUT_S, lockstep_timeout_s + 1.0)
 
 
 def s_to_ns(seconds: float) -> int:

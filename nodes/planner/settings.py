@@ -60,7 +60,7 @@ APF: dict[str, Spec] = {
 # safety setting — past 2 s a robot drives on data that no longer describes the world.
 NODE: dict[str, Spec] = {
     "stale_timeout": pos(2.0, "s", safety=True),
-    "pair_timeout": pos(10.0, "s"),
+    "pair_timeout": pos(61.0, "s"),   # a second past the driver's longest lockstep timeout
     # the short plan each realtime command carries (docs/link-driving.md): the robot follows
     # it at most this far; 0.2 s is two scan periods, 2 s the watchdog's own ceiling
     "plan_horizon": num(0.2, 2.0, "s"),

@@ -84,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
                                      + describe(PORTS, VARIANTS))
     parser.add_argument("--realtime", action="store_true",
                         help="pair each scan with the latest pose (robot / HIL)")
-    parser.add_argument("--pair-timeout", type=arg_type("--pair-timeout", pos(10.0, "s")),
+    parser.add_argument("--pair-timeout", type=arg_type("--pair-timeout", pos(61.0, "s")),
                         default=LOCKSTEP_PAIR_TIMEOUT_S, metavar="S",
                         help="lockstep: wall time a scan waits for its pose [s] (default "
                              f"{LOCKSTEP_PAIR_TIMEOUT_S:g}, longer than the driver's "

@@ -61,6 +61,11 @@ def register(sub) -> None:
     p.add_argument("--odom-hz", type=arg_type("--odom-hz", DRIVER_OPTIONS["odom_hz"]),
                    metavar="HZ", help="the sim's odometry, wheels and battery rate (default 50; a "
                    "fleet's without people: the scan rate, 10; docs/performance.md \"A fleet's odometry rate\")")
+    p.add_argument("--lockstep-timeout", type=arg_type("--lockstep-timeout",
+                                                        DRIVER_OPTIONS["lockstep_timeout"]),
+                   metavar="S", help="wall seconds the simulator waits for a scan's command "
+                   "before it gives up the lockstep (default 2; longer on a loaded machine: a "
+                   "run is bit-reproducible only while the lockstep holds)")
     p.add_argument("--dry-run", action="store_true",
                    help="print the resolved process list as JSON, start nothing")
     p.add_argument("--verbose", "-v", action="store_true", help="show every node's log lines")
@@ -101,6 +106,8 @@ def run_config(args):
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      passing=args.passing, odom_hz=args.odom_hz,
+                     **({} if args.lockstep_timeout is None
+                        else {"lockstep_timeout_s": args.lockstep_timeout}),
                      ros_face=face_domain(args), progress=None if not args.json else False,
                      link=args.link, robot_trace=args.robot_trace,
                      robot_record=args.robot_record,

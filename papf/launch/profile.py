@@ -31,7 +31,7 @@ VARIABLES = ("world", "world_file", "seed", "planner", "planner_args", "record",
              "timeout_s", "realtime", "lockstep_timeout", "bridge_namespace", "objects",
              "view", "ros", "ros_domain", "cmd_vel_type", "ros_face", "ros_face_domain",
              "record_force", "ros_distro", "ros_face_distro", "record_format", "passing",
-             "odom_hz")
+             "odom_hz", "pair_timeout")
 ROUTER_MODULE = "papf.launch.router"
 OBJECTS = ("none", "truth", "tracker")   # where the planner's obstacle tracks come from
 OBJECT_PLANNERS = tuple(declared("uses_objects"))   # planners that use tracks: their default is truth

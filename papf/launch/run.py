@@ -17,7 +17,11 @@ from dataclasses import dataclass, field, replace
 import zenoh
 
 from common import runauth, seal
+from common.drive import DRIVER_OPTIONS
+from common.errors import ConfigError
+from common.params import check_value
 from common.transport import wait_alive, zenoh_config
+from common.units import LOCKSTEP_TIMEOUT_S, pair_timeout_s
 from nodes.energy_meter.models import DEFAULT_MODEL
 from nodes.planner.registry import DEFAULT_PLANNER
 from papf.console.progress import RunProgress
@@ -54,7 +58,7 @@ class RunConfig:
     verbose: bool = False
     progress: bool | None = None       # None: when stderr is a terminal
     startup_timeout_s: float = 60.0    # [s wall] for every node to become alive
-    lockstep_timeout_s: float = 2.0    # [s wall] driver waits this long for a command
+    lockstep_timeout_s: float = LOCKSTEP_TIMEOUT_S   # [s wall] driver waits this long for a command
     extra_node_args: dict[str, list[str]] = field(default_factory=dict)
     zenoh_mode: str = "peer"           # nodes' Zenoh mode: peer (direct links, default) or client
     view: int | None = None            # serve a Foxglove view on this port (docs/viewer.md)
@@ -76,6 +80,8 @@ def launch_options(cfg: RunConfig, port: int) -> LaunchOptions:
               "record_force": "1" if cfg.force and cfg.record else None,
               "record_format": "ros2" if cfg.record and cfg.record_format == "ros2" else None,
               "lockstep_timeout": f"{cfg.lockstep_timeout_s:g}",
+              "pair_timeout": (None if cfg.lockstep_timeout_s == LOCKSTEP_TIMEOUT_S   # the
+                               else f"{pair_timeout_s(cfg.lockstep_timeout_s):g}"),   # nodes' own
               "realtime": "1" if cfg.realtime else None,
               "objects": cfg.objects, "view": cfg.view, "passing": cfg.passing,
               "odom_hz": None if cfg.odom_hz is None else f"{cfg.odom_hz:g}",
@@ -121,6 +127,10 @@ def preflight(cfg: RunConfig) -> World:
     check_run(world, cfg.planner, cfg.seed, cfg.timeout_s, cfg.port, cfg.namespace,
               None if bag else cfg.record, cfg.planner_args, force=cfg.force,
               view=cfg.view)
+    check_value("--lockstep-timeout", cfg.lockstep_timeout_s, DRIVER_OPTIONS["lockstep_timeout"])
+    if cfg.realtime and cfg.lockstep_timeout_s != LOCKSTEP_TIMEOUT_S:
+        raise ConfigError("--lockstep-timeout: a lockstep run's; with --realtime the simulator "
+                          "goes at the wall clock's pace and never waits for a command: drop one")
     if cfg.odom_hz is not None:   # on the physics step's grid, the scans on its own
         from nodes.world_sim.core import WorldConfig  # pybullet: only when asked
 

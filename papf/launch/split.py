@@ -27,6 +27,7 @@ from pathlib import Path
 
 from common import runauth
 from common.errors import ConfigError
+from common.units import LOCKSTEP_TIMEOUT_S
 from papf.launch.claim import Claim
 from papf.launch.host import launch, launch_key
 from papf.launch.outcome import RunMonitor, RunResult
@@ -168,6 +169,9 @@ def _check(cfg: RunConfig, spec: LinkSpec, ports: SplitPorts) -> None:
     if cfg.odom_hz is not None:   # the robot side is the ROSbot's (its emulator): its own rate
         raise ConfigError("--odom-hz: the simulator's odometry rate; with --link the "
                           "robot side is the ROSbot's emulator at its own 50 Hz: drop --odom-hz")
+    if cfg.lockstep_timeout_s != LOCKSTEP_TIMEOUT_S:   # a split run is real time: nothing waits
+        raise ConfigError("--lockstep-timeout: a lockstep run's; a run with --link goes at the "
+                          "wall clock's pace and never waits for a command: drop --lockstep-timeout")
     check_launch(robot_options(cfg, ports), load_profile("robot"))
     laptop = laptop_options(cfg, ports, spec)
     check_launch(laptop, load_profile("laptop"))

@@ -14,6 +14,7 @@ from common.transport import zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Clock, Keys
 from tests.support.e2e import assert_no_orphans, papf_run, pids_of, start_papf_run
+from tests.support.worlds import STEADY
 
 
 def test_open_world_reaches_goal_in_a_straight_line():
@@ -32,8 +33,8 @@ def test_open_world_reaches_goal_in_a_straight_line():
 
 @pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
 def test_same_seed_identical_other_seed_differs():
-    runs = [papf_run("--world", "energy", "--planner", "apf", "--seed", str(s), "--timeout", "20")
-            for s in (5, 5, 6)]
+    runs = [papf_run("--world", "energy", "--planner", "apf", "--seed", str(s), "--timeout", "20",
+                     *STEADY) for s in (5, 5, 6)]
     a, b, c = (r[1] for r in runs)
     assert a is not None and b is not None and c is not None, [r[2][-2000:] for r in runs]
     for r in (a, b, c):

@@ -8,6 +8,7 @@ import pytest
 from papf.recording.reader import iter_messages
 from schemas.messages import Objects
 from tests.support.e2e import papf_run
+from tests.support.worlds import STEADY
 
 
 def objects_of(path, ns="rosbot"):
@@ -34,7 +35,7 @@ def test_iapf_reaches_every_road_world_with_truth_and_tracker_and_repeats(tmp_pa
         w, o = ("road-cut-in", "tracker") if key == "again" else key
         extra = ("--record", str(tmp_path / rec[key])) if key in rec else ()
         return ("--world", w, "--planner", "iapf", "--objects", o, "--seed", "1",
-                "--namespace", ns[key], *extra)
+                "--namespace", ns[key], *STEADY, *extra)
 
     with ThreadPoolExecutor(PARALLEL_RUNS) as pool:
         futures = {key: pool.submit(papf_run, *args(key)) for key in keys}

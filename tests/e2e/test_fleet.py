@@ -17,6 +17,7 @@ from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Keys
 from tests.support.e2e import papf_run
+from tests.support.worlds import STEADY
 
 PY = sys.executable
 
@@ -45,8 +46,8 @@ to = [4.0, 1.0]
 def test_corridor_swap_head_on_both_reach_and_repeat(tmp_path):
     world = tmp_path / "swap.toml"
     world.write_text(HEAD_ON)
-    runs = [papf_run("--world", str(world), "--planner", "papf", "--seed", "2", "--timeout", "60")
-            for _ in range(2)]
+    runs = [papf_run("--world", str(world), "--planner", "papf", "--seed", "2", "--timeout", "60",
+                     *STEADY) for _ in range(2)]
     for code, res, err in runs:
         assert res is not None, err
         assert (code, res["outcome"], res["collisions"]) == (0, "reached", 0), res

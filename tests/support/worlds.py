@@ -19,6 +19,10 @@ position = [1.0, 0.0]
 tolerance = 0.1
 """
 FAST = ["--set", "v_max=0.5"]    # the paper's 0.1 m/s would make a test of a short world slow
+# A run compared with another is bit-reproducible only while its lockstep holds: the suite's
+# load (four workers, each starting processes, on two cores) once stalled a fleet's command
+# past the simulator's 2 s wait, and the second of two runs differed (papf run --lockstep-timeout)
+STEADY = ["--lockstep-timeout", "30"]
 
 
 def box_world(name: str, description: str, goal_x: float, box_center: tuple[float, float],

@@ -75,6 +75,10 @@ def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
     (["--odom-hz", "30"], "use a rate that divides 1e9 ns"),
     (["--odom-hz", "20"], "must be a positive multiple of the 4000000 ns physics step"),
     (["--link", "lan", "--odom-hz", "10"], "with --link the robot side is the ROSbot's emulator"),
+    (["--lockstep-timeout", "nan"], "--lockstep-timeout=nan: must be a finite number in (0, 60] s"),
+    (["--lockstep-timeout", "0"], "--lockstep-timeout=0"),
+    (["--realtime", "--lockstep-timeout", "5"], "with --realtime the simulator goes at the wall"),
+    (["--link", "lan", "--lockstep-timeout", "5"], "never waits for a command: drop --lockstep"),
     (["--timeout", "inf"], "--timeout=inf"), (["--timeout", "0"], "--timeout=0"),
     (["--timeout", "-5"], "--timeout=-5"),
     (["--port", "-1"], "--port=-1: must be an integer in [1, 65535]"),
@@ -103,3 +107,23 @@ def test_plan_refuses_a_negative_seed_and_a_3d_world_is_refused_by_run():
     assert p.returncode == 2 and "--seed=-1" in p.stderr and "Traceback" not in p.stderr
     p = papf("run", "--world", "wang-3d-fig9", "--json")
     assert p.returncode == 2 and "is 3-D" in p.stderr and p.stdout == ""
+
+
+def test_a_longer_lockstep_timeout_reaches_the_simulator_and_the_pairing_nodes():
+    """The planner's and tracker's pair timeout stays a second past the simulator's wait, so a
+    loaded machine never changes an answer (common.units.pair_timeout_s)."""
+    from papf.launch.run import RunConfig, resolve_run
+
+    def argv(cfg, name):
+        return list(resolve_run(cfg).nodes[name])
+
+    default = RunConfig(world="open", objects="tracker")
+    world = argv(default, "base_driver")
+    assert world[world.index("--lockstep-timeout") + 1] == "2"
+    assert "--pair-timeout" not in argv(default, "planner") + argv(default, "tracker")
+    longer = RunConfig(world="open", objects="tracker", lockstep_timeout_s=10.0)
+    world = argv(longer, "base_driver")
+    assert world[world.index("--lockstep-timeout") + 1] == "10"
+    for name in ("planner", "tracker"):
+        args = argv(longer, name)
+        assert args[args.index("--pair-timeout") + 1] == "11", name
