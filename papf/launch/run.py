@@ -100,6 +100,9 @@ def resolve_run(cfg: RunConfig, port: int | None = None) -> Resolved:
     return resolve(load_profile(PROFILE), launch_options(cfg, port or router_port(cfg.port)))
 
 
+ROUTER_TRIES = 3   # a router port taken between its choice and the listen: choose again
+
+
 def router_port(port: int | None) -> int:
     """``--port``; else 7447 when it is free and inside ``--port-range`` (if one is set),
     else a free port (of the range: :mod:`papf.launch.portrange`)."""
@@ -141,25 +144,13 @@ def preflight(cfg: RunConfig) -> World:
 def run(cfg: RunConfig) -> RunResult:
     """Run the whole stack once; always stops every process it started."""
     world = preflight(cfg)   # before anything starts
-    port = router_port(cfg.port)
-    if cfg.port is None and port != DEFAULT_PORT and port_in_use(DEFAULT_PORT):
-        log.warning("port %d is in use; the embedded router listens on %d instead",
-                    DEFAULT_PORT, port)
-    graph = resolve_run(cfg, port)
-    endpoint = graph.connect[0]
     wall0 = time.monotonic()
     monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision,
                          goal=(world.goal[0], world.goal[1], world.tolerance))
     keys = Keys(cfg.namespace)
-    # The launcher's own session is the embedded router (a Python process, as the profile
-    # says, but this one): no router process to start and wait for, and the launcher's
-    # subscriptions are served without a hop. The nodes are stopped before it closes. A
-    # port someone else listens on (another stack's router) fails here: nothing published.
-    try:
-        # no multicast, nothing to connect to: no scouting delay (Zenoh waits 0.5 s by default)
-        router = zenoh.open(zenoh_config("router", listen=[f"tcp/127.0.0.1:{port}"], scout_delay_ms=0))
-    except Exception as exc:  # zenoh raises ZError (e.g. the port was taken meanwhile)
-        monitor.fail(f"the embedded router could not listen on {endpoint}: {exc}")
+    router, graph, why = open_router(cfg)
+    if router is None:
+        monitor.fail(why)
         return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
     run_key = runauth.new_key()    # to the nodes through their environment only
     run_id = seal.new_run_id()     # every sample of this run carries it (common.seal)
@@ -170,6 +161,33 @@ def run(cfg: RunConfig) -> RunResult:
     finally:
         if cfg.realtime:
             runauth.withdraw_key(cfg.namespace, run_key)
+
+
+def open_router(cfg: RunConfig, tries: int = ROUTER_TRIES) -> tuple[zenoh.Session | None, Resolved, str]:
+    """The embedded router, the run's processes around its port, and "" — or None, the
+    processes and why it could not listen.
+
+    The launcher's own session is the embedded router (a Python process, as the profile
+    says, but this one): no router process to start and wait for, and the launcher's
+    subscriptions are served without a hop. The nodes are stopped before it closes. A port
+    someone else listens on (another stack's router) fails here: nothing published. Without
+    ``--port``, a port taken between its choice and the listen (two runs started at once:
+    both saw 7447 free) is chosen again, up to ``tries`` times."""
+    for attempt in range(1, max(tries, 1) + 1):
+        port = router_port(cfg.port)
+        if cfg.port is None and port != DEFAULT_PORT and port_in_use(DEFAULT_PORT):
+            log.warning("port %d is in use; the embedded router listens on %d instead",
+                        DEFAULT_PORT, port)
+        graph = resolve_run(cfg, port)
+        try:   # no multicast, nothing to connect to: no scouting delay (Zenoh's default 0.5 s)
+            return zenoh.open(zenoh_config("router", listen=[f"tcp/127.0.0.1:{port}"],
+                                           scout_delay_ms=0)), graph, ""
+        except Exception as exc:  # zenoh raises ZError (e.g. the port was taken meanwhile)
+            why = f"the embedded router could not listen on {graph.connect[0]}: {exc}"
+            if cfg.port is not None or attempt >= tries:
+                return None, graph, why
+            log.warning("port %d was taken as the router started; choosing another", port)
+    raise AssertionError("the last try returns")
 
 
 def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, run_key: str,
