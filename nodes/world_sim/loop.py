@@ -28,6 +28,7 @@ from common.units import NS_PER_S
 from schemas.messages import Event, Twist
 
 SOURCE = "base_driver"   # the core's SOURCE (not imported: the core pulls in pybullet)
+LOCKSTEP_FAULT = "no cmd_vel with stamp_ns="   # how a lockstep timeout's node_fault begins
 
 PACE, AWAIT, DRAIN = "pace", "await", "drain"
 
@@ -105,7 +106,7 @@ class WorldLoop:
 
     def _fault(self, now: float) -> tuple[str, Event]:
         t = self.core.t_ns
-        detail = (f"no cmd_vel with stamp_ns={t} within {self.timeout_s:g} s (wall); "
+        detail = (f"{LOCKSTEP_FAULT}{t} within {self.timeout_s:g} s (wall); "
                   "free running in real time until a command answers the latest scan")
         if self.log:
             self.log.warning("lockstep: %s", detail)

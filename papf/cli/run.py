@@ -195,11 +195,28 @@ def print_summary(result, energy_model: str | None = None) -> None:
         rows.insert(8, ("min separation", "-" if sep is None else f"{sep:.3f} m"))
     if result.reason:
         rows.append(("reason", result.reason))
+    rows += fault_rows(result.faults)
     for k, v in rows:   # a reason may quote a node's output: no markup, no ESC (common.text)
         t.add_row(k, escape(safe_text(v, None)))
     print_table(t)   # fits: whole cells on a narrow terminal, one line a row when piped
     if result.fleet:
         print_table(fleet_table(result.fleet))
+
+
+def fault_rows(faults: tuple[str, ...]) -> list[tuple[str, str]]:
+    """The summary's rows on the run's node faults: the first, how many, and what a broken
+    lockstep means and what to do about it."""
+    from nodes.world_sim.loop import LOCKSTEP_FAULT
+
+    if not faults:
+        return []
+    more = f" (and {len(faults) - 1} more: --json lists them)" if len(faults) > 1 else ""
+    rows = [("faults", faults[0] + more)]
+    if any(LOCKSTEP_FAULT in f for f in faults):
+        rows.append(("lockstep", "broken: this run is not bit-reproducible (a command came "
+                                 "later than the simulator waits; a loaded machine? papf run "
+                                 "--lockstep-timeout S)"))
+    return rows
 
 
 def fleet_table(robots: tuple[dict, ...]):

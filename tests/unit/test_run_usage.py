@@ -52,12 +52,31 @@ def test_the_run_summary_shows_a_reason_as_text_no_markup_no_escapes(capsys):
     result = SimpleNamespace(outcome="failed", world="energy", planner="apf", seed=0,
                              duration_s=1.0, path_length_m=1.0, charge_mAh=1.0, energy_J=1.0,
                              collisions=0, sim_time_s=1.0, wall_time_s=1.0, fleet=(),
-                             min_separation_m=None,
+                             min_separation_m=None, faults=(),
                              reason="planner: \x1b]0;owned\x07[link=http://e]click[/link]")
     print_summary(result, "motor")
     out = capsys.readouterr().out
     assert "\x1b" not in out and "[link=http://e]click" in out
     assert "1.00 mAh (motor model)" in out          # the charge names the meter's model
+    assert "faults" not in out and "lockstep" not in out
+
+
+def test_the_run_summary_says_a_broken_lockstep_and_what_to_do(capsys):
+    from types import SimpleNamespace
+
+    from papf.cli.run import print_summary
+
+    faults = ("base_driver at 3.40 s: no cmd_vel with stamp_ns=3400000000 within 2 s (wall); "
+              "free running in real time until a command answers the latest scan",
+              "base_driver at 9.10 s: no cmd_vel with stamp_ns=9100000000 within 2 s (wall); …")
+    result = SimpleNamespace(outcome="reached", world="energy", planner="apf", seed=0,
+                             duration_s=1.0, path_length_m=1.0, charge_mAh=1.0, energy_J=1.0,
+                             collisions=0, sim_time_s=1.0, wall_time_s=1.0, fleet=(),
+                             min_separation_m=None, faults=faults, reason="")
+    print_summary(result)
+    out = " ".join(capsys.readouterr().out.split())   # the table wraps its cells
+    assert "base_driver at 3.40 s: no cmd_vel" in out and "and 1 more" in out
+    assert "not bit-reproducible" in out and "--lockstep-timeout S" in out
 
 
 @pytest.mark.parametrize("args,says", [
