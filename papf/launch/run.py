@@ -197,8 +197,8 @@ def _run(cfg: RunConfig, world: World, graph: Resolved, router: zenoh.Session, r
         return _run_fleet(cfg, world, graph, router, run_key, run_id, wall0)
     with router as session, Supervisor(show=_show_line(cfg.verbose), last=("recorder",),
                                        env={runauth.ENV: run_key, seal.RUN_ID_ENV: run_id}) as sup:
-        seq = RunSequence(session, keys, sup, monitor, run_key=bytes.fromhex(run_key),
-                          run_id=bytes.fromhex(run_id))
+        seq = RunSequence(session, keys, sup, monitor, stall_s=stall_s(cfg),
+                          run_key=bytes.fromhex(run_key), run_id=bytes.fromhex(run_id))
         try:
             _drive(cfg, world, graph.nodes, sup, session, keys, seq)
         finally:
@@ -299,11 +299,18 @@ def _drive_fleet(cfg: RunConfig, world: World, robots: list, commands: dict[str,
         seq.start(f"world={world.name} planner={cfg.planner} seed={cfg.seed} robots={len(seqs)}")
     with RunProgress(cfg.progress, cfg.timeout_s, world.name,
                      f"{len(seqs)} robots") as progress:
-        watch_fleet(seqs, sup, progress, goals)
+        watch_fleet(seqs, sup, progress, goals, stall_s(cfg))
+
+
+def stall_s(cfg: RunConfig) -> float:
+    """[s wall] how long the launcher waits for the sim clock to move before it calls the
+    stack stuck: :data:`~papf.launch.sequence.STALL_S`, or twice a longer lockstep timeout
+    (the simulator's whole wait for a command, and as long again)."""
+    return max(STALL_S, 2.0 * cfg.lockstep_timeout_s)
 
 
 def watch_fleet(seqs: dict[str, RunSequence], sup: Supervisor, progress,
-                goals: dict[str, tuple[float, float]]) -> None:
+                goals: dict[str, tuple[float, float]], stall: float = STALL_S) -> None:
     """Until every robot has an outcome: drain each robot's messages; a dead node, a stall
     or a stop ends every robot still running; then the figures at each robot's ``t_end``."""
     monitors = {n: s.monitor for n, s in seqs.items()}
@@ -322,8 +329,8 @@ def watch_fleet(seqs: dict[str, RunSequence], sup: Supervisor, progress,
         if progress is not None:
             progress.update(*progress_figures(monitors, goals))
         reason = sup.death_reason() if sup.dead() else (
-            f"sim time stuck at {clock / 1e9:.2f} s for {STALL_S:g} s"
-            if now - last_change > STALL_S else "")
+            f"sim time stuck at {clock / 1e9:.2f} s for {stall:g} s"
+            if now - last_change > stall else "")
         if reason:
             for m in monitors.values():
                 if not m.done:

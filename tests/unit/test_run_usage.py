@@ -146,3 +146,12 @@ def test_a_longer_lockstep_timeout_reaches_the_simulator_and_the_pairing_nodes()
     for name in ("planner", "tracker"):
         args = argv(longer, name)
         assert args[args.index("--pair-timeout") + 1] == "11", name
+
+
+def test_the_launcher_calls_a_run_stuck_only_after_the_simulators_whole_wait():
+    from papf.launch.run import RunConfig, stall_s
+    from papf.launch.sequence import STALL_S
+
+    assert stall_s(RunConfig(world="open")) == STALL_S == 20.0
+    assert stall_s(RunConfig(world="open", lockstep_timeout_s=10.0)) == STALL_S
+    assert stall_s(RunConfig(world="open", lockstep_timeout_s=30.0)) == 60.0
