@@ -118,12 +118,14 @@ def plan(exp: EnergyExperiment) -> list[RunSpec]:
 def run_config(exp: EnergyExperiment, spec: RunSpec, port: int) -> RunConfig:
     """The RunConfig of one run of ``exp`` (world, planner, preset, seed) on router ``port``."""
     from nodes.planner.registry import preset_sets
+    from papf.experiments.trials import LOCKSTEP_TIMEOUT_S
     from papf.launch.run import RunConfig
 
     return RunConfig(world=exp.world, planner=spec.planner, seed=spec.seed,
                      planner_args=[a for kv in preset_sets(spec.preset) for a in ("--set", kv)],
                      timeout_s=exp.timeout_s, record=str(spec.path), force=True, port=port,
                      energy_model=exp.energy_model, progress=False,
+                     lockstep_timeout_s=LOCKSTEP_TIMEOUT_S,   # the runs share the cores
                      extra_node_args={"recorder": ["--meta", "experiment=energy"]})
 
 

@@ -107,6 +107,12 @@ def run_offline(world: World | str, planner: str, seed: int = 0, timeout_s: floa
                  wall_time_s=time.monotonic() - t0, path=r.path, preset=preset)
 
 
+# [s wall] an experiment's stack runs wait this long for each command (papf run's 2 s): its
+# runs share the cores with each other (--workers) and with whatever else runs, and a command
+# held past the wait would let the physics run on without it and change a figure.
+LOCKSTEP_TIMEOUT_S = 10.0
+
+
 def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: float = 300.0,
               record: str | Path | None = None, planner_args: Sequence[str] = (),
               objects: str | None = None, namespace: str = "rosbot",
@@ -122,7 +128,7 @@ def run_stack(world_file: str | Path, planner: str, seed: int = 0, timeout_s: fl
     cfg = RunConfig(world=str(world_file), planner=planner, seed=seed, timeout_s=timeout_s,
                     record=str(record) if record else None, port=run_port(), progress=False,
                     planner_args=list(planner_args), objects=objects, namespace=namespace,
-                    startup_timeout_s=startup_timeout_s)
+                    startup_timeout_s=startup_timeout_s, lockstep_timeout_s=LOCKSTEP_TIMEOUT_S)
     res = run(cfg)
     path = pose_path(record) if record is not None and Path(record).exists() else np.zeros((0, 2))
     return Trial(res.world, planner, seed, "stack", res.outcome, res.duration_s, res.path_length_m,

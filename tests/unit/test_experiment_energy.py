@@ -62,6 +62,9 @@ def test_experiment_records_every_run_and_reports(tmp_path):
     assert cfg.world == "energy" and cfg.progress is False and cfg.port
     recorder = resolve_run(cfg).nodes["recorder"]    # the sim profile states the timeout
     assert "timeout_s=300" in recorder and "experiment=energy" in recorder
+    # its runs share the cores: each waits 10 s for a command, not papf run's 2 s
+    world = resolve_run(cfg).nodes["base_driver"]
+    assert world[world.index("--lockstep-timeout") + 1] == "10"
     assert all(c.port for c in fake.configs)          # an explicit free port each run
     for name in ("report.md", "report.csv", "trajectories.png", "charge.png", "motion.png"):
         assert (out / name).is_file()
