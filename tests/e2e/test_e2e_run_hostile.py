@@ -90,7 +90,7 @@ def _fuzz(endpoint: str, stop: threading.Event, counts: dict) -> None:
 
 def test_bus_fuzz_gives_the_figures_of_the_clean_run():
     """Items 2 and 3 end to end: nothing hostile on the bus changes a lockstep run."""
-    args = ("--world", "open", "--planner", "apf", "--timeout", "60")
+    args = ("--world", "open", "--planner", "apf", "--timeout", "60", *STEADY)
     code, clean, err = papf_run(*args)
     assert code == 0 and clean["outcome"] == "reached", err[-2000:]
     port = free_port()
