@@ -45,6 +45,9 @@ DRIVER_OPTIONS: dict[str, Spec] = {
     "odom_hz": pos(1000.0, "Hz"), "scan_hz": pos(100.0, "Hz"),
     "watchdog": pos(2.0, "s", safety=True), "lockstep_timeout": pos(60.0, "s"), "seed": SEED,
 }
+# The planner's and tracker's --pair-timeout: up to a second past the longest lockstep
+# timeout (common.units.pair_timeout_s gives it beside a driver's)
+PAIR_TIMEOUT: Spec = pos(DRIVER_OPTIONS["lockstep_timeout"].hi + 1.0, "s")
 
 
 def add_driver_args(parser, simulator: bool = True) -> None:

@@ -9,6 +9,7 @@ the charges' ranges fix eq. 2's signs, ``q_V, q_O, q_Q < 0 < q_G`` (docs/planner
 
 from __future__ import annotations
 
+from common.drive import PAIR_TIMEOUT
 from common.errors import ConfigError
 from common.params import FLAG, Spec, integer, num, pos
 from common.robot import LIDAR_RANGE_MAX_M, V_MAX_M_S, W_MAX_RAD_S
@@ -60,7 +61,7 @@ APF: dict[str, Spec] = {
 # safety setting — past 2 s a robot drives on data that no longer describes the world.
 NODE: dict[str, Spec] = {
     "stale_timeout": pos(2.0, "s", safety=True),
-    "pair_timeout": pos(61.0, "s"),   # a second past the driver's longest lockstep timeout
+    "pair_timeout": PAIR_TIMEOUT,
     # the short plan each realtime command carries (docs/link-driving.md): the robot follows
     # it at most this far; 0.2 s is two scan periods, 2 s the watchdog's own ceiling
     "plan_horizon": num(0.2, 2.0, "s"),

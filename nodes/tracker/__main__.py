@@ -20,8 +20,9 @@ import sys
 import time
 
 from common.cliparse import ArgumentParser
+from common.drive import PAIR_TIMEOUT
 from common.errors import ConfigError
-from common.params import arg_type, pos
+from common.params import arg_type
 from common.ports import describe
 from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
@@ -84,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
                                      + describe(PORTS, VARIANTS))
     parser.add_argument("--realtime", action="store_true",
                         help="pair each scan with the latest pose (robot / HIL)")
-    parser.add_argument("--pair-timeout", type=arg_type("--pair-timeout", pos(61.0, "s")),
+    parser.add_argument("--pair-timeout", type=arg_type("--pair-timeout", PAIR_TIMEOUT),
                         default=LOCKSTEP_PAIR_TIMEOUT_S, metavar="S",
                         help="lockstep: wall time a scan waits for its pose [s] (default "
                              f"{LOCKSTEP_PAIR_TIMEOUT_S:g}, longer than the driver's "

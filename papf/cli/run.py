@@ -7,6 +7,7 @@ import json
 from common.drive import DRIVER_OPTIONS
 from common.params import PORT, SEED, TIMEOUT, arg_type
 from common.ros_link import add_face_args, face_distro, face_domain
+from common.units import LOCKSTEP_TIMEOUT_S
 from nodes.energy_meter.models import DEFAULT_MODEL, MODELS
 from papf.cli.options import (
     add_planner_settings,
@@ -63,7 +64,8 @@ def register(sub) -> None:
                    "fleet's without people: the scan rate, 10; docs/performance.md \"A fleet's odometry rate\")")
     p.add_argument("--lockstep-timeout", type=arg_type("--lockstep-timeout",
                                                         DRIVER_OPTIONS["lockstep_timeout"]),
-                   metavar="S", help="wall seconds the simulator waits for a scan's command "
+                   default=LOCKSTEP_TIMEOUT_S, metavar="S",
+                   help="wall seconds the simulator waits for a scan's command "
                    "before it gives up the lockstep (default 2; longer on a loaded machine: a "
                    "run is bit-reproducible only while the lockstep holds)")
     p.add_argument("--dry-run", action="store_true",
@@ -106,8 +108,7 @@ def run_config(args):
                      stop_on_collision=not args.continue_on_collision, verbose=args.verbose,
                      zenoh_mode=args.zenoh_mode, objects=args.objects, view=args.view,
                      passing=args.passing, odom_hz=args.odom_hz,
-                     **({} if args.lockstep_timeout is None
-                        else {"lockstep_timeout_s": args.lockstep_timeout}),
+                     lockstep_timeout_s=args.lockstep_timeout,
                      ros_face=face_domain(args), progress=None if not args.json else False,
                      link=args.link, robot_trace=args.robot_trace,
                      robot_record=args.robot_record,
