@@ -616,6 +616,24 @@ class Node:
         self._publishers.clear()
 
 
+def fleet_names(robots: str | None) -> list[str]:
+    """A node's ``--robots r1,r2,...`` as the namespaces it serves (``[""]`` without it: the
+    one of ``--namespace``); ConfigError for a name that is no plain key, or a repeated one.
+    A node serving several robots gives each a :class:`Node` of its own on its session."""
+    if robots is None:
+        return [""]
+    names = robots.split(",")
+    try:
+        for name in names:
+            Keys(name)
+    except ValueError as exc:
+        raise ConfigError(f"--robots {robots!r}: {exc}") from None
+    if "/" in robots or len(set(names)) != len(names):
+        raise ConfigError(f"--robots {robots!r}: robot names (plain keys without /), "
+                          "each once, comma-separated")
+    return names
+
+
 @contextmanager
 def open_node(name: str, args: argparse.Namespace, log: logging.Logger | None = None):
     """``with open_node("planner", args) as node:`` — session closed on exit, always."""

@@ -24,7 +24,14 @@ import argparse
 from common.cliparse import ArgumentParser
 from common.errors import ConfigError, PapfError
 from common.ports import describe, plain
-from common.transport import Node, add_zenoh_args, exit_fast, open_node, setup_logging
+from common.transport import (
+    Node,
+    add_zenoh_args,
+    exit_fast,
+    fleet_names,
+    open_node,
+    setup_logging,
+)
 from nodes.energy_meter.ports import PORTS, VARIANTS
 from schemas import Keys
 
@@ -151,18 +158,8 @@ def main(argv: list[str] | None = None) -> int:
 def robot_names(args: argparse.Namespace) -> list[str]:
     """``--robots`` as namespaces (``[""]``: this one, ``--namespace``); ConfigError for a
     name that is no plain key, a repeated one, or with ``--resume`` (one robot's account)."""
-    if args.robots is None:
-        return [""]
-    names = args.robots.split(",")
-    try:
-        for name in names:
-            Keys(name)
-    except ValueError as exc:
-        raise ConfigError(f"--robots {args.robots!r}: {exc}") from None
-    if "/" in args.robots or len(set(names)) != len(names):
-        raise ConfigError(f"--robots {args.robots!r}: robot names (plain keys without /), "
-                          "each once, comma-separated")
-    if args.resume:
+    names = fleet_names(args.robots)
+    if args.resume and args.robots is not None:
         raise ConfigError("--resume goes on with one robot's account: not with --robots")
     return names
 

@@ -9,7 +9,9 @@ or scans are older than that), ``--pair-timeout S`` (lockstep: wall time a scan 
 its odometry), ``--objects`` (take obstacle tracks from ``<ns>/objects``, sim ground
 truth or the tracker node, and wait for the scan's own in lockstep), ``--passing orca``
 (a fleet's robots pass each other: the reciprocal layer of :mod:`nodes.planner.passing` over
-the command, fed by the obstacle tracks), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
+the command, fed by the obstacle tracks), ``--robots r1,r2,...`` (one process plans for a sim
+fleet: a planner and a loop per robot, each robot's keys, seals, stamps, token and parameters
+its own, as a process of its own would have them), plus the Zenoh options of :func:`common.transport.add_zenoh_args`.
 Exit code 2 on a bad setting.
 """
 
@@ -24,7 +26,7 @@ from common.cliparse import ArgumentParser
 from common.errors import ConfigError
 from common.params import arg_type
 from common.ports import describe, plain
-from common.transport import add_zenoh_args, exit_fast, open_node, setup_logging
+from common.transport import Node, add_zenoh_args, exit_fast, fleet_names, open_node, setup_logging
 from common.units import LOCKSTEP_PAIR_TIMEOUT_S
 from nodes.planner import lazy
 from nodes.planner.loop import PLAN_HORIZON_S, PlannerLoop
@@ -33,6 +35,7 @@ from nodes.planner.passing import MODES, Passing, PassingParams
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
 from nodes.planner.settings import NODE
+from schemas import Keys
 from schemas.messages import Event
 
 NODE_NAME = "planner"
@@ -67,64 +70,121 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--passing", choices=MODES, default="off",
                     help="orca: pass the robots and people of the obstacle tracks (a fleet; needs "
                          "--objects), off: the planner's command as it is (default)")
+    ap.add_argument("--robots", metavar="R1,R2,...",
+                    help="one process plans for these robots, each on its own namespace (a sim "
+                         "fleet; the launch profile's fleet = \"one\")")
     ap.add_argument("--log-level", default="INFO")
     add_zenoh_args(ap)
     args = ap.parse_args(argv)
+    try:
+        fleet_names(args.robots)
+    except ConfigError as exc:
+        ap.error(str(exc))
     if args.passing != "off" and not args.objects:
         ap.error(f"--passing {args.passing} needs --objects (the other robots come as obstacle tracks)")
     return args
 
 
+POLL_ALL_S = 0.05   # [s] a fleet's process looks at every robot's overdue pairings this often
+
+
+class Served:
+    """One robot a planner process serves: its :class:`Node` (the process's own, or a share of
+    its session with the robot's keys, seals, stamps and token), its planner and its loop."""
+
+    def __init__(self, node: Node, name: str, planner, args: argparse.Namespace, log):
+        self.name, self.planner = name, planner
+        self.share = share = Node(NODE_NAME, node.session, Keys(name), log) if name else node
+        self.loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
+                                runauth.key_from_env(), objects=args.objects,
+                                send_command=lambda cmd: share.publish("cmd_vel", cmd),
+                                want_state=lambda: share.listened("planner/state"),
+                                plan_horizon_s=args.plan_horizon)
+        prefix = f"{name}/" if name else ""   # how its items come out of the process's loop
+        for topic in ("scan", "goal"):
+            share.subscribe(topic, handler=lambda m, t=prefix + topic: node.inbox.put((t, m)))
+        # odometry comes at 50 Hz, scans at 10 Hz: it waits in Zenoh's channel and is taken
+        # when a scan wakes the loop (odom(t) nearly always came first), not one wake each;
+        # so do the obstacle tracks, put just before the scan they go with (one wake a cycle)
+        share.subscribe("odom", batched=True)
+        if args.objects:
+            share.subscribe("objects", batched=True)
+        if name:
+            node.gather(share)
+        share.declare_publishers("cmd_vel", "planner/status", "events",
+                                 on_demand=("planner/state",))
+        self.params_q = node.session.declare_queryable(  # answered on the loop's thread, in order
+            share.keys.key("planner/params"),
+            lambda q, t=prefix + "planner/params": node.inbox.put((t, q)))
+        self.last_status = None
+
+    def publish(self, out: list) -> None:
+        for topic, msg in out:
+            self.share.publish(topic, msg)
+            if topic == "planner/status" and msg.state != self.last_status:
+                self.last_status = msg.state
+                self.share.log.info("%sstatus %s at %d ns %s", f"{self.name}: " if self.name else "",
+                                    msg.state, msg.stamp_ns, msg.reason)
+
+    def close(self, node: Node) -> None:
+        self.params_q.undeclare()
+        if self.share is not node:
+            self.share.close()
+
+
+def build_planner(args: argparse.Namespace):
+    """The planner of ``args`` (ConfigError: a bad setting), warmed up."""
+    planner = make_planner(args.planner, args.params, [*preset_sets(args.preset), *args.set])
+    if args.passing != "off":
+        planner.passing = Passing(PassingParams(mode=args.passing))
+    warm_up(planner)
+    return planner
+
+
 def run(args: argparse.Namespace) -> int:
-    """Open the session, build the planner, serve scans until stopped; the exit code."""
+    """Open the session, build the planner (one per robot of ``--robots``), serve scans until
+    stopped; the exit code."""
     log = setup_logging(NODE_NAME, args.log_level)
     # numba would import scipy.linalg for nothing (nodes/planner/lazy.py); a library's kernels
     # (pysocialforce's, the social-force planner's) use np.dot and need it
     if not getattr(PLANNERS.get(args.planner), "needs_blas", False):
         lazy.numba_without_scipy()
     try:
-        planner = make_planner(args.planner, args.params, [*preset_sets(args.preset), *args.set])
+        planners = {name: build_planner(args) for name in fleet_names(args.robots)}
     except ConfigError as exc:
         log.error("%s", exc)
         return 2
-    if args.passing != "off":
-        planner.passing = Passing(PassingParams(mode=args.passing))
-    warm_up(planner)
+    fleet = args.robots is not None
     with open_node(NODE_NAME, args, log) as node:
-        loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
-                           runauth.key_from_env(), objects=args.objects,
-                           send_command=lambda cmd: node.publish("cmd_vel", cmd),
-                           want_state=lambda: node.listened("planner/state"),
-                           plan_horizon_s=args.plan_horizon)
-        for topic in ("scan", "goal"):
-            node.subscribe(topic)
-        # odometry comes at 50 Hz, scans at 10 Hz: it waits in Zenoh's channel and is taken
-        # when a scan wakes the loop (odom(t) nearly always came first), not one wake each;
-        # so do the obstacle tracks, put just before the scan they go with (one wake a cycle)
-        node.subscribe("odom", batched=True)
-        if args.objects:
-            node.subscribe("objects", batched=True)
-        node.declare_publishers("cmd_vel", "planner/status", "events", on_demand=("planner/state",))
+        served = {name: Served(node, name, planner, args, log) for name, planner in planners.items()}
+        for robot in served.values():
+            if robot.share is not node:
+                robot.share.ready()
+        node.ready()   # in a fleet, <namespace>/alive/planner too: the process itself is up
         params_check = runauth.RequestCheck(runauth.key_from_env(), seal.run_from_env())
-        params_q = node.session.declare_queryable(  # answered on this thread, in arrival order
-            node.keys.key("planner/params"), lambda q: node.inbox.put(("planner/params", q)))
-        node.ready()
-        log.info("planner %s (%s); waiting for a goal on %s (papf goal X Y)", args.planner,
-                 "realtime" if args.realtime else "lockstep", node.keys.goal)
-        last_status = None
-        for topic, msg in node.messages(tick_s=0.05, urgent=lambda: bool(loop.pending)):
+        log.info("planner %s (%s) for %s; waiting for a goal (papf goal X Y)", args.planner,
+                 "realtime" if args.realtime else "lockstep",
+                 ", ".join(served) if fleet else node.keys.goal)
+        polled = time.monotonic()
+        for topic, msg in node.messages(tick_s=0.05,
+                                        urgent=lambda: any(r.loop.pending for r in served.values())):
             now = time.monotonic()
+            name, topic = topic.split("/", 1) if fleet and topic else ("", topic)
+            robot = served.get(name)
             if topic == "planner/params":
-                _answer_params(node, args.planner, planner, msg, loop.last_stamp, params_check)
+                _answer_params(robot.share, args.planner, robot.planner, msg, robot.loop.last_stamp,
+                               params_check)
                 continue
-            out = loop.on_message(topic, msg, now) if topic else []
-            for out_topic, out_msg in out + loop.poll(now):
-                node.publish(out_topic, out_msg)
-                if out_topic == "planner/status" and out_msg.state != last_status:
-                    last_status = out_msg.state
-                    log.info("status %s at %d ns %s", out_msg.state, out_msg.stamp_ns, out_msg.reason)
-        params_q.undeclare()
-        log.info("stopping after %d cycles (%d stale)", loop.cycles, loop.stale_cycles)
+            if robot is not None and topic:
+                robot.publish(robot.loop.on_message(topic, msg, now) + robot.loop.poll(now))
+            if topic is None or now - polled >= POLL_ALL_S:   # the others' overdue pairings
+                polled = now
+                for other in served.values():
+                    other.publish(other.loop.poll(now))
+        for robot in served.values():
+            log.info("%sstopping after %d cycles (%d stale)", f"{robot.name}: " if fleet else "",
+                     robot.loop.cycles, robot.loop.stale_cycles)
+            robot.close(node)
     return 0
 
 

@@ -69,6 +69,53 @@ def test_node_answers_goal_and_scan_over_zenoh(router, spawn, session, algorithm
             s.undeclare()
 
 
+def test_one_process_plans_for_each_robot_as_its_own_would(router, spawn, session):
+    """``--robots pa,pb`` (a sim fleet's planners in one process): each robot's goal, scan
+    and odometry on its own namespace get the command a planner of its own computes from
+    them, bit for bit, on that namespace; each has its own token and its own parameters."""
+    from nodes.planner.registry import make_planner
+
+    spawn("planner", [sys.executable, "-m", "nodes.planner", "--planner", "apf", "--robots",
+                      "pa,pb", "--connect", router, "--set", "v_max=0.2"])
+    robots = {"pa": (Keys("pa"), Goal(stamp_ns=5, x=2.0, y=0.0)),
+              "pb": (Keys("pb"), Goal(stamp_ns=5, x=-1.0, y=1.5))}
+    for keys, _ in robots.values():
+        assert not wait_alive(session, keys, ["planner"], timeout_s=30)
+    inbox: queue.Queue = queue.Queue()
+    subs = [session.declare_subscriber(keys.key(k), lambda s, n=n, k=k: inbox.put(
+        ((n, k), s.payload.to_bytes()))) for n, (keys, _) in robots.items()
+        for k in ("cmd_vel", "planner/status")]
+    try:
+        for keys, goal in robots.values():
+            session.put(keys.goal, goal.to_bytes())
+        got = dict(_take(inbox, 2, "the goals"))
+        assert {PlannerStatus.from_bytes(got[(n, "planner/status")]).state for n in robots} == {"ready"}
+        for keys, _ in robots.values():
+            session.put(keys.scan, scan(100 * MS).to_bytes())
+            session.put(keys.odom, odom(100 * MS).to_bytes())
+        got = dict(_take(inbox, 4, "the scans"))
+        for name, (_, goal) in robots.items():
+            own = make_planner("apf", None, ["v_max=0.2"])
+            own.set_goal(goal)
+            expected, _ = own.command(scan(100 * MS), odom(100 * MS), None)
+            assert Twist.from_bytes(got[(name, "cmd_vel")]) == expected, name
+        assert got[("pa", "cmd_vel")] != got[("pb", "cmd_vel")]
+        p = _papf("param", "set", "planner", "v_max", "0.3", "--namespace", "pb", "--connect", router)
+        assert p.returncode == 0, p.stderr
+        values = {n: _papf("param", "get", "planner", "v_max", "--namespace", n, "--connect",
+                           router).stdout.strip() for n in robots}
+        assert values == {"pa": "apf.v_max = 0.2", "pb": "apf.v_max = 0.3"}
+    finally:
+        for s in subs:
+            s.undeclare()
+
+
+def test_a_planner_refuses_robots_that_are_no_names():
+    p = subprocess.run([sys.executable, "-m", "nodes.planner", "--robots", "pa,pa"],
+                       capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert p.returncode == 2 and "each once" in p.stderr and "Traceback" not in p.stderr
+
+
 def _papf(*args, env=None):
     return subprocess.run([sys.executable, "-m", "papf", *args], capture_output=True, text=True,
                           timeout=120, stdin=subprocess.DEVNULL, env=env)

@@ -107,7 +107,8 @@ def test_launch_gives_each_robot_its_nodes_and_planner(tmp_path):
     graph = resolve(load_profile("sim"), LaunchOptions("sim", values={"world": str(path),
                                                                        "planner": "apf"}))
     nodes = graph.nodes
-    # the LiDARs and the meters serve every robot from one process each (fleet = "one")
+    # the LiDARs and the meters serve every robot from one process each (fleet = "one"); the
+    # planners differ, so each robot has its own
     assert {"r1/planner", "r2/planner", "lidar_sim", "energy_meter", "base_driver"} == set(nodes)
 
     def arg(name, flag):
@@ -119,6 +120,20 @@ def test_launch_gives_each_robot_its_nodes_and_planner(tmp_path):
     assert _alive_groups(nodes) == {"rosbot": ["energy_meter", "lidar_sim", "base_driver"],
                                     "r1": ["energy_meter", "planner", "lidar_sim"],
                                     "r2": ["energy_meter", "planner", "lidar_sim"]}
+
+
+def test_robots_with_one_planner_share_its_process(tmp_path):
+    """Robots whose planners are alike (the same algorithm and settings) are planned for by
+    one process (fleet = "one"): each still has its planner's token on its namespace."""
+    path = tmp_path / "f.toml"
+    path.write_text('name = "f"\n[[robots]]\nname = "r1"\nstart = [0, 0]\ngoal = [3, 0]\n'
+                    '[[robots]]\nname = "r2"\nstart = [3, 1]\ngoal = [0, 1]\n')
+    nodes = resolve(load_profile("sim"), LaunchOptions("sim", values={"world": str(path),
+                                                                       "planner": "papf"})).nodes
+    assert {"planner", "lidar_sim", "energy_meter", "base_driver"} == set(nodes)
+    argv = nodes["planner"]
+    assert argv[argv.index("--robots") + 1] == "r1,r2" and argv[argv.index("--planner") + 1] == "papf"
+    assert _alive_groups(nodes)["r2"] == ["energy_meter", "planner", "lidar_sim"]
 
 
 def test_a_fleet_node_whose_robots_differ_runs_per_robot(tmp_path):
