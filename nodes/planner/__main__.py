@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import time
 
 from common import runauth, seal
@@ -88,12 +89,20 @@ def parse_args(argv=None) -> argparse.Namespace:
 POLL_ALL_S = 0.05   # [s] a fleet's process looks at every robot's overdue pairings this often
 
 
+class RobotLog(logging.LoggerAdapter):
+    """The process's log, each line led by the robot's name (``r3: status reached …``)."""
+
+    def process(self, msg, kwargs):
+        return f"{self.extra['robot']}: {msg}", kwargs
+
+
 class Served:
     """One robot a planner process serves: its :class:`Node` (the process's own, or a share of
     its session with the robot's keys, seals, stamps and token), its planner and its loop."""
 
     def __init__(self, node: Node, name: str, planner, args: argparse.Namespace, log):
         self.name, self.planner = name, planner
+        log = RobotLog(log, {"robot": name}) if name else log   # a fleet's lines name the robot
         self.share = share = Node(NODE_NAME, node.session, Keys(name), log) if name else node
         self.loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
                                 runauth.key_from_env(), objects=args.objects,
@@ -123,8 +132,7 @@ class Served:
             self.share.publish(topic, msg)
             if topic == "planner/status" and msg.state != self.last_status:
                 self.last_status = msg.state
-                self.share.log.info("%sstatus %s at %d ns %s", f"{self.name}: " if self.name else "",
-                                    msg.state, msg.stamp_ns, msg.reason)
+                self.share.log.info("status %s at %d ns %s", msg.state, msg.stamp_ns, msg.reason)
 
     def close(self, node: Node) -> None:
         self.params_q.undeclare()
@@ -182,8 +190,8 @@ def run(args: argparse.Namespace) -> int:
                 for other in served.values():
                     other.publish(other.loop.poll(now))
         for robot in served.values():
-            log.info("%sstopping after %d cycles (%d stale)", f"{robot.name}: " if fleet else "",
-                     robot.loop.cycles, robot.loop.stale_cycles)
+            robot.share.log.info("stopping after %d cycles (%d stale)", robot.loop.cycles,
+                                 robot.loop.stale_cycles)
             robot.close(node)
     return 0
 
