@@ -1,5 +1,6 @@
 """The planner node process answering goal and scan over a router."""
 
+import json
 import os
 import queue
 import subprocess
@@ -8,8 +9,8 @@ import sys
 import pytest
 
 from bench.foxglove_ws import FoxgloveClient
-from common import runauth
-from common.transport import wait_alive
+from common import runauth, seal
+from common.transport import attachment_of, wait_alive
 from papf.launch.supervisor import free_port
 from schemas import Keys
 from schemas.messages import (
@@ -105,6 +106,41 @@ def test_one_process_plans_for_each_robot_as_its_own_would(router, spawn, sessio
         values = {n: _papf("param", "get", "planner", "v_max", "--namespace", n, "--connect",
                            router).stdout.strip() for n in robots}
         assert values == {"pa": "apf.v_max = 0.2", "pb": "apf.v_max = 0.3"}
+    finally:
+        for s in subs:
+            s.undeclare()
+
+
+def test_a_keyed_fleet_planner_takes_each_robots_input_only_sealed_and_signed(router, spawn,
+                                                                             session):
+    """A run key (as papf run gives it): what a keyless peer puts on one robot's goal is
+    refused and counted in that robot's health answer, not in the other's; a goal sealed and
+    signed with the key gets that robot's signed ``ready``, and the other robot stays idle."""
+    key = runauth.new_key()
+    spawn("planner", [sys.executable, "-m", "nodes.planner", "--planner", "apf", "--robots",
+                      "ka,kb", "--connect", router], env={runauth.ENV: key})
+    ka, kb = Keys("ka"), Keys("kb")
+    for keys in (ka, kb):
+        assert not wait_alive(session, keys, ["planner"], timeout_s=30)
+    inbox: queue.Queue = queue.Queue()
+    subs = [session.declare_subscriber(keys.key("planner/status"), lambda s, k=keys.ns: inbox.put(
+        (k, PlannerStatus.from_bytes(s.payload.to_bytes()), attachment_of(s)))) for keys in (ka, kb)]
+    try:
+        forged = Goal(stamp_ns=5, x=2.0, y=0.0)
+        for _ in range(3):
+            session.put(kb.goal, forged.to_bytes())                     # no seal: refused
+        sealer = seal.Sealer(bytes.fromhex(key))
+        goal = runauth.sign(Goal(stamp_ns=5, x=2.0, y=0.0), bytes.fromhex(key)).to_bytes()
+        session.put(ka.goal, goal, attachment=sealer.seal(ka.goal, goal))
+        ns, status, _att = _take(inbox, 1, "the sealed goal")[0]
+        assert (ns, status.state) == ("ka", "ready") and runauth.verify(status, bytes.fromhex(key))
+
+        def health(keys):
+            replies = list(session.get(keys.key("health/planner"), timeout=10))
+            return json.loads(replies[0].ok.payload.to_bytes())
+        assert health(kb)["refused"] == {"goal": {"unsigned": 3}}, health(kb)
+        assert health(ka)["refused"] == {}, health(ka)
+        assert inbox.empty()                                            # kb never got a goal
     finally:
         for s in subs:
             s.undeclare()
