@@ -564,6 +564,17 @@ class Node:
             for topic, msg in share._drain_batched():
                 yield f"{share.keys.ns}/{topic}", msg
 
+    def share(self, robot: str, log: logging.Logger | None = None) -> Node:
+        """The node robot ``robot`` of a process serving a fleet is seen as: a :class:`Node`
+        of this one's name on this session under the robot's namespace (its own keys, seals,
+        stamps, health answer and token), its batched topics drained by this node's
+        :meth:`messages` (:meth:`gather`); for ``""`` (no ``--robots``), this node itself."""
+        if not robot:
+            return self
+        share = Node(self.name, self.session, Keys(robot), log or self.log)
+        self.gather(share)
+        return share
+
     def gather(self, share: Node) -> None:
         """Drain ``share``'s batched topics in this node's :meth:`messages` (a process that
         serves several robots, one :class:`Node` per robot on this session: one loop, one

@@ -33,7 +33,6 @@ from common.transport import (
     setup_logging,
 )
 from nodes.energy_meter.ports import PORTS, VARIANTS
-from schemas import Keys
 
 from .core import EnergyMeter
 from .models import DEFAULT_MODEL, MODELS
@@ -78,9 +77,7 @@ def open_shares(node: Node, names, log) -> dict[str, Node]:
     session (its own keys, seals, stamps and token), gathered into ``node``'s loop; ready."""
     shares = {}
     for name in names:
-        share = shares[name] = Node(NODE_NAME, node.session, Keys(name), log) if name else node
-        if name:
-            node.gather(share)
+        share = shares[name] = node.share(name, log)
         listen(share)
     for share in shares.values():
         share.ready()

@@ -36,7 +36,6 @@ from nodes.planner.passing import MODES, Passing, PassingParams
 from nodes.planner.ports import EXTRAS, PORTS, VARIANTS
 from nodes.planner.registry import DEFAULT_PLANNER, PLANNERS, PRESETS, make_planner, preset_sets
 from nodes.planner.settings import NODE
-from schemas import Keys
 from schemas.messages import Event
 
 NODE_NAME = "planner"
@@ -78,7 +77,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     add_zenoh_args(ap)
     args = ap.parse_args(argv)
     try:
-        fleet_names(args.robots)
+        args.names = fleet_names(args.robots)   # [""]: the one robot of --namespace
     except ConfigError as exc:
         ap.error(str(exc))
     if args.passing != "off" and not args.objects:
@@ -101,9 +100,9 @@ class Served:
     its session with the robot's keys, seals, stamps and token), its planner and its loop."""
 
     def __init__(self, node: Node, name: str, planner, args: argparse.Namespace, log):
-        self.name, self.planner = name, planner
+        self.planner = planner
         log = RobotLog(log, {"robot": name}) if name else log   # a fleet's lines name the robot
-        self.share = share = Node(NODE_NAME, node.session, Keys(name), log) if name else node
+        self.share = share = node.share(name, log)
         self.loop = PlannerLoop(planner, args.realtime, args.stale_timeout, args.pair_timeout, log,
                                 runauth.key_from_env(), objects=args.objects,
                                 send_command=lambda cmd: share.publish("cmd_vel", cmd),
@@ -118,8 +117,6 @@ class Served:
         share.subscribe("odom", batched=True)
         if args.objects:
             share.subscribe("objects", batched=True)
-        if name:
-            node.gather(share)
         share.declare_publishers("cmd_vel", "planner/status", "events",
                                  on_demand=("planner/state",))
         self.params_q = node.session.declare_queryable(  # answered on the loop's thread, in order
@@ -158,11 +155,11 @@ def run(args: argparse.Namespace) -> int:
     if not getattr(PLANNERS.get(args.planner), "needs_blas", False):
         lazy.numba_without_scipy()
     try:
-        planners = {name: build_planner(args) for name in fleet_names(args.robots)}
+        planners = {name: build_planner(args) for name in args.names}
     except ConfigError as exc:
         log.error("%s", exc)
         return 2
-    fleet = args.robots is not None
+    fleet = args.names != [""]
     with open_node(NODE_NAME, args, log) as node:
         served = {name: Served(node, name, planner, args, log) for name, planner in planners.items()}
         for robot in served.values():
