@@ -13,7 +13,7 @@ WARM_UP = import sys; from nodes.planner.registry import PLANNERS, make_planner;
 	[make_planner(n).warm_up() for n in PLANNERS if (n in a) != ('--others' in a)]; \
 	'--tracker' in a and Tracker(TrackerParams()).warm_up()
 
-.PHONY: demo test test-slow lint coverage setup bytecode clean docs docs-check
+.PHONY: demo test test-quick test-slow lint coverage setup bytecode clean docs docs-check
 setup: $(VENV)/.installed
 
 # Bytecode of our packages, compiled where it is stale: where PYTHONDONTWRITEBYTECODE is set
@@ -51,13 +51,20 @@ else
 endif
 
 # The tests on parallel workers (pytest-xdist; each worker its own ports and runtime dir,
-# tests/conftest.py), the slow tier left out: `make test-slow` runs it (CI does, second).
+# tests/conftest.py). `make test`: every tier in one pytest run, the README's test command and
+# CI's: one run leaves no second tail of idle workers and collects once (docs/performance.md
+# "One pytest run for every tier"). `make test-quick` leaves the slow tier (marker `slow`,
+# long end-to-end cases) out, for the loop while working; `make test-slow` runs it alone.
 TEST_WORKERS ?= 4
+PYTEST = $(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal
 test: bytecode
-	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m "not slow"
+	$(PYTEST)
 
-test-slow: bytecode   # the slow tier: long end-to-end cases (marker `slow`), CI's second step
-	$(PY) -m pytest -n $(TEST_WORKERS) --dist worksteal -m slow
+test-quick: bytecode
+	$(PYTEST) -m "not slow"
+
+test-slow: bytecode
+	$(PYTEST) -m slow
 
 lint: setup
 	$(VENV)/bin/ruff check .

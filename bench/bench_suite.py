@@ -2,8 +2,9 @@
 
 Clones this repository at ``REV`` into a new directory and runs what ``.ci/run`` runs there,
 one step at a time — ``make setup`` (a new venv; empty pip and uv caches unless ``--warm``;
-numba's cache is the new clone's own), ``make test`` (the README's test command), ``make test-slow`` (CI's second step),
-``make lint`` — timing each: wall seconds, and CPU seconds of the step and every process it
+numba's cache is the new clone's own), ``make test`` (the README's test command: every tier
+in one pytest run; at a commit from before ``make test-quick`` existed, every tier but the
+slow one, and then ``make test-slow``, CI's second step then), ``make lint`` — timing each: wall seconds, and CPU seconds of the step and every process it
 reaped (``RUSAGE_CHILDREN``). The tests' steps run with the plugin :mod:`bench.pytest_cpu`, which
 charges each test with its CPU; ``--files-csv`` writes the sums per test file and tier. Run it on a
 quiet machine: the suite is CPU-bound on 2 cores, so the load of other jobs is its time too
@@ -30,8 +31,9 @@ from common.cliparse import ArgumentParser
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-STEPS = (("setup", ["make", "setup"]), ("make test", ["make", "test"]),
-         ("make test-slow", ["make", "test-slow"]), ("make lint", ["make", "lint"]))
+STEPS = (("setup", ["make", "setup"]), ("make test", ["make", "test"]), ("make lint", ["make", "lint"]))
+# a commit whose `make test` left the slow tier out (no `test-quick` target): CI ran it second
+STEPS_TWO_RUNS = (*STEPS[:2], ("make test-slow", ["make", "test-slow"]), STEPS[2])
 FIELDS = ("date", "label", "commit", "step", "wall_s", "cpu_s", "cpu_over_wall", "tests_passed",
           "load_before", "load_after")
 FILE_FIELDS = ("date", "label", "commit", "tier", "file", "tests", "cpu_s", "wall_s")
@@ -61,16 +63,15 @@ def run_step(name: str, cmd: list[str], cwd: Path, env: dict) -> dict:
 
 
 def per_file(work: Path) -> list[dict]:
-    """The plugin's per-test rows summed per test file and tier (``slow`` for ``make
-    test-slow``'s, else the test's folder: unit, bus, e2e); first each tier's sum (file
+    """The plugin's per-test rows summed per test file and tier (``slow`` for a test with
+    that marker, else the test's folder: unit, bus, e2e); first each tier's sum (file
     ``(all)``), then the files, the costliest first."""
     sums: dict[tuple[str, str], list[float]] = collections.defaultdict(lambda: [0, 0.0, 0.0])
     # the workers' files only: a test that runs pytest itself (a scaffolded planner's test)
     # writes cpu.main.tsv, and its CPU is already its test's
     for tsv in work.glob("cpu*.gw*.tsv"):
         for line in tsv.read_text().splitlines():
-            cpu, wall, nodeid = line.split("\t", 2)
-            tier = "slow" if tsv.name.startswith("cpu-slow.") else nodeid.split("/")[1]
+            cpu, wall, tier, nodeid = line.split("\t", 3)
             acc = sums[(tier, nodeid.split("::")[0])]
             acc[0] += 1
             acc[1] += float(cpu)
@@ -112,7 +113,8 @@ def main(argv: list[str] | None = None) -> int:
             env.update(PIP_NO_CACHE_DIR="1", UV_CACHE_DIR=str(work / "uv-cache"))
         date = datetime.now(timezone.utc).strftime("%Y-%m-%d")
         rows = []
-        for name, cmd in STEPS:
+        one_run = "test-quick:" in (tree / "Makefile").read_text()
+        for name, cmd in STEPS if one_run else STEPS_TWO_RUNS:
             env["PAPF_CPU_PER_TEST"] = str(work / ("cpu-slow" if "slow" in name else "cpu"))
             row = {"date": date, "label": label, "commit": commit, **run_step(name, cmd, tree, env)}
             print(json.dumps(row), flush=True)

@@ -2,7 +2,8 @@
 
 CPU is the test process's own plus every child process it reaped (``RUSAGE_SELF`` +
 ``RUSAGE_CHILDREN``), so a test that runs the stack is charged with the stack's processes.
-Each worker (pytest-xdist) writes ``$PAPF_CPU_PER_TEST.<worker>.tsv``: ``cpu_s wall_s nodeid``.
+Each worker (pytest-xdist) writes ``$PAPF_CPU_PER_TEST.<worker>.tsv``: ``cpu_s wall_s tier
+nodeid``, the tier ``slow`` for a test with that marker, else its folder (unit, bus, e2e).
 A measurement, never a judgement: nothing here fails a test.
 """
 
@@ -14,7 +15,7 @@ import time
 
 import pytest
 
-_rows: list[tuple[str, float, float]] = []
+_rows: list[tuple[str, str, float, float]] = []
 
 
 def _cpu_s() -> float:
@@ -27,7 +28,8 @@ def _cpu_s() -> float:
 def pytest_runtest_protocol(item, nextitem):
     cpu0, wall0 = _cpu_s(), time.monotonic()
     yield
-    _rows.append((item.nodeid, _cpu_s() - cpu0, time.monotonic() - wall0))
+    tier = "slow" if item.get_closest_marker("slow") else item.nodeid.split("/")[1]
+    _rows.append((tier, item.nodeid, _cpu_s() - cpu0, time.monotonic() - wall0))
 
 
 def pytest_sessionfinish(session):
@@ -36,4 +38,4 @@ def pytest_sessionfinish(session):
         return
     worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
     with open(f"{out}.{worker}.tsv", "w") as fh:
-        fh.writelines(f"{cpu:.3f}\t{wall:.3f}\t{nodeid}\n" for nodeid, cpu, wall in _rows)
+        fh.writelines(f"{cpu:.3f}\t{wall:.3f}\t{tier}\t{nodeid}\n" for tier, nodeid, cpu, wall in _rows)

@@ -277,7 +277,7 @@ def _prepare(cwd: Path, block: list[Example]) -> None:
         write_bag(cwd / "other-bag", names={"odom": "/odom", "battery": "/battery_state"})
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 @pytest.mark.parametrize("block", sorted(BLOCKS))
 def test_docs_block_runs(block, tmp_path):
     examples_ = BLOCKS[block]

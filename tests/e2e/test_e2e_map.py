@@ -10,7 +10,7 @@ from worlds.maps import OccupancyMap, save_map
 pytestmark = pytest.mark.e2e
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_papf_crosses_a_map_of_rooms(tmp_path):
     yaml_path, _ = save_map(OccupancyMap(map_gen.rooms(0.05), 0.05, (-1.0, -0.5, 0.0)),
                             tmp_path / "lab.yaml")

@@ -31,7 +31,7 @@ def test_open_world_reaches_goal_in_a_straight_line():
     assert_no_orphans(port)
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_same_seed_identical_other_seed_differs():
     runs = [papf_run("--world", "energy", "--planner", "apf", "--seed", str(s), "--timeout", "20",
                      *STEADY) for s in (5, 5, 6)]
@@ -59,7 +59,7 @@ def test_every_nodes_last_line_comes_before_the_launcher_exits():
         assert any(line.startswith(f"[{node}]") and last in line for line in err.splitlines()), err
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_killing_the_planner_stops_the_robot_and_fails_the_run():
     port = free_port()
     proc = start_papf_run("--world", "open", "--planner", "apf", port=port)
@@ -85,7 +85,7 @@ def test_killing_the_planner_stops_the_robot_and_fails_the_run():
     assert_no_orphans(port)
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_garbage_on_cmd_vel_and_scan_crashes_nothing():
     port = free_port()
     proc = start_papf_run("--world", "open", "--planner", "apf", port=port)

@@ -114,7 +114,7 @@ def test_bus_fuzz_gives_the_figures_of_the_clean_run():
     assert_no_orphans(port)
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_a_dead_energy_meter_freezes_the_figures_and_is_named():
     """Item 4: the run ends at the meter's death, within the timeout, naming it."""
     port = free_port()

@@ -19,7 +19,7 @@ ROAD_WORLDS = ("road-stopped", "road-slow-leader", "road-cut-in", "road-blocked"
 PARALLEL_RUNS = 3      # runs at a time: each is a lockstep process tree, mostly waiting
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_iapf_reaches_every_road_world_with_truth_and_tracker_and_repeats(tmp_path):
     """Issue 11's acceptance through the whole stack: IAPF reaches each road-* world with
     0 collisions from ground-truth tracks and from the LiDAR tracker's (seed 1; 0 and 2-5

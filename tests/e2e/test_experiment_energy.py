@@ -11,7 +11,7 @@ from papf.experiments.energy import EnergyExperiment, run_experiment
 from tests.support.worlds import SHORT_WORLD
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_one_real_run_through_the_stack(tmp_path):
     world = tmp_path / "short.toml"
     world.write_text(SHORT_WORLD)

@@ -42,7 +42,7 @@ to = [4.0, 1.0]
 """
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_corridor_swap_head_on_both_reach_and_repeat(tmp_path):
     world = tmp_path / "swap.toml"
     world.write_text(HEAD_ON)
@@ -58,7 +58,7 @@ def test_corridor_swap_head_on_both_reach_and_repeat(tmp_path):
     assert first == second
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_two_robots_on_two_routers_are_one_network():
     """Two `papf launch robot` hosts, each its own router and namespace, the second joined to
     the first: `papf topic list` on either router sees both robots' nodes; with --namespace

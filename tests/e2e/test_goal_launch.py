@@ -15,7 +15,7 @@ import pytest
 from papf.launch.supervisor import free_port, wait_port
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_goal_retargets_the_planner_of_a_launched_session():
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"

@@ -65,7 +65,7 @@ def split_run(robot_profile: str, laptop_profile: str, world: str, ns: str, emul
                     proc.wait(timeout=30)
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_robot_and_laptop_profiles_reach_the_goal(world):
     ns = "t5launch"
     result = split_run("robot", "laptop", world, ns, ["--world", world])
@@ -74,7 +74,7 @@ def test_robot_and_laptop_profiles_reach_the_goal(world):
     assert not _leftovers(ns), "orphans after the launchers stopped"
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_hil_profiles_reach_the_goal(world, tmp_path):
     ns = "t5hil"
     record = tmp_path / "hil.mcap"

@@ -157,7 +157,7 @@ def _papf(*args, env=None):
                           timeout=120, stdin=subprocess.DEVNULL, env=env)
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_a_keyed_planner_takes_changes_only_from_its_key(router, spawn, session, tmp_path,
                                                          monkeypatch):
     key = runauth.new_key()

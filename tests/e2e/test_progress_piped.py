@@ -62,7 +62,7 @@ def test_run_view_prints_the_url_without_realtime(tmp_path):
     assert f"ws://127.0.0.1:{port}" in line and "--realtime" in line
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_animate_prints_progress_before_its_last_line(tmp_path):
     rec, out = tmp_path / "run.mcap", tmp_path / "run.gif"
     write_drive(rec, 100, {"world": "open", "planner": "apf", "seed": 0})

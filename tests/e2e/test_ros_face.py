@@ -48,7 +48,7 @@ def _goal_pose(x: float, y: float) -> bytes:
     return bytes(STORE.serialize_cdr(msg, "geometry_msgs/msg/PoseStamped"))
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 @pytest.mark.e2e
 def test_a_third_party_ros2_client_finds_decodes_and_steers_the_stack():
     port = free_port()

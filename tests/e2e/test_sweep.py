@@ -37,7 +37,7 @@ def _rows(path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_offline_random_sweep_same_csv_with_two_workers(tmp_path):
     for workers in (1, 2):
         run_random(tmp_path / f"w{workers}", n=2, seed=3, planners=("apf", "papf"),
@@ -47,7 +47,7 @@ def test_offline_random_sweep_same_csv_with_two_workers(tmp_path):
     assert len(rows) == 4 and all(float(r["duration_s"]) > 0 for r in rows)
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_stack_sweep_same_csv_with_two_workers(tmp_path):
     """Two full-stack runs at once (own router ports and namespaces): the CSV of a
     sequential sweep, byte for byte, and every recording gathered here."""

@@ -169,7 +169,7 @@ def test_parameters_listed_and_set_through_validation(router, spawn, session):
         client.close()
 
 
-@pytest.mark.slow   # the slow tier: make test-slow (CI's second step)
+@pytest.mark.slow   # the slow tier (make test-quick leaves it out)
 def test_papf_run_realtime_view_serves_every_channel(tmp_path):
     """The acceptance case, shortened: `papf run --realtime --view PORT` while a client watches."""
     import subprocess
