@@ -5,10 +5,11 @@ one step at a time — ``make setup`` (a new venv; empty pip and uv caches unles
 numba's cache is the new clone's own), ``make test`` (the README's test command: every tier
 in one pytest run; at a commit from before ``make test-quick`` existed, every tier but the
 slow one, and then ``make test-slow``, CI's second step then), ``make lint`` — timing each:
-wall seconds, and CPU seconds of the step and every process it reaped (``RUSAGE_CHILDREN``). The tests' steps run with the plugin :mod:`bench.pytest_cpu`, which
-charges each test with its CPU; ``--files-csv`` writes the sums per test file and tier. Run it on a
-quiet machine: the suite is CPU-bound on 2 cores, so the load of other jobs is its time too
-(the 1-minute load before and after each step is in the CSV). Speed is reported, never asserted;
+wall seconds, and CPU seconds of the step and every process it reaped (``RUSAGE_CHILDREN``).
+The tests' steps run with the plugin :mod:`bench.pytest_cpu`, which charges each test with
+its CPU; ``--files-csv`` writes the sums per test file and tier. Run it on a quiet machine:
+the suite is CPU-bound on 2 cores, so the load of other jobs is its time too (the 1-minute
+load before and after each step is in the CSV). Speed is reported, never asserted;
 a failing step is reported and ends the measurement (exit 1).
 """
 
