@@ -3,7 +3,10 @@
 :class:`TreeCPU` samples every ``period_s`` in a thread, so a child's last figures are
 kept after it exits (Linux only; elsewhere it reports nothing). It walks the tree through
 ``/proc/PID/task/TID/children`` (a scan of /proc where the kernel lacks it) and leaves its
-own sampling thread out of the root's figures. Used by ``bench sim``.
+own sampling thread out of the root's figures. The root's threads are charged only with what
+they used inside the ``with`` block (their CPU at entry subtracted): a bench that runs the
+stack in its own process several times reports each run's launcher, not the sum so far.
+Used by ``bench sim``.
 """
 
 from __future__ import annotations
@@ -35,10 +38,14 @@ class TreeCPU:
         self._stop = threading.Event()
         self._own_tid: int | None = None   # the sampler's own thread: not the run's CPU
         self._pre_exec = _name(self.root, -1)  # what a forked child is called until it execs
+        self._root_before: dict[int, float] = {}   # the root's threads: CPU at entry [s]
         self._thread = threading.Thread(target=self._run, daemon=True, name="tree-cpu")
 
     def __enter__(self) -> TreeCPU:
         if os.path.isdir("/proc"):
+            for tid in os.listdir(f"/proc/{self.root}/task"):
+                if st := _stat(f"/proc/{self.root}/task/{tid}/stat"):
+                    self._root_before[int(tid)] = st[2]
             self._thread.start()
         return self
 
@@ -77,6 +84,8 @@ class TreeCPU:
         for (pid, tid), (comm, cpu) in self.threads.items():
             if pid == self.root and tid == self._own_tid:
                 continue
+            if pid == self.root:
+                cpu -= self._root_before.get(tid, 0.0)
             name = self.names.get(pid, str(pid))
             kind = "python_s" if comm.startswith(("python", "pt_main")) or pid == self.root and \
                 not re.match(r"(rx|tx|net|acc|app)-\d+", comm) else "zenoh_s"

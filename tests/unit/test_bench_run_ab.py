@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -44,3 +45,18 @@ def test_tree_cpu_names_a_grandchild_by_its_module():
     with TreeCPU(period_s=0.02) as cpu:
         subprocess.run([sys.executable, "-c", child], check=True, capture_output=True)
     assert "timeit" in cpu.per_process()
+
+
+def test_tree_cpu_charges_the_root_only_with_the_cpu_used_inside_the_block():
+    """A bench that runs the stack in its own process, again and again, reports each run's
+    launcher CPU, not the sum of every run so far."""
+    def spin(s):
+        end = time.process_time() + s
+        while time.process_time() < end:
+            pass
+
+    spin(0.6)                                   # before the block: not the block's
+    with TreeCPU(period_s=0.02) as cpu:
+        spin(0.2)
+    launcher = cpu.per_process()["launcher"]["cpu_s"]
+    assert 0.1 < launcher < 0.5, launcher
