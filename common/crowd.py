@@ -379,8 +379,28 @@ def _sample_edge(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def load_pysocialforce():
-    """pysocialforce, imported once without its side effects (:func:`_pysocialforce`)."""
+    """pysocialforce, imported once without its side effects (:func:`_pysocialforce`), its
+    numba kernels cached on disk (:func:`_cache_kernels`)."""
     return _pysocialforce()
+
+
+def _cache_kernels(module) -> int:
+    """Turn on numba's on-disk cache for ``module``'s compiled kernels; the count turned on.
+
+    pysocialforce compiles its kernels (``@njit`` in ``utils/stateutils.py``) without
+    ``cache=True``: every process that ran the model, each crowd world's simulator and each
+    social-force planner, compiled them again from source, about 5 s of CPU before its first
+    step (and ``make setup``'s compile of them was thrown away). With the cache, as for our
+    own kernels (numba's cache beside the source, keyed by the file and the argument types),
+    a process after the first loads them in well under a second: the same machine code, the
+    same forces (tests/unit/test_crowd_kernels_cached.py). Only dispatchers that have
+    compiled nothing yet are touched, so it is safe after the library was used."""
+    on = 0
+    for obj in vars(module).values():
+        if callable(getattr(obj, "enable_caching", None)) and not getattr(obj, "signatures", True):
+            obj.enable_caching()
+            on += 1
+    return on
 
 
 def _pysocialforce():
@@ -402,4 +422,6 @@ def _pysocialforce():
             for h in [h for h in lg.handlers if h not in handlers]:
                 lg.removeHandler(h)
             lg.setLevel(level)
+    from pysocialforce.utils import stateutils
+    _cache_kernels(stateutils)
     return pysocialforce
