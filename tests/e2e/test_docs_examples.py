@@ -62,6 +62,10 @@ SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
     # draws an animation at the default size frame by frame)
     ("animate",): (["--speed", "16", "--dpi", "50"], {0}),
 }
+# a run over an emulated link goes at the wall clock's pace (the link's delays are real):
+# 3 s of it start the proxy, drive over it and end as a run does (tests/e2e/test_link_*.py
+# drive whole runs over it)
+LINK_TIMEOUT = ["--timeout", "3"]
 WHY_MINUTES = "takes minutes (tests/e2e/test_progress_piped.py runs its first steps)"
 HELP: dict[tuple[str, ...], str] = {
     ("teleop",): "reads the keyboard (tests/e2e/test_teleop_robot.py drives it in a pty)",
@@ -148,6 +152,8 @@ class Session:
             return [*args[:_subcommand_len(args)], "--help"]
         short = _match(args, SHORT)
         extra = SHORT[short][0] if short and not background else []
+        if short == ("run",) and "--link" in args and not background:
+            extra = LINK_TIMEOUT
         if "--help" in args or "--dry-run" in args:
             return args
         args = _own_view_port(args)
