@@ -394,11 +394,16 @@ def _cache_kernels(module) -> int:
     own kernels (numba's cache beside the source, keyed by the file and the argument types),
     a process after the first loads them in well under a second: the same machine code, the
     same forces (tests/unit/test_crowd_kernels_cached.py). Only dispatchers that have
-    compiled nothing yet are touched, so it is safe after the library was used."""
+    compiled nothing yet are touched, so it is safe after the library was used; where numba
+    finds no writable cache directory (a read-only install, no user cache) a kernel stays
+    uncached and compiles in each process, as before."""
     on = 0
     for obj in vars(module).values():
         if callable(getattr(obj, "enable_caching", None)) and not getattr(obj, "signatures", True):
-            obj.enable_caching()
+            try:
+                obj.enable_caching()
+            except RuntimeError:     # numba: "cannot cache function …: no locator available"
+                continue
             on += 1
     return on
 

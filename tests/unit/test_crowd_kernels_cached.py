@@ -36,6 +36,19 @@ def test_only_kernels_that_compiled_nothing_yet_are_turned_on():
     assert type(mod.used._cache).__name__ == "NullCache"
 
 
+def test_a_kernel_numba_cannot_cache_stays_uncached_and_still_runs():
+    class NoLocator:                             # as numba where no cache dir is writable
+        signatures = ()
+
+        def enable_caching(self):
+            raise RuntimeError("cannot cache function 'f': no locator available for file 'f.py'")
+
+    mod = types.ModuleType("toy")
+    mod.ro = NoLocator()
+    mod.fresh = numba.njit(lambda x: x + 1)
+    assert _cache_kernels(mod) == 1 and mod.fresh(1) == 2
+
+
 def test_every_pysocialforce_kernel_has_its_cache_on():
     load_pysocialforce()
     from pysocialforce.utils import stateutils
