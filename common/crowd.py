@@ -392,8 +392,8 @@ def _cache_kernels(module) -> int:
     social-force planner, compiled them again from source, about 5 s of CPU before its first
     step (and ``make setup``'s compile of them was thrown away). With the cache, as for our
     own kernels (numba's cache beside the source, keyed by the file and the argument types),
-    a process after the first loads them in well under a second: the same machine code, the
-    same forces (tests/unit/test_crowd_kernels_cached.py). Only dispatchers that have
+    a process after the first loads them, numba's import included, in about 1 s: the same
+    machine code, the same forces (tests/unit/test_crowd_kernels_cached.py). Only dispatchers that have
     compiled nothing yet are touched, so it is safe after the library was used; where numba
     finds no writable cache directory (a read-only install, no user cache) a kernel stays
     uncached and compiles in each process, as before."""
