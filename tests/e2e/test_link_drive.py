@@ -133,8 +133,11 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
                 if isinstance(m, Odometry) and lost - 10**9 <= m.stamp_ns <= back + 10**9]
         applied = [m for _k, m, _t in rec.messages([f"{ns}/cmd_vel/applied"])
                    if isinstance(m, Twist) and lost + 10**9 <= m.stamp_ns < back]
+    # no hole of the outage's kind (4 s, the laptop's recording has it): at most a few 20 ms
+    # ticks missed at once, which a real-time driver on two loaded cores skips rather than
+    # stacks (120 ms seen once under the whole suite)
     gaps = [b - a for a, b in zip(odom, odom[1:], strict=False)]
-    assert odom and max(gaps) <= 100_000_000, "the robot's own recording has a hole"
+    assert odom and max(gaps) <= 500_000_000, f"the robot's own recording has a hole: {max(gaps)} ns"
     assert applied and all(m.v == 0.0 and m.w == 0.0 for m in applied), "obeyed while down"
     report = subprocess.run([PY, "-m", "papf", "report", str(lap), str(rob), "--json",
                              "--out", str(tmp_path / "report")],

@@ -131,8 +131,12 @@ def _wait(cond, timeout_s: float) -> bool:
 def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, session, cmd_type):
     keys = Keys("rmwdrv")
     robot = ThirdPartyRosbot(session, cmd_type)
-    odoms = []
-    sub = session.declare_subscriber(keys.odom, lambda s: odoms.append(s.payload.to_bytes()))
+    # the driver's odometry and wheel states in the order it published them (one subscriber,
+    # one callback): between runs it sends the robot's odometry alone, in the robot's own
+    # frame; each run tick its odometry in the run's frame, then the wheels
+    heard = []
+    sub = session.declare_subscriber(f"{keys.ns}/*", lambda s: heard.append(
+        (str(s.key_expr), s.payload.to_bytes())))
     stamped = ["--cmd-vel-type", "twist_stamped"] if cmd_type == TWIST_STAMPED else []
     spawn("base_driver", [sys.executable, "-m", "nodes.base_driver", "--driver", "rosbot",
                           "--connect", router, "--namespace", keys.ns, "--ros", "rmw_zenoh",
@@ -182,7 +186,11 @@ def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, sessio
         stamps = [int.from_bytes(a[8:16], "little", signed=True) for a in atts]
         assert abs(stamps[-1] - time.time_ns()) < 10 * 10**9
         # odometry comes back in the run's frame: the world "open" starts at its own start pose
-        ours = [Odometry.from_bytes(b) for b in odoms]
+        # (a run tick's odometry is the one its wheel states follow; between runs, none do)
+        heard_now = [(k, b) for k, b in heard if k in (keys.odom, keys.wheels)]
+        ours = [Odometry.from_bytes(b) for (k, b), (k_next, _)
+                in zip(heard_now, heard_now[1:], strict=False)
+                if k == keys.odom and k_next == keys.wheels]
         assert ours, "no odometry on our key"
         sx, sy, syaw = load_world("open").start
         first = ours[0]
