@@ -388,15 +388,12 @@ def _cache_kernels(module) -> int:
     """Turn on numba's on-disk cache for ``module``'s compiled kernels; the count turned on.
 
     pysocialforce compiles its kernels (``@njit`` in ``utils/stateutils.py``) without
-    ``cache=True``: every process that ran the model, each crowd world's simulator and each
-    social-force planner, compiled them again from source, about 5 s of CPU before its first
-    step (and ``make setup``'s compile of them was thrown away). With the cache, as for our
-    own kernels (numba's cache beside the source, keyed by the file and the argument types),
-    a process after the first loads them, numba's import included, in about 1 s: the same
-    machine code, the same forces (tests/unit/test_crowd_kernels_cached.py). Only dispatchers that have
-    compiled nothing yet are touched, so it is safe after the library was used; where numba
-    finds no writable cache directory (a read-only install, no user cache) a kernel stays
-    uncached and compiles in each process, as before."""
+    ``cache=True``: every process that ran the model (a crowd world's simulator, a
+    social-force planner) compiled them from source again, about 5 s of CPU. Cached as our
+    own kernels are, a later process loads the same machine code in about 1 s, numba's
+    import included (tests/unit/test_crowd_kernels_cached.py). Only dispatchers that have
+    compiled nothing yet are touched; where numba finds no writable cache directory a
+    kernel stays uncached and compiles in each process, as before."""
     on = 0
     for obj in vars(module).values():
         if callable(getattr(obj, "enable_caching", None)) and not getattr(obj, "signatures", True):

@@ -187,9 +187,9 @@ def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, sessio
         assert abs(stamps[-1] - time.time_ns()) < 10 * 10**9
         # odometry comes back in the run's frame: the world "open" starts at its own start pose
         # (a run tick's odometry is the one its wheel states follow; between runs, none do)
-        heard_now = [(k, b) for k, b in heard if k in (keys.odom, keys.wheels)]
+        odom_wheels = [(k, b) for k, b in heard if k in (keys.odom, keys.wheels)]
         ours = [Odometry.from_bytes(b) for (k, b), (k_next, _)
-                in zip(heard_now, heard_now[1:], strict=False)
+                in zip(odom_wheels, odom_wheels[1:], strict=False)
                 if k == keys.odom and k_next == keys.wheels]
         assert ours, "no odometry on our key"
         sx, sy, syaw = load_world("open").start
