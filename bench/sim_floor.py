@@ -57,10 +57,13 @@ def chain(world_name: str = "energy", planner_name: str | None = None, seed: int
     while core.t_ns <= end_ns and outcome == "timeout":
         out = tm("driver outputs", core.outputs)
         _codec(tm, puts, out)
-        odom, wheels = out[1][1], out[2][1]
+        by_topic = dict(out)   # a world with people also puts sim/people and sim/bodies
+        odom, wheels = by_topic["odom"], by_topic["wheels"]
         for msg in (odom, wheels):
             battery = tm("energy meter", meter.feed, msg)
         _codec(tm, puts, [("battery", battery)])
+        if by_topic.get("sim/bodies") is not None:   # the people where the LiDAR sees them
+            tm("lidar cast", lidar.place_bodies, by_topic["sim/bodies"])
         if core.is_scan_instant():
             scan = tm("lidar cast", lidar.scan, odom.x, odom.y, odom.yaw, odom.stamp_ns)
             answer = tm("planner", loop.on_message, "odom", odom, 0.0) + \
