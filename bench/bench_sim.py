@@ -51,6 +51,7 @@ from common.transport import wait_alive, zenoh_config  # noqa: E402
 from papf.launch.supervisor import Supervisor, free_port, wait_port  # noqa: E402
 from schemas import Keys  # noqa: E402
 from schemas.messages import Clock, Event, Scan, Twist  # noqa: E402
+from worlds import load_world  # noqa: E402
 
 
 def bench(sim_s: float, world: str, beams: int) -> dict:
@@ -225,6 +226,10 @@ def main() -> None:
         print(json.dumps(bench(a.sim_s, a.world, a.beams)))
         return
     if a.floor:
+        robots = len(load_world(a.world).robots)
+        if robots > 1:   # the chain is one robot's: physics, its scan, its planner, its meter
+            raise SystemExit(f"--floor runs one robot; {a.world!r} has {robots} "
+                             "(papf bench fleet measures a fleet)")
         floor(a.planners.split(","), a.world, a.seed, a.csv, a.label)
         return
     if a.repeat < 1 or not a.timeout > 0 or bool(a.csv) != bool(a.label):
