@@ -48,7 +48,7 @@ def register(subparsers) -> None:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     script = Path(bench.__file__).parent / f"bench_{args.name.replace('-', '_')}.py"
-    sys.argv = [str(script), *args.args]
+    argv, sys.argv = sys.argv, [str(script), *args.args]
     try:
         runpy.run_path(str(script), run_name="__main__")
     except SystemExit as exc:
@@ -56,4 +56,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
             print(f"papf bench {args.name}: {exc.code}", file=sys.stderr)
             return 2
         return int(exc.code or 0)
+    finally:
+        sys.argv = argv   # the caller's again (main() called in-process, by a test)
     return 0
