@@ -3,36 +3,22 @@ folder and its test appear, ``papf plan`` and ``papf run`` (real node processes)
 reach the goal, ``papf run --help`` lists it, its own test passes; bad names and a second
 scaffold are refused in one line with exit 2 and change nothing."""
 
-import hashlib
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-SKIP = {".git", ".venv", "__pycache__", ".pytest_cache", ".ruff_cache", ".hypothesis"}
-
-
-def _ignore(_dir, names):
-    return [n for n in names if n in SKIP or n.endswith(".egg-info")]
-
-
-def tree(root: Path) -> dict[str, str]:
-    """Relative path -> sha256 of every file under ``root`` (caches left out)."""
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in root.rglob("*")
-            if p.is_file() and not SKIP.intersection(p.relative_to(root).parts)}
+from tests.support.checkout import REPO, copy_checkout, tree
 
 
 @pytest.fixture(scope="module")
 def copy(tmp_path_factory) -> Path:
     """A copy of the checkout: the scaffold writes there, never into the repository."""
     dst = tmp_path_factory.mktemp("repo") / "papf-stack"
-    shutil.copytree(REPO, dst, ignore=_ignore)
+    copy_checkout(dst)
     return dst
 
 

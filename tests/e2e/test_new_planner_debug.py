@@ -4,18 +4,16 @@ in a copy of the checkout, ``papf new planner`` scaffolds ``probe`` from APF, it
 ``PlannerState`` carries them, the viewer's scene, the ROS 2 face's markers and
 ``papf plan --plot`` draw them in its declared style."""
 
-import hashlib
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-SKIP = {".git", ".venv", "__pycache__", ".pytest_cache", ".ruff_cache", ".hypothesis"}
+from tests.support.checkout import copy_checkout, tree
+
 STRATEGY = Path("nodes/planner/probe/strategy.py")
 
 DECLARE = '''
@@ -60,13 +58,6 @@ print(json.dumps({
 '''
 
 
-def tree(root: Path) -> dict[str, str]:
-    """Relative path -> sha256 of every file under ``root`` (caches left out)."""
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in root.rglob("*")
-            if p.is_file() and not SKIP.intersection(p.relative_to(root).parts)}
-
-
 def run(copy: Path, *argv: str, timeout: float = 300.0) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(copy)}   # the copy's packages before the installed ones
     return subprocess.run([sys.executable, *argv], cwd=copy, env=env, text=True,
@@ -77,8 +68,7 @@ def run(copy: Path, *argv: str, timeout: float = 300.0) -> subprocess.CompletedP
 def copy(tmp_path_factory) -> Path:
     """A copy of the checkout with ``probe`` scaffolded and given debug output in its folder."""
     dst = tmp_path_factory.mktemp("repo") / "papf-stack"
-    shutil.copytree(REPO, dst, ignore=lambda _d, names: [
-        n for n in names if n in SKIP or n.endswith(".egg-info")])
+    copy_checkout(dst)
     before = tree(dst)
     r = run(dst, "-m", "papf", "new", "planner", "probe", "--from", "apf")
     assert r.returncode == 0, r.stderr
