@@ -26,6 +26,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -253,6 +254,22 @@ def _blocks() -> dict[str, list[Example]]:
 BLOCKS = _blocks()
 
 
+_RECORDED: list[bytes] = []   # this worker's recording of a short run, made once
+
+
+def _recording() -> bytes:
+    """A recording of a short run (open world, APF, 6 s): recorded by the first block of
+    this worker that needs one, copied for the others (each block takes it as given)."""
+    if not _RECORDED:
+        with tempfile.TemporaryDirectory() as tmp:
+            subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
+                            "--record", "run.mcap", "--port", str(free_port()), "--timeout", "6"],
+                           cwd=tmp, capture_output=True, timeout=300, check=False)
+            assert (Path(tmp) / "run.mcap").exists(), "the blocks' recording was not made"
+            _RECORDED.append((Path(tmp) / "run.mcap").read_bytes())
+    return _RECORDED[0]
+
+
 def _prepare(cwd: Path, block: list[Example]) -> None:
     """What the block's examples take as given: a recording, a broken one, a result dir."""
     text = " ".join(e.text for e in block)
@@ -263,11 +280,7 @@ def _prepare(cwd: Path, block: list[Example]) -> None:
     # (recordings are never overwritten: the block's run would refuse an existing run.mcap)
     prep = cwd / ("prep.mcap" if records_run else "run.mcap")
     if needs_run or "broken.mcap" in text or "energy-exp" in text:
-        port = free_port()
-        subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
-                        "--record", prep.name, "--port", str(port), "--timeout", "6"],
-                       cwd=cwd, capture_output=True, timeout=300, check=False)
-        assert prep.exists()
+        prep.write_bytes(_recording())
     if "broken.mcap" in text:
         data = prep.read_bytes()
         (cwd / "broken.mcap").write_bytes(data[: len(data) * 2 // 3])
