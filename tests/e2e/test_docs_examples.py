@@ -20,6 +20,7 @@ unit test ``tests/unit/test_docs_examples.py`` checks each is one of the known t
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import shutil
@@ -254,20 +255,16 @@ def _blocks() -> dict[str, list[Example]]:
 BLOCKS = _blocks()
 
 
-_RECORDED: list[bytes] = []   # this worker's recording of a short run, made once
-
-
+@functools.cache
 def _recording() -> bytes:
     """A recording of a short run (open world, APF, 6 s): recorded by the first block of
     this worker that needs one, copied for the others (each block takes it as given)."""
-    if not _RECORDED:
-        with tempfile.TemporaryDirectory() as tmp:
-            subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
-                            "--record", "run.mcap", "--port", str(free_port()), "--timeout", "6"],
-                           cwd=tmp, capture_output=True, timeout=300, check=False)
-            assert (Path(tmp) / "run.mcap").exists(), "the blocks' recording was not made"
-            _RECORDED.append((Path(tmp) / "run.mcap").read_bytes())
-    return _RECORDED[0]
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
+                        "--record", "run.mcap", "--port", str(free_port()), "--timeout", "6"],
+                       cwd=tmp, capture_output=True, timeout=300, check=False)
+        assert (Path(tmp) / "run.mcap").exists(), "the blocks' recording was not made"
+        return (Path(tmp) / "run.mcap").read_bytes()
 
 
 def _prepare(cwd: Path, block: list[Example]) -> None:

@@ -7,7 +7,8 @@ import shutil
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-CACHES = {".git", ".venv", "__pycache__", ".pytest_cache", ".ruff_cache", ".hypothesis"}
+NOT_COPIED = {".git", ".venv", ".pytest_cache", ".ruff_cache", ".hypothesis"}
+CACHES = NOT_COPIED | {"__pycache__"}   # what tree() leaves out
 
 
 def copy_checkout(dst: Path) -> Path:
@@ -16,7 +17,7 @@ def copy_checkout(dst: Path) -> Path:
     PYTHONDONTWRITEBYTECODE is set, every process started in the copy compiled every module
     it imports from source."""
     shutil.copytree(REPO, dst, ignore=lambda _dir, names: [
-        n for n in names if (n in CACHES and n != "__pycache__") or n.endswith(".egg-info")])
+        n for n in names if n in NOT_COPIED or n.endswith(".egg-info")])
     return dst
 
 
