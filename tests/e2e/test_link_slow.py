@@ -39,9 +39,18 @@ def test_a_split_run_over_a_slow_link_reaches_its_goal_within_the_robots_limits(
     cmds = _commands(Path(trace))
     assert cmds and all(abs(c["v"]) <= V_MAX_M_S + 1e-9 and abs(c["w"]) <= W_MAX_RAD_S
                         + 1e-9 for c in cmds)
-    # the driver ramps on its 50 Hz grid (A_MAX * 20 ms a tick); the trace's receive times
-    # bunch under load, so the step per command is checked, with room for a late tick or two
-    steps = [abs(b["v"] - a["v"]) for a, b in zip(cmds, cmds[1:], strict=False)]
-    assert max(steps) <= A_MAX_M_S2 * 0.020 * 3 + 1e-9, max(steps)
+    # the driver ramps on its 50 Hz grid (A_MAX * 20 ms a tick) and speeds up by at most two
+    # ticks' worth after a late tick (common/drive.py rule 5); the trace's receive times bunch
+    # under load, so a speed-up is checked per command, with room for a late tick. Slowing
+    # down may use the whole time since the driver's last tick (a stop is never delayed by a
+    # stall): bounded by A_MAX over the receive times of two commands back, plus two ticks
+    # (0.061 m/s after an 86 ms stall was seen under load)
+    for before, a, b in zip(cmds, cmds[1:], cmds[2:], strict=False):
+        step = abs(b["v"] - a["v"])
+        if abs(b["v"]) > abs(a["v"]) or b["v"] * a["v"] < 0:
+            assert step <= A_MAX_M_S2 * 0.020 * 3 + 1e-9, (a, b)
+        else:
+            assert step <= A_MAX_M_S2 * ((b["t_ns"] - before["t_ns"]) * 1e-9 + 0.040) + 1e-9, \
+                (before, a, b)
     assert not _leftovers(ns)
 
