@@ -351,6 +351,14 @@ def attachment_of(sample: zenoh.Sample) -> bytes | None:
     return None if att is None else att.to_bytes()
 
 
+def _copy(counts: dict) -> dict:
+    """A copy of a dict another thread writes to (Zenoh's): empty if it grew meanwhile."""
+    try:
+        return dict(counts.copy())
+    except RuntimeError:   # written on Zenoh's thread right now: next time
+        return {}
+
+
 class Node:
     """A node's Zenoh session with typed, fault-tolerant pub/sub.
 
@@ -395,6 +403,10 @@ class Node:
         self._unheard: set[str] = set()            # on-demand topics no subscriber matches now
         self._token = None
         self._last: tuple[Message | None, bytes] = (None, b"")   # last message put, encoded
+        # the stamp of the last sample taken and put per topic: the health answer's, for a
+        # run that names where a held lockstep cycle waits (papf/launch/sequence.py)
+        self.heard: dict[str, int] = {}
+        self.sent: dict[str, int] = {}
 
     # -- publishing -------------------------------------------------------
     def publish(self, topic: str, msg: Message) -> None:
@@ -410,6 +422,7 @@ class Node:
         if msg is not self._last[0]:  # the same message on two keys (sim/pose, odom): encode once
             self._last = (msg, msg.to_bytes())
         payload = self._last[1]
+        self.sent[topic] = getattr(msg, "stamp_ns", -1)
         if self.trust.keyed:
             pub.put(payload, attachment=self.trust.seal(self.key_expr(topic), payload))
         else:
@@ -501,6 +514,7 @@ class Node:
         if why:
             self._count_bad(topic, why)
             return None
+        self.heard[topic] = getattr(msg, "stamp_ns", -1)
         return msg
 
     def _count_bad(self, topic: str, exc: Exception | str) -> None:
@@ -592,14 +606,12 @@ class Node:
         self.log.info("ready as %s", self.keys.alive(self.name))
 
     def health(self) -> dict:
-        """What this node refused and dropped so far, and its run (JSON-ready)."""
-        try:
-            bad = dict(self.bad_messages.copy())
-        except RuntimeError:   # counted on Zenoh's thread right now: next time
-            bad = {}
+        """What this node refused and dropped so far, its run, and the stamp it last took and
+        put on each topic (JSON-ready)."""
         return {"node": self.name, "run": self.trust.run_hex(), "keyed": self.trust.keyed,
-                "refused": self.trust.counts(), "bad": bad, "stamp_resyncs": self.stamps.resyncs,
-                **self.extra_health}
+                "refused": self.trust.counts(), "bad": _copy(self.bad_messages),
+                "stamp_resyncs": self.stamps.resyncs, "heard": _copy(self.heard),
+                "sent": _copy(self.sent), **self.extra_health}
 
     def _answer_health(self, query) -> None:   # Zenoh's thread: a copy of counters, one reply
         try:

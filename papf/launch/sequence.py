@@ -19,8 +19,9 @@ from common.errors import SchemaError
 from common.intake import Trust
 from common.transport import round_robin
 from common.units import StampGuard
+from nodes.world_sim.loop import LOCKSTEP_FAULT
 from papf.launch.linkwatch import LinkWatch
-from papf.launch.outcome import NS, RunMonitor, RunResult
+from papf.launch.outcome import MAX_FAULTS, NS, RunMonitor, RunResult
 from papf.launch.supervisor import Supervisor
 from schemas import Event, Keys, PlannerStatus
 from schemas.keys import STAMP_ORDERED, TOPICS
@@ -72,6 +73,7 @@ class RunSequence:
                                                       monitor.on_time(msg.stamp_ns),
                                                       *(hook(msg) for hook in self._pose_hooks))
         self._pose_hooks: list[Callable] = []   # watch_poses
+        self._faults_seen = 0                   # the monitor's faults looked at (_explain_held)
         self.watchers: list[Callable[[RunMonitor], None]] = []   # called every CHECK_S of the run
         if link is not None:   # the robot's clock is the laptop's ear; its reports its voice
             self._handlers["clock"] = lambda msg: (monitor.on_clock(msg), self._heard())
@@ -197,6 +199,7 @@ class RunSequence:
                 last_clock, last_change = m.clock_ns, now
             for watcher in self.watchers:
                 watcher(m)
+            self._explain_held()
             state = m.status.state if m.status else ""
             if self.link is not None:
                 for kind, detail in self.link.tick(time.monotonic_ns()):
@@ -213,6 +216,22 @@ class RunSequence:
                 m.fail(f"sim time stuck at {m.clock_ns / NS:.2f} s for {self.stall_s:g} s "
                        "(a node is hung, or the link to the base driver is lost)")
         self._wait_for_figures()
+
+    def _explain_held(self) -> None:
+        """After the world simulator's lockstep wait ran out (its ``node_fault``): where the
+        cycle waits, from every node's health answer (the stamp each last took and put per
+        topic), logged and added to the run's faults — the node whose input has the scan's
+        stamp and whose output has not is the one holding it."""
+        m = self.monitor
+        new, self._faults_seen = m.faults[self._faults_seen:], len(m.faults)
+        if not any(LOCKSTEP_FAULT in fault for fault in new):
+            return
+        started = [c.name for c in self.sup.children if c.name not in ("router", "recorder")]
+        where = where_held(self.health(), started)
+        log.warning("lockstep held: %s", where)
+        if len(m.faults) < MAX_FAULTS:
+            m.faults.append(f"launcher: the nodes' last stamps: {where}")
+            self._faults_seen = len(m.faults)
 
     def _on_node_death(self) -> None:
         """A node died: the figures freeze at its last output (the meter's last battery, the
@@ -340,3 +359,23 @@ class RunSequence:
                     f" (it exited with code {recorder[0].returncode})"
                     if recorder[0].returncode is not None else "")
         return False
+
+
+def where_held(health: dict[str, dict], started: list[str] = ()) -> str:
+    """``base_driver took cmd_vel 47.00; put odom 47.10, … | planner took …``: the stamps
+    [s] each node last took and put per topic (its health answer's ``heard`` and ``sent``),
+    and which of the ``started`` nodes did not answer (frozen, or busy past the wait)."""
+    def stamps(verb: str, topics: dict) -> str:
+        return verb + " " + ", ".join(f"{t} {ns / NS:.2f}" for t, ns in sorted(topics.items())
+                                      if isinstance(ns, int) and ns >= 0) if topics else ""
+
+    parts = []
+    for name in sorted(health):
+        h = health[name]
+        said = "; ".join(x for x in (stamps("took", h.get("heard") or {}),
+                                     stamps("put", h.get("sent") or {})) if x)
+        parts.append(f"{name} {said or 'nothing'}")
+    silent = sorted(set(started) - set(health))
+    if silent:
+        parts.append("no answer from " + ", ".join(silent))
+    return " | ".join(parts) or "no node answered"

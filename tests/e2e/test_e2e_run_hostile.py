@@ -333,3 +333,47 @@ def test_a_frozen_recorder_makes_the_run_say_its_recording_stopped(world, tmp_pa
     assert proc.returncode == 6 and res["outcome"] == "failed", err[-2000:]
     assert res["reason"].startswith("the recording stopped early") and "reached" in res["reason"]
     assert res["recording"]["complete"] is False
+
+
+def test_a_frozen_planner_makes_the_run_name_where_its_lockstep_cycle_waits(world):
+    """The planner stopped (SIGSTOP) for 2 s mid-run: the world simulator's lockstep wait
+    (0.5 s) runs out, and the run's faults say where the cycle waits — every node's last stamps
+    taken and put, the LiDAR's scan of the held instant among them, and the planner silent.
+    Then the planner goes on, the lockstep comes back and the run reaches its goal."""
+    port = free_port()
+    proc = start_papf_run("--world", world, "--planner", "apf", "--timeout", "60", *FAST,
+                          "--lockstep-timeout", "0.5", port=port)
+    frozen: list[int] = []
+    try:
+        assert wait_port(port, 60)
+        with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as s:
+            driving = threading.Event()   # a few cycles in: the planner has answered scans
+            sub = s.declare_subscriber(KEYS.key("sim/pose"), lambda sample: driving.set() if
+                                       Odometry.from_bytes(sample.payload.to_bytes()).stamp_ns
+                                       >= 300_000_000 else None)
+            assert driving.wait(120), "the run never started"
+            sub.undeclare()
+        frozen = pids_of("nodes.planner", port)
+        assert frozen
+        for pid in frozen:
+            os.kill(pid, signal.SIGSTOP)
+        time.sleep(2.0)
+        for pid in frozen:
+            os.kill(pid, signal.SIGCONT)
+        out, err = proc.communicate(timeout=240)
+    finally:
+        for pid in frozen:
+            try:
+                os.kill(pid, signal.SIGCONT)
+            except ProcessLookupError:
+                pass
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    res = json.loads(out.strip().splitlines()[-1])
+    assert res["outcome"] == "reached", err[-2000:]
+    held = [f for f in res["faults"] if f.startswith("launcher: the nodes' last stamps: ")]
+    assert held, res["faults"]
+    print(held[0])
+    assert "no answer from planner" in held[0] and "lidar_sim took sim/pose" in held[0]
+    assert "put scan" in held[0] and "base_driver took cmd_vel" in held[0]
+    assert "lockstep held: " in err

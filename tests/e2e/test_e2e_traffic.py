@@ -47,7 +47,8 @@ def test_iapf_reaches_every_road_world_with_truth_and_tracker_and_repeats(tmp_pa
         # run not reproducible; named here, with the run's log, rather than as a diff below
         # (pytest.fail: the log whole, not cut short as an assertion's repr would be)
         if "faults" in res:
-            pytest.fail(f"{key}: {res['faults']}\n--- the run's log (tail) ---\n{err[-8000:]}")
+            pytest.fail(f"{key}: {res['faults']}\nrefused: {res.get('refused')}\n"
+                        f"--- the run's log (tail) ---\n{err[-8000:]}")
 
     a, b = results[("road-cut-in", "tracker")][1], results["again"][1]
     for r in (a, b):   # what differs between two runs by design: the wall clock, the run's

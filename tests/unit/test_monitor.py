@@ -6,7 +6,7 @@ import tracemalloc
 from unittest.mock import MagicMock
 
 from papf.launch.outcome import NS, RunMonitor, RunResult
-from papf.launch.sequence import RunSequence
+from papf.launch.sequence import RunSequence, where_held
 from schemas import BatteryState, Clock, Event, Keys, Odometry, PlannerStatus, Twist
 
 
@@ -206,3 +206,17 @@ def test_launcher_memory_stays_constant_over_a_long_run():
     assert growth < 64 * 1024, growth        # was ~34 KB per sim second: 68 MB here
     m._decide("timeout", round(2399.98 * NS), "")
     assert math.isclose(m.path_length_m(), 239.998, rel_tol=1e-6)
+
+
+def test_a_held_lockstep_cycle_is_named_by_the_nodes_last_stamps():
+    """``where_held``: each node's last stamps taken and put [s], and the nodes that did not
+    answer — the one holding the cycle is the silent one, or the one that took the scan's
+    stamp and put an older one."""
+    health = {"planner": {"heard": {"scan": 47_100_000_000, "objects": 47_000_000_000},
+                          "sent": {"cmd_vel": 47_000_000_000}},
+              "lidar_sim": {"heard": {"sim/pose": 47_100_000_000}, "sent": {"scan": 47_100_000_000}},
+              "energy_meter": {"heard": {}, "sent": {}}}
+    assert where_held(health, ["base_driver", "lidar_sim", "planner", "tracker", "energy_meter"]) == (
+        "energy_meter nothing | lidar_sim took sim/pose 47.10; put scan 47.10 | planner took "
+        "objects 47.00, scan 47.10; put cmd_vel 47.00 | no answer from base_driver, tracker")
+    assert where_held({}) == "no node answered"

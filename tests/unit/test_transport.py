@@ -1,6 +1,7 @@
 """Transport configuration: defaults, command-line arguments, bad config files."""
 
 import argparse
+import json
 import logging
 import os
 import signal
@@ -21,7 +22,7 @@ from common.transport import Node, add_zenoh_args, zenoh_config
 from common.units import MAX_STAMP_NS
 from schemas import Keys
 from schemas.keys import TOPICS
-from schemas.messages import Odometry
+from schemas.messages import Odometry, Twist
 from tests.support.messages import odom as _odom
 from tests.support.messages import scan_63 as _scan
 
@@ -103,3 +104,23 @@ def test_a_node_whose_stop_cannot_start_its_timer_still_ends_by_the_kernels_alar
     assert proc.returncode == -signal.SIGALRM, proc.stderr[-2000:]
     assert "request returned" not in proc.stdout
     assert time.monotonic() - t0 < 1.0 + transport.ALARM_EXTRA_S + 10.0
+
+
+def test_the_health_answer_names_the_last_stamps_taken_and_put():
+    """What a run's lockstep fault shows (papf/launch/sequence.py ``where_held``): per topic,
+    the stamp of the last sample taken (a dropped one moves nothing) and put."""
+    node = _node()
+    node.accept("odom", _odom(40_000_000).to_bytes())
+    node.accept("odom", _odom(-1).to_bytes())                 # dropped: not taken
+    node.accept("scan", _scan(20_000_000).to_bytes())
+
+    class Pub:
+        def put(self, payload, **_):
+            pass
+
+    node._publishers["cmd_vel"] = Pub()
+    node.publish("cmd_vel", Twist(stamp_ns=20_000_000, v=0.1, w=0.0))
+    health = node.health()
+    assert health["heard"] == {"odom": 40_000_000, "scan": 20_000_000}
+    assert health["sent"] == {"cmd_vel": 20_000_000}
+    assert json.loads(json.dumps(health)) == health
