@@ -31,7 +31,7 @@ from schemas import BatteryState, Clock, Event, Goal, Keys, PlannerStatus
 from schemas.keys import TOPICS
 from schemas.messages import Odometry, Scan, Twist
 from tests.support.e2e import assert_no_orphans, papf_run, pids_of, start_papf_run
-from tests.support.worlds import FAST, SHORT, STEADY, write_world
+from tests.support.worlds import FAST, SHORT, STEADY, box_world, write_world
 
 FIGURES = ("outcome", "duration_s", "path_length_m", "charge_mAh", "energy_J", "collisions",
            "sim_time_s")
@@ -335,13 +335,15 @@ def test_a_frozen_recorder_makes_the_run_say_its_recording_stopped(world, tmp_pa
     assert res["recording"]["complete"] is False
 
 
-def test_a_frozen_planner_makes_the_run_name_where_its_lockstep_cycle_waits(world):
+def test_a_frozen_planner_makes_the_run_name_where_its_lockstep_cycle_waits(tmp_path):
     """The planner stopped (SIGSTOP) for 2 s mid-run: the world simulator's lockstep wait
     (0.5 s) runs out, and the run's faults say where the cycle waits — every node's last stamps
     taken and put, the LiDAR's scan of the held instant among them, and the planner silent.
     Then the planner goes on, the lockstep comes back and the run reaches its goal."""
+    # 5 m: a lockstep run of the short world could end before the planner is frozen
+    world = write_world(tmp_path / "long.toml", box_world("long", "5 m", 5.0, (0.6, 0.6)))
     port = free_port()
-    proc = start_papf_run("--world", world, "--planner", "apf", "--timeout", "60", *FAST,
+    proc = start_papf_run("--world", str(world), "--planner", "apf", "--timeout", "60", *FAST,
                           "--lockstep-timeout", "0.5", port=port)
     frozen: list[int] = []
     try:
