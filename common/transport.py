@@ -611,7 +611,14 @@ class Node:
         return {"node": self.name, "run": self.trust.run_hex(), "keyed": self.trust.keyed,
                 "refused": self.trust.counts(), "bad": _copy(self.bad_messages),
                 "stamp_resyncs": self.stamps.resyncs, "heard": _copy(self.heard),
-                "sent": _copy(self.sent), **self.extra_health}
+                "sent": _copy(self.sent), "peers": self._peers(), **self.extra_health}
+
+    def _peers(self) -> int | None:
+        """How many Zenoh peers this node's session links to directly now (None: unknown)."""
+        try:
+            return sum(1 for _ in self.session.info.peers_zid())
+        except Exception:   # no session (a test's node), or one closing
+            return None
 
     def _answer_health(self, query) -> None:   # Zenoh's thread: a copy of counters, one reply
         try:

@@ -374,7 +374,9 @@ def where_held(health: dict[str, dict], started: list[str] = ()) -> str:
         h = health[name]
         said = "; ".join(x for x in (stamps("took", h.get("heard") or {}),
                                      stamps("put", h.get("sent") or {})) if x)
-        parts.append(f"{name} {said or 'nothing'}")
+        peers = h.get("peers")
+        linked = f" ({peers} peer links)" if isinstance(peers, int) else ""
+        parts.append(f"{name}{linked} {said or 'nothing'}")
     silent = sorted(set(started) - set(health))
     if silent:
         parts.append("no answer from " + ", ".join(silent))

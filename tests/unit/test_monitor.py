@@ -214,9 +214,11 @@ def test_a_held_lockstep_cycle_is_named_by_the_nodes_last_stamps():
     stamp and put an older one."""
     health = {"planner": {"heard": {"scan": 47_100_000_000, "objects": 47_000_000_000},
                           "sent": {"cmd_vel": 47_000_000_000}},
-              "lidar_sim": {"heard": {"sim/pose": 47_100_000_000}, "sent": {"scan": 47_100_000_000}},
+              "lidar_sim": {"heard": {"sim/pose": 47_100_000_000}, "sent": {"scan": 47_100_000_000},
+                            "peers": 3},
               "energy_meter": {"heard": {}, "sent": {}}}
     assert where_held(health, ["base_driver", "lidar_sim", "planner", "tracker", "energy_meter"]) == (
-        "energy_meter nothing | lidar_sim took sim/pose 47.10; put scan 47.10 | planner took "
-        "objects 47.00, scan 47.10; put cmd_vel 47.00 | no answer from base_driver, tracker")
+        "energy_meter nothing | lidar_sim (3 peer links) took sim/pose 47.10; put scan 47.10 | "
+        "planner took objects 47.00, scan 47.10; put cmd_vel 47.00 | no answer from base_driver, "
+        "tracker")
     assert where_held({}) == "no node answered"
