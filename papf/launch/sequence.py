@@ -366,8 +366,9 @@ def where_held(health: dict[str, dict], started: list[str] = ()) -> str:
     [s] each node last took and put per topic (its health answer's ``heard`` and ``sent``),
     and which of the ``started`` nodes did not answer (frozen, or busy past the wait)."""
     def stamps(verb: str, topics: dict) -> str:
-        return verb + " " + ", ".join(f"{t} {ns / NS:.2f}" for t, ns in sorted(topics.items())
-                                      if isinstance(ns, int) and ns >= 0) if topics else ""
+        said = ", ".join(f"{t} {ns / NS:.2f}" for t, ns in sorted(topics.items())
+                         if isinstance(ns, int) and ns >= 0)
+        return f"{verb} {said}" if said else ""
 
     parts = []
     for name in sorted(health):
