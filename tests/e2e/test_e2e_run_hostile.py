@@ -303,23 +303,30 @@ def test_nothing_a_keyless_peer_sends_changes_the_run(world, tmp_path):
     assert hit["recording"]["complete"] and hit["recording"]["dropped"]
 
 
-def test_a_frozen_recorder_makes_the_run_say_its_recording_stopped(world, tmp_path):
+def _run_with_frozen(args: tuple[str, ...], module: str, at_ns: int = 0,
+                     freeze_s: float | None = None) -> tuple[int, dict, str]:
+    """``papf run args`` with ``module``'s processes stopped (SIGSTOP) once the sim clock
+    reaches ``at_ns``, for ``freeze_s`` seconds (None: to the end); (exit code, JSON, stderr)."""
     port = free_port()
-    record = tmp_path / "frozen.mcap"
-    proc = start_papf_run("--world", world, "--planner", "apf", "--timeout", "60", *FAST,
-                          "--record", str(record), port=port)
+    proc = start_papf_run(*args, port=port)
     frozen: list[int] = []
     try:
         assert wait_port(port, 60)
         with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as s:
-            started = threading.Event()
-            sub = s.declare_subscriber(KEYS.key("sim/pose"), lambda _s: started.set())
-            assert started.wait(120), "the run never started"
-            frozen = pids_of("nodes.recorder", port)
-            assert frozen
-            for pid in frozen:
-                os.kill(pid, signal.SIGSTOP)
+            there = threading.Event()
+            sub = s.declare_subscriber(KEYS.key("sim/pose"), lambda sample: there.set() if
+                                       Odometry.from_bytes(sample.payload.to_bytes()).stamp_ns
+                                       >= at_ns else None)
+            assert there.wait(120), "the run never started"
             sub.undeclare()
+        frozen = pids_of(module, port)
+        assert frozen
+        for pid in frozen:
+            os.kill(pid, signal.SIGSTOP)
+        if freeze_s is not None:
+            time.sleep(freeze_s)
+            for pid in frozen:
+                os.kill(pid, signal.SIGCONT)
         out, err = proc.communicate(timeout=240)
     finally:
         for pid in frozen:
@@ -329,8 +336,14 @@ def test_a_frozen_recorder_makes_the_run_say_its_recording_stopped(world, tmp_pa
                 pass
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-    res = json.loads(out.strip().splitlines()[-1])
-    assert proc.returncode == 6 and res["outcome"] == "failed", err[-2000:]
+    return proc.returncode, json.loads(out.strip().splitlines()[-1]), err
+
+
+def test_a_frozen_recorder_makes_the_run_say_its_recording_stopped(world, tmp_path):
+    code, res, err = _run_with_frozen(("--world", world, "--planner", "apf", "--timeout", "60",
+                                       *FAST, "--record", str(tmp_path / "frozen.mcap")),
+                                      "nodes.recorder")
+    assert code == 6 and res["outcome"] == "failed", err[-2000:]
     assert res["reason"].startswith("the recording stopped early") and "reached" in res["reason"]
     assert res["recording"]["complete"] is False
 
@@ -340,38 +353,12 @@ def test_a_frozen_planner_makes_the_run_name_where_its_lockstep_cycle_waits(tmp_
     (0.5 s) runs out, and the run's faults say where the cycle waits — every node's last stamps
     taken and put, the LiDAR's scan of the held instant among them, and the planner silent.
     Then the planner goes on, the lockstep comes back and the run reaches its goal."""
-    # 5 m: a lockstep run of the short world could end before the planner is frozen
+    # 5 m: a lockstep run of the short world could end before the planner is frozen; frozen
+    # a few cycles in, when the planner has answered scans
     world = write_world(tmp_path / "long.toml", box_world("long", "5 m", 5.0, (0.6, 0.6)))
-    port = free_port()
-    proc = start_papf_run("--world", str(world), "--planner", "apf", "--timeout", "60", *FAST,
-                          "--lockstep-timeout", "0.5", port=port)
-    frozen: list[int] = []
-    try:
-        assert wait_port(port, 60)
-        with zenoh.open(zenoh_config("client", [f"tcp/127.0.0.1:{port}"])) as s:
-            driving = threading.Event()   # a few cycles in: the planner has answered scans
-            sub = s.declare_subscriber(KEYS.key("sim/pose"), lambda sample: driving.set() if
-                                       Odometry.from_bytes(sample.payload.to_bytes()).stamp_ns
-                                       >= 300_000_000 else None)
-            assert driving.wait(120), "the run never started"
-            sub.undeclare()
-        frozen = pids_of("nodes.planner", port)
-        assert frozen
-        for pid in frozen:
-            os.kill(pid, signal.SIGSTOP)
-        time.sleep(2.0)
-        for pid in frozen:
-            os.kill(pid, signal.SIGCONT)
-        out, err = proc.communicate(timeout=240)
-    finally:
-        for pid in frozen:
-            try:
-                os.kill(pid, signal.SIGCONT)
-            except ProcessLookupError:
-                pass
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-    res = json.loads(out.strip().splitlines()[-1])
+    _code, res, err = _run_with_frozen(("--world", str(world), "--planner", "apf", "--timeout",
+                                        "60", *FAST, "--lockstep-timeout", "0.5"),
+                                       "nodes.planner", at_ns=300_000_000, freeze_s=2.0)
     assert res["outcome"] == "reached", err[-2000:]
     held = [f for f in res["faults"] if f.startswith("launcher: the nodes' last stamps: ")]
     assert held, res["faults"]
