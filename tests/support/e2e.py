@@ -32,9 +32,7 @@ def papf_run(*args: str, port: int | None = None, timeout: float = RUN_TIMEOUT_S
 
 
 def _papf_run(args: tuple[str, ...], port: int, timeout: float):
-    cmd = [sys.executable, "-m", "papf", "run", *args, "--json", "--port", str(port)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = start_papf_run(*args, port=port)
     try:
         out, err = proc.communicate(timeout=timeout)
     finally:
