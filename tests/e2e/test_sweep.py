@@ -41,7 +41,7 @@ def _rows(path) -> list[dict]:
 def test_offline_random_sweep_same_csv_with_two_workers(tmp_path):
     for workers in (1, 2):
         run_random(tmp_path / f"w{workers}", n=2, seed=3, planners=("apf", "papf"),
-                   mode="offline", timeout_s=60, progress=False, sweep=SweepOptions(workers))
+                   mode="offline", timeout_s=15, progress=False, sweep=SweepOptions(workers))
     assert (tmp_path / "w1" / "random.csv").read_bytes() == (tmp_path / "w2" / "random.csv").read_bytes()
     rows = _rows(tmp_path / "w2" / "random.csv")   # two worlds x two planners, real runs
     assert len(rows) == 4 and all(float(r["duration_s"]) > 0 for r in rows)

@@ -41,7 +41,7 @@ def test_summary_rates_and_means():
 
 def test_a_small_sweep_writes_its_files(tmp_path):
     summary = run_crowd(tmp_path, planners=["apf", "orca"], people=[0, 3], seeds=[0],
-                        timeout_s=20, progress=False, scenes=("hall", "groups", "replay"))
+                        timeout_s=8, progress=False, scenes=("hall", "groups", "replay"))
     assert [(r["planner"], r["scene"]) for r in summary] == [
         (p, s) for p in ("apf", "orca") for s in ("hall-0", "hall-3", "groups",
                                                  "replay-walkers-hall")]
@@ -56,7 +56,7 @@ def test_a_small_sweep_writes_its_files(tmp_path):
                  "worlds/crowd-replay-walkers-hall-0.toml"):
         assert (tmp_path / name).is_file()
     again = run_crowd(tmp_path, planners=["apf", "orca"], people=[0, 3], seeds=[0],
-                      timeout_s=20, progress=False, scenes=("hall", "groups", "replay"))
+                      timeout_s=8, progress=False, scenes=("hall", "groups", "replay"))
     assert again == summary                            # from the journal, the same
 
 
