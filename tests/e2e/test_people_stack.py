@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 import re
 
+import pytest
+
 from papf.recording.reader import iter_messages
 from tests.support.e2e import papf_run
 from worlds import load_world
@@ -87,17 +89,17 @@ def _fault_time_s(fault: str) -> float:
     return float(m.group(1)) if m else 0.0
 
 
-def test_the_crowd_planners_pass_the_standing_group_through_the_stack():
+@pytest.mark.parametrize("planner", ["orca", "social_force"])   # two tests: two workers
+def test_the_crowd_planners_pass_the_standing_group_through_the_stack(planner):
     """ORCA and the social force as planner processes (tracks from --objects truth, their
     libraries compiled before the node is ready: no lockstep fault), on crowd-standing."""
-    for planner in ("orca", "social_force"):
-        code, res, err = papf_run("--world", "crowd-standing", "--planner", planner,
-                                  "--timeout", "300")
-        assert res is not None, err
-        assert (code, res["outcome"], res["collisions"]) == (0, "reached", 0), res
-        # the libraries compile before the node is ready: no lockstep fault at the first
-        # cycles (a compile there takes seconds); a later one is the loaded machine's stall
-        early = [f for f in res.get("faults", []) if _fault_time_s(f) < FIRST_CYCLES_S]
-        assert not early, early
-        assert res["robots"][0]["group_intrusions"] == 0
-        assert 0.0 < res["robots"][0]["min_separation_m"] < 1.5    # passed beside them
+    code, res, err = papf_run("--world", "crowd-standing", "--planner", planner,
+                              "--timeout", "300")
+    assert res is not None, err
+    assert (code, res["outcome"], res["collisions"]) == (0, "reached", 0), res
+    # the libraries compile before the node is ready: no lockstep fault at the first
+    # cycles (a compile there takes seconds); a later one is the loaded machine's stall
+    early = [f for f in res.get("faults", []) if _fault_time_s(f) < FIRST_CYCLES_S]
+    assert not early, early
+    assert res["robots"][0]["group_intrusions"] == 0
+    assert 0.0 < res["robots"][0]["min_separation_m"] < 1.5    # passed beside them
