@@ -58,6 +58,7 @@ def one_run(tree: Path, planner: str, world: str, seed: int, timeout_s: float, p
         raise SystemExit(f"bench run_ab: {tree}: no JSON from papf run (exit {out.returncode}): "
                          f"{out.stderr.strip().splitlines()[-1:]}")
     res = json.loads(lines[-1])
+    res.pop("run_id", None)   # a new id each run, by design: not a figure
     return {"bench": "run_ab_run", "tree": str(tree), "planner": planner, "timeout_s": timeout_s,
             "command_wall_s": round(wall, 3), "run_wall_s": res.pop("wall_time_s"),
             "cpu_s": round(cpu, 3), "load_1min": load, "figures": res,

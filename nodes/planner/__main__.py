@@ -111,12 +111,11 @@ class Served:
         prefix = f"{name}/" if name else ""   # how its items come out of the process's loop
         for topic in ("scan", "goal"):
             share.subscribe(topic, handler=lambda m, t=prefix + topic: node.inbox.put((t, m)))
-        # odometry comes at 50 Hz, scans at 10 Hz: it waits in Zenoh's channel and is taken
-        # when a scan wakes the loop (odom(t) nearly always came first), not one wake each;
-        # so do the obstacle tracks, put just before the scan they go with (one wake a cycle)
-        share.subscribe("odom", batched=True)
-        if args.objects:
-            share.subscribe("objects", batched=True)
+        # the scan's partners too, each a wake: batched in Zenoh's channel, odom(t) or
+        # objects(t) now and then reached the loop only with the next scan, on a loaded
+        # machine, and held the lockstep (docs/architecture.md, "Lockstep")
+        for topic in ("odom", "objects") if args.objects else ("odom",):
+            share.subscribe(topic, handler=lambda m, t=prefix + topic: node.inbox.put((t, m)))
         share.declare_publishers("cmd_vel", "planner/status", "events",
                                  on_demand=("planner/state",))
         self.params_q = node.session.declare_queryable(  # answered on the loop's thread, in order

@@ -19,6 +19,7 @@ from schemas.messages import Goal, Objects, Odometry, PlannerState, PlannerStatu
 
 ODOM_BUFFER = 64          # odometry messages kept for pairing (1.28 s at 50 Hz)
 OBJECTS_BUFFER = 16       # object lists kept for pairing (1.6 s at 10 Hz)
+LATE_PAIR_S = 1.0         # [s] wall time a scan waits for its partners before that is logged
 STALE_REPEAT_S = 0.1      # [s] wall period of zero commands while scans are stale (realtime)
 PLAN_HORIZON_S = 1.5      # [s] the realtime commands' plan (docs/link-driving.md, "The choice")
 
@@ -129,6 +130,9 @@ class PlannerLoop:
         for scan, arrived in sorted(self.pending, key=lambda p: p[0].stamp_ns):
             t = scan.stamp_ns
             if self._complete(t):
+                if now - arrived > LATE_PAIR_S and self.log:   # the run's log says where
+                    self.log.warning("scan %d waited %.2f s for its odometry/objects",
+                                     t, now - arrived)          # a held cycle waited
                 out += self._answer(scan, self.odoms[t], self.objects.get(t))
             elif now - arrived > self.pair_timeout_s:
                 odom, objects = _newest_upto(self.odoms, t), _newest_upto(self.objects, t)

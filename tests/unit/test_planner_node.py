@@ -61,6 +61,19 @@ def test_lockstep_missing_odom_falls_back_after_pair_timeout():
     assert (out[0][1].v, out[0][1].w) == (0.0, 0.0) and "stale" in out[2][1].reason
 
 
+def test_lockstep_a_late_partner_is_logged_with_how_long_the_scan_waited():
+    log = logging.getLogger("test.late_pair")
+    seen = []
+    log.warning = lambda fmt, *args: seen.append(fmt % args)
+    lp = loop(log=log)
+    lp.on_message("scan", scan(100 * MS), 0.0)
+    assert lp.on_message("odom", odom(100 * MS), 0.5)[0][1].stamp_ns == 100 * MS
+    assert seen == []                                              # in time: nothing said
+    lp.on_message("scan", scan(200 * MS), 1.0)
+    assert lp.on_message("odom", odom(200 * MS), 3.5)[0][1].stamp_ns == 200 * MS
+    assert seen == ["scan 200000000 waited 2.50 s for its odometry/objects"]
+
+
 class Seen:
     """Records what the planner shows a strategy through ``observe``: (road, track x, t [ns])."""
 
