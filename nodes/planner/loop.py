@@ -130,9 +130,9 @@ class PlannerLoop:
         for scan, arrived in sorted(self.pending, key=lambda p: p[0].stamp_ns):
             t = scan.stamp_ns
             if self._complete(t):
-                if now - arrived > LATE_PAIR_S and self.log:   # the run's log says where
+                if now - arrived > LATE_PAIR_S and self.log:   # where a held cycle waited
                     self.log.warning("scan %d waited %.2f s for its odometry/objects",
-                                     t, now - arrived)          # a held cycle waited
+                                     t, now - arrived)
                 out += self._answer(scan, self.odoms[t], self.objects.get(t))
             elif now - arrived > self.pair_timeout_s:
                 odom, objects = _newest_upto(self.odoms, t), _newest_upto(self.objects, t)
