@@ -243,3 +243,40 @@ def test_planner_accepts_a_goal_only_from_the_run_that_set_it():
     (topic, status), = loop.on_message("goal", ours, 0.0)
     assert status.state == "ready" and runauth.verify(status, key)   # the answer is signed
     assert not runauth.verify(PlannerStatus(stamp_ns=0, state="reached"), key)
+
+
+class _Subscriptions:
+    """What a planner's robot subscribes to, and how (a stand-in for its Node)."""
+
+    def __init__(self):
+        self.calls = {}
+        self.session = self
+
+    def share(self, name, log=None):
+        return self
+
+    def subscribe(self, topic, msg_type=None, *, handler=None, batched=False):
+        self.calls[topic] = "batched" if batched else "inbox"
+
+    def declare_publishers(self, *topics, on_demand=()):
+        pass
+
+    def declare_queryable(self, key, handler):
+        return self
+
+    def listened(self, topic):
+        return False
+
+    keys = Keys("rosbot")
+
+
+def test_nothing_a_lockstep_cycle_waits_for_is_batched():
+    """A scan's odometry and tracks come into the inbox as the scan does: batched in Zenoh's
+    channel, one now and then reached the loop only with the next scan (docs/architecture.md,
+    "Lockstep")."""
+    from nodes.planner.__main__ import Served, parse_args
+
+    args = parse_args(["--planner", "apf", "--objects"])
+    node = _Subscriptions()
+    Served(node, "", make_planner("apf"), args, logging.getLogger("test"))
+    assert node.calls == {"scan": "inbox", "goal": "inbox", "odom": "inbox", "objects": "inbox"}
