@@ -18,6 +18,7 @@ missing partners, wall seconds, the 1-minute load before the round.
 from __future__ import annotations
 
 import argparse
+import csv
 import os
 import re
 import subprocess
@@ -27,7 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench.csvrows import replace_label  # noqa: E402
+from bench.csvrows import emit, replace_label, write_rows  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 TEST = "tests/e2e/test_e2e_traffic.py"
@@ -35,7 +36,7 @@ FIELDS = ("label", "round", "passed", "failed", "stalls", "held_at_s", "missing"
           "load_avg_1min")
 SUMMARY = ("label", "rounds", "rounds_stalled", "stalls", "runs", "missing_odom", "missing_objects")
 RUNS_PER_ROUND = 27   # three tests of nine road runs
-HELD = re.compile(r"base_driver at ([0-9.]+) s: no cmd_vel with stamp_ns=(\d+) within")
+HELD = re.compile(r"base_driver at ([0-9.]+) s: no cmd_vel with stamp_ns=\d+ within")
 PLANNER = re.compile(r"planner \(\d+ peer links\) took ([^;|\]]*)")
 
 
@@ -46,24 +47,25 @@ def parse(text: str) -> dict:
     held, missing = [], []
     for line in text.splitlines():
         m = HELD.search(line)
-        if not m or "the nodes' last stamps" not in line:
-            continue
-        t = float(m.group(1))
-        held.append(f"{t:.2f}")
-        took = PLANNER.search(line)
-        stamps = dict(part.strip().rsplit(" ", 1) for part in took.group(1).split(",")) \
-            if took else {}
-        missing.append("+".join(k for k in ("odom", "objects", "scan")
-                                if k in stamps and float(stamps[k]) < t - 1e-6) or "?")
+        if m and "the nodes' last stamps" in line:
+            held.append(f"{float(m.group(1)):.2f}")
+            missing.append(_missed(line, float(m.group(1))))
     return {"passed": int(passed.group(1)) if passed else 0,
             "failed": int(failed.group(1)) if failed else 0,
             "stalls": len(held), "held_at_s": " ".join(held), "missing": " ".join(missing)}
 
 
-def summarise(path: Path) -> Path:
-    """Per label of the rounds' CSV: rounds, rounds with a stall, stalls, runs, what was missed."""
-    import csv
+def _missed(line: str, t: float) -> str:
+    """The topics whose last stamp the planner took is older than the held instant ``t``."""
+    took = PLANNER.search(line)
+    stamps = dict(part.strip().rsplit(" ", 1) for part in took.group(1).split(",")) if took else {}
+    return "+".join(k for k in ("odom", "objects", "scan")
+                    if k in stamps and float(stamps[k]) < t - 1e-6) or "?"
 
+
+def summarise(path: Path) -> Path:
+    """Per label of the rounds' CSV: rounds, rounds with a stall, stalls, runs, what was missed
+    (``<name>-summary.csv`` beside it, written whole: it is derived from the rounds' CSV)."""
     with path.open(newline="") as fh:
         rows = list(csv.DictReader(fh))
     out = []
@@ -76,8 +78,7 @@ def summarise(path: Path) -> Path:
                      "runs": RUNS_PER_ROUND * len(mine),
                      "missing_odom": missed.count("odom"), "missing_objects": missed.count("objects")})
     summary = path.with_name(path.stem + "-summary.csv")
-    for row in out:
-        replace_label(summary, SUMMARY, row["label"], [row])
+    write_rows(summary, SUMMARY, out)
     return summary
 
 
@@ -102,18 +103,16 @@ def main(argv=None) -> None:
         return
     if not args.label:
         ap.error("--label is required")
-    rows = []
-    if args.from_logs:
-        logs = sorted(args.from_logs.glob("r-*.log"), key=lambda p: int(p.stem[2:]))
-        for log in logs:
-            rows.append({"label": args.label, "round": int(log.stem[2:]), **parse(log.read_text()),
-                         "wall_s": "", "load_avg_1min": ""})
-    for k in range(args.rounds if not args.from_logs else 0):
-        load = os.getloadavg()[0]
-        text, wall = run_round()
-        rows.append({"label": args.label, "round": k + 1, **parse(text),
-                     "wall_s": round(wall, 1), "load_avg_1min": round(load, 2)})
-        print(rows[-1], flush=True)
+    rows: list[dict] = []
+    if args.from_logs:   # rounds a loop of the same pytest command ran: its r-<n>.log files
+        for log in sorted(args.from_logs.glob("r-*.log"), key=lambda p: int(p.stem[2:])):
+            emit(rows, {"round": int(log.stem[2:]), **parse(log.read_text())}, args.label)
+    else:
+        for k in range(args.rounds):
+            load = os.getloadavg()[0]
+            text, wall = run_round()
+            emit(rows, {"round": k + 1, **parse(text), "wall_s": round(wall, 1),
+                        "load_avg_1min": round(load, 2)}, args.label)
     if args.csv:
         replace_label(args.csv, FIELDS, args.label, rows)
 

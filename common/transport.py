@@ -45,7 +45,6 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 MODES = ("client", "peer", "router")
 BATCH_POLL_S = 0.01      # [s wall] a node with batched topics drains them this often
 BATCH_IDLE_POLL_S = 0.04  # [s wall] ... at most this seldom after drains that found nothing
-URGENT_POLL_S = 0.0002   # [s wall] ... while the node waits for a batched sample to go on
 BATCH_CAPACITY = 65536   # [samples] per batched topic between drains (then Zenoh waits)
 
 
@@ -529,15 +528,12 @@ class Node:
             self.log.warning("refused #%d on %s: %s (not sealed with this run's key, a replay, "
                              "or another run's)", n, self.keys.key(topic), verdict)
 
-    def messages(self, tick_s: float = 0.1, urgent=lambda: False
-                 ) -> Iterator[tuple[str | None, Message | None]]:
+    def messages(self, tick_s: float = 0.1) -> Iterator[tuple[str | None, Message | None]]:
         """Yield inbox items (and batched topics' samples) until stop; ``(None, None)``
         every ``tick_s`` of silence.
 
         Batched samples waiting when an inbox item comes are yielded before it (they mostly
-        arrived first: odom(t) before the scan(t) that wakes the planner); while ``urgent()``
-        (a scan waits for its odometry) the channels are looked at every
-        :data:`URGENT_POLL_S` instead of every :data:`BATCH_POLL_S`.
+        arrived first). Nothing a lockstep cycle waits for is batched (docs/architecture.md).
         """
         if not (self._batched or self._gathered):
             while not self.stop:
@@ -554,11 +550,10 @@ class Node:
                 yield item
             # nothing came: wait longer next time (an inbox item still wakes at once)
             idle_s = BATCH_POLL_S if got else min(2 * idle_s, BATCH_IDLE_POLL_S, tick_s)
-            wait_s = URGENT_POLL_S if urgent() else idle_s
             try:
-                item = self.inbox.get(timeout=wait_s)
+                item = self.inbox.get(timeout=idle_s)
             except queue.Empty:
-                silent_s = 0.0 if got else silent_s + wait_s
+                silent_s = 0.0 if got else silent_s + idle_s
                 if silent_s >= tick_s:
                     silent_s = 0.0
                     yield None, None

@@ -170,8 +170,7 @@ def run(args: argparse.Namespace) -> int:
                  "realtime" if args.realtime else "lockstep",
                  ", ".join(served) if fleet else node.keys.goal)
         polled = time.monotonic()
-        for topic, msg in node.messages(tick_s=0.05,
-                                        urgent=lambda: any(r.loop.pending for r in served.values())):
+        for topic, msg in node.messages(tick_s=0.05):
             now = time.monotonic()
             name, topic = topic.split("/", 1) if fleet and topic else ("", topic)
             robot = served.get(name)

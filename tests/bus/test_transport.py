@@ -129,8 +129,7 @@ def test_batched_topics_come_in_step_checked_and_with_ticks(router, session):
 
 
 def test_batched_samples_come_before_the_inbox_item_that_woke_the_node(router, session):
-    """The planner's case: odom(t) batched, scan(t) woken for — odom(t), put first, is
-    yielded first, so the scan finds its partner without another wait."""
+    """odom(t) batched, cmd_vel(t) woken for: odom(t), put first, is yielded first."""
     keys = Keys("t4")
     with zenoh.open(zenoh_config("client", [router])) as s2:
         node = Node("probe", s2, keys, logging.getLogger("probe"))
@@ -143,7 +142,7 @@ def test_batched_samples_come_before_the_inbox_item_that_woke_the_node(router, s
             session.put(keys.odom, Odometry(stamp_ns=t, x=0, y=0, yaw=0, v=0, w=0).to_bytes())
             session.put(keys.cmd_vel, Twist(stamp_ns=t, v=0.1, w=0.0).to_bytes())
         deadline = time.monotonic() + 30
-        for topic, msg in node.messages(tick_s=0.05, urgent=lambda: True):
+        for topic, msg in node.messages(tick_s=0.05):
             if topic is not None:
                 got.append((topic, msg.stamp_ns))
             if len(got) == 6 or time.monotonic() > deadline:

@@ -62,10 +62,13 @@ def test_lockstep_missing_odom_falls_back_after_pair_timeout():
 
 
 def test_lockstep_a_late_partner_is_logged_with_how_long_the_scan_waited():
-    log = logging.getLogger("test.late_pair")
     seen = []
-    log.warning = lambda fmt, *args: seen.append(fmt % args)
-    lp = loop(log=log)
+
+    class Log:   # what the loop logs, as the lines it would write
+        def warning(self, fmt, *args):
+            seen.append(fmt % args)
+
+    lp = loop(log=Log())
     lp.on_message("scan", scan(100 * MS), 0.0)
     assert lp.on_message("odom", odom(100 * MS), 0.5)[0][1].stamp_ns == 100 * MS
     assert seen == []                                              # in time: nothing said
@@ -248,6 +251,8 @@ def test_planner_accepts_a_goal_only_from_the_run_that_set_it():
 class _Subscriptions:
     """What a planner's robot subscribes to, and how (a stand-in for its Node)."""
 
+    keys = Keys("rosbot")
+
     def __init__(self):
         self.calls = {}
         self.session = self
@@ -266,8 +271,6 @@ class _Subscriptions:
 
     def listened(self, topic):
         return False
-
-    keys = Keys("rosbot")
 
 
 def test_nothing_a_lockstep_cycle_waits_for_is_batched():
