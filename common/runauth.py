@@ -24,7 +24,7 @@ from pathlib import Path
 import msgpack
 
 from common import seal
-from common.errors import PapfError
+from common.errors import ConfigError, PapfError
 
 ENV = "PAPF_RUN_KEY"          # environment variable that carries the key (hex)
 TAG_HEX = 32                  # [hex digits] 128-bit tag
@@ -51,8 +51,9 @@ def key_file(namespace: str) -> Path:
     return base / f"papf-{os.getuid()}" / f"{re.sub(r'[^A-Za-z0-9_.-]', '_', namespace)}.key"
 
 
-class NamespaceTaken(Exception):
-    """Another launcher of this user holds the namespace (its key file names a live process)."""
+class NamespaceTaken(ConfigError):
+    """Another launcher of this user holds the namespace (its key file names a live process):
+    a user's mistake like any other (exit 2, one line that says what to do)."""
 
 
 def publish_key(namespace: str, key_hex: str, run_id: str = "") -> Path:

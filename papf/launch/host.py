@@ -72,10 +72,7 @@ def launch(opt: LaunchOptions, stop: StopRequested | None = None,
                 opt = with_meter_resume(opt, journal)
                 graph = resolve(prof, opt)
         if prof.run:   # this user's `papf goal` may re-target the session (common.runauth)
-            try:
-                runauth.publish_key(opt.namespace, run_key, run_id or "")
-            except runauth.NamespaceTaken as exc:
-                raise ConfigError(str(exc)) from None
+            runauth.publish_key(opt.namespace, run_key, run_id or "")   # NamespaceTaken: exit 2
         try:
             return _launch(opt, prof, graph, stop, show, keys, run_key, run_id, journal,
                            on_run_start)

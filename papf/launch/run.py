@@ -148,15 +148,18 @@ def run(cfg: RunConfig) -> RunResult:
     monitor = RunMonitor(cfg.timeout_s, cfg.stop_on_collision,
                          goal=(world.goal[0], world.goal[1], world.tolerance))
     keys = Keys(cfg.namespace)
-    router, graph, why = open_router(cfg)
-    if router is None:
-        monitor.fail(why)
-        return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
     run_key = runauth.new_key()    # to the nodes through their environment only
     run_id = seal.new_run_id()     # every sample of this run carries it (common.seal)
-    if cfg.realtime:   # this user's `papf goal` may steer a real-time run (common.runauth);
-        runauth.publish_key(cfg.namespace, run_key, run_id)   # a lockstep run stays reproducible
+    # this user's `papf goal` may steer a real-time run (common.runauth); a lockstep run stays
+    # reproducible. Claimed before the router opens: a namespace another launch of this user
+    # holds is a usage error (NamespaceTaken, exit 2) before anything starts
+    if cfg.realtime:
+        runauth.publish_key(cfg.namespace, run_key, run_id)
     try:
+        router, graph, why = open_router(cfg)
+        if router is None:
+            monitor.fail(why)
+            return monitor.result(cfg.planner, world.name, cfg.seed, time.monotonic() - wall0)
         return _run(cfg, world, graph, router, run_key, run_id, monitor, keys, wall0)
     finally:
         if cfg.realtime:

@@ -121,6 +121,24 @@ def test_a_port_held_by_another_listener_is_refused():
     assert p.returncode == 2 and "already listens" in p.stderr and p.stdout == ""
 
 
+def test_a_namespace_another_launch_holds_is_a_usage_error_not_a_traceback(tmp_path, monkeypatch):
+    """A real-time run publishes its key for `papf goal` (common.runauth): in a namespace a
+    live launch of this user holds, exit 2 and one line that says what to do, before the
+    router opens (a traceback with exit 1 until 2026-12-07)."""
+    import os
+
+    from common import runauth
+
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    path = runauth.key_file("rosbot")
+    path.parent.mkdir(mode=0o700)
+    path.write_text(f"{'ab' * 16} {os.getpid()}\n")   # this test's process: alive
+    p = papf("run", "--world", "open", "--realtime", "--timeout", "1", "--json")
+    assert p.returncode == 2 and p.stdout == "", (p.returncode, p.stderr)
+    assert "in use by another launch" in p.stderr and "--namespace" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+
+
 def test_plan_refuses_a_negative_seed_and_a_3d_world_is_refused_by_run():
     p = papf("plan", "--world", "open", "--seed", "-1")
     assert p.returncode == 2 and "--seed=-1" in p.stderr and "Traceback" not in p.stderr
