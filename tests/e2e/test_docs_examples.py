@@ -90,6 +90,7 @@ HELP_IF = (("/opt/papf/certs", "needs the robot's certificates under /opt/papf")
 SERVERS = (("launch", "robot"), ("launch", "hil-robot"), ("rosbot-emulator",), ("view",),
            ("record",))
 MAKE_DRY = {"demo", "test", "setup"}      # `make -n`: the recipe exists and expands
+SETTLE_S = 2.0   # [s] a server's nodes come up after its first log line (Session.start)
 
 
 def _match(argv: list[str], table) -> tuple | None:
@@ -122,6 +123,7 @@ class Session:
         self.log: list[str] = []
         self.needs_robot = False      # start the emulator once a router listens
         self.dask_port = free_port()  # docs/sweeps.md's scheduler (8786 in the docs)
+        self.settle_until = 0.0       # [s, monotonic] the last server's nodes are up by then
         self.link_port = free_port()  # docs/link.md's emulator (7448 in the docs)
 
     def argv(self, ex: Example) -> list[str] | None:
@@ -192,6 +194,7 @@ class Session:
             return
         short = _match(papf_args, SHORT)
         ok = SHORT[short][1] if short and "--help" not in argv else {0}
+        self.settle()
         proc = subprocess.run(argv, cwd=self.cwd, capture_output=True, text=True, timeout=600,
                               stdin=subprocess.DEVNULL)
         self.log.append(f"$ {' '.join(argv[2:])}  -> {proc.returncode}")
@@ -220,10 +223,17 @@ class Session:
         deadline = time.monotonic() + 30.0   # its first log line: imported and started
         while not log.read_text().strip() and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.1)
-        time.sleep(2.0)   # the server's nodes come up (the next line finds them alive)
+        # the server's nodes come up: 2 s before the next foreground line or the block's end
+        # (the next line finds them alive), not after each server of a row of them
+        self.settle_until = time.monotonic() + SETTLE_S
+
+    def settle(self) -> None:
+        """Wait out what is left of the last server's :data:`SETTLE_S`."""
+        time.sleep(max(0.0, self.settle_until - time.monotonic()))
 
     def stop(self) -> None:
         """Stop the background processes (last first): each still running, no traceback."""
+        self.settle()
         errors = []
         for k, (where, proc) in reversed(list(enumerate(self.background))):
             if proc.poll() is not None and proc.returncode != 0:
