@@ -83,39 +83,9 @@ def tiny_disk(tmp_path):
 TIERS = ("unit", "bus", "e2e")
 
 
-# the longest tests first: the slow tier, then the other end-to-end cases, the bus, the units
-WEIGHT_ORDER = ("slow", "e2e", "bus", "unit")
-
-
-def pytest_collection_modifyitems(config, items):
-    """Markers follow the folders: a test in ``tests/<tier>/`` carries the marker ``<tier>``.
-
-    On N parallel workers the items are also dealt out heaviest first: pytest-xdist's
-    worksteal hands each worker a contiguous Nth of the collection and lets an idle worker
-    take the back half of the longest queue. In folder order the end-to-end cases sat in two
-    workers' shares and the last of them started late, a tail of 1-2 busy workers on 2
-    cores; dealt round-robin from the weight order (:func:`heaviest_first`), each share
-    starts with its part of the long tests and ends with unit tests that balance the end
-    (docs/performance.md "The test suite's time")."""
+def pytest_collection_modifyitems(items):
+    """Markers follow the folders: a test in ``tests/<tier>/`` carries the marker ``<tier>``."""
     for item in items:
         tier = item.path.parent.name
         if tier in TIERS:
             item.add_marker(getattr(pytest.mark, tier))
-    workers = int(getattr(config, "workerinput", {}).get("workercount", 1))
-    if workers > 1:
-        items[:] = heaviest_first(items, workers)
-
-
-def _weight(item) -> int:
-    """0 for the heaviest kind of test (:data:`WEIGHT_ORDER`), more for lighter ones."""
-    for rank, marker in enumerate(WEIGHT_ORDER):
-        if item.get_closest_marker(marker) is not None:
-            return rank
-    return len(WEIGHT_ORDER)
-
-
-def heaviest_first(items: list, workers: int) -> list:
-    """``items`` sorted by weight (stable), dealt round-robin into ``workers`` contiguous
-    shares: every share begins with the heaviest and ends with the lightest."""
-    ranked = sorted(items, key=_weight)
-    return [item for k in range(workers) for item in ranked[k::workers]]
