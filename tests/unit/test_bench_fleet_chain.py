@@ -1,4 +1,4 @@
-"""bench/fleet_chain.py: a fleet cycle's phases from the arrival times in a recording."""
+"""papf bench fleet-chain: a fleet cycle's phases from the arrival times in a recording."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import csv
 import pytest
 from mcap.writer import Writer
 
-from bench import fleet_chain
+from bench import bench_fleet_chain as fleet_chain
+from tests.support.cli import papf
 
 MS = 1_000_000
 
@@ -54,3 +55,15 @@ def test_a_run_without_a_fleet_is_refused_in_one_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         fleet_chain.main([str(path)])
     assert exc.value.code == 2 and "no lockstep fleet instants" in capsys.readouterr().err
+
+
+def test_what_is_not_a_recording_or_a_table_is_one_line(tmp_path):
+    (tmp_path / "notes.mcap").write_text("hello\n")
+    p = papf("bench", "fleet-chain", tmp_path / "notes.mcap")
+    assert p.returncode == 2 and "not an MCAP file" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    path = tmp_path / "run.mcap"
+    write(path, cycle(1, 0) + cycle(2, 30))
+    p = papf("bench", "fleet-chain", path, "--csv", tmp_path / "missing" / "c.csv")
+    assert p.returncode == 2 and "does not exist" in p.stderr and p.stdout == "", p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr

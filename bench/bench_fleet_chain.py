@@ -10,7 +10,7 @@ instant came, and when the next instant's burst began: the median and the 90th p
 over the instants.
 
     papf run --world F --planner apf --record run.mcap --timeout 30   # F: a fleet world
-    python bench/fleet_chain.py run.mcap --label L [--csv docs/data/fleet-chain.csv]
+    papf bench fleet-chain run.mcap --label L [--csv docs/data/fleet-chain.csv]
 
 The recorder is one more subscriber of every topic: its own work shares the machine with the
 run it measures (figures are the run's with a recorder, compared with each other).
@@ -26,9 +26,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from mcap.reader import make_reader  # noqa: E402
-
-from bench.csvrows import emit, replace_label  # noqa: E402
+from bench.csvrows import check_csv, emit, replace_label  # noqa: E402
+from common.errors import PapfError  # noqa: E402
+from papf.recording.reader import open_recording  # noqa: E402
 
 FIELDS = ("label", "phase", "median_ms", "p90_ms", "instants")
 PHASES = (("burst out", "clock", max), ("first scan", "scan", min), ("last scan", "scan", max),
@@ -37,12 +37,12 @@ PHASES = (("burst out", "clock", max), ("first scan", "scan", min), ("last scan"
 
 def arrivals(path: Path) -> dict[int, dict[str, list[int]]]:
     """sim stamp [ns] -> topic kind (``scan``: every robot's ``<robot>/scan``) -> wall times
-    [ns] of its samples' arrival."""
+    [ns] of its samples' arrival (RecordingError: not a whole MCAP recording)."""
     found: dict[int, dict[str, list[int]]] = defaultdict(lambda: defaultdict(list))
-    with path.open("rb") as fh:
-        for _schema, channel, message in make_reader(fh).iter_messages():
-            _robot, _, kind = channel.topic.partition("/")
-            found[message.log_time][kind].append(message.publish_time)
+    with open_recording(path) as rec:
+        for raw in rec.raw(log_time_order=False):
+            _robot, _, kind = raw.key.partition("/")
+            found[raw.log_time_ns][kind].append(raw.publish_time_ns)
     return found
 
 
@@ -66,7 +66,7 @@ def rows(out: dict[str, list[float]]) -> list[dict]:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(prog="python bench/fleet_chain.py", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="papf bench fleet-chain", description=__doc__.split("\n\n")[0])
     parser.add_argument("recording", type=Path, help="MCAP of a lockstep fleet run (papf run --record)")
     parser.add_argument("--from-s", type=float, default=1.0, help="sim time [s] to start at (default 1)")
     parser.add_argument("--label", default="", help="the rows' label (with --csv: replaces that label's)")
@@ -74,6 +74,8 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     if not args.recording.is_file():
         parser.error(f"{args.recording}: no such recording")
+    if args.csv:
+        check_csv(args.csv, FIELDS)   # a table of this benchmark or a new file, before the work
     found = phases(arrivals(args.recording), round(args.from_s * 1e9))
     if not found:
         parser.error(f"{args.recording}: no lockstep fleet instants (no <robot>/sim/bodies) "
@@ -87,4 +89,7 @@ def main(argv=None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except PapfError as exc:   # a damaged recording, a CSV that is not this table: one line
+        raise SystemExit(str(exc)) from None
