@@ -18,7 +18,10 @@
   carry its driver's run).
 
 Every refused sample is counted per topic and reason (:attr:`Trust.refused`); the node's
-health answer, ``papf topic list`` and the run's JSON show the counts.
+health answer, ``papf topic list`` and the run's JSON show the counts. A run's node refuses
+a sample sealed outside any run as :data:`~common.seal.BEFORE_RUN`, not ``other_run``: its
+sender had not joined the run yet (what the robot side put while the run began, still on a
+slow link); the others are worth a warning, this one is expected at a split run's start.
 """
 
 from __future__ import annotations
@@ -75,6 +78,8 @@ class Trust:
         kind = getattr(msg, "kind", "") if topic == "events" else ""
         expected = None if kind == "run_started" else self._expected(topic, msg)
         verdict, run = self.opener.check(key_expr, payload, attachment, expected)
+        if verdict == seal.OTHER_RUN and run == seal.NO_RUN and self.fixed is not None:
+            verdict = seal.BEFORE_RUN   # its sender had not joined this run yet
         if verdict == seal.OK and kind == "run_started" and self.fixed is None:
             age = seal.seq_age_s(attachment)
             if age is None or abs(age) > RUN_START_FRESH_S:

@@ -41,6 +41,10 @@ SENDERS_KEPT = 4096                 # [-] (key, sender) pairs whose last seq is 
 
 # verdicts of Opener.check
 OK, UNSIGNED, FORGED, REPLAY, OTHER_RUN = "ok", "unsigned", "forged", "replay", "other_run"
+# a run's receiver (common.intake.Trust) tells OTHER_RUN apart: sealed outside any run
+# (NO_RUN), its sender had not joined the run yet (a robot-side node's odometry still on the
+# link when the run began). Refused all the same
+BEFORE_RUN = "before_run"
 
 
 def new_run_id() -> str:

@@ -17,6 +17,7 @@ import zenoh
 from common import runauth
 from common.errors import SchemaError
 from common.intake import Trust
+from common.seal import BEFORE_RUN
 from common.transport import round_robin
 from common.units import StampGuard
 from nodes.world_sim.loop import LOCKSTEP_FAULT
@@ -130,9 +131,11 @@ class RunSequence:
         except SchemaError:
             self.dropped += 1
             return None
-        if self.trust.check(topic, self._key_of[topic], payload, attachment, msg) != "ok":
+        verdict = self.trust.check(topic, self._key_of[topic], payload, attachment, msg)
+        if verdict != "ok":
             self.dropped += 1
-            if sum(self.trust.refused.values()) in (1, 10, 100, 1000):
+            warned = sum(n for (_t, why), n in self.trust.refused.items() if why != BEFORE_RUN)
+            if verdict != BEFORE_RUN and warned in (1, 10, 100, 1000):   # before_run: expected
                 log.warning("refused samples not sealed by this run's processes: %s",
                             self.trust.counts())
             return None

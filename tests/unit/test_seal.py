@@ -75,6 +75,26 @@ def test_a_fixed_run_node_takes_its_run_only_and_no_key_takes_all():
     assert Trust(None, None).check("scan", "rosbot/scan", b"x", None) == "ok"
 
 
+def test_a_runs_node_tells_samples_from_before_any_run_apart_from_another_runs():
+    """What the robot side sealed outside any run (NO_RUN: it had not joined yet, the samples
+    still on a slow link as the run began) is refused as before_run, another run's as
+    other_run; a follower keeps refusing an unrun command in a run as other_run."""
+    meter = Trust(KEY, RUN)
+    robot_before, robot_old = seal.Sealer(KEY, None), seal.Sealer(KEY, RUN2)
+    assert meter.check("odom", "rosbot/odom", b"a", robot_before.seal("rosbot/odom", b"a")) \
+        == seal.BEFORE_RUN
+    assert meter.check("odom", "rosbot/odom", b"b", robot_old.seal("rosbot/odom", b"b")) \
+        == seal.OTHER_RUN
+    assert meter.counts() == {"odom": {seal.BEFORE_RUN: 1, seal.OTHER_RUN: 1}}
+    driver = Trust(KEY, None)
+    start = Event(stamp_ns=0, kind="run_started", source="launcher")
+    assert driver.check("events", "rosbot/events", b"s",
+                        seal.Sealer(KEY, RUN).seal("rosbot/events", b"s"), start) == "ok"
+    teleop = seal.Sealer(KEY, None)
+    assert driver.check("cmd_vel", "rosbot/cmd_vel", b"t", teleop.seal("rosbot/cmd_vel", b"t")) \
+        == seal.OTHER_RUN
+
+
 def test_a_parameter_request_of_another_run_is_refused():
     from common import runauth
 
