@@ -21,7 +21,9 @@ Every refused sample is counted per topic and reason (:attr:`Trust.refused`); th
 health answer, ``papf topic list`` and the run's JSON show the counts. A run's node refuses
 a sample sealed outside any run as :data:`~common.seal.BEFORE_RUN`, not ``other_run``: its
 sender had not joined the run yet (what the robot side put while the run began, still on a
-slow link); the others are worth a warning, this one is expected at a split run's start.
+slow link). The first :data:`BEFORE_RUN_EXPECTED` of those are :meth:`Trust.expected` at a
+split run's start; every other refusal, and a sender that never joins, is worth a warning
+(:meth:`Trust.alarming`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,9 @@ from common import runauth, seal
 
 RUN_START_FRESH_S = 120.0   # [s] a run_started sealed longer ago (or ahead) than this is stale
 COMMAND_TOPICS = frozenset({"cmd_vel"})   # strict to the current run even when following
+# [samples] before_run refusals a node takes as a split run's start (4-6 per node seen over a
+# 200 ms link); more are a sender that has not joined the run, worth a warning
+BEFORE_RUN_EXPECTED = 50
 
 
 class Trust:
@@ -100,6 +105,21 @@ class Trust:
             self.current = None
         if run != seal.NO_RUN and self.sealer is not None:
             self.sealer.run = run
+
+    def expected(self, verdict: str) -> bool:
+        """Whether a refusal of ``verdict`` (just counted) is one a run's start brings: a
+        :data:`~common.seal.BEFORE_RUN` within the first :data:`BEFORE_RUN_EXPECTED`."""
+        return verdict == seal.BEFORE_RUN and self._before_run() <= BEFORE_RUN_EXPECTED
+
+    def alarming(self) -> int:
+        """How many refusals so far are worth a warning (all but the expected ones)."""
+        with self._lock:
+            total = sum(self.refused.values())
+        return total - min(self._before_run(), BEFORE_RUN_EXPECTED)
+
+    def _before_run(self) -> int:
+        with self._lock:
+            return sum(n for (_t, why), n in self.refused.items() if why == seal.BEFORE_RUN)
 
     def counts(self) -> dict[str, dict[str, int]]:
         """``{topic: {reason: n}}`` of the refused samples so far."""

@@ -35,7 +35,6 @@ import zenoh
 from common.errors import ConfigError, SchemaError
 from common.intake import Trust
 from common.reach import session_error
-from common.seal import BEFORE_RUN
 from common.text import install_log_filter
 from common.units import StampGuard
 from schemas import Keys
@@ -524,11 +523,13 @@ class Node:
             self.log.warning("dropped bad message #%d on %s: %s", n, self.keys.key(topic), exc)
 
     def _count_refused(self, topic: str, verdict: str) -> None:
-        n = sum(self.trust.refused.values())
-        if verdict == BEFORE_RUN:   # expected as a split run begins: counted, no warning
-            self.log.info("dropped %s from before this run (%s: its sender had not joined it "
-                          "yet)", self.keys.key(topic), BEFORE_RUN)
-        elif n <= 5 or n % 100 == 0:
+        if self.trust.expected(verdict):   # a split run's start: counted, said once per topic
+            if self.trust.refused[(topic, verdict)] == 1:
+                self.log.info("dropped %s from before this run (%s: its sender had not joined "
+                              "it yet)", self.keys.key(topic), verdict)
+            return
+        n = self.trust.alarming()
+        if n <= 5 or n % 100 == 0:
             self.log.warning("refused #%d on %s: %s (not sealed with this run's key, a replay, "
                              "or another run's)", n, self.keys.key(topic), verdict)
 

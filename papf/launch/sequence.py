@@ -17,7 +17,6 @@ import zenoh
 from common import runauth
 from common.errors import SchemaError
 from common.intake import Trust
-from common.seal import BEFORE_RUN
 from common.transport import round_robin
 from common.units import StampGuard
 from nodes.world_sim.loop import LOCKSTEP_FAULT
@@ -134,8 +133,7 @@ class RunSequence:
         verdict = self.trust.check(topic, self._key_of[topic], payload, attachment, msg)
         if verdict != "ok":
             self.dropped += 1
-            warned = sum(n for (_t, why), n in self.trust.refused.items() if why != BEFORE_RUN)
-            if verdict != BEFORE_RUN and warned in (1, 10, 100, 1000):   # before_run: expected
+            if not self.trust.expected(verdict) and self.trust.alarming() in (1, 10, 100, 1000):
                 log.warning("refused samples not sealed by this run's processes: %s",
                             self.trust.counts())
             return None

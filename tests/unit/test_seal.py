@@ -4,7 +4,7 @@ and parameter requests of another run — pure, no bus."""
 from __future__ import annotations
 
 from common import seal
-from common.intake import Trust
+from common.intake import BEFORE_RUN_EXPECTED, Trust
 from schemas import Event
 
 KEY, OTHER = b"k" * 16, b"o" * 16
@@ -86,6 +86,12 @@ def test_a_runs_node_tells_samples_from_before_any_run_apart_from_another_runs()
     assert meter.check("odom", "rosbot/odom", b"b", robot_old.seal("rosbot/odom", b"b")) \
         == seal.OTHER_RUN
     assert meter.counts() == {"odom": {seal.BEFORE_RUN: 1, seal.OTHER_RUN: 1}}
+    assert meter.expected(seal.BEFORE_RUN) and not meter.expected(seal.OTHER_RUN)
+    assert meter.alarming() == 1                      # the other run's sample only
+    for k in range(BEFORE_RUN_EXPECTED):              # a robot side that never joins the run
+        payload = f"late{k}".encode()
+        meter.check("odom", "rosbot/odom", payload, robot_before.seal("rosbot/odom", payload))
+    assert not meter.expected(seal.BEFORE_RUN) and meter.alarming() == 2
     driver = Trust(KEY, None)
     start = Event(stamp_ns=0, kind="run_started", source="launcher")
     assert driver.check("events", "rosbot/events", b"s",
