@@ -21,16 +21,20 @@ Every refused sample is counted per topic and reason (:attr:`Trust.refused`); th
 health answer, ``papf topic list`` and the run's JSON show the counts. A run's node refuses
 a sample sealed outside any run as :data:`~common.seal.BEFORE_RUN`, not ``other_run``: its
 sender had not joined the run yet (what the robot side put while the run began, still on a
-slow link). The first :data:`BEFORE_RUN_EXPECTED` of those are :meth:`Trust.expected` at a
-split run's start; every other refusal, and a sender that never joins, is worth a warning
-(:meth:`Trust.alarming`).
+slow link). A follower refuses a command of a run whose ``run_started`` it has not accepted
+(nor any earlier sample of) as :data:`~common.seal.AHEAD_OF_RUN`, not ``other_run``: a new
+run's first command, which overtook its ``run_started`` on another connection of a jittered
+link (a command of a run it saw begin is still ``other_run``: an old laptop's). The first
+:data:`EXPECTED` of each are :meth:`Trust.expected` at a split run's start; every other
+refusal, and a sender that never joins (or a run whose start never comes), is worth a
+warning (:meth:`Trust.alarming`).
 """
 
 from __future__ import annotations
 
 import os
 import threading
-from collections import Counter
+from collections import Counter, deque
 
 from common import runauth, seal
 
@@ -39,6 +43,13 @@ COMMAND_TOPICS = frozenset({"cmd_vel"})   # strict to the current run even when 
 # [samples] before_run refusals a node takes as a split run's start (4-6 per node seen over a
 # 200 ms link); more are a sender that has not joined the run, worth a warning
 BEFORE_RUN_EXPECTED = 50
+# [commands] ahead_of_run refusals a follower takes as a run's start (1 per split run seen over
+# a link with 150 ms of jitter: commands come at 10 Hz); more are a run whose start never came
+AHEAD_OF_RUN_EXPECTED = 10
+EXPECTED = {seal.BEFORE_RUN: BEFORE_RUN_EXPECTED, seal.AHEAD_OF_RUN: AHEAD_OF_RUN_EXPECTED}
+WHY_EXPECTED = {seal.BEFORE_RUN: "its sender had not joined this run yet",
+                seal.AHEAD_OF_RUN: "a new run's command, ahead of its run_started on the link"}
+RUNS_KEPT = 64   # [-] run ids a follower remembers having seen begin
 
 
 class Trust:
@@ -52,6 +63,7 @@ class Trust:
         self.opener = seal.Opener(key, None) if key else None
         self.refused: Counter[tuple[str, str]] = Counter()
         self._lock = threading.Lock()
+        self._begun: deque[bytes] = deque(maxlen=RUNS_KEPT)   # a follower's runs seen begin
 
     @classmethod
     def from_env(cls, environ=os.environ) -> Trust:
@@ -85,6 +97,9 @@ class Trust:
         verdict, run = self.opener.check(key_expr, payload, attachment, expected)
         if verdict == seal.OTHER_RUN and run == seal.NO_RUN and self.fixed is not None:
             verdict = seal.BEFORE_RUN   # its sender had not joined this run yet
+        elif verdict == seal.OTHER_RUN and self.fixed is None and run not in (None, seal.NO_RUN) \
+                and run not in self._begun:
+            verdict = seal.AHEAD_OF_RUN   # a new run's command before its run_started
         if verdict == seal.OK and kind == "run_started" and self.fixed is None:
             age = seal.seq_age_s(attachment)
             if age is None or abs(age) > RUN_START_FRESH_S:
@@ -101,6 +116,8 @@ class Trust:
             return
         if kind == "run_started":
             self.current = run
+            if run not in self._begun:
+                self._begun.append(run)
         elif kind == "run_ended" and run == self.current:
             self.current = None
         if run != seal.NO_RUN and self.sealer is not None:
@@ -108,18 +125,19 @@ class Trust:
 
     def expected(self, verdict: str) -> bool:
         """Whether a refusal of ``verdict`` (just counted) is one a run's start brings: a
-        :data:`~common.seal.BEFORE_RUN` within the first :data:`BEFORE_RUN_EXPECTED`."""
-        return verdict == seal.BEFORE_RUN and self._before_run() <= BEFORE_RUN_EXPECTED
+        :data:`~common.seal.BEFORE_RUN` or :data:`~common.seal.AHEAD_OF_RUN` within the first
+        :data:`EXPECTED` of its kind."""
+        return verdict in EXPECTED and self._of(verdict) <= EXPECTED[verdict]
 
     def alarming(self) -> int:
         """How many refusals so far are worth a warning (all but the expected ones)."""
         with self._lock:
             total = sum(self.refused.values())
-        return total - min(self._before_run(), BEFORE_RUN_EXPECTED)
+        return total - sum(min(self._of(verdict), n) for verdict, n in EXPECTED.items())
 
-    def _before_run(self) -> int:
+    def _of(self, verdict: str) -> int:
         with self._lock:
-            return sum(n for (_t, why), n in self.refused.items() if why == seal.BEFORE_RUN)
+            return sum(n for (_t, why), n in self.refused.items() if why == verdict)
 
     def counts(self) -> dict[str, dict[str, int]]:
         """``{topic: {reason: n}}`` of the refused samples so far."""

@@ -33,7 +33,7 @@ from pathlib import Path
 import zenoh
 
 from common.errors import ConfigError, SchemaError
-from common.intake import Trust
+from common.intake import WHY_EXPECTED, Trust
 from common.reach import session_error
 from common.text import install_log_filter
 from common.units import StampGuard
@@ -525,8 +525,8 @@ class Node:
     def _count_refused(self, topic: str, verdict: str) -> None:
         if self.trust.expected(verdict):   # a split run's start: counted, said once per topic
             if self.trust.refused[(topic, verdict)] == 1:
-                self.log.info("dropped %s from before this run (%s: its sender had not joined "
-                              "it yet)", self.keys.key(topic), verdict)
+                self.log.info("dropped %s at a run's start (%s: %s)", self.keys.key(topic),
+                              verdict, WHY_EXPECTED[verdict])
             return
         n = self.trust.alarming()
         if n <= 5 or n % 100 == 0:

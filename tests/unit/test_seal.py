@@ -4,7 +4,7 @@ and parameter requests of another run — pure, no bus."""
 from __future__ import annotations
 
 from common import seal
-from common.intake import BEFORE_RUN_EXPECTED, Trust
+from common.intake import AHEAD_OF_RUN_EXPECTED, BEFORE_RUN_EXPECTED, Trust
 from schemas import Event
 
 KEY, OTHER = b"k" * 16, b"o" * 16
@@ -48,6 +48,8 @@ def test_a_follower_obeys_commands_of_the_run_it_is_in_only():
     launcher, planner, old = (seal.Sealer(KEY, RUN), seal.Sealer(KEY, RUN),
                               seal.Sealer(KEY, RUN2))
     start = Event(stamp_ns=0, kind="run_started", source="launcher")
+    assert driver.check("events", "rosbot/events", b"o", old.seal("rosbot/events", b"o"),
+                        start) == "ok"                # the old run began first
     assert driver.check("events", "rosbot/events", b"s", launcher.seal("rosbot/events", b"s"),
                         start) == "ok"
     assert driver.run_hex() == RUN.hex()
@@ -99,6 +101,41 @@ def test_a_runs_node_tells_samples_from_before_any_run_apart_from_another_runs()
     teleop = seal.Sealer(KEY, None)
     assert driver.check("cmd_vel", "rosbot/cmd_vel", b"t", teleop.seal("rosbot/cmd_vel", b"t")) \
         == seal.OTHER_RUN
+
+
+def test_a_follower_tells_a_new_runs_early_command_apart_from_an_old_runs():
+    """A new run's first command may overtake its run_started on a jittered link: the robot
+    side refuses it as ahead_of_run (expected, no warning) while it has not seen that run
+    begin; a command of a run it saw begin and end (an old laptop's) stays other_run, and a
+    run whose start never comes is warned of after AHEAD_OF_RUN_EXPECTED commands."""
+    driver = Trust(KEY, None)
+    laptop_old, laptop_new = seal.Sealer(KEY, RUN), seal.Sealer(KEY, RUN2)
+
+    def command(sealer, payload):
+        return driver.check("cmd_vel", "rosbot/cmd_vel", payload,
+                            sealer.seal("rosbot/cmd_vel", payload))
+
+    def event(sealer, kind, payload):
+        return driver.check("events", "rosbot/events", payload,
+                            sealer.seal("rosbot/events", payload),
+                            Event(stamp_ns=0, kind=kind, source="launcher"))
+
+    assert event(laptop_old, "run_started", b"s1") == seal.OK
+    assert command(laptop_old, b"c1") == seal.OK
+    assert event(laptop_old, "run_ended", b"e1") == seal.OK
+    assert command(laptop_new, b"c2") == seal.AHEAD_OF_RUN       # ahead of its run_started
+    assert driver.expected(seal.AHEAD_OF_RUN) and driver.alarming() == 0
+    assert event(laptop_new, "run_started", b"s2") == seal.OK
+    assert command(laptop_new, b"c3") == seal.OK
+    assert command(laptop_old, b"c4") == seal.OTHER_RUN          # the old run's: a warning
+    assert driver.alarming() == 1
+    assert driver.counts() == {"cmd_vel": {seal.AHEAD_OF_RUN: 1, seal.OTHER_RUN: 1}}
+    never = seal.Sealer(KEY, bytes(range(1, 9)))                 # its run_started never comes
+    for k in range(AHEAD_OF_RUN_EXPECTED + 1):
+        assert command(never, f"n{k}".encode()) == seal.AHEAD_OF_RUN
+    assert not driver.expected(seal.AHEAD_OF_RUN) and driver.alarming() == 3
+    assert Trust(KEY, RUN).check("cmd_vel", "rosbot/cmd_vel", b"p",
+                                 laptop_new.seal("rosbot/cmd_vel", b"p")) == seal.OTHER_RUN
 
 
 def test_a_parameter_request_of_another_run_is_refused():
