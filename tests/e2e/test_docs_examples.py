@@ -69,10 +69,12 @@ SHORT: dict[tuple[str, ...], tuple[list[str], set[int]]] = {
     # draws an animation at the default size frame by frame)
     ("animate",): (["--speed", "16", "--dpi", "50"], {0}),
 }
-# a run over an emulated link goes at the wall clock's pace (the link's delays are real):
-# 3 s of it start the proxy, drive over it and end as a run does (tests/e2e/test_link_*.py
-# drive whole runs over it)
-LINK_TIMEOUT = ["--timeout", "3"]
+# a run over an emulated link, a --realtime run and a laptop side driving a robot go at the
+# wall clock's pace (the link's delays are real): 3 s of it start the proxy or the robot's run,
+# drive and end as a run does (tests/e2e/test_link_*.py, test_launch_profiles.py and
+# test_ros_face.py drive whole ones)
+WALL_CLOCK_TIMEOUT = ["--timeout", "3"]
+WALL_CLOCK = (("launch", "laptop"), ("launch", "hil-laptop"))
 WHY_MINUTES = "takes minutes (tests/e2e/test_progress_piped.py runs its first steps)"
 HELP: dict[tuple[str, ...], str] = {
     ("teleop",): "reads the keyboard (tests/e2e/test_teleop_robot.py drives it in a pty)",
@@ -161,8 +163,9 @@ class Session:
             return [*args[:_subcommand_len(args)], "--help"]
         short = _match(args, SHORT)
         extra = SHORT[short][0] if short and not background else []
-        if short == ("run",) and "--link" in args and not background:
-            extra = LINK_TIMEOUT
+        if not background and (short in WALL_CLOCK or short == ("run",) and (
+                "--link" in args or "--realtime" in args)):
+            extra = [*WALL_CLOCK_TIMEOUT, *extra[2:]]   # its other short arguments kept
         if "--help" in args or "--dry-run" in args:
             return args
         args = _own_view_port(args)
