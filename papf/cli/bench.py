@@ -27,6 +27,8 @@ BENCHES = {
     "tracker": "obstacle tracker cycle time (300-beam scans) and its error against truth, road worlds",
     "fleet": "papf run with 1-8 robots and 0-50 people: x real time, CPU per robot-cycle",
     "fleet-chain": "a recorded lockstep fleet run: when each cycle's scans and commands came",
+    "rx": "a Zenoh subscriber's CPU per received sample: callback or drained channel, main "
+          "thread idle or busy",
     "maps": "PAPF on the packaged map worlds, offline and through the stack (outcome, x real time)",
     "link-drive": "papf run --link over slow links: outcome, time, round trip, refused commands "
                   "(this code or --checkout DIR's)",
