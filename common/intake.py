@@ -22,7 +22,7 @@ health answer, ``papf topic list`` and the run's JSON show the counts. A run's n
 a sample sealed outside any run as :data:`~common.seal.BEFORE_RUN`, not ``other_run``: its
 sender had not joined the run yet (what the robot side put while the run began, still on a
 slow link). A follower refuses a command of a run whose ``run_started`` it has not accepted
-(nor any earlier sample of) as :data:`~common.seal.AHEAD_OF_RUN`, not ``other_run``: a new
+(it remembers the last :data:`RUNS_KEPT`) as :data:`~common.seal.AHEAD_OF_RUN`, not ``other_run``: a new
 run's first command, which overtook its ``run_started`` on another connection of a jittered
 link (a command of a run it saw begin is still ``other_run``: an old laptop's). The first
 :data:`EXPECTED` of each are :meth:`Trust.expected` at a split run's start; every other
