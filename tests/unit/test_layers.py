@@ -9,6 +9,7 @@ hide an upward edge or a cycle. Read with :mod:`ast`, nothing is imported.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -47,17 +48,30 @@ def _targets(node: ast.AST, here: str, is_pkg: bool, modules: dict[str, Path]) -
     return out
 
 
+@functools.cache
+def _trees() -> tuple[tuple[str, Path, ast.Module], ...]:
+    """Every project module's syntax tree, parsed once per test process (the checks below
+    read the same files; parsing them is most of their cost)."""
+    return tuple((name, path, ast.parse(path.read_text(encoding="utf-8"), str(path)))
+                 for name, path in project_modules().items())
+
+
 def import_graph() -> dict[str, set[str]]:
+    """module -> the project modules it imports (a copy of the one graph built per process)."""
+    return {name: set(edges) for name, edges in _graph().items()}
+
+
+@functools.cache
+def _graph() -> dict[str, frozenset[str]]:
     modules = project_modules()
-    graph: dict[str, set[str]] = {}
-    for name, path in modules.items():
-        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    graph: dict[str, frozenset[str]] = {}
+    for name, path, tree in _trees():
         edges = set()
         for node in ast.walk(tree):
             if isinstance(node, (ast.Import, ast.ImportFrom)):
                 edges.update(_targets(node, name, path.name == "__init__.py", modules))
         edges.discard(name)
-        graph[name] = edges
+        graph[name] = frozenset(edges)
     return graph
 
 
@@ -198,8 +212,8 @@ def test_the_room_check_sees_sideways_and_upward_edges():
 def test_optional_imports_are_decided_once():
     """``HAVE_NUMBA`` is assigned and ``tomli`` imported only in common/optional.py."""
     places = set()
-    for name, path in project_modules().items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for name, _path, tree in _trees():
+        for node in ast.walk(tree):
             if isinstance(node, ast.Assign) and any(
                     isinstance(t, ast.Name) and t.id == "HAVE_NUMBA" for t in node.targets):
                 places.add(name)
