@@ -44,16 +44,13 @@ TICK_S = 0.01   # [s] the main thread's wait for the queue (idle) or between dra
 
 
 def _session(listen: str | None = None, connect: str | None = None):
+    """A peer session on loopback, as the stack's nodes open theirs (no multicast scouting)."""
     import zenoh
 
-    conf = zenoh.Config()
-    conf.insert_json5("mode", '"peer"')
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    if listen:
-        conf.insert_json5("listen/endpoints", f'["{listen}"]')
-    if connect:
-        conf.insert_json5("connect/endpoints", f'["{connect}"]')
-    return zenoh.open(conf)
+    from common.transport import zenoh_config
+
+    return zenoh.open(zenoh_config("peer", connect=[connect] if connect else (),
+                                   listen=[listen] if listen else ()))
 
 
 def publish(endpoint: str, topics: int, size: int, period_s: float, seconds: float) -> None:

@@ -127,17 +127,20 @@ class Trust:
         """Whether a refusal of ``verdict`` (just counted) is one a run's start brings: a
         :data:`~common.seal.BEFORE_RUN` or :data:`~common.seal.AHEAD_OF_RUN` within the first
         :data:`EXPECTED` of its kind."""
-        return verdict in EXPECTED and self._of(verdict) <= EXPECTED[verdict]
+        return verdict in EXPECTED and self._by_reason()[verdict] <= EXPECTED[verdict]
 
     def alarming(self) -> int:
         """How many refusals so far are worth a warning (all but the expected ones)."""
-        with self._lock:
-            total = sum(self.refused.values())
-        return total - sum(min(self._of(verdict), n) for verdict, n in EXPECTED.items())
+        by = self._by_reason()
+        return sum(by.values()) - sum(min(by[verdict], n) for verdict, n in EXPECTED.items())
 
-    def _of(self, verdict: str) -> int:
+    def _by_reason(self) -> Counter[str]:
+        """The refusals so far per reason, every topic together."""
+        out: Counter[str] = Counter()
         with self._lock:
-            return sum(n for (_t, why), n in self.refused.items() if why == verdict)
+            for (_topic, why), n in self.refused.items():
+                out[why] += n
+        return out
 
     def counts(self) -> dict[str, dict[str, int]]:
         """``{topic: {reason: n}}`` of the refused samples so far."""

@@ -45,9 +45,9 @@ OK, UNSIGNED, FORGED, REPLAY, OTHER_RUN = "ok", "unsigned", "forged", "replay", 
 # (NO_RUN), its sender had not joined the run yet (a robot-side node's odometry still on the
 # link when the run began). Refused all the same
 BEFORE_RUN = "before_run"
-# ... and a follower (the robot side) a command of a run it has not seen begin: the new run's
-# first command, which overtook its run_started on another connection of a jittered link.
-# Refused all the same
+# a follower (the robot side, common.intake.Trust) tells OTHER_RUN apart too: a command of a
+# run it has not seen begin, the new run's first command, which overtook its run_started on
+# another connection of a jittered link. Refused all the same
 AHEAD_OF_RUN = "ahead_of_run"
 
 

@@ -102,6 +102,14 @@ def _match(argv: list[str], table) -> tuple | None:
     return None
 
 
+def _without_timeout(args: list[str]) -> list[str]:
+    """``args`` without a ``--timeout VALUE`` pair."""
+    if "--timeout" not in args:
+        return args
+    k = args.index("--timeout")
+    return [*args[:k], *args[k + 2:]]
+
+
 def _own_view_port(args: list[str]) -> list[str]:
     """A Foxglove view on a free port of its own, never the default 8765: two views of one
     block, or of two blocks on parallel test workers, would take the same port."""
@@ -165,7 +173,7 @@ class Session:
         extra = SHORT[short][0] if short and not background else []
         if not background and (short in WALL_CLOCK or short == ("run",) and (
                 "--link" in args or "--realtime" in args)):
-            extra = [*WALL_CLOCK_TIMEOUT, *extra[2:]]   # its other short arguments kept
+            extra = [*WALL_CLOCK_TIMEOUT, *_without_timeout(extra)]   # its other ones kept
         if "--help" in args or "--dry-run" in args:
             return args
         args = _own_view_port(args)
