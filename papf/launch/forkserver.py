@@ -14,7 +14,8 @@ Every node is still a process of its own, with its own Zenoh session and everyth
 ``python -m`` start gives it:
 
 - its own session and process group (a stop reaches all it spawns), its standard output
-  and error one pipe the launcher reads, standard input ``/dev/null``, the environment,
+  and error one pipe the launcher reads, standard input ``/dev/null`` (or the three streams
+  a request brings: the tests fork ``papf`` commands so, ``tests/support/warm.py``), the environment,
   working directory and argv of the request, and that command line in ``/proc/<pid>/cmdline``
   (``ps``, ``pgrep -f``), written over the server's own, which is padded to make room;
 - the same exit as ``python -m``: an exception is printed and exits 1, ``sys.exit(n)``
@@ -147,24 +148,29 @@ class ForkServer:
         return (_startup_vars(env) == self._startup
                 and len(_title(argv)) <= TITLE_ROOM)
 
-    def spawn(self, argv: list[str], env: dict) -> ForkedProc:
-        """Fork ``python -m argv[0] argv[1:]`` with environment ``env`` in this process's
-        working directory. OSError when the server cannot (it has gone)."""
-        request = json.dumps({"argv": argv, "env": env, "cwd": os.getcwd()}).encode()
+    def spawn(self, argv: list[str], env: dict, cwd: str | None = None,
+              streams: tuple[int, int, int] | None = None) -> ForkedProc:
+        """Fork ``python -m argv[0] argv[1:]`` with environment ``env`` in ``cwd`` (None:
+        this process's working directory). Its output and errors: one pipe, the returned
+        process's ``stdout``; or with ``streams``, the descriptors (input, output, errors)
+        given, left open here (``stdout`` None). OSError when the server cannot (it has gone)."""
+        request = json.dumps({"argv": argv, "env": env, "cwd": cwd or os.getcwd()}).encode()
         if len(request) > MAX_REQUEST:
             raise OSError(f"a fork request of {len(request)} bytes (at most {MAX_REQUEST})")
-        r, w = os.pipe()
+        r, w = os.pipe() if streams is None else (None, None)
         try:
             with self._lock:
-                socket.send_fds(self._sock, [request], [w])
+                socket.send_fds(self._sock, [request], [w] if streams is None else list(streams))
                 answer = self._answer()
         finally:
-            os.close(w)
+            if w is not None:
+                os.close(w)
         if "pid" not in answer:
-            os.close(r)
+            if r is not None:
+                os.close(r)
             raise OSError(answer.get("error", "no answer"))
-        stdout = io.TextIOWrapper(io.FileIO(r, "r"), encoding="utf-8", errors="replace",
-                                  line_buffering=True)
+        stdout = None if r is None else io.TextIOWrapper(
+            io.FileIO(r, "r"), encoding="utf-8", errors="replace", line_buffering=True)
         proc = ForkedProc(int(answer["pid"]), stdout, self)
         with self._cond:   # an exit reported before this line is the node's own
             proc.returncode = self._early.pop(proc.pid, None)
@@ -297,7 +303,7 @@ def serve(sock: socket.socket) -> dict:
                 _report_exits(sock)
                 continue
             try:
-                data, fds, _flags, _addr = socket.recv_fds(sock, MAX_REQUEST, 1)
+                data, fds, _flags, _addr = socket.recv_fds(sock, MAX_REQUEST, 3)
             except OSError:
                 data, fds = b"", []
             if not data:
@@ -328,8 +334,9 @@ def _fork(sock: socket.socket, data: bytes, fds: list[int], seen: set[str],
     """Fork the node of one request: its request in the node, None in the server (which
     has answered with the node's pid, or why not)."""
     try:
-        if len(fds) != 1:
-            raise ValueError(f"a request comes with one descriptor, its output; this one had {len(fds)}")
+        if len(fds) not in (1, 3):
+            raise ValueError("a request comes with one descriptor, its output and errors, or "
+                             f"three, its input, output and errors; this one had {len(fds)}")
         request = json.loads(data)
         _preload(request["argv"][0], request["argv"][1:], seen, log)
         threads = len(os.listdir("/proc/self/task"))
@@ -346,11 +353,16 @@ def _fork(sock: socket.socket, data: bytes, fds: list[int], seen: set[str],
     if pid == 0:
         request["server"] = os.getppid()
         sock.close()
-        os.dup2(fds[0], 1)
-        os.dup2(fds[0], 2)
-        os.close(fds[0])
+        streams = (None, fds[0], fds[0]) if len(fds) == 1 else fds
+        for target, fd in enumerate(streams):
+            if fd is not None:
+                os.dup2(fd, target)
+        for fd in set(fds) - {0, 1, 2}:
+            os.close(fd)
+        request["stdin"] = len(fds) == 3
         return request
-    os.close(fds[0])
+    for fd in fds:
+        os.close(fd)
     sock.send(json.dumps({"pid": pid}).encode())
     return None
 
@@ -373,8 +385,9 @@ def become(request: dict) -> None:
     die_with_parent()
     if os.getppid() != request["server"]:   # the server died meanwhile
         os._exit(1)
-    with open(os.devnull, "rb") as null:
-        os.dup2(null.fileno(), 0)
+    if not request.get("stdin"):
+        with open(os.devnull, "rb") as null:
+            os.dup2(null.fileno(), 0)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     for sig in (signal.SIGTERM, signal.SIGCHLD, signal.SIGHUP):
         signal.signal(sig, signal.SIG_DFL)

@@ -24,6 +24,7 @@ from papf.bus.goal import send_goal
 from papf.bus.teleop import TeleopState
 from papf.bus.teleop import run as teleop_run
 from schemas import Goal, Keys, PlannerStatus, Scan, Twist
+from tests.support import warm
 
 KEYS = Keys("rosbot")
 
@@ -139,15 +140,13 @@ def test_topic_cli_echo_once_and_timeout(router, session):
     th = _publish_for(session, 120.0, stop)   # until stopped: three CLI start-ups under load
     cmd = [sys.executable, "-m", "papf", "topic"]
     try:
-        r = subprocess.run([*cmd, "echo", "scan", "--once", "--connect", router],
-                           capture_output=True, text=True, timeout=60)
+        r = warm.run([*cmd, "echo", "scan", "--once", "--connect", router], timeout=60)
         assert r.returncode == 0, r.stderr
         assert r.stdout.startswith("# rosbot/scan  [papf/Scan/v1, msgpack]")
-        r = subprocess.run([*cmd, "hz", "/odometry/filtered", "--count", "5", "--connect",
-                            router], capture_output=True, text=True, timeout=60)
+        r = warm.run([*cmd, "hz", "/odometry/filtered", "--count", "5", "--connect",
+                            router], timeout=60)
         assert r.returncode == 0 and "odometry/filtered:" in r.stdout and " Hz (" in r.stdout
-        r = subprocess.run([*cmd, "echo", "nothing/here", "--timeout", "0.5", "--connect", router],
-                           capture_output=True, text=True, timeout=60)
+        r = warm.run([*cmd, "echo", "nothing/here", "--timeout", "0.5", "--connect", router], timeout=60)
         assert r.returncode == 5 and "no message on nothing/here" in r.stderr
     finally:
         stop.set()
@@ -185,9 +184,8 @@ def test_goal_cli_handshake_start_run_and_outcome(router, session):
     threads: list[threading.Thread] = []
     sub, goals = _fake_planner(session, reached_after=20, threads=threads)
     try:
-        r = subprocess.run([sys.executable, "-m", "papf", "goal", "3", "-1.5", "--tolerance", "0.2",
-                            "--start-run", "--connect", router],
-                           capture_output=True, text=True, timeout=60)
+        r = warm.run([sys.executable, "-m", "papf", "goal", "3", "-1.5", "--tolerance", "0.2",
+                            "--start-run", "--connect", router], timeout=60)
         assert r.returncode == 0, r.stderr
         assert "acknowledged" in r.stdout and r.stdout.rstrip().endswith("reached")
         assert (goals[0].x, goals[0].y, goals[0].tolerance) == (3.0, -1.5, 0.2)
@@ -241,15 +239,13 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
     monkeypatch.setattr(goal_mod, "HANDSHAKE_S", 1.0)
     res = send_goal(session, KEYS, 1.0, 2.0, out=[].append)
     assert res.outcome == "no_planner" and res.exit_code == 6 and "nodes.planner" in res.reason
-    r = subprocess.run([sys.executable, "-m", "papf", "goal", "1", "--connect", router],
-                       capture_output=True, text=True, timeout=60)
+    r = warm.run([sys.executable, "-m", "papf", "goal", "1", "--connect", router], timeout=60)
     assert r.returncode == 2 and "X Y" in r.stderr and "Traceback" not in r.stderr
     from papf.launch.supervisor import free_port
 
     nobody = f"tcp/127.0.0.1:{free_port()}"
     for cmd in (["goal", "1", "2"], ["topic", "list"], ["teleop"]):
-        r = subprocess.run([sys.executable, "-m", "papf", *cmd, "--connect", nobody],
-                           capture_output=True, text=True, timeout=60)
+        r = warm.run([sys.executable, "-m", "papf", *cmd, "--connect", nobody], timeout=60)
         assert r.returncode == 2 and "cannot reach the bus" in r.stderr, (cmd, r.stderr)
         assert "Traceback" not in r.stderr
 
@@ -257,8 +253,8 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
 def test_tls_without_credentials_names_the_authentication():
     from papf.launch.supervisor import free_port
 
-    r = subprocess.run([sys.executable, "-m", "papf", "topic", "list", "--connect",
-                        f"tls/127.0.0.1:{free_port()}"], capture_output=True, text=True, timeout=60)
+    r = warm.run([sys.executable, "-m", "papf", "topic", "list", "--connect",
+                        f"tls/127.0.0.1:{free_port()}"], timeout=60)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     assert "authenticates its clients" in r.stderr and "--zenoh-config" in r.stderr, r.stderr
 
@@ -323,8 +319,7 @@ def test_topic_list_shows_a_peers_escape_sequences_never_runs_them(router, sessi
 
 
 def _topic(*args, router: str) -> subprocess.CompletedProcess:
-    return subprocess.run([*CMD, *args, "--connect", router], capture_output=True, text=True,
-                          timeout=90, stdin=subprocess.DEVNULL)
+    return warm.run([*CMD, *args, "--connect", router], timeout=90)
 
 
 @pytest.fixture
@@ -378,7 +373,7 @@ def test_pub_takes_count_and_duration(router, session):
 @pytest.mark.parametrize("tool", [["echo", "scan"], ["hz", "scan"], ["pub", "cmd_vel", "{}"]])
 def test_every_tool_has_the_three_stops(tool):
     for flag in ("--once", "--count", "--duration"):
-        r = subprocess.run([*CMD, *tool, "--help"], capture_output=True, text=True, timeout=60)
+        r = warm.run([*CMD, *tool, "--help"], timeout=60)
         assert flag in r.stdout, (tool, flag)
 
 

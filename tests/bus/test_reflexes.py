@@ -17,6 +17,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from common.transport import Node
 from schemas import Keys, Twist
+from tests.support import warm
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 DOMAIN = 11
@@ -30,8 +31,7 @@ ROBOT_TOKENS = (   # a robot's controller on rmw_zenoh: node, and its /cmd_vel s
 
 
 def papf(*argv, router, timeout=60):
-    return subprocess.run([sys.executable, "-m", "papf", *argv, "--connect", router],
-                          capture_output=True, text=True, timeout=timeout)
+    return warm.run([sys.executable, "-m", "papf", *argv, "--connect", router], timeout=timeout)
 
 
 def test_node_list_and_info_on_the_ros_graph(router, session):

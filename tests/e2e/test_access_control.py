@@ -18,6 +18,7 @@ from nodes.base_driver.rosbot import cdr_to_robot_odom, twist_to_cdr
 from papf.launch.supervisor import free_port, wait_port
 from papf.robot.certs import Bundle, write_bundle
 from schemas import Keys, Twist
+from tests.support import warm
 
 NS, BRIDGE = "t5sec", "bot"
 
@@ -144,12 +145,10 @@ def test_the_planner_identity_moves_the_robot(secure_robot):
 def test_the_planner_lists_the_nodes_behind_the_bridge(secure_robot):
     """The bridge's admin space (answered here by the emulator) passes the ACL, whose "**"
     matches no "@" chunk (the observer queries nothing: its node list has no ROS nodes)."""
-    import subprocess
 
     bundle, _, tls, _ = secure_robot
-    r = subprocess.run([sys.executable, "-m", "papf", "node", "list", "--namespace", NS,
-                        "--connect", tls, "--zenoh-config", str(bundle.laptop)],
-                       capture_output=True, text=True, timeout=60)
+    r = warm.run([sys.executable, "-m", "papf", "node", "list", "--namespace", NS,
+                        "--connect", tls, "--zenoh-config", str(bundle.laptop)], timeout=60)
     assert r.returncode == 0, r.stderr
     assert any(line.startswith("/rosbot_emulator  (ROS 2, zenoh-bridge-ros2dds ")
                for line in r.stdout.splitlines()), r.stdout
@@ -157,16 +156,15 @@ def test_the_planner_lists_the_nodes_behind_the_bridge(secure_robot):
 
 def test_secure_hil_run_reaches_the_goal(secure_robot, tmp_path):
     """The rules let a whole run through: the laptop's LiDAR, planner and meter over mTLS."""
-    import subprocess
 
     bundle, _, tls, _ = secure_robot
     world = tmp_path / "short.toml"
     world.write_text('name = "short"\n[goal]\nposition = [1.0, 0.0]\ntolerance = 0.15\n'
                      '[[obstacles]]\nkind = "cylinder"\ncenter = [0.5, 0.6]\nradius = 0.15\n')
-    out = subprocess.run([sys.executable, "-m", "papf", "launch", "hil-laptop",
+    out = warm.run([sys.executable, "-m", "papf", "launch", "hil-laptop",
                           "--zenoh-config", str(bundle.laptop), "--connect", tls,
                           "--namespace", NS, "--world", str(world), "--json", "--timeout", "30",
-                          "--set", "v_max=0.5"], capture_output=True, text=True, timeout=120)
+                          "--set", "v_max=0.5"], timeout=120)
     assert out.stdout.strip(), out.stderr[-2000:]
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert result["outcome"] == "reached", (result, out.stderr[-2000:])
@@ -176,7 +174,6 @@ def test_secure_hil_run_reaches_the_goal(secure_robot, tmp_path):
 def test_a_command_without_credentials_is_told_authentication_failed(secure_robot, tmp_path):
     """No certificate (or a wrong password): one line naming the authentication, not "is a
     stack running?" (the router is up)."""
-    import subprocess
 
     bundle, tcp, tls, _ = secure_robot
     conf = json.loads(bundle.observer.read_text())
@@ -185,8 +182,8 @@ def test_a_command_without_credentials_is_told_authentication_failed(secure_robo
     wrong.write_text(json.dumps(conf))
     for extra, said in ((["--connect", tls], "has none"), (["--connect", tcp], "asks for credentials"),
                         (["--zenoh-config", str(wrong)], "refused the credentials of")):
-        r = subprocess.run([sys.executable, "-m", "papf", "topic", "list", "--namespace", NS,
-                            *extra], capture_output=True, text=True, timeout=60)
+        r = warm.run([sys.executable, "-m", "papf", "topic", "list", "--namespace", NS,
+                            *extra], timeout=60)
         assert r.returncode == 2 and "authentication failed" in r.stderr and said in r.stderr, \
             (extra, r.stderr)
         assert "stack running" not in r.stderr and "Traceback" not in r.stderr

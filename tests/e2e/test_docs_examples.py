@@ -35,6 +35,7 @@ import pytest
 
 from papf.doctools.examples import ROOT, Example, concrete, examples
 from papf.launch.supervisor import free_port, wait_port
+from tests.support import warm
 
 pytestmark = pytest.mark.e2e
 
@@ -206,8 +207,7 @@ class Session:
         short = _match(papf_args, SHORT)
         ok = SHORT[short][1] if short and "--help" not in argv else {0}
         self.settle()
-        proc = subprocess.run(argv, cwd=self.cwd, capture_output=True, text=True, timeout=600,
-                              stdin=subprocess.DEVNULL)
+        proc = warm.run(argv, cwd=self.cwd, timeout=600)
         self.log.append(f"$ {' '.join(argv[2:])}  -> {proc.returncode}")
         assert proc.returncode in ok, (f"{ex.where}: {ex.text}\n-> {' '.join(argv)} exited "
                                        f"{proc.returncode}\n{proc.stderr[-3000:]}")
@@ -216,9 +216,8 @@ class Session:
             assert "acknowledged by the planner" in proc.stdout, f"{ex.where}: {proc.stdout}"
 
     def start(self, ex: Example, argv: list[str]) -> None:
-        proc = subprocess.Popen(argv, cwd=self.cwd, stdout=subprocess.DEVNULL,
-                                stderr=(self.cwd / f"bg-{len(self.background)}.log").open("w"),
-                                start_new_session=True, stdin=subprocess.DEVNULL)
+        with (self.cwd / f"bg-{len(self.background)}.log").open("w") as log:
+            proc = warm.popen(argv, cwd=self.cwd, stdout=subprocess.DEVNULL, stderr=log)
         self.background.append((ex.where, proc))
         self.log.append(f"$ {' '.join(argv[2:])} &")
         if argv[2:3] == ["papf.launch.router"] or argv[3:5] == ["launch", "robot"] or \
@@ -288,9 +287,9 @@ def _recording() -> bytes:
     """A recording of a short run (open world, APF, 6 s): recorded by the first block of
     this worker that needs one, copied for the others (each block takes it as given)."""
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
-                        "--record", "run.mcap", "--port", str(free_port()), "--timeout", "6"],
-                       cwd=tmp, capture_output=True, timeout=300, check=False)
+        warm.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
+                  "--record", "run.mcap", "--port", str(free_port()), "--timeout", "6"],
+                 cwd=tmp, timeout=300)
         assert (Path(tmp) / "run.mcap").exists(), "the blocks' recording was not made"
         return (Path(tmp) / "run.mcap").read_bytes()
 

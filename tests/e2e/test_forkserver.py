@@ -224,3 +224,28 @@ def test_a_request_without_its_output_descriptor_is_refused_and_the_server_goes_
         assert node.wait(timeout=30) == 8 and "argv ['8']" in node.stdout.read()
     finally:
         server.close()
+
+
+def test_a_request_with_three_descriptors_gets_its_input_output_and_errors_apart(probe):
+    """The tests' warm ``papf`` (tests/support/warm.py) forks with a request's own input,
+    output and errors; a node's request keeps one pipe for both and /dev/null for input."""
+    (probe / "streams.py").write_text(
+        "import sys\nprint('out', sys.stdin.read(), flush=True)\n"
+        "print('err', file=sys.stderr, flush=True)\nsys.exit(4)\n")
+    env = {**os.environ, "PYTHONPATH": str(probe)}
+    server = forkserver.ForkServer([sys.executable, "-m", "papf.launch.forkserver"], env)
+    pipes = [os.pipe() for _ in range(3)]
+    try:
+        os.write(pipes[0][1], b"fed")
+        os.close(pipes[0][1])
+        node = server.spawn(["streams"], env, cwd=str(probe),
+                            streams=(pipes[0][0], pipes[1][1], pipes[2][1]))
+        assert node.stdout is None
+        for fd in (pipes[0][0], pipes[1][1], pipes[2][1]):
+            os.close(fd)
+        out, err = (os.fdopen(pipes[k][0]).read() for k in (1, 2))
+        assert node.wait(timeout=30) == 4 and (out, err) == ("out fed\n", "err\n")
+        merged = server.spawn(["streams"], env, cwd=str(probe))
+        assert merged.wait(timeout=30) == 4 and merged.stdout.read() == "out \nerr\n"
+    finally:
+        server.close()

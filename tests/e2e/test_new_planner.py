@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support import warm
 from tests.support.checkout import REPO, copy_checkout, tree
 
 
@@ -24,8 +25,7 @@ def copy(tmp_path_factory) -> Path:
 
 def papf(copy: Path, *args: str, timeout: float = 300.0) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(copy)}   # the copy's packages before the installed ones
-    return subprocess.run([sys.executable, "-m", "papf", *args], cwd=copy, env=env, text=True,
-                          capture_output=True, timeout=timeout)
+    return warm.run([sys.executable, "-m", "papf", *args], timeout=timeout, cwd=copy, env=env)
 
 
 def test_scaffold_plan_run_help(copy):

@@ -19,6 +19,7 @@ from schemas.messages import (
     PlannerStatus,
     Twist,
 )
+from tests.support import warm
 from tests.support.messages import odom, scan
 
 MS = 1_000_000
@@ -156,8 +157,7 @@ def test_a_planner_refuses_robots_that_are_no_names():
 
 
 def _papf(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "papf", *args], capture_output=True, text=True,
-                          timeout=120, stdin=subprocess.DEVNULL, env=env)
+    return warm.run([sys.executable, "-m", "papf", *args], timeout=120, env=env)
 
 
 @pytest.mark.slow   # the slow tier (make test-quick leaves it out)

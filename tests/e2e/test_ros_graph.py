@@ -3,20 +3,19 @@ the tool, on both middlewares: its rmw_zenoh tokens, or the bridge's admin space
 
 from __future__ import annotations
 
-import subprocess
 import sys
 
 import pytest
 
 from common.transport import wait_alive
 from schemas import Keys
+from tests.support import warm
 
 DOMAIN = 13
 
 
 def papf(*argv, router):
-    return subprocess.run([sys.executable, "-m", "papf", *argv, "--connect", router],
-                          capture_output=True, text=True, timeout=60)
+    return warm.run([sys.executable, "-m", "papf", *argv, "--connect", router], timeout=60)
 
 
 @pytest.mark.e2e

@@ -5,11 +5,13 @@ from __future__ import annotations
 import subprocess
 import sys
 
+from tests.support import warm
 
-def papf(*args, timeout: float = 60) -> subprocess.CompletedProcess:
-    """``python -m papf ARGS`` with no stdin; its exit code, stdout and stderr (text)."""
-    return subprocess.run([sys.executable, "-m", "papf", *map(str, args)], capture_output=True,
-                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+
+def papf(*args, timeout: float = 60, cwd=None) -> subprocess.CompletedProcess:
+    """``python -m papf ARGS`` with no stdin; its exit code, stdout and stderr (text). A fork
+    of the test worker's warm interpreter (:mod:`tests.support.warm`)."""
+    return warm.run([sys.executable, "-m", "papf", *args], timeout=timeout, cwd=cwd)
 
 
 def stderr_until(proc: subprocess.Popen, pattern: str, seen: list[str],

@@ -13,6 +13,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from papf.launch.supervisor import free_port
+from tests.support import warm
 
 RUN_TIMEOUT_S = 240  # hard wall-clock limit of one `papf run` in a test
 
@@ -32,7 +33,7 @@ def papf_run(*args: str, port: int | None = None, timeout: float = RUN_TIMEOUT_S
 
 
 def _papf_run(args: tuple[str, ...], port: int, timeout: float):
-    proc = start_papf_run(*args, port=port)
+    proc = warm.popen([sys.executable, "-m", "papf", "run", *args, "--json", "--port", str(port)])
     try:
         out, err = proc.communicate(timeout=timeout)
     finally:

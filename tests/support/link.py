@@ -4,10 +4,10 @@
 from __future__ import annotations
 
 import json
-import subprocess
 import sys
 from pathlib import Path
 
+from tests.support import warm
 from tests.support.worlds import box_world
 
 PY = sys.executable
@@ -17,9 +17,8 @@ RUN_TIMEOUT_S = 300                # [s wall] one split run, start-up on a loade
 
 def split_run(world: Path, ns: str, link: str, *extra: str) -> tuple[int, dict, str]:
     """``papf run --link LINK --json``: exit code, JSON, stderr."""
-    out = subprocess.run([PY, "-m", "papf", "run", "--world", str(world), "--planner", "apf",
-                          "--namespace", ns, "--link", link, "--json", "--timeout", "60", *extra],
-                         capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    out = warm.run([PY, "-m", "papf", "run", "--world", str(world), "--planner", "apf",
+                          "--namespace", ns, "--link", link, "--json", "--timeout", "60", *extra], timeout=RUN_TIMEOUT_S)
     assert out.stdout.strip(), out.stderr[-3000:]
     return out.returncode, json.loads(out.stdout.strip().splitlines()[-1]), out.stderr
 

@@ -25,6 +25,7 @@ from nodes.planner.registry import make_planner
 from nodes.planner.rollout import rollout
 from papf.launch.linkwatch import LinkWatch
 from schemas import Odometry, Scan, Twist
+from tests.support import warm
 
 MS = 1_000_000
 W = 500 * MS          # the driver's watchdog
@@ -344,11 +345,9 @@ def test_the_time_the_link_held_the_robot_still_is_reported_and_blamed():
     (["launch", "robot", "--record", "/no/such/dir/r.mcap"], "does not exist"),
 ])
 def test_the_robots_recording_is_checked_before_anything_starts(argv, says, tmp_path):
-    import subprocess
     import sys
 
-    out = subprocess.run([sys.executable, "-m", "papf", *argv], capture_output=True, text=True,
-                         timeout=60, cwd=tmp_path)
+    out = warm.run([sys.executable, "-m", "papf", *argv], timeout=60, cwd=tmp_path)
     assert out.returncode == 2, out.stderr
     assert says in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
 

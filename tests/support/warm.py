@@ -1,0 +1,160 @@
+"""``python -m papf …`` for the tests, forked from a warm interpreter (one per test worker).
+
+The suite runs the ``papf`` command some five hundred times, and each start paid for an
+interpreter and its imports (0.15-0.7 s of CPU: numpy, Zenoh, the messages, the CLI,
+matplotlib for the commands that draw) on two cores shared by four test workers. Here each
+worker starts one server the first time it needs one — :mod:`papf.launch.forkserver`, the
+launcher's own, after :data:`PRELOAD` — and each command is a fork of it: still a process of
+its own (its own session and process group, pid, exit code, the environment, working
+directory and arguments of the call, ``/proc/<pid>/cmdline`` and ``sys.path[0]`` as ``python
+-m`` gives them), with its input, output and errors where the call says. What it imports
+that the server had loaded is already there; nothing else differs. A call the server cannot
+take (input fed to it, an interpreter-start variable of its own, no server) runs ``python -m``
+as before; ``PAPF_TEST_FORK=0`` runs them all so.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+from papf.launch import forkserver
+
+ROOT = Path(__file__).resolve().parents[2]
+ENV = "PAPF_TEST_FORK"
+PAPF = [sys.executable, "-m", "papf"]
+
+_server: forkserver.ForkServer | None = None
+_lock = threading.Lock()
+
+
+def _get_server() -> forkserver.ForkServer | None:
+    global _server
+    with _lock:
+        if _server is None or _server.gone:
+            if os.environ.get(ENV, "1") == "0" or not forkserver.enabled():
+                return None
+            # no PR_SET_PDEATHSIG: a test's thread may be the first caller, and the server
+            # must outlive it; it leaves when this process closes its end of the socket
+            _server = forkserver.ForkServer([sys.executable, "-m", "tests.support.warm_server"],
+                                            dict(os.environ), stderr=subprocess.DEVNULL)
+            atexit.register(_server.close)
+        return _server
+
+
+class Proc:
+    """A forked ``papf`` command, as much of ``subprocess.Popen`` as the tests use: ``pid``,
+    ``args``, ``returncode``, ``poll``, ``wait``, ``communicate``, ``send_signal``, ``kill``."""
+
+    def __init__(self, args: list[str], forked: forkserver.ForkedProc, out: int | None,
+                 err: int | None):
+        self.args, self._forked, self.pid = args, forked, forked.pid
+        self._pipes = {fd: name for fd, name in ((out, "stdout"), (err, "stderr")) if fd is not None}
+
+    @property
+    def returncode(self) -> int | None:
+        return self._forked.returncode
+
+    def poll(self) -> int | None:
+        return self._forked.poll()
+
+    def wait(self, timeout: float | None = None) -> int:
+        return self._forked.wait(timeout)
+
+    def send_signal(self, sig: int) -> None:
+        if self.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(self.pid, sig)
+
+    def kill(self) -> None:
+        self.send_signal(signal.SIGKILL)
+
+    def communicate(self, timeout: float | None = None) -> tuple[str | None, str | None]:
+        """Its output and errors (text) to their ends, and its exit;
+        ``subprocess.TimeoutExpired`` after ``timeout`` [s] (it keeps running, as Popen's)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        chunks: dict[str, list[bytes]] = {name: [] for name in self._pipes.values()}
+        with selectors.DefaultSelector() as sel:
+            for fd in self._pipes:
+                sel.register(fd, selectors.EVENT_READ)
+            while sel.get_map():
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
+                    raise subprocess.TimeoutExpired(self.args, timeout)
+                for key, _ in sel.select(left):
+                    data = os.read(key.fd, 1 << 16)
+                    if data:
+                        chunks[self._pipes[key.fd]].append(data)
+                    else:
+                        sel.unregister(key.fd)
+                        os.close(key.fd)
+        self._pipes = {}
+        self.wait(None if deadline is None else max(deadline - time.monotonic(), 0.1))
+        text = {k: b"".join(v).decode("utf-8", "replace") for k, v in chunks.items()}
+        return text.get("stdout"), text.get("stderr")
+
+
+def popen(args: list, *, cwd=None, env: dict | None = None, stdout=subprocess.PIPE,
+          stderr=subprocess.PIPE):
+    """``subprocess.Popen(args, stdin=DEVNULL, start_new_session=True, text=True, …)`` of a
+    ``python -m papf`` command, forked where it can be (:class:`Proc`), else that Popen."""
+    args = [str(a) for a in args]
+    env_ = dict(os.environ if env is None else env)
+    server = _get_server() if args[:3] == PAPF else None
+    if server is None or not server.can_fork(args[2:], env_):
+        return subprocess.Popen(args, cwd=cwd, env=env, stdout=stdout, stderr=stderr,
+                                stdin=subprocess.DEVNULL, start_new_session=True, text=True)
+    ends, mine = [], []
+    for where in (stdout, stderr):
+        if where == subprocess.PIPE:
+            r, w = os.pipe()
+            ends.append(w)
+            mine.append(r)
+        elif where in (None, subprocess.DEVNULL):
+            fd = os.open(os.devnull, os.O_WRONLY)
+            ends.append(fd)
+            mine.append(None)
+        else:
+            ends.append(os.dup(where.fileno() if hasattr(where, "fileno") else where))
+            mine.append(None)
+    null = os.open(os.devnull, os.O_RDONLY)
+    try:
+        forked = server.spawn(args[2:], env_, cwd=str(cwd or os.getcwd()),
+                              streams=(null, *ends))
+    except OSError:
+        for fd in [r for r in mine if r is not None]:
+            os.close(fd)
+        return subprocess.Popen(args, cwd=cwd, env=env, stdout=stdout, stderr=stderr,
+                                stdin=subprocess.DEVNULL, start_new_session=True, text=True)
+    finally:
+        for fd in (null, *ends):
+            os.close(fd)
+    return Proc(args, forked, *mine)
+
+
+def run(args: list, *, cwd=None, env: dict | None = None, timeout: float = 60,
+        input: str | None = None) -> subprocess.CompletedProcess:
+    """``subprocess.run(args, capture_output=True, text=True, stdin=DEVNULL, timeout=…)`` of
+    a ``python -m papf`` command, forked where it can be; on a timeout its process group is
+    killed and ``subprocess.TimeoutExpired`` raised, as ``subprocess.run`` does."""
+    args = [str(a) for a in args]
+    if input is not None:
+        return subprocess.run(args, cwd=cwd, env=env, input=input, capture_output=True,
+                              text=True, timeout=timeout)
+    proc = popen(args, cwd=cwd, env=env)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        raise
+    return subprocess.CompletedProcess(args, proc.returncode, out, err)
