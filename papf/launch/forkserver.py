@@ -359,7 +359,7 @@ def _fork(sock: socket.socket, data: bytes, fds: list[int], seen: set[str],
                 os.dup2(fd, target)
         for fd in set(fds) - {0, 1, 2}:
             os.close(fd)
-        request["stdin"] = len(fds) == 3
+        request["streams"] = len(fds) == 3
         return request
     for fd in fds:
         os.close(fd)
@@ -385,7 +385,7 @@ def become(request: dict) -> None:
     die_with_parent()
     if os.getppid() != request["server"]:   # the server died meanwhile
         os._exit(1)
-    if not request.get("stdin"):
+    if not request.get("streams"):
         with open(os.devnull, "rb") as null:
             os.dup2(null.fileno(), 0)
     signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -394,15 +394,33 @@ def become(request: dict) -> None:
     os.chdir(request["cwd"])
     os.environ.clear()
     os.environ.update(request["env"])
-    sys.stdin = io.TextIOWrapper(io.FileIO(0, "r", closefd=False), encoding="utf-8")
-    sys.stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), encoding="utf-8",
-                                  errors="backslashreplace", line_buffering=True, write_through=True)
-    sys.stderr = io.TextIOWrapper(io.FileIO(2, "w", closefd=False), encoding="utf-8",
-                                  errors="backslashreplace", line_buffering=True, write_through=True)
+    if request.get("streams"):
+        _streams_as_python_makes_them()
+    else:   # a node: every line reaches the launcher as it is written
+        sys.stdin = io.TextIOWrapper(io.FileIO(0, "r", closefd=False), encoding="utf-8")
+        sys.stdout, sys.stderr = (
+            io.TextIOWrapper(io.FileIO(fd, "w", closefd=False), encoding="utf-8",
+                             errors="backslashreplace", line_buffering=True, write_through=True)
+            for fd in (1, 2))
     sys.__stdout__, sys.__stderr__, sys.__stdin__ = sys.stdout, sys.stderr, sys.stdin
     logging.root.handlers.clear()
     sys.argv = list(request["argv"])
     _set_cmdline(_title(request["argv"]))
+
+
+def _streams_as_python_makes_them() -> None:
+    """``sys.stdin``/``stdout``/``stderr`` on descriptors 0-2 as an interpreter started on
+    them makes them: with the server's own settings (its streams are no terminal: output
+    block-buffered, errors by line), and output by line where it is a terminal — a command
+    that forgets to flush shows it as it would started by ``python -m``."""
+    made = []
+    for fd, like in ((0, sys.__stdin__), (1, sys.__stdout__), (2, sys.__stderr__)):
+        raw = io.FileIO(fd, "r" if fd == 0 else "w", closefd=False)
+        made.append(io.TextIOWrapper(
+            io.BufferedReader(raw) if fd == 0 else io.BufferedWriter(raw), encoding=like.encoding,
+            errors=like.errors, line_buffering=like.line_buffering or (fd == 1 and raw.isatty()),
+            write_through=like.write_through))
+    sys.stdin, sys.stdout, sys.stderr = made
 
 
 def main() -> None:

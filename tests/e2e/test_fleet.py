@@ -69,18 +69,17 @@ def test_two_robots_on_two_routers_are_one_network():
     hosts = []
     try:
         for i, extra in enumerate(([], ["--join", ends[0]])):
-            hosts.append(subprocess.Popen(
-                [PY, "-m", "papf", "launch", "robot", "--namespace", f"fleet{i + 1}",
-                 "--listen", ends[i], *extra], start_new_session=True,
-                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
+            hosts.append(warm.popen([PY, "-m", "papf", "launch", "robot", "--namespace",
+                                     f"fleet{i + 1}", "--listen", ends[i], *extra],
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE))
             assert wait_port(ports[i], 30.0), "a robot's router did not come up"
         with zenoh.open(zenoh_config("client", [ends[1]])) as session:   # the second router
             for ns in ("fleet1", "fleet2"):
                 assert not wait_alive(session, Keys(ns), ["base_driver", "lidar_sim"], 60.0)
 
         def alive(*args):
-            out = warm.run([PY, "-m", "papf", "topic", "list", "--json", "--duration",
-                                  "0.5", *args], timeout=60)
+            out = warm.run([PY, "-m", "papf", "topic", "list", "--json", "--duration", "0.5",
+                            *args], timeout=60)
             return json.loads(out.stdout.strip().splitlines()[-1])
 
         for end in ends:   # either router sees the whole fleet

@@ -231,7 +231,9 @@ def test_a_request_with_three_descriptors_gets_its_input_output_and_errors_apart
     output and errors; a node's request keeps one pipe for both and /dev/null for input."""
     (probe / "streams.py").write_text(
         "import sys\nprint('out', sys.stdin.read(), flush=True)\n"
-        "print('err', file=sys.stderr, flush=True)\nsys.exit(4)\n")
+        "print('err', file=sys.stderr, flush=True)\n"
+        "print([(s.encoding, s.errors, s.line_buffering, s.write_through) for s in "
+        "(sys.stdout, sys.stderr)], file=sys.stderr)\nsys.exit(4)\n")
     env = {**os.environ, "PYTHONPATH": str(probe)}
     server = forkserver.ForkServer([sys.executable, "-m", "papf.launch.forkserver"], env)
     pipes = [os.pipe() for _ in range(3)]
@@ -244,8 +246,11 @@ def test_a_request_with_three_descriptors_gets_its_input_output_and_errors_apart
         for fd in (pipes[0][0], pipes[1][1], pipes[2][1]):
             os.close(fd)
         out, err = (os.fdopen(pipes[k][0]).read() for k in (1, 2))
-        assert node.wait(timeout=30) == 4 and (out, err) == ("out fed\n", "err\n")
+        plain = subprocess.run([sys.executable, "-m", "streams"], input="fed", env=env,
+                               cwd=probe, capture_output=True, text=True, timeout=60)
+        assert node.wait(timeout=30) == 4 and out == "out fed\n" and err.startswith("err\n")
+        assert (out, err) == (plain.stdout, plain.stderr)   # buffered as python -m's streams
         merged = server.spawn(["streams"], env, cwd=str(probe))
-        assert merged.wait(timeout=30) == 4 and merged.stdout.read() == "out \nerr\n"
+        assert merged.wait(timeout=30) == 4 and merged.stdout.read().startswith("out \nerr\n")
     finally:
         server.close()

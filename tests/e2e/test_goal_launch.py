@@ -20,10 +20,9 @@ from tests.support import warm
 def test_goal_retargets_the_planner_of_a_launched_session():
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    launch = subprocess.Popen([sys.executable, "-m", "papf", "launch", "sim", "--world", "open",
-                               "--planner", "papf", "--realtime", "--listen", endpoint, "--json"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              start_new_session=True)
+    launch = warm.popen([sys.executable, "-m", "papf", "launch", "sim", "--world", "open",
+                         "--planner", "papf", "--realtime", "--listen", endpoint, "--json"],
+                        stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     lines: list[str] = []
     threading.Thread(target=lambda: lines.extend(launch.stderr), daemon=True).start()
     try:
@@ -32,8 +31,8 @@ def test_goal_retargets_the_planner_of_a_launched_session():
         while not any("papf on open" in x for x in lines):
             assert time.monotonic() < deadline and launch.poll() is None, "".join(lines)
             time.sleep(0.1)
-        goal = warm.run([sys.executable, "-m", "papf", "goal", "1.5", "1.0", "--connect",
-                               endpoint, "--timeout", "150"], timeout=240)
+        goal = warm.run([sys.executable, "-m", "papf", "goal", "1.5", "1.0", "--connect", endpoint,
+                         "--timeout", "150"], timeout=240)
         assert goal.returncode == 0, goal.stderr
         assert "acknowledged" in goal.stdout and "reached" in goal.stdout
         launch.wait(timeout=120)

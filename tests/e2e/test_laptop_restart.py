@@ -24,6 +24,7 @@ from common.transport import zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from papf.recording.reader import iter_messages, read_metadata
 from schemas import Keys, Odometry
+from tests.support import warm
 from tests.support.worlds import FAST, box_world, write_world
 
 PY = sys.executable
@@ -93,9 +94,8 @@ class Split:
         assert wait_port(int(self.laptop_ep.rsplit(":", 1)[1]), 30.0)
 
     def _spawn(self, args: list[str], name: str) -> subprocess.Popen:
-        proc = subprocess.Popen([PY, "-m", "papf", *args], start_new_session=True,
-                                stdout=subprocess.DEVNULL,
-                                stderr=(self.tmp / f"{name}.log").open("w"))
+        proc = warm.popen([PY, "-m", "papf", *args], stdout=subprocess.DEVNULL,
+                          stderr=(self.tmp / f"{name}.log").open("w"))
         self.procs.append(proc)
         return proc
 

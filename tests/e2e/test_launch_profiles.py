@@ -35,19 +35,18 @@ def split_run(robot_profile: str, laptop_profile: str, world: str, ns: str, emul
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     log = Path(world).with_suffix(f".{robot_profile}.log")
-    robot = subprocess.Popen([PY, "-m", "papf", "launch", robot_profile, "--listen",
-                              endpoint, "--namespace", ns, "--world", world],
-                             start_new_session=True, stdout=subprocess.DEVNULL,
-                             stderr=log.open("w"))
+    robot = warm.popen([PY, "-m", "papf", "launch", robot_profile, "--listen", endpoint,
+                        "--namespace", ns, "--world", world], stdout=subprocess.DEVNULL,
+                       stderr=log.open("w"))
     emulator = None
     try:
         assert wait_port(port, 30.0), "the robot's router did not come up"
-        emulator = subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
-                                     "--namespace", ns, *emulator_args], start_new_session=True,
-                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        laptop = warm.run([PY, "-m", "papf", "launch", laptop_profile,
-                                 "--connect", endpoint, "--namespace", ns, "--world", world,
-                                 "--timeout", "30", "--json", *FAST, *(laptop_extra or [])], timeout=120)
+        emulator = warm.popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
+                               "--namespace", ns, *emulator_args], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+        laptop = warm.run([PY, "-m", "papf", "launch", laptop_profile, "--connect", endpoint,
+                           "--namespace", ns, "--world", world, "--timeout", "30", "--json", *FAST,
+                           *(laptop_extra or [])], timeout=120)
         assert laptop.stdout.strip(), laptop.stderr[-2000:]
         return json.loads(laptop.stdout.strip().splitlines()[-1])
     finally:
@@ -90,9 +89,8 @@ def test_hil_profiles_reach_the_goal(world, tmp_path):
 
 
 def test_sim_profile_reaches_the_goal(world):
-    out = warm.run([PY, "-m", "papf", "launch", "sim", "--listen",
-                          f"tcp/127.0.0.1:{free_port()}", "--namespace", "t5sim", "--world", world,
-                          "--json", *FAST], timeout=120)
+    out = warm.run([PY, "-m", "papf", "launch", "sim", "--listen", f"tcp/127.0.0.1:{free_port()}",
+                    "--namespace", "t5sim", "--world", world, "--json", *FAST], timeout=120)
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert (result["outcome"], out.returncode) == ("reached", 0), out.stderr[-2000:]
     assert not _leftovers("t5sim")
@@ -106,15 +104,14 @@ def test_ctrl_c_on_the_robot_profile_stops_without_a_traceback(tmp_path, bridge)
     ns, port = f"t5stop{bridge}", free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     bridged = ["--bridge-namespace", bridge] if bridge else []
-    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
-                              "--namespace", ns, *bridged], start_new_session=True,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    robot = warm.popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint, "--namespace",
+                        ns, *bridged], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     emulator = None
     try:
         assert wait_port(port, 30.0), "the robot's router did not come up"
-        emulator = subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
-                                     "--namespace", ns, *bridged], start_new_session=True,
-                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        emulator = warm.popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
+                               "--namespace", ns, *bridged], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             assert not wait_alive(session, Keys(ns), ["base_driver", "lidar_sim"], 60.0)
         time.sleep(1.0)                           # battery and odometry flowing to the driver
@@ -136,9 +133,8 @@ def test_a_second_launch_in_a_namespace_exits_2_with_one_line(world, tmp_path):
     the namespace's planner is alive (another laptop's), are refused before they start."""
     ns, port = "t5twice", free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
-                              "--namespace", ns], start_new_session=True,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    robot = warm.popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint, "--namespace",
+                        ns], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     other = None
     try:
         assert wait_port(port, 30.0), "the robot's router did not come up"
@@ -153,7 +149,7 @@ def test_a_second_launch_in_a_namespace_exits_2_with_one_line(world, tmp_path):
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             assert not wait_alive(session, Keys(ns), ["planner"], 60.0)
         laptop = warm.run([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
-                                 "--namespace", ns, "--world", world], timeout=60)
+                           "--namespace", ns, "--world", world], timeout=60)
         assert laptop.returncode == 2, laptop.stderr
         assert "is in use on the network at" in laptop.stderr and "planner" in laptop.stderr
         assert len(laptop.stderr.strip().splitlines()) == 1, laptop.stderr
@@ -173,16 +169,14 @@ def test_the_laptop_waits_for_the_robots_odometry_before_the_run_clock_starts(wo
     at 0.00 m: 'never drove under load')."""
     ns, port = "t5late", free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint,
-                              "--namespace", ns], start_new_session=True,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    robot = warm.popen([PY, "-m", "papf", "launch", "robot", "--listen", endpoint, "--namespace",
+                        ns], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     emulator = laptop = None
     try:
         assert wait_port(port, 30.0), "the robot's router did not come up"
-        laptop = subprocess.Popen([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
-                                   "--namespace", ns, "--world", world, "--timeout", "30",
-                                   "--json", *FAST], text=True, stdout=subprocess.PIPE,
-                                  stderr=subprocess.PIPE, start_new_session=True)
+        laptop = warm.popen([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
+                             "--namespace", ns, "--world", world, "--timeout", "30", "--json",
+                             *FAST], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         seen = []
         for line in laptop.stderr:
             seen.append(line)
@@ -190,10 +184,9 @@ def test_the_laptop_waits_for_the_robots_odometry_before_the_run_clock_starts(wo
                 break
         assert seen and "waiting for the robot's odometry" in seen[-1], seen[-10:]
         time.sleep(2.0)                              # the robot is late: the clock must wait
-        emulator = subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
-                                     "--namespace", ns, "--world", world],
-                                    start_new_session=True, stdout=subprocess.DEVNULL,
-                                    stderr=subprocess.DEVNULL)
+        emulator = warm.popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
+                               "--namespace", ns, "--world", world], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
         out, err = laptop.communicate(timeout=120)
         result = json.loads(out.strip().splitlines()[-1])
         # reached within --timeout although the robot came late: the wait is not the run's

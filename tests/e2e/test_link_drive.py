@@ -52,16 +52,14 @@ def _kill(procs) -> None:
 
 def _robot_side(world: Path, ns: str, port: int, log: Path, *extra: str) -> list:
     """`papf launch robot` on its own router and the emulated ROSbot on it."""
-    robot = subprocess.Popen([PY, "-m", "papf", "launch", "robot", "--listen",
-                              f"tcp/127.0.0.1:{port}", "--namespace", ns, "--world", str(world),
-                              *extra], start_new_session=True, stdout=subprocess.DEVNULL,
-                             stderr=log.open("w"))
+    robot = warm.popen([PY, "-m", "papf", "launch", "robot", "--listen", f"tcp/127.0.0.1:{port}",
+                        "--namespace", ns, "--world", str(world), *extra],
+                       stdout=subprocess.DEVNULL, stderr=log.open("w"))
     procs = [robot]
     assert wait_port(port, 60.0), log.read_text()[-2000:]
-    procs.append(subprocess.Popen([PY, "-m", "papf", "rosbot-emulator", "--connect",
-                                   f"tcp/127.0.0.1:{port}", "--namespace", ns, "--world",
-                                   str(world)], start_new_session=True,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    procs.append(warm.popen([PY, "-m", "papf", "rosbot-emulator", "--connect",
+                             f"tcp/127.0.0.1:{port}", "--namespace", ns, "--world", str(world)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
     return procs
 
 
@@ -78,8 +76,8 @@ def test_the_issues_link_no_longer_stands_the_robot_still(tmp_path):
             start_new_session=True))
         assert wait_port(link_port, 30.0)
         laptop = warm.run([PY, "-m", "papf", "launch", "laptop", "--connect",
-                                 f"tcp/127.0.0.1:{link_port}", "--namespace", ns, "--world",
-                                 str(world), "--timeout", "60", "--json", "--set", "v_max=0.5"], timeout=300)
+                           f"tcp/127.0.0.1:{link_port}", "--namespace", ns, "--world", str(world),
+                           "--timeout", "60", "--json", "--set", "v_max=0.5"], timeout=300)
     finally:
         _kill(procs[::-1])
     assert laptop.stdout.strip(), laptop.stderr[-3000:]
@@ -139,8 +137,8 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
     gaps = [b - a for a, b in zip(odom, odom[1:], strict=False)]
     assert odom and max(gaps) <= 500_000_000, f"the robot's own recording has a hole: {max(gaps)} ns"
     assert applied and all(m.v == 0.0 and m.w == 0.0 for m in applied), "obeyed while down"
-    report = warm.run([PY, "-m", "papf", "report", str(lap), str(rob), "--json",
-                             "--out", str(tmp_path / "report")], timeout=300)
+    report = warm.run([PY, "-m", "papf", "report", str(lap), str(rob), "--json", "--out",
+                       str(tmp_path / "report")], timeout=300)
     assert report.returncode == 0, report.stderr[-3000:]
     rows = [json.loads(line) for line in report.stdout.splitlines() if line.startswith("{")]
     assert len(rows) == 1, rows                                # one run, seen from both sides
@@ -153,7 +151,7 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
     assert "Runs recorded on the laptop and on the robot" in (
         tmp_path / "report" / "report.md").read_text()
     alone = warm.run([PY, "-m", "papf", "report", str(rob), "--json", "--out",
-                            str(tmp_path / "robot-report")], timeout=300)
+                      str(tmp_path / "robot-report")], timeout=300)
     row = json.loads(alone.stdout.splitlines()[-1])          # the robot's recording alone
     assert (row["planner"], row["outcome"]) == ("apf", "reached") and row["path_length_m"] > 2.0
     assert not _leftovers(ns)

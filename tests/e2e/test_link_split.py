@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from common.outcomes import OUTCOMES
+from tests.support import warm
 from tests.support.cli import stderr_until
 from tests.support.e2e import leftovers as _leftovers
 from tests.support.link import CORRIDOR, RUN_TIMEOUT_S, split_run
@@ -118,10 +119,9 @@ def test_papf_link_alone_stops_on_ctrl_c_and_writes_its_stats(tmp_path):
     from papf.launch.supervisor import free_port, wait_port
 
     port, stats = free_port(), tmp_path / "link.json"
-    proc = subprocess.Popen([PY, "-m", "papf", "link", "--listen", f"tcp/127.0.0.1:{port}", "--to",
-                             f"tcp/127.0.0.1:{free_port()}", "--profile", "wifi", "--stats",
-                             str(stats)], stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = warm.popen([PY, "-m", "papf", "link", "--listen", f"tcp/127.0.0.1:{port}", "--to",
+                       f"tcp/127.0.0.1:{free_port()}", "--profile", "wifi", "--stats", str(stats)],
+                      stdout=None, stderr=subprocess.PIPE)
     try:
         assert wait_port(port, 60.0)
         import socket

@@ -16,6 +16,7 @@ import sys
 import pytest
 
 from papf.launch.supervisor import free_port
+from tests.support import warm
 from tests.support.cli import stderr_until
 from tests.support.recordings import write_drive
 
@@ -25,9 +26,8 @@ pytestmark = pytest.mark.e2e
 def _first_progress(argv: list[str], pattern: str, cwd, timeout_s: float = 240.0) -> str:
     """Start ``papf argv`` piped; return its first stderr line matching ``pattern`` while it
     is still running, then stop it."""
-    proc = subprocess.Popen([sys.executable, "-m", "papf", *argv], cwd=cwd, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+    proc = warm.popen([sys.executable, "-m", "papf", *argv], cwd=cwd, stdout=subprocess.PIPE,
+                      stderr=subprocess.PIPE)
     seen: list[str] = []
     try:
         line = stderr_until(proc, pattern, seen, timeout_s)

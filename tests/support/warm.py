@@ -18,7 +18,6 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
-import selectors
 import signal
 import subprocess
 import sys
@@ -52,12 +51,17 @@ def _get_server() -> forkserver.ForkServer | None:
 
 class Proc:
     """A forked ``papf`` command, as much of ``subprocess.Popen`` as the tests use: ``pid``,
-    ``args``, ``returncode``, ``poll``, ``wait``, ``communicate``, ``send_signal``, ``kill``."""
+    ``args``, ``returncode``, ``stdout``/``stderr`` (text, where piped), ``poll``, ``wait``,
+    ``communicate``, ``send_signal``, ``terminate``, ``kill``."""
 
     def __init__(self, args: list[str], forked: forkserver.ForkedProc, out: int | None,
                  err: int | None):
         self.args, self._forked, self.pid = args, forked, forked.pid
-        self._pipes = {fd: name for fd, name in ((out, "stdout"), (err, "stderr")) if fd is not None}
+        self.stdout, self.stderr = (None if fd is None else open(fd, encoding="utf-8",
+                                                                 errors="replace")
+                                    for fd in (out, err))
+        self.stdin = None
+        self._readers: dict[str, tuple[threading.Thread, list[str]]] = {}   # communicate's
 
     @property
     def returncode(self) -> int | None:
@@ -74,32 +78,39 @@ class Proc:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(self.pid, sig)
 
+    def terminate(self) -> None:
+        self.send_signal(signal.SIGTERM)
+
     def kill(self) -> None:
         self.send_signal(signal.SIGKILL)
 
     def communicate(self, timeout: float | None = None) -> tuple[str | None, str | None]:
         """Its output and errors (text) to their ends, and its exit;
-        ``subprocess.TimeoutExpired`` after ``timeout`` [s] (it keeps running, as Popen's)."""
+        ``subprocess.TimeoutExpired`` after ``timeout`` [s] (it keeps running and a later
+        call goes on, as Popen's). One reader thread per pipe, as Popen's where it cannot
+        poll: what a test read line by line before is not read twice."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        chunks: dict[str, list[bytes]] = {name: [] for name in self._pipes.values()}
-        with selectors.DefaultSelector() as sel:
-            for fd in self._pipes:
-                sel.register(fd, selectors.EVENT_READ)
-            while sel.get_map():
-                left = None if deadline is None else deadline - time.monotonic()
-                if left is not None and left <= 0:
-                    raise subprocess.TimeoutExpired(self.args, timeout)
-                for key, _ in sel.select(left):
-                    data = os.read(key.fd, 1 << 16)
-                    if data:
-                        chunks[self._pipes[key.fd]].append(data)
-                    else:
-                        sel.unregister(key.fd)
-                        os.close(key.fd)
-        self._pipes = {}
+        if not self._readers:
+            for name in ("stdout", "stderr"):
+                stream = getattr(self, name)
+                if stream is not None:
+                    chunks: list[str] = []
+                    reader = threading.Thread(target=self._drain, args=(stream, chunks),
+                                              daemon=True)
+                    reader.start()
+                    self._readers[name] = (reader, chunks)
+        for reader, _ in self._readers.values():
+            reader.join(None if deadline is None else max(deadline - time.monotonic(), 0.0))
+            if reader.is_alive():
+                raise subprocess.TimeoutExpired(self.args, timeout)
         self.wait(None if deadline is None else max(deadline - time.monotonic(), 0.1))
-        text = {k: b"".join(v).decode("utf-8", "replace") for k, v in chunks.items()}
+        text = {name: "".join(chunks) for name, (_, chunks) in self._readers.items()}
         return text.get("stdout"), text.get("stderr")
+
+    @staticmethod
+    def _drain(stream, chunks: list) -> None:
+        with stream:
+            chunks.append(stream.read())
 
 
 def popen(args: list, *, cwd=None, env: dict | None = None, stdout=subprocess.PIPE,
@@ -113,18 +124,18 @@ def popen(args: list, *, cwd=None, env: dict | None = None, stdout=subprocess.PI
         return subprocess.Popen(args, cwd=cwd, env=env, stdout=stdout, stderr=stderr,
                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True)
     ends, mine = [], []
-    for where in (stdout, stderr):
+    for own, where in ((1, stdout), (2, stderr)):
         if where == subprocess.PIPE:
             r, w = os.pipe()
             ends.append(w)
             mine.append(r)
-        elif where in (None, subprocess.DEVNULL):
-            fd = os.open(os.devnull, os.O_WRONLY)
-            ends.append(fd)
-            mine.append(None)
-        else:
-            ends.append(os.dup(where.fileno() if hasattr(where, "fileno") else where))
-            mine.append(None)
+            continue
+        if where == subprocess.DEVNULL:
+            ends.append(os.open(os.devnull, os.O_WRONLY))
+        else:     # None: this process's own, as Popen's child inherits it; else a file's
+            ends.append(os.dup(own if where is None else
+                               where.fileno() if hasattr(where, "fileno") else where))
+        mine.append(None)
     null = os.open(os.devnull, os.O_RDONLY)
     try:
         forked = server.spawn(args[2:], env_, cwd=str(cwd or os.getcwd()),
