@@ -3,8 +3,10 @@ always die with the test, and a client session for the test itself."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -14,6 +16,7 @@ import zenoh
 
 from common.transport import zenoh_config
 from papf.launch.supervisor import Supervisor, free_port, wait_port
+from tests.support import warm
 
 # pytest caches the test modules it rewrote for its asserts only where bytecode may be written;
 # where PYTHONDONTWRITEBYTECODE is set (this machine sets it) every worker of every run parsed
@@ -36,14 +39,26 @@ def pytest_unconfigure(config):
 
 
 @pytest.fixture
-def router():
-    """Start `python -m papf.launch.router` on a free loopback port; yield its endpoint."""
+def router(tmp_path_factory):
+    """Start `python -m papf.launch.router` on a free loopback port (forked from the test
+    worker's warm interpreter, tests/support/warm.py); yield its endpoint."""
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    with Supervisor(show=lambda *_: False) as sup:
-        sup.start("router", [sys.executable, "-m", "papf.launch.router", "--listen", endpoint])
-        assert wait_port(port, 15.0), "router did not start: " + " | ".join(sup.children[0].tail)
+    log = tmp_path_factory.mktemp("router") / "router.log"
+    with log.open("w") as err:
+        proc = warm.popen([sys.executable, "-m", "papf.launch.router", "--listen", endpoint],
+                          stdout=subprocess.DEVNULL, stderr=err)
+    try:
+        assert wait_port(port, 15.0), f"router did not start: {log.read_text()[-2000:]}"
         yield endpoint
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGINT)
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=10)
 
 
 @pytest.fixture

@@ -1,4 +1,5 @@
-"""``python -m papf …`` for the tests, forked from a warm interpreter (one per test worker).
+"""``python -m papf …`` for the tests, forked from a warm interpreter (one per test worker);
+so are ``python -m`` of our other modules (the router of the bus tests).
 
 The suite runs the ``papf`` command some five hundred times, and each start paid for an
 interpreter and its imports (0.15-0.7 s of CPU: numpy, Zenoh, the messages, the CLI,
@@ -30,6 +31,7 @@ from papf.launch import forkserver
 ROOT = Path(__file__).resolve().parents[2]
 ENV = "PAPF_TEST_FORK"
 PAPF = [sys.executable, "-m", "papf"]
+PACKAGES = ("papf", "nodes")   # python -m of a module of these is forked (the rest: python -m)
 
 _server: forkserver.ForkServer | None = None
 _lock = threading.Lock()
@@ -116,10 +118,11 @@ class Proc:
 def popen(args: list, *, cwd=None, env: dict | None = None, stdout=subprocess.PIPE,
           stderr=subprocess.PIPE):
     """``subprocess.Popen(args, stdin=DEVNULL, start_new_session=True, text=True, …)`` of a
-    ``python -m papf`` command, forked where it can be (:class:`Proc`), else that Popen."""
+    ``python -m papf`` command (or a module of :data:`PACKAGES`), forked where it can be
+    (:class:`Proc`), else that Popen."""
     args = [str(a) for a in args]
     env_ = dict(os.environ if env is None else env)
-    server = _get_server() if args[:3] == PAPF else None
+    server = _get_server() if args[:2] == PAPF[:2] and args[2].split(".")[0] in PACKAGES else None
     if server is None or not server.can_fork(args[2:], env_):
         return subprocess.Popen(args, cwd=cwd, env=env, stdout=stdout, stderr=stderr,
                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True)
