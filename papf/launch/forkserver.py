@@ -118,9 +118,10 @@ class ForkedProc:
 class ForkServer:
     """The launcher's handle on its fork server: :meth:`spawn` a node, :meth:`close`."""
 
-    def __init__(self, argv: list[str], env: dict, stderr=None, preexec_fn=None):
+    def __init__(self, argv: list[str], env: dict, stderr=None, preexec_fn=None, cwd=None):
         """Start the server: ``argv`` runs this module (``python -m papf.launch.forkserver``;
-        the control socket's fd and the title's room are appended), with environment ``env``."""
+        the control socket's fd and the title's room are appended), with environment ``env``,
+        in ``cwd`` (None: this process's working directory)."""
         self._sock, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         self._startup = _startup_vars(env)
         self._lock = threading.Lock()            # one request at a time
@@ -132,7 +133,7 @@ class ForkServer:
         self.proc = subprocess.Popen(
             [*argv, str(theirs.fileno()), " " * TITLE_ROOM], stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL, stderr=stderr, pass_fds=(theirs.fileno(),),
-            start_new_session=True, preexec_fn=preexec_fn, env=env)
+            start_new_session=True, preexec_fn=preexec_fn, env=env, cwd=cwd)
         theirs.close()
         threading.Thread(target=self._read, daemon=True, name="forkserver-reader").start()
 

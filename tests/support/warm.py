@@ -46,7 +46,7 @@ def _get_server() -> forkserver.ForkServer | None:
             # no PR_SET_PDEATHSIG: a test's thread may be the first caller, and the server
             # must outlive it; it leaves when this process closes its end of the socket
             _server = forkserver.ForkServer([sys.executable, "-m", "tests.support.warm_server"],
-                                            dict(os.environ), stderr=subprocess.DEVNULL)
+                                            dict(os.environ), stderr=subprocess.DEVNULL, cwd=ROOT)
             atexit.register(_server.close)
         return _server
 

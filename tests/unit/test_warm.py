@@ -56,3 +56,12 @@ def test_fork_off_runs_python_m(monkeypatch):
     out, _ = proc.communicate(timeout=60)
     assert proc.returncode == 0 and out.startswith("papf-stack")
     assert os.environ[warm.ENV] == "0"
+
+
+def test_a_server_first_needed_in_another_directory_still_forks(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)                       # the server itself starts in the checkout
+    monkeypatch.setattr(warm, "_server", None)
+    proc = warm.popen([*PAPF, "--version"])
+    assert isinstance(proc, warm.Proc)
+    out, _ = proc.communicate(timeout=60)
+    assert proc.returncode == 0 and out.startswith("papf-stack")
