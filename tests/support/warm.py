@@ -10,8 +10,8 @@ its own (its own session and process group, pid, exit code, the environment, wor
 directory and arguments of the call, ``/proc/<pid>/cmdline`` and ``sys.path[0]`` as ``python
 -m`` gives them), with its input, output and errors where the call says. What it imports
 that the server had loaded is already there; nothing else differs. A call the server cannot
-take (input fed to it, an interpreter-start variable of its own, no server) runs ``python -m``
-as before; ``PAPF_TEST_FORK=0`` runs them all so.
+take (an interpreter-start variable of its own, no server) runs ``python -m`` as before;
+``PAPF_TEST_FORK=0`` runs them all so.
 """
 
 from __future__ import annotations
@@ -122,10 +122,14 @@ def popen(args: list, *, cwd=None, env: dict | None = None, stdout=subprocess.PI
     (:class:`Proc`), else that Popen."""
     args = [str(a) for a in args]
     env_ = dict(os.environ if env is None else env)
-    server = _get_server() if args[:2] == PAPF[:2] and args[2].split(".")[0] in PACKAGES else None
-    if server is None or not server.can_fork(args[2:], env_):
+    def python_m():
         return subprocess.Popen(args, cwd=cwd, env=env, stdout=stdout, stderr=stderr,
                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True)
+
+    ours = len(args) > 2 and args[:2] == PAPF[:2] and args[2].split(".")[0] in PACKAGES
+    server = _get_server() if ours else None
+    if server is None or not server.can_fork(args[2:], env_):
+        return python_m()
     ends, mine = [], []
     for own, where in ((1, stdout), (2, stderr)):
         if where == subprocess.PIPE:
@@ -143,26 +147,21 @@ def popen(args: list, *, cwd=None, env: dict | None = None, stdout=subprocess.PI
     try:
         forked = server.spawn(args[2:], env_, cwd=str(cwd or os.getcwd()),
                               streams=(null, *ends))
-    except OSError:
+    except OSError:   # the server has gone: python -m, as the launcher's nodes then
         for fd in [r for r in mine if r is not None]:
             os.close(fd)
-        return subprocess.Popen(args, cwd=cwd, env=env, stdout=stdout, stderr=stderr,
-                                stdin=subprocess.DEVNULL, start_new_session=True, text=True)
+        return python_m()
     finally:
         for fd in (null, *ends):
             os.close(fd)
     return Proc(args, forked, *mine)
 
 
-def run(args: list, *, cwd=None, env: dict | None = None, timeout: float = 60,
-        input: str | None = None) -> subprocess.CompletedProcess:
+def run(args: list, *, cwd=None, env: dict | None = None,
+        timeout: float = 60) -> subprocess.CompletedProcess:
     """``subprocess.run(args, capture_output=True, text=True, stdin=DEVNULL, timeout=…)`` of
     a ``python -m papf`` command, forked where it can be; on a timeout its process group is
     killed and ``subprocess.TimeoutExpired`` raised, as ``subprocess.run`` does."""
-    args = [str(a) for a in args]
-    if input is not None:
-        return subprocess.run(args, cwd=cwd, env=env, input=input, capture_output=True,
-                              text=True, timeout=timeout)
     proc = popen(args, cwd=cwd, env=env)
     try:
         out, err = proc.communicate(timeout=timeout)
