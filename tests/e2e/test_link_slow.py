@@ -19,6 +19,7 @@ from tests.support.link import CORRIDOR, split_run
 from tests.support.link import commands as _commands
 from tests.support.worlds import write_world
 
+BUNCH_NS = 1_000_000   # [ns] commands received closer together than this came in one bunch
 LINKS = {"100ms-50": "delay=50,jitter=100",      # 50-150 ms: 100 ms ± 50 ms
          "200ms-0-150": "delay=200,jitter=150"}  # 200-350 ms
 
@@ -44,13 +45,21 @@ def test_a_split_run_over_a_slow_link_reaches_its_goal_within_the_robots_limits(
     # under load, so a speed-up is checked per command, with room for a late tick. Slowing
     # down may use the whole time since the driver's last tick (a stop is never delayed by a
     # stall): bounded by A_MAX over the receive times of two commands back, plus two ticks
-    # (0.061 m/s after an 86 ms stall was seen under load)
-    for before, a, b in zip(cmds, cmds[1:], cmds[2:], strict=False):
+    # (0.061 m/s after an 86 ms stall was seen under load). Commands the robot received in
+    # one bunch (a busy machine delivering them late, together) carry no trace of when the
+    # driver sent them: the time runs from the last one received before the bunch (three
+    # received within 1.2 us, slowing by 0.044 m/s, failed the two-back bound once under load)
+    for k in range(2, len(cmds)):
+        a, b = cmds[k - 1], cmds[k]
         step = abs(b["v"] - a["v"])
         if abs(b["v"]) > abs(a["v"]) or b["v"] * a["v"] < 0:
             assert step <= A_MAX_M_S2 * 0.020 * 3 + 1e-9, (a, b)
-        else:
-            assert step <= A_MAX_M_S2 * ((b["t_ns"] - before["t_ns"]) * 1e-9 + 0.040) + 1e-9, \
-                (before, a, b)
+            continue
+        j = k - 2
+        while j > 0 and a["t_ns"] - cmds[j]["t_ns"] < BUNCH_NS:
+            j -= 1
+        before = cmds[j]
+        assert step <= A_MAX_M_S2 * ((b["t_ns"] - before["t_ns"]) * 1e-9 + 0.040) + 1e-9, \
+            (before, a, b)
     assert not _leftovers(ns)
 
