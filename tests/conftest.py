@@ -3,10 +3,8 @@ always die with the test, and a client session for the test itself."""
 
 from __future__ import annotations
 
-import contextlib
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -17,6 +15,7 @@ import zenoh
 from common.transport import zenoh_config
 from papf.launch.supervisor import Supervisor, free_port, wait_port
 from tests.support import warm
+from tests.support.cli import interrupt
 
 # pytest caches the test modules it rewrote for its asserts only where bytecode may be written;
 # where PYTHONDONTWRITEBYTECODE is set (this machine sets it) every worker of every run parsed
@@ -52,13 +51,7 @@ def router(tmp_path_factory):
         assert wait_port(port, 15.0), f"router did not start: {log.read_text()[-2000:]}"
         yield endpoint
     finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(proc.pid, signal.SIGINT)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=10)
+        interrupt(proc, 10)
 
 
 @pytest.fixture

@@ -21,10 +21,8 @@ unit test ``tests/unit/test_docs_examples.py`` checks each is one of the known t
 from __future__ import annotations
 
 import functools
-import os
 import re
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -36,6 +34,7 @@ import pytest
 from papf.doctools.examples import ROOT, Example, concrete, examples
 from papf.launch.supervisor import free_port, wait_port
 from tests.support import warm
+from tests.support.cli import interrupt
 
 pytestmark = pytest.mark.e2e
 
@@ -248,14 +247,8 @@ class Session:
         for k, (where, proc) in reversed(list(enumerate(self.background))):
             if proc.poll() is not None and proc.returncode != 0:
                 errors.append(f"{where}: exited {proc.returncode} before the end of its block")
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-                try:
-                    proc.wait(timeout=40)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait(timeout=30)
-                    errors.append(f"{where}: did not stop on SIGINT")
+            if proc.poll() is None and not interrupt(proc, 40):
+                errors.append(f"{where}: did not stop on SIGINT")
             err = (self.cwd / f"bg-{k}.log").read_text()
             # Dask's own nanny may log a CommClosedError traceback while a worker and its
             # scheduler shut down together (seen once in 2 runs): not ours to judge

@@ -8,8 +8,6 @@ before its last line.
 
 from __future__ import annotations
 
-import os
-import signal
 import subprocess
 import sys
 
@@ -17,7 +15,7 @@ import pytest
 
 from papf.launch.supervisor import free_port
 from tests.support import warm
-from tests.support.cli import stderr_until
+from tests.support.cli import interrupt, stderr_until
 from tests.support.recordings import write_drive
 
 pytestmark = pytest.mark.e2e
@@ -35,12 +33,7 @@ def _first_progress(argv: list[str], pattern: str, cwd, timeout_s: float = 240.0
         return line.strip()
     finally:
         if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait(timeout=30)
+            interrupt(proc, 30)
         proc.stdout.close()
         proc.stderr.close()
 

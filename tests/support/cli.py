@@ -31,3 +31,21 @@ def stderr_until(proc: subprocess.Popen, pattern: str, seen: list[str],
         if re.search(pattern, line):
             return line
     raise AssertionError(f"no line /{pattern}/ in {seen[-10:]}")
+
+
+def interrupt(proc, timeout_s: float) -> bool:
+    """Ctrl-C to ``proc``'s process group (SIGINT), SIGKILL after ``timeout_s`` [s] if it
+    still runs; whether it stopped on the SIGINT (a process that had ended: True)."""
+    import contextlib
+    import os
+    import signal
+
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(timeout=timeout_s)
+        return True
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+        return False
