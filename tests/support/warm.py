@@ -1,9 +1,9 @@
 """``python -m papf …`` for the tests, forked from a warm interpreter (one per test worker);
 so are ``python -m`` of our other modules (the router of the bus tests).
 
-The suite runs the ``papf`` command some five hundred times, and each start paid for an
-interpreter and its imports (0.15-0.7 s of CPU: numpy, Zenoh, the messages, the CLI,
-matplotlib for the commands that draw) on two cores shared by four test workers. Here each
+The suite runs the ``papf`` command hundreds of times, and each start paid for an
+interpreter and its imports (numpy, Zenoh, the messages, the CLI, matplotlib for the
+commands that draw) on two cores shared by four test workers. Here each
 worker starts one server the first time it needs one — :mod:`papf.launch.forkserver`, the
 launcher's own, after :data:`PRELOAD` — and each command is a fork of it: still a process of
 its own (its own session and process group, pid, exit code, the environment, working
