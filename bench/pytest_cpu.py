@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import resource
+import sys
 import time
 
 import pytest
@@ -28,8 +29,6 @@ def _cpu_s() -> float:
 def _warm_cpu_s() -> float:
     """The worker's warm ``papf`` server (tests/support/warm.py), with the commands it forked
     and reaped: its processes are its children, not the worker's, until it exits."""
-    import sys
-
     warm = sys.modules.get("tests.support.warm")
     server = getattr(warm, "_server", None)
     if server is None:

@@ -406,6 +406,8 @@ def become(request: dict) -> None:
     sys.__stdout__, sys.__stderr__, sys.__stdin__ = sys.stdout, sys.stderr, sys.stdin
     logging.root.handlers.clear()
     sys.argv = list(request["argv"])
+    if not sys.flags.safe_path:   # as `python -m` puts it: its working directory (the
+        sys.path[0] = os.getcwd()   # server's own is there); with PYTHONSAFEPATH, nothing
     _set_cmdline(_title(request["argv"]))
 
 

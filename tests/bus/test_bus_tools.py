@@ -9,7 +9,6 @@ import io
 import math
 import os
 import subprocess
-import sys
 import threading
 import time
 
@@ -24,7 +23,7 @@ from papf.bus.goal import send_goal
 from papf.bus.teleop import TeleopState
 from papf.bus.teleop import run as teleop_run
 from schemas import Goal, Keys, PlannerStatus, Scan, Twist
-from tests.support import warm
+from tests.support.cli import papf
 
 KEYS = Keys("rosbot")
 
@@ -32,7 +31,6 @@ KEYS = Keys("rosbot")
 EVIL = "\x1b]0;owned\x07\x1b[2J"
 
 
-CMD = [sys.executable, "-m", "papf", "topic"]
 
 
 def _scan(stamp: int = 100) -> Scan:
@@ -138,15 +136,15 @@ def test_topic_list_echo_hz_over_the_router(router, session):
 def test_topic_cli_echo_once_and_timeout(router, session):
     stop = threading.Event()
     th = _publish_for(session, 120.0, stop)   # until stopped: three CLI start-ups under load
-    cmd = [sys.executable, "-m", "papf", "topic"]
     try:
-        r = warm.run([*cmd, "echo", "scan", "--once", "--connect", router], timeout=60)
+        r = papf("topic", "echo", "scan", "--once", "--connect", router, timeout=60)
         assert r.returncode == 0, r.stderr
         assert r.stdout.startswith("# rosbot/scan  [papf/Scan/v1, msgpack]")
-        r = warm.run([*cmd, "hz", "/odometry/filtered", "--count", "5", "--connect",
-                            router], timeout=60)
+        r = papf("topic", "hz", "/odometry/filtered", "--count", "5", "--connect", router,
+                 timeout=60)
         assert r.returncode == 0 and "odometry/filtered:" in r.stdout and " Hz (" in r.stdout
-        r = warm.run([*cmd, "echo", "nothing/here", "--timeout", "0.5", "--connect", router], timeout=60)
+        r = papf("topic", "echo", "nothing/here", "--timeout", "0.5", "--connect", router,
+                 timeout=60)
         assert r.returncode == 5 and "no message on nothing/here" in r.stderr
     finally:
         stop.set()
@@ -184,8 +182,8 @@ def test_goal_cli_handshake_start_run_and_outcome(router, session):
     threads: list[threading.Thread] = []
     sub, goals = _fake_planner(session, reached_after=20, threads=threads)
     try:
-        r = warm.run([sys.executable, "-m", "papf", "goal", "3", "-1.5", "--tolerance", "0.2",
-                            "--start-run", "--connect", router], timeout=60)
+        r = papf("goal", "3", "-1.5", "--tolerance", "0.2", "--start-run", "--connect", router,
+                 timeout=60)
         assert r.returncode == 0, r.stderr
         assert "acknowledged" in r.stdout and r.stdout.rstrip().endswith("reached")
         assert (goals[0].x, goals[0].y, goals[0].tolerance) == (3.0, -1.5, 0.2)
@@ -239,13 +237,13 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
     monkeypatch.setattr(goal_mod, "HANDSHAKE_S", 1.0)
     res = send_goal(session, KEYS, 1.0, 2.0, out=[].append)
     assert res.outcome == "no_planner" and res.exit_code == 6 and "nodes.planner" in res.reason
-    r = warm.run([sys.executable, "-m", "papf", "goal", "1", "--connect", router], timeout=60)
+    r = papf("goal", "1", "--connect", router, timeout=60)
     assert r.returncode == 2 and "X Y" in r.stderr and "Traceback" not in r.stderr
     from papf.launch.supervisor import free_port
 
     nobody = f"tcp/127.0.0.1:{free_port()}"
     for cmd in (["goal", "1", "2"], ["topic", "list"], ["teleop"]):
-        r = warm.run([sys.executable, "-m", "papf", *cmd, "--connect", nobody], timeout=60)
+        r = papf(*cmd, "--connect", nobody, timeout=60)
         assert r.returncode == 2 and "cannot reach the bus" in r.stderr, (cmd, r.stderr)
         assert "Traceback" not in r.stderr
 
@@ -253,8 +251,7 @@ def test_goal_without_a_planner_fails_and_usage_errors_exit_2(session, monkeypat
 def test_tls_without_credentials_names_the_authentication():
     from papf.launch.supervisor import free_port
 
-    r = warm.run([sys.executable, "-m", "papf", "topic", "list", "--connect",
-                        f"tls/127.0.0.1:{free_port()}"], timeout=60)
+    r = papf("topic", "list", "--connect", f"tls/127.0.0.1:{free_port()}", timeout=60)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     assert "authenticates its clients" in r.stderr and "--zenoh-config" in r.stderr, r.stderr
 
@@ -319,7 +316,7 @@ def test_topic_list_shows_a_peers_escape_sequences_never_runs_them(router, sessi
 
 
 def _topic(*args, router: str) -> subprocess.CompletedProcess:
-    return warm.run([*CMD, *args, "--connect", router], timeout=90)
+    return papf("topic", *args, "--connect", router, timeout=90)
 
 
 @pytest.fixture
@@ -373,7 +370,7 @@ def test_pub_takes_count_and_duration(router, session):
 @pytest.mark.parametrize("tool", [["echo", "scan"], ["hz", "scan"], ["pub", "cmd_vel", "{}"]])
 def test_every_tool_has_the_three_stops(tool):
     for flag in ("--once", "--count", "--duration"):
-        r = warm.run([*CMD, *tool, "--help"], timeout=60)
+        r = papf("topic", *tool, "--help", timeout=60)
         assert flag in r.stdout, (tool, flag)
 
 

@@ -14,7 +14,7 @@ import time
 from papf.recording.reader import open_recording
 from schemas import Clock, Keys
 from tests.support import warm
-from tests.support.cli import stderr_until
+from tests.support.cli import papf, stderr_until
 
 
 def _until(proc: subprocess.Popen, needle: str, seen: list[str]) -> str:
@@ -44,15 +44,13 @@ def test_record_before_the_stack_waits_aloud_then_says_when_messages_come(router
 
 def test_record_stops_after_its_duration_with_a_complete_file(router, tmp_path):
     out = tmp_path / "r.mcap"
-    res = warm.run([sys.executable, "-m", "papf", "record", str(out), "--duration", "1",
-                    "--connect", router], timeout=60)
+    res = papf("record", str(out), "--duration", "1", "--connect", router, timeout=60)
     assert res.returncode == 0, res.stderr[-2000:]
     with open_recording(out) as rec:   # the footer is there: it reads back
         assert rec.run_metadata.get("namespace") == "rosbot"
 
 
 def test_a_bad_duration_is_one_line():
-    res = warm.run([sys.executable, "-m", "papf", "record", "x.mcap", "--duration", "nan"],
-                   timeout=60)
+    res = papf("record", "x.mcap", "--duration", "nan", timeout=60)
     assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
     assert "--duration" in res.stderr

@@ -16,7 +16,6 @@ from common.transport import zenoh_config
 from nodes.recorder.writer import RunWriter
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Keys, Twist
-from tests.support import warm
 from tests.support.cli import papf
 from tests.support.recordings import write_odom_recording, write_ros_topics, write_synthetic
 
@@ -51,7 +50,7 @@ def test_replay_without_a_router_serves_its_own(tmp_path):
 
 
 def _replay(rec, router: str) -> subprocess.CompletedProcess:
-    return warm.run([*CMD, str(rec), "--rate", "0", "--connect", router], timeout=120)
+    return papf("replay", str(rec), "--rate", "0", "--connect", router, timeout=120)
 
 
 def test_a_lone_recorder_does_not_make_replay_refuse_but_a_planner_does(tmp_path, router,
@@ -91,8 +90,7 @@ def test_the_replay_guard_is_not_fooled_by_the_metadata(tmp_path, router):
         token = s.liveliness().declare_token(Keys("rosbot").alive("base_driver"))
         sub = s.declare_subscriber("rosbot/cmd_vel", lambda sample: got.append(1))
         for extra in ([], ["--namespace", "r2"]):
-            p = warm.run([sys.executable, "-m", "papf", "replay", str(path), "--rate", "0",
-                                "--connect", router, *extra], timeout=120)
+            p = papf("replay", str(path), "--rate", "0", "--connect", router, *extra, timeout=120)
             assert p.returncode == 2 and "live stack runs in namespace 'rosbot'" in p.stderr, p.stderr
             assert len(p.stderr.strip().splitlines()) == 1
         time.sleep(0.3)

@@ -18,7 +18,7 @@ from nodes.base_driver.rosbot import cdr_to_robot_odom, twist_to_cdr
 from papf.launch.supervisor import free_port, wait_port
 from papf.robot.certs import Bundle, write_bundle
 from schemas import Keys, Twist
-from tests.support import warm
+from tests.support.cli import papf
 
 NS, BRIDGE = "t5sec", "bot"
 
@@ -147,8 +147,8 @@ def test_the_planner_lists_the_nodes_behind_the_bridge(secure_robot):
     matches no "@" chunk (the observer queries nothing: its node list has no ROS nodes)."""
 
     bundle, _, tls, _ = secure_robot
-    r = warm.run([sys.executable, "-m", "papf", "node", "list", "--namespace", NS,
-                        "--connect", tls, "--zenoh-config", str(bundle.laptop)], timeout=60)
+    r = papf("node", "list", "--namespace", NS, "--connect", tls, "--zenoh-config",
+             str(bundle.laptop), timeout=60)
     assert r.returncode == 0, r.stderr
     assert any(line.startswith("/rosbot_emulator  (ROS 2, zenoh-bridge-ros2dds ")
                for line in r.stdout.splitlines()), r.stdout
@@ -161,10 +161,9 @@ def test_secure_hil_run_reaches_the_goal(secure_robot, tmp_path):
     world = tmp_path / "short.toml"
     world.write_text('name = "short"\n[goal]\nposition = [1.0, 0.0]\ntolerance = 0.15\n'
                      '[[obstacles]]\nkind = "cylinder"\ncenter = [0.5, 0.6]\nradius = 0.15\n')
-    out = warm.run([sys.executable, "-m", "papf", "launch", "hil-laptop",
-                          "--zenoh-config", str(bundle.laptop), "--connect", tls,
-                          "--namespace", NS, "--world", str(world), "--json", "--timeout", "30",
-                          "--set", "v_max=0.5"], timeout=120)
+    out = papf("launch", "hil-laptop", "--zenoh-config", str(bundle.laptop), "--connect", tls,
+               "--namespace", NS, "--world", str(world), "--json", "--timeout", "30", "--set",
+               "v_max=0.5", timeout=120)
     assert out.stdout.strip(), out.stderr[-2000:]
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert result["outcome"] == "reached", (result, out.stderr[-2000:])
@@ -182,8 +181,7 @@ def test_a_command_without_credentials_is_told_authentication_failed(secure_robo
     wrong.write_text(json.dumps(conf))
     for extra, said in ((["--connect", tls], "has none"), (["--connect", tcp], "asks for credentials"),
                         (["--zenoh-config", str(wrong)], "refused the credentials of")):
-        r = warm.run([sys.executable, "-m", "papf", "topic", "list", "--namespace", NS,
-                            *extra], timeout=60)
+        r = papf("topic", "list", "--namespace", NS, *extra, timeout=60)
         assert r.returncode == 2 and "authentication failed" in r.stderr and said in r.stderr, \
             (extra, r.stderr)
         assert "stack running" not in r.stderr and "Traceback" not in r.stderr

@@ -34,7 +34,7 @@ import pytest
 from papf.doctools.examples import ROOT, Example, concrete, examples
 from papf.launch.supervisor import free_port, wait_port
 from tests.support import warm
-from tests.support.cli import interrupt
+from tests.support.cli import interrupt, papf
 
 pytestmark = pytest.mark.e2e
 
@@ -280,9 +280,8 @@ def _recording() -> bytes:
     """A recording of a short run (open world, APF, 6 s): recorded by the first block of
     this worker that needs one, copied for the others (each block takes it as given)."""
     with tempfile.TemporaryDirectory() as tmp:
-        warm.run([PY, "-m", "papf", "run", "--world", "open", "--planner", "apf",
-                  "--record", "run.mcap", "--port", str(free_port()), "--timeout", "6"],
-                 cwd=tmp, timeout=300)
+        papf("run", "--world", "open", "--planner", "apf", "--record", "run.mcap", "--port",
+             str(free_port()), "--timeout", "6", cwd=tmp, timeout=300)
         assert (Path(tmp) / "run.mcap").exists(), "the blocks' recording was not made"
         return (Path(tmp) / "run.mcap").read_bytes()
 

@@ -29,7 +29,7 @@ from papf.recording.reader import iter_messages, read_metadata
 from schemas import BatteryState, Clock, Event, Goal, Keys, PlannerStatus
 from schemas.keys import TOPICS
 from schemas.messages import Odometry, Scan, Twist
-from tests.support import warm
+from tests.support.cli import papf
 from tests.support.e2e import assert_no_orphans, papf_run, pids_of, start_papf_run
 from tests.support.worlds import FAST, SHORT, STEADY, box_world, write_world
 
@@ -179,8 +179,7 @@ def test_a_foreign_router_is_refused_before_anything_is_published():
         seen = []
         with zenoh.open(zenoh_config("client", [endpoint])) as s:
             sub = s.declare_subscriber("**", lambda smp: seen.append(str(smp.key_expr)))
-            p = warm.run([sys.executable, "-m", "papf", "run", "--world", "open", "--port",
-                                str(port), "--json"], timeout=60)
+            p = papf("run", "--world", "open", "--port", str(port), "--json", timeout=60)
             time.sleep(0.5)
             sub.undeclare()
     assert p.returncode == 2 and p.stdout == "" and "already listens" in p.stderr

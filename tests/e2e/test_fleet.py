@@ -17,6 +17,7 @@ from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Keys
 from tests.support import warm
+from tests.support.cli import papf
 from tests.support.e2e import papf_run
 from tests.support.worlds import STEADY
 
@@ -78,8 +79,7 @@ def test_two_robots_on_two_routers_are_one_network():
                 assert not wait_alive(session, Keys(ns), ["base_driver", "lidar_sim"], 60.0)
 
         def alive(*args):
-            out = warm.run([PY, "-m", "papf", "topic", "list", "--json", "--duration", "0.5",
-                            *args], timeout=60)
+            out = papf("topic", "list", "--json", "--duration", "0.5", *args, timeout=60)
             return json.loads(out.stdout.strip().splitlines()[-1])
 
         for end in ends:   # either router sees the whole fleet

@@ -14,6 +14,7 @@ import pytest
 
 from papf.launch.supervisor import free_port, wait_port
 from tests.support import warm
+from tests.support.cli import papf
 
 
 @pytest.mark.slow   # the slow tier (make test-quick leaves it out)
@@ -31,8 +32,7 @@ def test_goal_retargets_the_planner_of_a_launched_session():
         while not any("papf on open" in x for x in lines):
             assert time.monotonic() < deadline and launch.poll() is None, "".join(lines)
             time.sleep(0.1)
-        goal = warm.run([sys.executable, "-m", "papf", "goal", "1.5", "1.0", "--connect", endpoint,
-                         "--timeout", "150"], timeout=240)
+        goal = papf("goal", "1.5", "1.0", "--connect", endpoint, "--timeout", "150", timeout=240)
         assert goal.returncode == 0, goal.stderr
         assert "acknowledged" in goal.stdout and "reached" in goal.stdout
         launch.wait(timeout=120)

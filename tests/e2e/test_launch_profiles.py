@@ -17,6 +17,7 @@ from common.transport import wait_alive, zenoh_config
 from papf.launch.supervisor import free_port, wait_port
 from schemas import Keys
 from tests.support import warm
+from tests.support.cli import papf
 from tests.support.e2e import leftovers as _leftovers
 from tests.support.worlds import FAST, SHORT, write_world
 
@@ -44,9 +45,8 @@ def split_run(robot_profile: str, laptop_profile: str, world: str, ns: str, emul
         emulator = warm.popen([PY, "-m", "papf", "rosbot-emulator", "--connect", endpoint,
                                "--namespace", ns, *emulator_args], stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL)
-        laptop = warm.run([PY, "-m", "papf", "launch", laptop_profile, "--connect", endpoint,
-                           "--namespace", ns, "--world", world, "--timeout", "30", "--json", *FAST,
-                           *(laptop_extra or [])], timeout=120)
+        laptop = papf("launch", laptop_profile, "--connect", endpoint, "--namespace", ns, "--world",
+                      world, "--timeout", "30", "--json", *FAST, *(laptop_extra or []), timeout=120)
         assert laptop.stdout.strip(), laptop.stderr[-2000:]
         return json.loads(laptop.stdout.strip().splitlines()[-1])
     finally:
@@ -89,8 +89,8 @@ def test_hil_profiles_reach_the_goal(world, tmp_path):
 
 
 def test_sim_profile_reaches_the_goal(world):
-    out = warm.run([PY, "-m", "papf", "launch", "sim", "--listen", f"tcp/127.0.0.1:{free_port()}",
-                    "--namespace", "t5sim", "--world", world, "--json", *FAST], timeout=120)
+    out = papf("launch", "sim", "--listen", f"tcp/127.0.0.1:{free_port()}", "--namespace", "t5sim",
+               "--world", world, "--json", *FAST, timeout=120)
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert (result["outcome"], out.returncode) == ("reached", 0), out.stderr[-2000:]
     assert not _leftovers("t5sim")
@@ -138,7 +138,7 @@ def test_a_second_launch_in_a_namespace_exits_2_with_one_line(world, tmp_path):
     other = None
     try:
         assert wait_port(port, 30.0), "the robot's router did not come up"
-        second = warm.run([PY, "-m", "papf", "launch", "robot", "--namespace", ns], timeout=60)
+        second = papf("launch", "robot", "--namespace", ns, timeout=60)
         assert second.returncode == 2, second.stderr
         assert second.stderr.strip().splitlines() == [second.stderr.strip()]
         assert f"namespace '{ns}' is in use on this host: base_driver, lidar_sim" in second.stderr
@@ -148,8 +148,8 @@ def test_a_second_launch_in_a_namespace_exits_2_with_one_line(world, tmp_path):
                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         with zenoh.open(zenoh_config("client", [endpoint])) as session:
             assert not wait_alive(session, Keys(ns), ["planner"], 60.0)
-        laptop = warm.run([PY, "-m", "papf", "launch", "laptop", "--connect", endpoint,
-                           "--namespace", ns, "--world", world], timeout=60)
+        laptop = papf("launch", "laptop", "--connect", endpoint, "--namespace", ns, "--world",
+                      world, timeout=60)
         assert laptop.returncode == 2, laptop.stderr
         assert "is in use on the network at" in laptop.stderr and "planner" in laptop.stderr
         assert len(laptop.stderr.strip().splitlines()) == 1, laptop.stderr

@@ -30,6 +30,7 @@ from papf.launch.supervisor import free_port, wait_port
 from papf.recording.reader import open_recording
 from schemas import Clock, Event, Keys, Odometry, Twist
 from tests.support import warm
+from tests.support.cli import papf
 from tests.support.e2e import leftovers as _leftovers
 from tests.support.link import CORRIDOR, split_run
 from tests.support.worlds import write_world
@@ -75,9 +76,9 @@ def test_the_issues_link_no_longer_stands_the_robot_still(tmp_path):
              str(robot_port), "--delay", "200", "--jitter", "150", "--serial"],
             start_new_session=True))
         assert wait_port(link_port, 30.0)
-        laptop = warm.run([PY, "-m", "papf", "launch", "laptop", "--connect",
-                           f"tcp/127.0.0.1:{link_port}", "--namespace", ns, "--world", str(world),
-                           "--timeout", "60", "--json", "--set", "v_max=0.5"], timeout=300)
+        laptop = papf("launch", "laptop", "--connect", f"tcp/127.0.0.1:{link_port}", "--namespace",
+                      ns, "--world", str(world), "--timeout", "60", "--json", "--set", "v_max=0.5",
+                      timeout=300)
     finally:
         _kill(procs[::-1])
     assert laptop.stdout.strip(), laptop.stderr[-3000:]
@@ -137,8 +138,8 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
     gaps = [b - a for a, b in zip(odom, odom[1:], strict=False)]
     assert odom and max(gaps) <= 500_000_000, f"the robot's own recording has a hole: {max(gaps)} ns"
     assert applied and all(m.v == 0.0 and m.w == 0.0 for m in applied), "obeyed while down"
-    report = warm.run([PY, "-m", "papf", "report", str(lap), str(rob), "--json", "--out",
-                       str(tmp_path / "report")], timeout=300)
+    report = papf("report", str(lap), str(rob), "--json", "--out", str(tmp_path / "report"),
+                  timeout=300)
     assert report.returncode == 0, report.stderr[-3000:]
     rows = [json.loads(line) for line in report.stdout.splitlines() if line.startswith("{")]
     assert len(rows) == 1, rows                                # one run, seen from both sides
@@ -150,8 +151,7 @@ def test_an_outage_is_named_in_both_recordings_and_the_robots_has_no_hole(tmp_pa
     assert rows[0]["path_length_m"] == pytest.approx(sides["robot"]["path_length_m"])
     assert "Runs recorded on the laptop and on the robot" in (
         tmp_path / "report" / "report.md").read_text()
-    alone = warm.run([PY, "-m", "papf", "report", str(rob), "--json", "--out",
-                      str(tmp_path / "robot-report")], timeout=300)
+    alone = papf("report", str(rob), "--json", "--out", str(tmp_path / "robot-report"), timeout=300)
     row = json.loads(alone.stdout.splitlines()[-1])          # the robot's recording alone
     assert (row["planner"], row["outcome"]) == ("apf", "reached") and row["path_length_m"] > 2.0
     assert not _leftovers(ns)

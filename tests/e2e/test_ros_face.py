@@ -20,7 +20,7 @@ from rosbags.typesys import Stores, get_typestore
 from zenoh.ext import Int64, z_serialize
 
 from common.transport import zenoh_config
-from tests.support import warm
+from tests.support.cli import papf
 from tests.support.e2e import free_port
 
 DOMAIN = 9
@@ -139,7 +139,7 @@ def test_face_refuses_a_domain_where_a_robot_takes_cmd_vel(router, session):
 
 
 def test_launch_refuses_the_face_on_the_robots_domain():
-    r = warm.run([sys.executable, "-m", "papf", "launch", "laptop", "--ros", "rmw_zenoh",
-                        "--ros-domain", "3", "--ros-face", "--ros-face-domain", "3", "--world",
-                        "open", "--connect", "tcp/127.0.0.1:7", "--dry-run"], timeout=120)
+    r = papf("launch", "laptop", "--ros", "rmw_zenoh", "--ros-domain", "3", "--ros-face",
+             "--ros-face-domain", "3", "--world", "open", "--connect", "tcp/127.0.0.1:7",
+             "--dry-run", timeout=120)
     assert r.returncode == 2 and "--ros-face-domain" in r.stderr and r.stdout == ""

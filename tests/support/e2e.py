@@ -33,7 +33,7 @@ def papf_run(*args: str, port: int | None = None, timeout: float = RUN_TIMEOUT_S
 
 
 def _papf_run(args: tuple[str, ...], port: int, timeout: float):
-    proc = warm.popen([sys.executable, "-m", "papf", "run", *args, "--json", "--port", str(port)])
+    proc = start_papf_run(*args, port=port)
     try:
         out, err = proc.communicate(timeout=timeout)
     finally:
@@ -44,8 +44,13 @@ def _papf_run(args: tuple[str, ...], port: int, timeout: float):
     return proc.returncode, result, err
 
 
-def start_papf_run(*args: str, port: int, **popen) -> subprocess.Popen:
+def start_papf_run(*args: str, port: int, **popen) -> subprocess.Popen | warm.Proc:
+    """``papf run ARGS --json --port PORT``, output and errors piped: forked from the warm
+    interpreter (tests/support/warm.py), or a process of its own where ``popen`` asks for
+    more of ``subprocess.Popen`` (a ``preexec_fn``: a launcher started with SIGINT ignored)."""
     cmd = [sys.executable, "-m", "papf", "run", *args, "--json", "--port", str(port)]
+    if not popen:
+        return warm.popen(cmd)
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True, **popen)
 

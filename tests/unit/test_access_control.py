@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import shutil
-import sys
 
 import pytest
 
 from common.ros_link import BridgeTopics
 from papf.robot.certs import ROLES, access_control
-from tests.support import warm
+from tests.support.cli import papf
 
 NS, BRIDGE = "t5sec", "bot"
 
@@ -33,7 +32,7 @@ def test_make_certs_refuses_to_replace_a_bundle_and_bad_hosts(tmp_path):
         pytest.skip("the openssl command is needed to make test certificates")
 
     def certs(*args):
-        return warm.run([sys.executable, "-m", "papf", "make-certs", *map(str, args)], timeout=60)
+        return papf("make-certs", *map(str, args), timeout=60)
 
     out = tmp_path / "b"
     p = certs(out, "--robot-host", "10.0.0.2")
@@ -67,8 +66,8 @@ def test_make_certs_for_rmw_zenoh_writes_rmw_zenohs_config_files(tmp_path):
     import json
 
     out = tmp_path / "b"
-    p = warm.run([sys.executable, "-m", "papf", "make-certs", str(out), "--robot-host",
-                        "10.0.0.2", "--ros", "rmw_zenoh", "--ros-domain", "3"], timeout=60)
+    p = papf("make-certs", str(out), "--robot-host", "10.0.0.2", "--ros", "rmw_zenoh",
+             "--ros-domain", "3", timeout=60)
     assert p.returncode == 0, p.stderr
     assert "ZENOH_ROUTER_CONFIG_URI=rmw_zenohd.json5" in p.stderr
     assert "rmw_zenohd.json5 ros_session.json5" in (out / "README.txt").read_text()
@@ -86,8 +85,7 @@ def test_make_certs_for_rmw_zenoh_writes_rmw_zenohs_config_files(tmp_path):
     assert ours["listen"]["endpoints"] == ["tcp/127.0.0.1:7449"] and "access_control" not in ours
     laptop = json.loads((out / "laptop.json5").read_text())
     assert laptop["connect"]["endpoints"] == ["tls/10.0.0.2:7448"]
-    p = warm.run([sys.executable, "-m", "papf", "make-certs", str(out), "--robot-host",
-                        "10.0.0.2", "--force"], timeout=60)
+    p = papf("make-certs", str(out), "--robot-host", "10.0.0.2", "--force", timeout=60)
     assert p.returncode == 0 and not (out / "rmw_zenohd.json5").exists()   # a bridge bundle now
 
 

@@ -4,12 +4,11 @@ lanes in A, B and D. The traditional APF baseline runs too (its outcome is repor
 docs/planners.md, not asserted beyond what the paper shows)."""
 
 import json
-import sys
 
 import pytest
 
 from papf.offline.road import car_params, run_car
-from tests.support import warm
+from tests.support.cli import papf
 from worlds import load_world
 
 CASE_TIME_S = {"a": 5.0, "b": 5.0, "c": 6.0, "d": 10.0}   # Table 2
@@ -41,8 +40,7 @@ def test_traditional_apf_keeps_its_speed_and_fails_case_b():
 
 
 def test_plan_json_on_a_road_world_has_the_road_figures():
-    r = warm.run([sys.executable, "-m", "papf", "plan", "--world", "iapf-case-c", "--planner",
-                        "iapf", "--json"], timeout=120)
+    r = papf("plan", "--world", "iapf-case-c", "--planner", "iapf", "--json", timeout=120)
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     assert out["outcome"] == "reached" and out["collisions"] == 0 and out["left_road"] is False
@@ -51,6 +49,5 @@ def test_plan_json_on_a_road_world_has_the_road_figures():
 
 
 def test_plan_refuses_scan_planners_on_car_worlds():
-    r = warm.run([sys.executable, "-m", "papf", "plan", "--world", "iapf-case-a", "--planner",
-                        "papf"], timeout=120)
+    r = papf("plan", "--world", "iapf-case-a", "--planner", "papf", timeout=120)
     assert r.returncode == 2 and "valid" in r.stderr and "Traceback" not in r.stderr

@@ -25,7 +25,7 @@ from nodes.planner.registry import make_planner
 from nodes.planner.rollout import rollout
 from papf.launch.linkwatch import LinkWatch
 from schemas import Odometry, Scan, Twist
-from tests.support import warm
+from tests.support.cli import papf
 
 MS = 1_000_000
 W = 500 * MS          # the driver's watchdog
@@ -345,9 +345,8 @@ def test_the_time_the_link_held_the_robot_still_is_reported_and_blamed():
     (["launch", "robot", "--record", "/no/such/dir/r.mcap"], "does not exist"),
 ])
 def test_the_robots_recording_is_checked_before_anything_starts(argv, says, tmp_path):
-    import sys
 
-    out = warm.run([sys.executable, "-m", "papf", *argv], timeout=60, cwd=tmp_path)
+    out = papf(*argv, timeout=60, cwd=tmp_path)
     assert out.returncode == 2, out.stderr
     assert says in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
 

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import sys
-
 import pytest
 
 from common.errors import ConfigError
@@ -18,7 +16,7 @@ from papf.link.schedule import (
 )
 from papf.link.spec import PROFILES, LinkSpec, parse_spec, uniform, with_overrides
 from papf.link.stats import DirectionStats, percentile
-from tests.support import warm
+from tests.support.cli import papf
 
 
 def _direction(text: str, direction: str = "out") -> Direction:
@@ -193,8 +191,7 @@ def test_delay_stats_keep_a_bounded_reservoir():
     (["--spec", "delay=1,foo=2"], "unknown link spec key 'foo'"),
 ])
 def test_papf_link_refuses_bad_flags_with_one_line(args, says):
-    out = warm.run([sys.executable, "-m", "papf", "link", "--listen", "tcp/127.0.0.1:1",
-                          "--to", "tcp/127.0.0.1:2", *args], timeout=60)
+    out = papf("link", "--listen", "tcp/127.0.0.1:1", "--to", "tcp/127.0.0.1:2", *args, timeout=60)
     assert out.returncode == 2 and says in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1 and "Traceback" not in out.stderr
 
@@ -205,7 +202,7 @@ def test_papf_link_refuses_a_bad_endpoint_and_an_existing_stats_file(tmp_path):
     for args, says in ((["--listen", "7448", "--to", "tcp/127.0.0.1:2"], "tcp/HOST:PORT"),
                        (["--listen", "tcp/127.0.0.1:0", "--to", "tcp/127.0.0.1:2", "--stats",
                          str(stats)], "already exists")):
-        out = warm.run([sys.executable, "-m", "papf", "link", *args], timeout=60)
+        out = papf("link", *args, timeout=60)
         assert out.returncode == 2 and says in out.stderr, out.stderr
         assert len(out.stderr.strip().splitlines()) == 1
     assert stats.read_text() == "mine"
@@ -218,7 +215,7 @@ def test_papf_link_refuses_a_taken_port_with_one_line():
         s.bind(("127.0.0.1", 0))
         s.listen()
         port = s.getsockname()[1]
-        out = warm.run([sys.executable, "-m", "papf", "link", "--listen",
-                              f"tcp/127.0.0.1:{port}", "--to", "tcp/127.0.0.1:2"], timeout=60)
+        out = papf("link", "--listen", f"tcp/127.0.0.1:{port}", "--to", "tcp/127.0.0.1:2",
+                   timeout=60)
     assert out.returncode == 2 and "cannot listen there" in out.stderr, out.stderr
     assert len(out.stderr.strip().splitlines()) == 1

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import pytest
@@ -14,7 +13,7 @@ from papf.launch.run import RunConfig
 from papf.launch.split import laptop_stall_s, resolve_split
 from papf.link.spec import parse_spec
 from papf.robot.emulator import BodyContacts
-from tests.support import warm
+from tests.support.cli import papf
 from tests.support.worlds import SHORT, write_world
 from worlds import load_world
 
@@ -60,7 +59,7 @@ def test_the_laptop_waits_out_the_longest_outage_before_it_calls_the_run_stuck()
     (["--link", "lan", "--robot-trace", "/no/such/dir/t.jsonl"], "does not exist"),
 ])
 def test_papf_run_link_refuses_mistakes_with_one_line_before_anything_starts(world, args, says):
-    out = warm.run([sys.executable, "-m", "papf", "run", "--world", world, *args], timeout=60)
+    out = papf("run", "--world", world, *args, timeout=60)
     assert out.returncode == 2, out.stderr
     assert says in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
 
@@ -82,8 +81,7 @@ def test_the_body_is_its_footprint_not_its_centre(world):
 
 
 def test_the_dry_run_prints_the_graph_without_starting_anything(world, tmp_path):
-    out = warm.run([sys.executable, "-m", "papf", "run", "--world", world, "--link",
-                          "lte", "--dry-run"], timeout=60, cwd=tmp_path)
+    out = papf("run", "--world", world, "--link", "lte", "--dry-run", timeout=60, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["profile"] == "split"
     assert [p.name for p in Path(tmp_path).iterdir()] == ["short.toml"]   # nothing written

@@ -4,7 +4,6 @@ samples; its directory is never one a user made; papf run refuses a bad one befo
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 import pytest
@@ -16,7 +15,7 @@ from nodes.recorder.writer import RunWriter
 from papf.recording.ros2_export import export_ros2
 from papf.recording.rosbag import stack_metadata
 from schemas.messages import Event, Odometry, Scan, Twist, WheelStates
-from tests.support import warm
+from tests.support.cli import papf
 
 T0 = 1_700_000_000_000_000_000   # [ns] wall clock of the run's start (receive times)
 META = {"namespace": "rosbot", "world": "open", "planner": "papf", "seed": "3"}
@@ -77,7 +76,7 @@ def test_a_bag_directory_is_never_one_a_user_made(tmp_path):
 
 def test_papf_run_refuses_a_bad_bag_directory_before_starting(tmp_path):
     (tmp_path / "taken").mkdir()
-    r = warm.run([sys.executable, "-m", "papf", "run", "--world", "open", "--planner", "apf",
-                        "--record", str(tmp_path / "taken"), "--format", "ros2", "--timeout", "5"], timeout=120)
+    r = papf("run", "--world", "open", "--planner", "apf", "--record", str(tmp_path / "taken"),
+             "--format", "ros2", "--timeout", "5", timeout=120)
     assert r.returncode == 2 and r.stdout == "", r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "exists" in r.stderr

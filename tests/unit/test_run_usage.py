@@ -4,7 +4,6 @@ import socket
 
 import pytest
 
-from tests.support import warm
 from tests.support.cli import papf
 from tests.support.e2e import papf_run
 
@@ -36,10 +35,8 @@ def test_each_command_is_registered_by_the_module_the_cli_imports_for_it():
 
 def test_a_dry_run_is_preflighted_like_the_run():
     """Issue 31: `--dry-run` never prints a process list the run itself would refuse."""
-    import sys
 
-    p = warm.run([sys.executable, "-m", "papf", "run", "--world", "open", "--dry-run",
-                        "--set", "d_o=0.01"], timeout=120)
+    p = papf("run", "--world", "open", "--dry-run", "--set", "d_o=0.01", timeout=120)
     assert p.returncode == 2 and p.stdout == "" and "d_o" in p.stderr
     assert len(p.stderr.strip().splitlines()) == 1
 
